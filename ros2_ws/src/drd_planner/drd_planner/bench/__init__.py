@@ -1,0 +1,1 @@
+"""Benchmark harness: run policies over test worlds and report statistics."""

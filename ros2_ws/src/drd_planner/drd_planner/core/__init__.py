@@ -1,0 +1,1 @@
+"""ROS-free, FCL-free algorithms: problem model, DiRECt, BiSECt, decision tree, episodes, bounds."""

@@ -1,0 +1,307 @@
+"""DiRECt: decision-region edge cutting over a finite world database (ALGORITHMS.md section 3).
+
+One ECD problem per library path r (its region R_r against the *atoms* outside it: worlds with
+identical path-validity rows), plus a null ECD over all atoms when some training world has no
+valid path, combined by Noisy-OR. The greedy step maximises the expected reduction of the
+remaining product per unit cost (the corrected Alg. 1), in log space, for all tests at once:
+
+    w_r(t, x) = 1/2 (T_x^2 - a_x^2 - Q_x + S_x)        (section 3.4)
+
+with atom masses C_x (S x tests), T_x = sum C_x, Q_x = sum C_x^2, a_x = M^T C_x and
+S_x = M^T (C_x o C_x). Regions with identical membership over the active atoms are merged and
+counted with multiplicity; regions with no active world degenerate to the null weight
+1/2 (T_x^2 - Q_x). With a uniform prior all masses are integer counts, so the matrix products run
+exactly in float32 BLAS and zero weights are detected exactly.
+
+Optional region colouring (variant (c)): regions that never share a world are grouped into one
+ECD (Welsh-Powell greedy colouring of the overlap graph), w_k = 1/2 (T^2 - Q - sum_{r in k}(a_r^2 - S_r)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse as sp
+
+from drd_planner.exceptions import ProblemError
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Relative tolerance for ties between test scores (first test wins).
+TIE_RTOL = 1e-9
+#: Counts below this many worlds run exactly in float32 (sums of squared counts stay < 2**24).
+_FLOAT32_EXACT_WORLDS = 4096
+#: Weighted priors: a weight below this fraction of its version space's squared mass is zero
+#: (the closed form cancels terms of size mass^2, so its rounding error is a few ulps of that).
+_ZERO_RTOL = 64 * float(np.finfo(np.float64).eps)
+
+
+def greedy_region_colouring(R: npt.ArrayLike) -> IntArray:
+    """Colour regions so that regions sharing a world never share a colour (Welsh-Powell order).
+
+    Args:
+        R: (n, m) bool world x region membership.
+
+    Returns:
+        (m,) int64 colour per region, colours numbered from 0.
+    """
+    r = np.asarray(R, dtype=np.float64)
+    overlap = (r.T @ r) > 0
+    np.fill_diagonal(overlap, False)
+    degree = overlap.sum(1)
+    order = np.argsort(-degree, kind="stable")
+    colour = np.full(r.shape[1], -1, dtype=np.int64)
+    for region in order.tolist():
+        used = set(colour[overlap[region] & (colour >= 0)].tolist())
+        c = 0
+        while c in used:
+            c += 1
+        colour[region] = c
+    return colour
+
+
+def pick_best_test(log_expected: npt.ArrayLike, costs: npt.ArrayLike) -> int:
+    """Index of the test with the largest expected reduction per cost, (1 - E) / c.
+
+    ``log_expected`` (k,) is log E, E = the expected remaining fraction of the Noisy-OR product.
+    With hundreds of ECDs, E is often far below machine epsilon, so 1 - E rounds to 1 for every
+    test; ties of the score (within TIE_RTOL) are therefore broken by the smaller log E, which is
+    the same ordering, then by the first index.
+    """
+    log_e = np.asarray(log_expected, dtype=np.float64)
+    score = -np.expm1(log_e) / np.asarray(costs, dtype=np.float64)
+    best = score.max()
+    near = np.flatnonzero(score >= best - TIE_RTOL * abs(best))
+    sub = log_e[near]
+    lowest = sub.min()
+    if not np.isfinite(lowest):
+        return int(near[int(np.argmin(sub))])
+    tie = sub <= lowest + TIE_RTOL * max(1.0, abs(lowest))
+    return int(near[int(np.argmax(tie))])
+
+
+@dataclass(frozen=True)
+class DirectChoice:
+    """A DiRECt selection.
+
+    Attributes:
+        edge: the chosen edge id.
+        score: expected fraction of the remaining Noisy-OR product removed, per unit cost.
+        log_expected_remaining: log of the expected remaining fraction (finer than score near 1).
+    """
+
+    edge: int
+    score: float
+    log_expected_remaining: float
+
+
+class DirectSelector:
+    """Greedy DiRECt test selection on a fixed training database.
+
+    Args:
+        X: (n, E) bool outcomes of the training worlds.
+        R: (n, m) bool path validity of the training worlds.
+        edge_costs: (E,) positive costs.
+        prior: (n,) positive prior weights, or None for uniform (exact integer arithmetic).
+        colouring: group never-overlapping regions into one ECD (variant (c)).
+        candidate_edges: restrict tests to these edge ids (default: every edge).
+    """
+
+    def __init__(
+        self,
+        X: npt.ArrayLike,
+        R: npt.ArrayLike,
+        edge_costs: npt.ArrayLike,
+        *,
+        prior: npt.ArrayLike | None = None,
+        colouring: bool = False,
+        candidate_edges: npt.ArrayLike | None = None,
+    ) -> None:
+        self._X = np.asarray(X, dtype=bool)
+        self._R = np.asarray(R, dtype=bool)
+        n = self._X.shape[0]
+        if self._R.shape[0] != n:
+            raise ProblemError("X and R must have the same number of worlds")
+        self._costs = np.asarray(edge_costs, dtype=np.float64)
+        if self._costs.shape != (self._X.shape[1],) or np.any(self._costs <= 0):
+            raise ProblemError("edge costs must be (E,) and positive")
+        self._uniform = prior is None
+        self._prior = np.ones(n) if prior is None else np.asarray(prior, dtype=np.float64)
+        if self._prior.shape != (n,) or np.any(self._prior <= 0) or not np.all(np.isfinite(self._prior)):
+            raise ProblemError("the DiRECt prior must be (n,) finite and positive")
+        if candidate_edges is None:
+            self._candidates = np.arange(self._X.shape[1], dtype=np.int64)
+        else:
+            self._candidates = np.unique(np.asarray(candidate_edges, dtype=np.int64))
+        self._Xc = self._X[:, self._candidates]
+        # Atoms: worlds with identical region-membership rows.
+        atoms, self._atom_of = np.unique(self._R, axis=0, return_inverse=True)
+        self._atom_of = self._atom_of.ravel().astype(np.int64)
+        self._atom_regions = atoms.astype(bool)  # (S, m)
+        self._null_ecd = bool((~self._R.any(axis=1)).any())
+        self._colour = greedy_region_colouring(self._R) if colouring else None
+        self._exact = self._uniform and n < _FLOAT32_EXACT_WORLDS
+        self._dtype = np.float32 if self._exact else np.float64
+
+    @property
+    def num_worlds(self) -> int:
+        """n, the number of training worlds."""
+        return int(self._X.shape[0])
+
+    @property
+    def has_null_ecd(self) -> bool:
+        """True when some training world has no valid path (adds the all-atoms ECD)."""
+        return self._null_ecd
+
+    @property
+    def num_ecds(self) -> int:
+        """Number of ECD problems combined by Noisy-OR."""
+        groups = self._R.shape[1] if self._colour is None else int(self._colour.max(initial=-1) + 1)
+        return groups + int(self._null_ecd)
+
+    def _is_zero(self, w: FloatArray, mass: float | FloatArray) -> BoolArray:
+        """Zero weights: exact for integer counts; else within rounding of the branch's mass^2."""
+        if self._exact:
+            return np.asarray(w <= 0.0)
+        return np.asarray(w <= _ZERO_RTOL * np.asarray(mass) ** 2)
+
+    def select(
+        self,
+        active: npt.ArrayLike,
+        *,
+        regions: npt.ArrayLike | None = None,
+        candidates: npt.ArrayLike | None = None,
+    ) -> DirectChoice | None:
+        """The best test for the version space ``active`` (training-world row ids), or None.
+
+        None means the DRD is solved on the database (all active worlds lie in one region, or share
+        one atom) or no test splits the active worlds.
+
+        Args:
+            active: training-world row ids consistent with the observations so far.
+            regions: restrict the DRD to these regions (IncDRD); atoms and the null ECD are then
+                taken over the restricted membership of the active worlds. Not with colouring.
+            candidates: restrict this selection to these edge ids (e.g. the edges of the most
+                probable region, the DiRECt analogue of MaxProbReg); ECD weights are unchanged.
+        """
+        act = np.asarray(active, dtype=np.int64)
+        if act.size == 0:
+            return None
+        weights = self._prior[act]
+        if regions is None:
+            atom_ids, local = np.unique(self._atom_of[act], return_inverse=True)
+            members = self._atom_regions[atom_ids]  # (S, m)
+            null_ecd = self._null_ecd
+        else:
+            if self._colour is not None:
+                raise ProblemError("region subsets (IncDRD) cannot be combined with colouring")
+            cols = np.asarray(regions, dtype=np.int64)
+            members, local = np.unique(self._R[np.ix_(act, cols)], axis=0, return_inverse=True)
+            null_ecd = bool((~members.any(axis=1)).any())
+        local = np.asarray(local).ravel()
+        num_atoms = members.shape[0]
+        mass = np.bincount(local, weights=weights, minlength=num_atoms).astype(np.float64)  # c, (S,)
+        total = float(mass.sum())
+        groups, multiplicity, null_count = self._groups(members, null_ecd)
+        w_now, w0_now = self._weights_now(mass, groups)
+        if np.any(self._is_zero(w_now, total)) or (
+            null_count and self._is_zero(np.array([w0_now]), total)[0]
+        ):
+            return None
+        # Informative tests: the active worlds disagree.
+        x_act = self._Xc[act]
+        free_count = x_act.sum(axis=0)
+        split = (free_count > 0) & (free_count < act.size)
+        if candidates is not None:
+            split &= np.isin(self._candidates, np.asarray(candidates, dtype=np.int64))
+        informative = np.flatnonzero(split)
+        if informative.size == 0:
+            return None
+        xi = x_act[:, informative].astype(self._dtype)
+        onehot = sp.csr_array(
+            (weights.astype(self._dtype), (local, np.arange(act.size))), shape=(num_atoms, act.size)
+        )
+        c1 = np.asarray(onehot @ xi)  # (S, Ti) mass of atom s with x_t = 1
+        c0 = mass.astype(self._dtype)[:, None] - c1
+        log_remaining = []
+        for cx in (c0, c1):
+            tx = cx.sum(axis=0, dtype=np.float64)
+            qx = (cx * cx).sum(axis=0, dtype=np.float64)
+            w0_x = 0.5 * (tx * tx - qx)
+            with np.errstate(divide="ignore"):
+                lx = np.zeros(informative.size)
+                if groups is not None:
+                    wx = self._group_weights(cx, groups, tx, qx)
+                    wx = np.where(self._is_zero(wx, tx), 0.0, wx)
+                    lx += multiplicity @ (np.log(wx) - np.log(w_now)[:, None])
+                if null_count:
+                    w0z = np.where(self._is_zero(w0_x, tx), 0.0, w0_x)
+                    lx += null_count * (np.log(w0z) - np.log(w0_now))
+            log_remaining.append((tx, lx))
+        (t0, l0), (t1, l1) = log_remaining
+        with np.errstate(divide="ignore"):
+            log_p0 = np.log(t0 / total)
+            log_p1 = np.log(t1 / total)
+        log_expected = np.logaddexp(log_p0 + l0, log_p1 + l1)
+        best = pick_best_test(log_expected, self._costs[self._candidates[informative]])
+        return DirectChoice(
+            int(self._candidates[informative[best]]),
+            float(-np.expm1(log_expected[best]) / self._costs[self._candidates[informative[best]]]),
+            float(log_expected[best]),
+        )
+
+    def _groups(
+        self, members: BoolArray, null_ecd: bool
+    ) -> tuple[npt.NDArray[np.floating] | None, FloatArray, int]:
+        """ECD groups over the active atoms.
+
+        Returns (G, multiplicity, null_count): G is (S, U) 0/1 membership of each distinct group
+        that holds active mass (for colouring, one column per region plus the colour index in
+        ``self._group_colour``), multiplicity (U,) how many ECDs share it, and null_count how
+        many ECDs have degenerated to the all-atoms null weight (including the null ECD).
+        """
+        has_mass = members.any(axis=0)
+        if self._colour is None:
+            active_regions = members[:, has_mass]
+            null_count = int((~has_mass).sum()) + int(null_ecd)
+            if active_regions.shape[1] == 0:
+                return None, np.zeros(0), null_count
+            cols, counts = np.unique(active_regions.T, axis=0, return_counts=True)
+            return cols.T.astype(self._dtype), counts.astype(np.float64), null_count
+        colours = self._colour[has_mass]
+        used = np.unique(colours)
+        null_count = int(self._colour.max() + 1 - used.size) + int(null_ecd)
+        group_of_region = np.searchsorted(used, colours)
+        self._colour_sum = sp.csr_array(
+            (np.ones(colours.size), (group_of_region, np.arange(colours.size))),
+            shape=(used.size, colours.size),
+        )
+        return members[:, has_mass].astype(self._dtype), np.ones(used.size), null_count
+
+    def _group_weights(
+        self, cx: npt.NDArray[np.floating], groups: npt.NDArray[np.floating], tx: FloatArray, qx: FloatArray
+    ) -> FloatArray:
+        """(U, tests) ECD weights under one outcome (float64)."""
+        both = groups.T @ np.concatenate([cx, cx * cx], axis=1)
+        k = cx.shape[1]
+        a = both[:, :k].astype(np.float64)
+        s = both[:, k:].astype(np.float64)
+        diff = a * a - s  # (regions, tests): squared region mass minus its atoms' squares
+        if self._colour is not None:
+            diff = np.asarray(self._colour_sum @ diff)
+        return np.asarray(0.5 * ((tx * tx - qx)[None, :] - diff))
+
+    def _weights_now(
+        self, mass: FloatArray, groups: npt.NDArray[np.floating] | None
+    ) -> tuple[FloatArray, float]:
+        t = float(mass.sum())
+        q = float((mass * mass).sum())
+        w0 = 0.5 * (t * t - q)
+        if groups is None:
+            return np.zeros(0), w0
+        w = self._group_weights(mass.astype(self._dtype)[:, None], groups, np.array([t]), np.array([q]))
+        return w[:, 0], w0

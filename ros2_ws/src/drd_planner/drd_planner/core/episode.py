@@ -1,0 +1,226 @@
+"""The edge-oracle seam and the one episode runner every policy goes through.
+
+A policy only proposes edges (``select``) and hears outcomes (``observe``); the runner owns the
+check log and decides when a library path is proven free. It returns a path only when every one
+of its edges was checked free in this episode: that is the planner's safety invariant.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.library import PathLibrary
+from drd_planner.exceptions import PolicyError, UnverifiedPathError
+
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@runtime_checkable
+class EdgeOracle(Protocol):
+    """Answers whether an edge is collision-free: a row of X in benchmarks, FCL in the node."""
+
+    def check(self, edge: int) -> bool:
+        """True when ``edge`` is collision-free."""
+        ...
+
+
+class Policy(Protocol):
+    """An edge-selection policy driven by :func:`run_episode`."""
+
+    @property
+    def name(self) -> str:
+        """Registry name of the policy."""
+        ...
+
+    @property
+    def stage(self) -> str:
+        """Which part of the policy chose the last edge (``tree``, ``bisect``, ...)."""
+        ...
+
+    def select(self) -> int | None:
+        """The next edge to check, or None when the policy has nothing left to ask."""
+        ...
+
+    def observe(self, edge: int, free: bool) -> None:
+        """Hear the outcome of checking ``edge``."""
+        ...
+
+
+class TableOracle:
+    """An oracle that answers from one world's row of the outcome matrix X."""
+
+    def __init__(self, outcomes: npt.ArrayLike) -> None:
+        """``outcomes``: (E,) bool, True where the edge is free."""
+        self._outcomes = np.asarray(outcomes, dtype=bool).ravel()
+        self._calls = 0
+
+    @property
+    def calls(self) -> int:
+        """How many checks were asked of this oracle."""
+        return self._calls
+
+    def check(self, edge: int) -> bool:
+        """Look the edge up."""
+        self._calls += 1
+        return bool(self._outcomes[edge])
+
+
+class EpisodeStatus(str, Enum):
+    """How an episode ended."""
+
+    PATH_FOUND = "path_found"
+    NO_FREE_PATH = "no_free_path"
+    POLICY_GAVE_UP = "policy_gave_up"
+    MAX_CHECKS = "max_checks"
+
+
+@dataclass(frozen=True)
+class CheckRecord:
+    """One collision check: which edge, its outcome, who chose it and how long each part took."""
+
+    step: int
+    edge: int
+    free: bool
+    stage: str
+    select_ms: float
+    check_ms: float
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """The ordered check log and the outcome of one episode.
+
+    Attributes:
+        checks: every check in order.
+        status: how the episode ended.
+        path_index: index of the proven-free library path, when status is PATH_FOUND.
+        path_edges: that path's edge ids in traversal order.
+        blocked_evidence: for NO_FREE_PATH, (m,) the checked blocked edge that rules out each path.
+    """
+
+    checks: tuple[CheckRecord, ...]
+    status: EpisodeStatus
+    path_index: int | None
+    path_edges: IntArray | None
+    blocked_evidence: IntArray | None = None
+
+    @property
+    def num_checks(self) -> int:
+        """Number of distinct edges checked."""
+        return len(self.checks)
+
+    @property
+    def success(self) -> bool:
+        """True when a path was proven free."""
+        return self.status is EpisodeStatus.PATH_FOUND
+
+    def total_cost(self, edge_costs: npt.ArrayLike) -> float:
+        """Sum of the checked edges' costs."""
+        costs = np.asarray(edge_costs, dtype=np.float64)
+        return float(sum(costs[c.edge] for c in self.checks))
+
+    def mean_select_ms(self) -> float:
+        """Mean selection time per check in milliseconds (0 when nothing was checked)."""
+        return float(np.mean([c.select_ms for c in self.checks])) if self.checks else 0.0
+
+
+class _LibraryProgress:
+    """Per-path bookkeeping of unchecked and blocked edges (independent of any policy)."""
+
+    def __init__(self, library: PathLibrary) -> None:
+        self._library = library
+        self.remaining = np.array([p.size for p in library.path_edges], dtype=np.int64)
+        self.blocker = np.full(library.num_paths, -1, dtype=np.int64)
+
+    def record(self, edge: int, free: bool) -> None:
+        paths = self._library.paths_through(edge)
+        if free:
+            self.remaining[paths] -= 1
+        else:
+            fresh = paths[self.blocker[paths] < 0]
+            self.blocker[fresh] = edge
+
+    def proven_path(self, edge_costs: npt.NDArray[np.float64]) -> int | None:
+        """Cheapest (then lowest-index) path whose every edge is checked free."""
+        done = np.flatnonzero((self.remaining == 0) & (self.blocker < 0))
+        if done.size == 0:
+            return None
+        costs = np.array([edge_costs[self._library.path_edges[i]].sum() for i in done])
+        return int(done[int(np.argmin(costs))])
+
+    def all_blocked(self) -> bool:
+        return bool(np.all(self.blocker >= 0))
+
+
+def run_episode(
+    library: PathLibrary,
+    edge_costs: npt.ArrayLike,
+    policy: Policy,
+    oracle: EdgeOracle,
+    *,
+    max_checks: int | None = None,
+) -> EpisodeResult:
+    """Drive ``policy`` against ``oracle`` until a library path is proven free or none can be.
+
+    The episode ends when (1) some library path has every edge checked free (PATH_FOUND), (2) every
+    library path has a checked blocked edge (NO_FREE_PATH), (3) the policy has nothing left to ask
+    (POLICY_GAVE_UP), or (4) ``max_checks`` checks were made (MAX_CHECKS).
+
+    Raises:
+        PolicyError: the policy chose an edge outside the graph or one already checked.
+        UnverifiedPathError: never, unless the bookkeeping itself is broken (a last safety net).
+    """
+    costs = np.asarray(edge_costs, dtype=np.float64)
+    progress = _LibraryProgress(library)
+    outcome: dict[int, bool] = {}
+    log: list[CheckRecord] = []
+    status = EpisodeStatus.POLICY_GAVE_UP
+    while True:
+        if max_checks is not None and len(log) >= max_checks:
+            status = EpisodeStatus.MAX_CHECKS
+            break
+        t0 = time.perf_counter()
+        choice = policy.select()
+        t1 = time.perf_counter()
+        if choice is None:
+            status = EpisodeStatus.POLICY_GAVE_UP
+            break
+        edge = int(choice)
+        if not 0 <= edge < library.num_edges:
+            raise PolicyError(f"policy {policy.name} chose edge {edge}, outside [0, {library.num_edges})")
+        if edge in outcome:
+            raise PolicyError(f"policy {policy.name} chose edge {edge} a second time")
+        free = bool(oracle.check(edge))
+        t2 = time.perf_counter()
+        outcome[edge] = free
+        log.append(CheckRecord(len(log), edge, free, policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
+        progress.record(edge, free)
+        policy.observe(edge, free)
+        if free and progress.proven_path(costs) is not None:
+            status = EpisodeStatus.PATH_FOUND
+            break
+        if not free and progress.all_blocked():
+            status = EpisodeStatus.NO_FREE_PATH
+            break
+    path_index = progress.proven_path(costs) if status is EpisodeStatus.PATH_FOUND else None
+    path_edges = None
+    if path_index is not None:
+        path_edges = library.path_edges[path_index]
+        verify_path(path_edges, outcome)
+    evidence = progress.blocker.copy() if status is EpisodeStatus.NO_FREE_PATH else None
+    return EpisodeResult(tuple(log), status, path_index, path_edges, evidence)
+
+
+def verify_path(path_edges: Sequence[int] | IntArray, outcome: dict[int, bool]) -> None:
+    """Raise :class:`UnverifiedPathError` unless every edge was checked and found free."""
+    for e in np.asarray(path_edges, dtype=np.int64).tolist():
+        if outcome.get(int(e)) is not True:
+            raise UnverifiedPathError(f"edge {e} of the returned path was not checked free")

@@ -1,0 +1,283 @@
+"""Policies on the episode runner: BiSECt alone, the DiRECt tree then BiSECt, and the tree alone.
+
+Every policy is pure and seeded: the same inputs and seed give the same checks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.bisect import Bisect
+from drd_planner.core.episode import Policy
+from drd_planner.core.library import PathLibrary
+from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree
+from drd_planner.exceptions import PolicyError, ProblemError
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Default switch threshold: hand over to BiSECt when the consistent fraction is <= eta.
+DEFAULT_ETA = 0.2
+#: Default weight of the data term in the leaf bias.
+DEFAULT_ALPHA = 0.99
+
+
+class BisectPolicy:
+    """BiSECt with a fixed bias (``bisect`` with MaxProbReg, ``bisect_all`` without)."""
+
+    def __init__(
+        self,
+        library: PathLibrary,
+        theta: npt.ArrayLike,
+        edge_costs: npt.ArrayLike,
+        *,
+        max_prob_region: bool = True,
+        name: str | None = None,
+    ) -> None:
+        self._name = name or ("bisect" if max_prob_region else "bisect_all")
+        self._bisect = Bisect(library, theta, edge_costs, max_prob_region=max_prob_region)
+
+    @property
+    def name(self) -> str:
+        """Registry name."""
+        return self._name
+
+    @property
+    def stage(self) -> str:
+        """Always ``bisect``."""
+        return "bisect"
+
+    def select(self) -> int | None:
+        """BiSECt's next edge."""
+        return self._bisect.select()
+
+    def observe(self, edge: int, free: bool) -> None:
+        """Clamp the outcome."""
+        self._bisect.observe(edge, free)
+
+
+class TreeWalker:
+    """Follows a decision tree one outcome at a time."""
+
+    def __init__(self, tree: DecisionTree) -> None:
+        self._tree = tree
+        self._node = 0
+
+    @property
+    def node(self) -> int:
+        """The current node."""
+        return self._node
+
+    def edge(self) -> int | None:
+        """The edge the current node asks for, or None at a leaf."""
+        e = int(self._tree.edge[self._node])
+        return None if e == NO_EDGE else e
+
+    def advance(self, free: bool) -> bool:
+        """Move to the child for ``free``; False (and stay) when that child does not exist."""
+        child = int(self._tree.children[self._node, int(free)])
+        if child == NO_CHILD:
+            return False
+        self._node = child
+        return True
+
+
+class DirectBisectPolicy:
+    """The paper's method: walk the DiRECt tree, then BiSECt (MaxProbReg) with the node's bias.
+
+    The switch happens when the tree has no child for the outcome, the node has no edge, or the
+    node's consistent fraction is at or below ``eta``.
+    """
+
+    def __init__(
+        self,
+        tree: DecisionTree,
+        library: PathLibrary,
+        edge_costs: npt.ArrayLike,
+        *,
+        eta: float = DEFAULT_ETA,
+        alpha: float = DEFAULT_ALPHA,
+        name: str = "direct_bisect",
+    ) -> None:
+        _check_tree_fits(tree, library)
+        self._tree = tree
+        self._library = library
+        self._costs = np.asarray(edge_costs, dtype=np.float64)
+        self._eta = eta
+        self._alpha = alpha
+        self._name = name
+        self._walker = TreeWalker(tree)
+        self._observed: dict[int, bool] = {}
+        self._bisect: Bisect | None = None
+        self._switch_node: int | None = None
+        if self._should_switch(0):
+            self._switch(0)
+
+    @property
+    def name(self) -> str:
+        """Registry name."""
+        return self._name
+
+    @property
+    def stage(self) -> str:
+        """``tree`` while walking the tree, ``bisect`` after the switch."""
+        return "tree" if self._bisect is None else "bisect"
+
+    @property
+    def switch_node(self) -> int | None:
+        """The tree node at which BiSECt took over (None while still in the tree)."""
+        return self._switch_node
+
+    def _should_switch(self, node: int) -> bool:
+        return bool(self._tree.edge[node] == NO_EDGE or self._tree.active_fraction[node] <= self._eta)
+
+    def _switch(self, node: int) -> None:
+        self._switch_node = node
+        theta = self._tree.bias(node, alpha=self._alpha)
+        self._bisect = Bisect(self._library, theta, self._costs, observations=self._observed)
+
+    def select(self) -> int | None:
+        """Tree edge while in the tree; BiSECt's choice afterwards."""
+        if self._bisect is not None:
+            return self._bisect.select()
+        edge = self._walker.edge()
+        if edge is None or edge in self._observed:  # defensive: a tree never repeats an edge
+            self._switch(self._walker.node)
+            return self.select()
+        return edge
+
+    def observe(self, edge: int, free: bool) -> None:
+        """Record the outcome, step down the tree, and switch to BiSECt when due."""
+        self._observed[edge] = free
+        if self._bisect is not None:
+            self._bisect.observe(edge, free)
+            return
+        if edge != self._walker.edge():
+            raise PolicyError(
+                f"{self._name}: observed edge {edge}, but the tree asked for {self._walker.edge()}"
+            )
+        node = self._walker.node
+        if not self._walker.advance(free):
+            self._switch(node)
+        elif self._should_switch(self._walker.node):
+            self._switch(self._walker.node)
+
+
+class DirectOnlyPolicy:
+    """DiRECt alone: walk the tree to its end, then check the best-supported path's remaining edges.
+
+    The remaining edges are checked in a seeded random order. If that path turns out blocked, the
+    policy gives up (the episode fails): this is the baseline whose failure rate the paper reports.
+    """
+
+    def __init__(
+        self,
+        tree: DecisionTree,
+        library: PathLibrary,
+        *,
+        seed: int = 0,
+        name: str = "direct_only",
+    ) -> None:
+        _check_tree_fits(tree, library)
+        self._tree = tree
+        self._library = library
+        self._rng = np.random.default_rng(seed)
+        self._name = name
+        self._walker = TreeWalker(tree)
+        self._observed: dict[int, bool] = {}
+        self._queue: list[int] | None = None
+        self._failed = False
+
+    @property
+    def name(self) -> str:
+        """Registry name."""
+        return self._name
+
+    @property
+    def stage(self) -> str:
+        """``tree`` then ``path``."""
+        return "tree" if self._queue is None else "path"
+
+    def _start_final_path(self) -> None:
+        path = int(self._tree.best_path[self._walker.node])
+        if path < 0:
+            self._queue = []
+            self._failed = True
+            return
+        edges = self._library.path_edges[path]
+        if any(self._observed.get(int(e)) is False for e in edges):
+            self._queue = []
+            self._failed = True
+            return
+        todo = [int(e) for e in edges if int(e) not in self._observed]
+        self._queue = [todo[i] for i in self._rng.permutation(len(todo))]
+
+    def select(self) -> int | None:
+        """Tree edge, then the chosen path's unchecked edges; None once done or failed."""
+        if self._queue is None:
+            edge = self._walker.edge()
+            if edge is not None and edge not in self._observed:
+                return edge
+            self._start_final_path()
+        assert self._queue is not None
+        if self._failed or not self._queue:
+            return None
+        return self._queue[0]
+
+    def observe(self, edge: int, free: bool) -> None:
+        """Step down the tree, or tick off the final path's edge."""
+        self._observed[edge] = free
+        if self._queue is None:
+            if not self._walker.advance(free):
+                self._start_final_path()
+            return
+        if self._queue and self._queue[0] == edge:
+            self._queue.pop(0)
+        if not free:
+            self._failed = True
+
+
+def _check_tree_fits(tree: DecisionTree, library: PathLibrary) -> None:
+    if tree.num_edges != library.num_edges or tree.num_paths != library.num_paths:
+        raise ProblemError(
+            f"tree was built for {tree.num_edges} edges / {tree.num_paths} paths, but the problem has "
+            f"{library.num_edges} / {library.num_paths}"
+        )
+
+
+@dataclass(frozen=True)
+class PolicyContext:
+    """What a policy factory may use: the library, costs, training bias, tree and a seed."""
+
+    library: PathLibrary
+    edge_costs: FloatArray
+    train_theta: FloatArray
+    tree: DecisionTree | None
+    seed: int
+    eta: float = DEFAULT_ETA
+    alpha: float = DEFAULT_ALPHA
+
+
+PolicyFactory = Callable[[PolicyContext], Policy]
+
+
+def _need_tree(ctx: PolicyContext) -> DecisionTree:
+    if ctx.tree is None:
+        raise ProblemError("this policy needs a decision tree")
+    return ctx.tree
+
+
+POLICIES: Mapping[str, PolicyFactory] = {
+    "direct_bisect": lambda c: DirectBisectPolicy(
+        _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha
+    ),
+    "direct_only": lambda c: DirectOnlyPolicy(_need_tree(c), c.library, seed=c.seed),
+    "bisect": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=True),
+    "bisect_all": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=False),
+}
+
+#: Policies that need a decision tree.
+TREE_POLICIES = frozenset({"direct_bisect", "direct_only"})

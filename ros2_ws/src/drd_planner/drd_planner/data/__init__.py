@@ -1,0 +1,1 @@
+"""File formats: the authors' dataset folders, our tree files, and their checksums."""

@@ -1,0 +1,1 @@
+"""Planning domains: graphs and seeded generative world models."""

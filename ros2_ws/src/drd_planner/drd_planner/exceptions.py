@@ -1,0 +1,31 @@
+"""All exceptions raised by drd_planner.
+
+Every error a user can trigger with bad input derives from :class:`DrdError`, so callers (the CLI,
+the ROS node) can catch one type and print one clear line.
+"""
+
+from __future__ import annotations
+
+
+class DrdError(Exception):
+    """Base class of every error drd_planner raises on purpose."""
+
+
+class DatasetError(DrdError):
+    """A dataset folder or file is missing, malformed or inconsistent."""
+
+
+class TreeFileError(DrdError):
+    """A decision-tree file is corrupt, of another format version, or built for another problem."""
+
+
+class ProblemError(DrdError):
+    """A problem (graph, library, worlds) is internally inconsistent."""
+
+
+class PolicyError(DrdError):
+    """A policy broke the episode contract (for example it chose an edge twice)."""
+
+
+class UnverifiedPathError(DrdError):
+    """A path was about to be returned although one of its edges was not checked free."""

@@ -1,0 +1,1 @@
+"""FCL scenes, terrain, wires, robot models and edge checkers (populated by the real-worlds work)."""

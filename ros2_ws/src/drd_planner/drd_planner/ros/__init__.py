@@ -1,0 +1,1 @@
+"""The rclpy lifecycle node (the only subpackage that imports rclpy)."""

@@ -1,0 +1,42 @@
+"""ament_python / pip setup for drd_planner."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "drd_planner"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "tests"]),
+    package_data={PACKAGE: ["py.typed"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/launch", glob("launch/*.py")),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.24",
+        "scipy>=1.10",
+        "networkx>=3.0",
+        "tqdm>=4.60",
+        "PyYAML>=6.0",
+    ],
+    extras_require={
+        "plots": ["matplotlib>=3.6"],
+        "test": ["pytest>=7", "hypothesis>=6.80"],
+    },
+    zip_safe=True,
+    maintainer="drd_planner maintainers",
+    maintainer_email="maintainers@drd-planner.invalid",
+    description="DiRECt + BiSECt Bayesian active edge evaluation planner",
+    license="BSD-3-Clause",
+    entry_points={
+        "console_scripts": [
+            "drd = drd_planner.cli:main",
+        ],
+    },
+)

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Set up a virtual environment with both packages and run one job.
+#   scripts/run.sh demo    the main job: `drd demo` on the embedded planar scenario
+#   scripts/run.sh test    the whole suite: ruff, mypy, pytest
+# Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv when missing).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+job=${1:-}
+case "$job" in
+  demo|test) ;;
+  *) echo "usage: scripts/run.sh demo|test" >&2; exit 2 ;;
+esac
+
+python3 - <<'PY' || { echo "drd_planner needs Python 3.10 or newer" >&2; exit 2; }
+import sys
+raise SystemExit(0 if sys.version_info >= (3, 10) else 1)
+PY
+
+venv=${DRD_VENV:-.venv}
+if [ ! -x "$venv/bin/python" ]; then
+  if ! python3 -m venv "$venv" >/dev/null 2>&1; then
+    rm -rf "$venv"
+    echo "python3 -m venv is unavailable; installing python3-venv" >&2
+    sudo_cmd=""
+    [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+    $sudo_cmd apt-get update -qq
+    $sudo_cmd apt-get install -y -qq python3-venv
+    python3 -m venv "$venv"
+  fi
+fi
+py="$venv/bin/python"
+"$py" -m pip install -q --disable-pip-version-check --upgrade pip
+"$py" -m pip install -q --disable-pip-version-check \
+  -e ros2_ws/src/drd_msgs_py -e "ros2_ws/src/drd_planner[plots,test]" -r requirements-dev.txt
+
+case "$job" in
+  demo)
+    "$venv/bin/drd" demo
+    ;;
+  test)
+    "$venv/bin/ruff" check .
+    "$venv/bin/ruff" format --check .
+    "$venv/bin/mypy"
+    "$py" -m pytest -q
+    ;;
+esac

@@ -1,0 +1,27 @@
+"""Shared fixtures: where the authors' data lives, and skipping cleanly when it is absent."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+SHARED_DATA = Path(os.environ.get("DRD_SHARED_DATA", REPO_ROOT.parent / "shared" / "data"))
+GCCD = SHARED_DATA / "gccd"
+
+
+def gccd_folder(name: str) -> Path:
+    """Path of an authors' dataset folder, skipping the test with a reason when it is absent."""
+    folder = GCCD / name
+    if not folder.is_dir():
+        pytest.skip(f"shared dataset {folder} not present (set DRD_SHARED_DATA to its parent)")
+    return folder
+
+
+def gccd_graph_datasets() -> list[str]:
+    """Names of every graph dataset folder under shared/data/gccd (empty when absent)."""
+    if not GCCD.is_dir():
+        return []
+    return sorted(p.name for p in GCCD.iterdir() if (p / "graph.txt").is_file())
