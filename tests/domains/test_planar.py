@@ -207,7 +207,7 @@ def test_world_models_are_seeded_boxes(model: str) -> None:
 def _squares_of(w: np.ndarray) -> np.ndarray:
     """The 0.1 x 0.1 squares among a world's boxes."""
     side = np.stack([w[:, 2] - w[:, 0], w[:, 3] - w[:, 1]], axis=1)
-    return w[np.isclose(side, 0.1).all(axis=1)]
+    return np.asarray(w[np.isclose(side, 0.1).all(axis=1)])
 
 
 def test_one_wall_structure() -> None:

@@ -231,8 +231,8 @@ def one_wall_patterns(seed: int) -> IntArray:
     """
     rng = np.random.default_rng(seed)
     while True:
-        patterns = rng.integers(0, 2, size=(ONE_WALL_MAX_PATTERNS, ONE_WALL_SLOTS), dtype=np.int64)
-        patterns = patterns[patterns.sum(axis=1) >= 2]
+        draws = rng.integers(0, 2, size=(ONE_WALL_MAX_PATTERNS, ONE_WALL_SLOTS), dtype=np.int64)
+        patterns: IntArray = np.asarray(draws[draws.sum(axis=1) >= 2], dtype=np.int64)
         if patterns.shape[0]:
             return np.asarray(patterns, dtype=np.int64)
 

@@ -1,0 +1,105 @@
+"""The episode runner: stopping rules, the safety invariant and the policy contract."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
+from drd_planner.core.library import PathLibrary
+from drd_planner.exceptions import PolicyError, UnverifiedPathError
+
+
+class ScriptedPolicy:
+    """Checks a fixed list of edges in order."""
+
+    def __init__(self, edges: list[int]) -> None:
+        self._edges = list(edges)
+        self.observed: list[tuple[int, bool]] = []
+
+    @property
+    def name(self) -> str:
+        return "scripted"
+
+    @property
+    def stage(self) -> str:
+        return "script"
+
+    def select(self) -> int | None:
+        return self._edges.pop(0) if self._edges else None
+
+    def observe(self, edge: int, free: bool) -> None:
+        self.observed.append((edge, free))
+
+
+LIB = PathLibrary.from_sequences([[0, 1], [2, 3], [1, 4]], 5)
+COSTS = np.ones(5)
+
+
+def test_stops_as_soon_as_a_path_is_verified() -> None:
+    world = np.array([True, True, False, True, True])
+    policy = ScriptedPolicy([0, 1, 2, 3, 4])
+    result = run_episode(LIB, COSTS, policy, TableOracle(world))
+    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.path_index == 0
+    assert [c.edge for c in result.checks] == [0, 1]
+    assert policy.observed == [(0, True), (1, True)]
+    np.testing.assert_array_equal(result.path_edges, [0, 1])
+
+
+def test_cheapest_of_simultaneously_verified_paths_wins() -> None:
+    lib = PathLibrary.from_sequences([[0, 1, 2], [1, 2]], 3)
+    result = run_episode(lib, np.ones(3), ScriptedPolicy([0, 1, 2]), TableOracle([True, True, True]))
+    assert result.path_index == 1  # both complete on edge 2; path 1 is cheaper
+
+
+def test_no_free_path_reports_evidence_per_path() -> None:
+    world = np.array([False, True, False, True, False])
+    result = run_episode(LIB, COSTS, ScriptedPolicy([0, 2, 4]), TableOracle(world))
+    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.path_edges is None
+    np.testing.assert_array_equal(result.blocked_evidence, [0, 2, 4])
+    assert not result.success
+
+
+def test_policy_giving_up_and_max_checks() -> None:
+    world = np.ones(5, dtype=bool)
+    gave_up = run_episode(LIB, COSTS, ScriptedPolicy([0]), TableOracle(world))
+    assert gave_up.status is EpisodeStatus.POLICY_GAVE_UP
+    capped = run_episode(LIB, COSTS, ScriptedPolicy([0, 2, 1]), TableOracle(world), max_checks=2)
+    assert capped.status is EpisodeStatus.MAX_CHECKS
+    assert capped.num_checks == 2
+
+
+def test_policy_contract_violations_raise() -> None:
+    world = np.ones(5, dtype=bool)
+    with pytest.raises(PolicyError, match="second time"):
+        run_episode(LIB, COSTS, ScriptedPolicy([0, 0]), TableOracle(world))
+    with pytest.raises(PolicyError, match="outside"):
+        run_episode(LIB, COSTS, ScriptedPolicy([7]), TableOracle(world))
+
+
+def test_check_log_records_stage_times_and_cost() -> None:
+    world = np.array([True, True, True, True, True])
+    result = run_episode(LIB, np.array([1.0, 2.0, 1.0, 1.0, 1.0]), ScriptedPolicy([2, 3]), TableOracle(world))
+    assert [(c.step, c.edge, c.free, c.stage) for c in result.checks] == [
+        (0, 2, True, "script"),
+        (1, 3, True, "script"),
+    ]
+    assert all(c.select_ms >= 0 and c.check_ms >= 0 for c in result.checks)
+    assert result.total_cost([1.0, 2.0, 1.0, 1.0, 1.0]) == 2.0
+
+
+def test_verify_path_refuses_unchecked_or_blocked_edges() -> None:
+    verify_path([0, 1], {0: True, 1: True})
+    with pytest.raises(UnverifiedPathError):
+        verify_path([0, 1], {0: True})
+    with pytest.raises(UnverifiedPathError):
+        verify_path([0, 1], {0: True, 1: False})
+
+
+def test_table_oracle_counts_calls() -> None:
+    oracle = TableOracle([True, False])
+    assert oracle.check(0) is True
+    assert oracle.check(1) is False
+    assert oracle.calls == 2
