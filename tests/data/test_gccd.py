@@ -284,10 +284,10 @@ REQUIRED = (
 )
 
 
-def _refused(folder: Path, filename: str, *, merge: str = "or") -> str:
+def _refused(folder: Path, filename: str) -> str:
     """Load ``folder``, expect a DatasetError, and check it names ``filename``; returns the message."""
     with pytest.raises(DatasetError) as info:
-        load_gccd_folder(folder, merge=merge)  # type: ignore[arg-type]
+        load_gccd_folder(folder)
     message = str(info.value)
     assert filename in message.replace(str(folder.parent), ""), message
     assert "\n" not in message
@@ -361,7 +361,10 @@ def test_x_with_wrong_number_of_columns_is_refused(tmp_path: Path) -> None:
 def test_x_with_a_value_two_is_refused(tmp_path: Path) -> None:
     bad = X_STORED.astype(np.float64)
     bad[2, 3] = 2
-    _refused(write_folder(tmp_path, coll_check_results_DOT_mat={"coll_check_results": bad}), "coll_check_results.mat")
+    _refused(
+        write_folder(tmp_path, coll_check_results_DOT_mat={"coll_check_results": bad}),
+        "coll_check_results.mat",
+    )
 
 
 def test_x_with_a_wrong_variable_name_is_refused(tmp_path: Path) -> None:
@@ -395,12 +398,12 @@ def test_bad_path_library_is_refused(tmp_path: Path, text: str) -> None:
 def test_world_ids_out_of_range_are_refused(tmp_path: Path, filename: str, ids: list[float]) -> None:
     variable = filename.removesuffix(".mat")
     override = {filename.replace(".", "_DOT_"): {variable: np.array(ids)[:, None]}}
-    _refused(write_folder(tmp_path, **override), filename)  # type: ignore[arg-type]
+    _refused(write_folder(tmp_path, **override), filename)
 
 
 @pytest.mark.parametrize("filename", ["start_idx.dat", "goal_idx.dat"])
 def test_non_integer_start_or_goal_is_refused(tmp_path: Path, filename: str) -> None:
-    _refused(write_folder(tmp_path, **{filename.replace(".", "_DOT_"): "start\n"}), filename)  # type: ignore[arg-type]
+    _refused(write_folder(tmp_path, **{filename.replace(".", "_DOT_"): "start\n"}), filename)
 
 
 @pytest.mark.parametrize(
@@ -408,7 +411,7 @@ def test_non_integer_start_or_goal_is_refused(tmp_path: Path, filename: str) -> 
 )
 def test_corrupt_mat_file_is_refused(tmp_path: Path, filename: str) -> None:
     junk = np.random.default_rng(7).integers(0, 256, size=512, dtype=np.uint8).tobytes()
-    _refused(write_folder(tmp_path, **{filename.replace(".", "_DOT_"): junk}), filename)  # type: ignore[arg-type]
+    _refused(write_folder(tmp_path, **{filename.replace(".", "_DOT_"): junk}), filename)
 
 
 def test_stored_r_of_wrong_shape_is_refused(tmp_path: Path) -> None:

@@ -146,11 +146,17 @@ class DirectSelector:
         self._colour = greedy_region_colouring(self._R) if colouring else None
         self._exact = self._uniform and n < _FLOAT32_EXACT_WORLDS
         self._dtype = np.float32 if self._exact else np.float64
+        self._flops = 0
 
     @property
     def num_worlds(self) -> int:
         """n, the number of training worlds."""
         return int(self._X.shape[0])
+
+    @property
+    def matmul_flops(self) -> int:
+        """Floating-point operations spent in the ECD-weight matrix products so far."""
+        return self._flops
 
     @property
     def has_null_ecd(self) -> bool:
@@ -236,8 +242,9 @@ class DirectSelector:
                 lx = np.zeros(informative.size)
                 if groups is not None:
                     wx = self._group_weights(cx, groups, tx, qx)
-                    wx = np.where(self._is_zero(wx, tx), 0.0, wx)
-                    lx += multiplicity @ (np.log(wx) - np.log(w_now)[:, None])
+                    if not self._exact:  # exact integer weights are already exactly zero
+                        wx = np.where(self._is_zero(wx, tx), 0.0, wx)
+                    lx += multiplicity @ np.log(wx) - float(multiplicity @ np.log(w_now))
                 if null_count:
                     w0z = np.where(self._is_zero(w0_x, tx), 0.0, w0_x)
                     lx += null_count * (np.log(w0z) - np.log(w0_now))
@@ -270,8 +277,12 @@ class DirectSelector:
             null_count = int((~has_mass).sum()) + int(null_ecd)
             if active_regions.shape[1] == 0:
                 return None, np.zeros(0), null_count
-            cols, counts = np.unique(active_regions.T, axis=0, return_counts=True)
-            return cols.T.astype(self._dtype), counts.astype(np.float64), null_count
+            # Merge regions with identical membership: unique over bit-packed columns (fast hashing).
+            packed = np.ascontiguousarray(np.packbits(active_regions, axis=0).T)
+            keys = packed.view(np.dtype((np.void, packed.shape[1]))).ravel()
+            _, first, counts = np.unique(keys, return_index=True, return_counts=True)
+            cols = active_regions[:, first]
+            return cols.astype(self._dtype), counts.astype(np.float64), null_count
         colours = self._colour[has_mass]
         used = np.unique(colours)
         null_count = int(self._colour.max() + 1 - used.size) + int(null_ecd)
@@ -287,13 +298,18 @@ class DirectSelector:
     ) -> FloatArray:
         """(U, tests) ECD weights under one outcome (float64)."""
         both = groups.T @ np.concatenate([cx, cx * cx], axis=1)
+        self._flops += 2 * groups.shape[0] * groups.shape[1] * 2 * cx.shape[1]
         k = cx.shape[1]
-        a = both[:, :k].astype(np.float64)
-        s = both[:, k:].astype(np.float64)
-        diff = a * a - s  # (regions, tests): squared region mass minus its atoms' squares
+        # With integer counts below 2**12 worlds every term is an integer below 2**24, so the
+        # arithmetic stays exact in float32; otherwise it runs in float64.
+        a = both[:, :k]
+        diff = a * a
+        diff -= both[:, k:]  # (regions, tests): squared region mass minus its atoms' squares
         if self._colour is not None:
-            diff = np.asarray(self._colour_sum @ diff)
-        return np.asarray(0.5 * ((tx * tx - qx)[None, :] - diff))
+            diff = np.asarray(self._colour_sum @ diff.astype(np.float64), dtype=self._dtype)
+        outside = (tx * tx - qx).astype(self._dtype)
+        np.subtract(outside[None, :], diff, out=diff)
+        return np.asarray(diff, dtype=np.float64) * 0.5
 
     def _weights_now(
         self, mass: FloatArray, groups: npt.NDArray[np.floating] | None

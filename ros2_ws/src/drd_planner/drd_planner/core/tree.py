@@ -229,6 +229,7 @@ def build_tree(
         "null_ecd": selector.has_null_ecd,
         "expanded_nodes": expanded,
         "build_seconds": build_s,
+        "matmul_flops": selector.matmul_flops,
     }
     return DecisionTree(
         edge=np.array(edges, dtype=np.int32),
