@@ -335,11 +335,6 @@ def test_malformed_graph_txt_is_refused(tmp_path: Path, text: str) -> None:
     _refused(write_folder(tmp_path, graph_DOT_txt=text), "graph.txt")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="production bug: rows of the wrong width are reshaped into 4-column rows when the total "
-    "count of numbers happens to be a multiple of 4 (gccd.read_graph_txt uses reshape(-1, 4))",
-)
 def test_graph_rows_of_two_numbers_are_refused(tmp_path: Path) -> None:
     path = tmp_path / "graph.txt"
     path.write_text("NumVertices: 4\nNumEdges: 2\n1 2\n1 3\n")

@@ -85,7 +85,7 @@ def _rechecksum(arrays: dict[str, np.ndarray]) -> None:
     header = _header(arrays)
     digests = {k: _array_digest(k, v) for k, v in arrays.items() if k != "header"}
     header["array_sha256"] = digests
-    header["payload_sha256"] = _payload_digest(digests)
+    header["payload_sha256"] = _payload_digest(digests, header)
     arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
 
 
@@ -397,3 +397,16 @@ def test_loader_never_calls_pickle(saved: Path, monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(pickle, "load", boom)
     monkeypatch.setattr(pickle, "loads", boom)
     assert load_tree(saved).domain == "planar"
+
+
+def test_edited_header_field_is_refused(tmp_path: Path, bundle: TreeBundle) -> None:
+    """The payload checksum covers header fields too (start, goal, eta, alpha, domain, ...)."""
+    path = tmp_path / "tree.npz"
+    save_tree(path, bundle)
+    with np.load(path, allow_pickle=False) as archive:
+        arrays = {k: archive[k] for k in archive.files}
+    header = json.loads(arrays["header"].tobytes().decode())
+    header["eta"] = 0.9
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+    np.savez(path, **arrays)  # type: ignore[arg-type]
+    _refused(path, "payload checksum")

@@ -74,14 +74,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``drd bench``: every policy on every test world of an authors'-format dataset."""
     from drd_planner.bench.runner import benchmark_json, markdown_table, run_benchmark
     from drd_planner.data.gccd import load_gccd_folder
-    from drd_planner.data.tree_file import load_tree
+    from drd_planner.data.tree_file import check_bundle_fits, load_tree
 
     problem = load_gccd_folder(args.gccd)
     tree = None
     if args.tree:
-        bundle = load_tree(args.tree)
-        if bundle.problem.num_edges != problem.num_edges or bundle.problem.num_paths != problem.num_paths:
-            raise DrdError(f"tree {args.tree} was built for another problem than {args.gccd}")
+        bundle = load_tree(args.tree, expected_domain="gccd")
+        check_bundle_fits(bundle, problem)
         tree = bundle.tree
     elif any(p in ("direct_bisect", "direct_only") for p in args.policies):
         tree = _build_tree_from_args(problem, args)
@@ -105,12 +104,11 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from drd_planner.core.episode import TableOracle, run_episode
     from drd_planner.core.policies import POLICIES, PolicyContext
     from drd_planner.data.gccd import load_gccd_folder
-    from drd_planner.data.tree_file import load_tree
+    from drd_planner.data.tree_file import check_bundle_fits, load_tree
 
-    bundle = load_tree(args.tree)
+    bundle = load_tree(args.tree, expected_domain="gccd")
     problem = load_gccd_folder(args.gccd)
-    if bundle.problem.num_edges != problem.num_edges or bundle.problem.num_paths != problem.num_paths:
-        raise DrdError(f"tree {args.tree} was built for another problem than {args.gccd}")
+    check_bundle_fits(bundle, problem)
     worlds = problem.require_worlds()
     if not 0 <= args.world < worlds.num_worlds:
         raise DrdError(f"--world must lie in [0, {worlds.num_worlds})")

@@ -125,7 +125,7 @@ def benchmark_json(result: BenchmarkResult) -> dict[str, Any]:
         "dataset": result.dataset,
         "test_ids": result.test_ids,
         "oracle_lower_bound": {
-            "mean": float(np.nanmean(lb)) if lb.size else float("nan"),
+            "mean": nanmean_or_nan(lb),
             "per_world": [None if np.isnan(v) else float(v) for v in lb],
         },
         "policies": {name: stats.as_json() for name, stats in result.policies.items()},
@@ -147,6 +147,12 @@ def markdown_table(results: Sequence[BenchmarkResult], policies: Sequence[str]) 
                 continue
             mean = float(np.mean(stats.checks)) if stats.checks else float("nan")
             cells.append(f"{mean:.2f}" + (f" ({stats.failures} failed)" if stats.failures else ""))
-        lb = float(np.nanmean(res.lower_bound)) if res.lower_bound else float("nan")
+        lb = nanmean_or_nan(np.asarray(res.lower_bound, dtype=np.float64))
         rows.append(f"| {res.dataset} | " + " | ".join(cells) + f" | {lb:.2f} |")
     return "\n".join(rows) + "\n"
+
+
+def nanmean_or_nan(values: np.ndarray) -> float:
+    """Mean of the finite entries; NaN (without a warning) when there are none."""
+    finite = values[np.isfinite(values)]
+    return float(finite.mean()) if finite.size else float("nan")

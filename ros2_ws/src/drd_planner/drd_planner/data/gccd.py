@@ -75,8 +75,14 @@ def read_graph_txt(path: Path) -> RawGraph:
     rows = [ln for ln in lines[body_start:] if ln.strip()]
     if len(rows) != header["NumEdges"]:
         raise DatasetError(f"{path}: NumEdges is {header['NumEdges']} but {len(rows)} edge rows follow")
+    fields = [ln.split() for ln in rows]
+    bad = next((i for i, f in enumerate(fields) if len(f) != 4), None)
+    if bad is not None:
+        raise DatasetError(
+            f"{path}: line {body_start + bad + 1} must be 'id parent child length' (4 numbers)"
+        )
     try:
-        table = np.array([[float(v) for v in ln.split()] for ln in rows], dtype=np.float64).reshape(-1, 4)
+        table = np.array(fields, dtype=np.float64).reshape(-1, 4)
     except ValueError:
         raise DatasetError(f"{path}: every edge row must be 'id parent child length' (4 numbers)") from None
     nv = header["NumVertices"]
@@ -84,6 +90,11 @@ def read_graph_txt(path: Path) -> RawGraph:
     children = table[:, 2].astype(np.int64) - 1
     if table.size and (min(parents.min(), children.min()) < 0 or max(parents.max(), children.max()) >= nv):
         raise DatasetError(f"{path}: vertex ids must lie in 1..{nv}")
+    loops = np.flatnonzero(parents == children)
+    if loops.size:
+        raise DatasetError(
+            f"{path}: line {body_start + int(loops[0]) + 1} is a self-loop, which is not an edge"
+        )
     if not np.all(np.isfinite(table[:, 3])) or np.any(table[:, 3] < 0):
         raise DatasetError(f"{path}: edge lengths must be finite and non-negative")
     return RawGraph(nv, parents, children, table[:, 3].copy())

@@ -89,8 +89,13 @@ def _array_digest(name: str, arr: npt.NDArray[Any]) -> str:
     return h.hexdigest()
 
 
-def _payload_digest(digests: dict[str, str]) -> str:
-    return hashlib.sha256("".join(f"{k}:{digests[k]};" for k in sorted(digests)).encode()).hexdigest()
+def _payload_digest(digests: dict[str, str], header: dict[str, Any] | None = None) -> str:
+    """SHA-256 over every array digest and every header field except the digests themselves."""
+    h = hashlib.sha256("".join(f"{k}:{digests[k]};" for k in sorted(digests)).encode())
+    if header is not None:
+        fields = {k: v for k, v in header.items() if k not in ("array_sha256", "payload_sha256")}
+        h.update(json.dumps(fields, sort_keys=True).encode())
+    return h.hexdigest()
 
 
 def _concat(seqs: tuple[npt.NDArray[np.int64], ...]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
@@ -139,8 +144,9 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         "problem_metadata": problem.metadata,
         "provenance": bundle.provenance,
         "array_sha256": digests,
-        "payload_sha256": _payload_digest(digests),
     }
+    header = json.loads(json.dumps(header, sort_keys=True))  # exactly what a reader will see
+    header["payload_sha256"] = _payload_digest(digests, header)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     header_bytes = np.frombuffer(json.dumps(header, sort_keys=True).encode(), dtype=np.uint8)
@@ -184,7 +190,7 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
     for name, arr in contents.items():
         if _array_digest(name, arr) != digests[name]:
             raise TreeFileError(f"{src} is corrupt: checksum mismatch in array {name!r}")
-    if _payload_digest(digests) != header.get("payload_sha256"):
+    if _payload_digest(digests, header) != header.get("payload_sha256"):
         raise TreeFileError(f"{src} is corrupt: payload checksum mismatch")
     missing = [k for k in _REQUIRED if k not in contents]
     if missing:
@@ -200,6 +206,29 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
         return _bundle_from(contents, header)
     except (DrdError, KeyError, TypeError, ValueError, IndexError) as exc:
         raise TreeFileError(f"{src} is inconsistent: {exc}") from exc
+
+
+def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
+    """Raise TreeFileError unless ``bundle`` was built for ``problem``'s graph and library.
+
+    Sizes are not enough: two datasets can share a graph and library size but not their paths.
+    """
+    theirs, ours = bundle.problem, problem
+    same = (
+        theirs.num_edges == ours.num_edges
+        and theirs.num_paths == ours.num_paths
+        and all(
+            np.array_equal(a, b)
+            for a, b in zip(theirs.library.path_edges, ours.library.path_edges, strict=True)
+        )
+        and (
+            theirs.graph is None or ours.graph is None or np.array_equal(theirs.graph.edges, ours.graph.edges)
+        )
+    )
+    if not same:
+        raise TreeFileError(
+            f"tree {bundle.problem.name!r} was built for another graph or path library than {ours.name!r}"
+        )
 
 
 def _split(flat: npt.NDArray[np.int64], offsets: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
