@@ -11,7 +11,7 @@ from conftest import gccd_folder, gccd_graph_datasets
 
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.problem import Problem
-from drd_planner.data.gccd import RawGraph, load_gccd_folder, merge_directions, read_graph_txt
+from drd_planner.data.gccd import REQUIRED_FILES, RawGraph, load_gccd_folder, merge_directions, read_graph_txt
 from drd_planner.exceptions import DatasetError
 
 # --------------------------------------------------------------------------------------------------
@@ -273,15 +273,7 @@ def test_merge_directions_directed_graph_keeps_every_row() -> None:
 # Refusals
 # --------------------------------------------------------------------------------------------------
 
-REQUIRED = (
-    "graph.txt",
-    "path_library.dat",
-    "start_idx.dat",
-    "goal_idx.dat",
-    "coll_check_results.mat",
-    "train_id.mat",
-    "test_id.mat",
-)
+REQUIRED = REQUIRED_FILES
 
 
 def _refused(folder: Path, filename: str) -> str:
