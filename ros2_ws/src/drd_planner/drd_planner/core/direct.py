@@ -85,6 +85,23 @@ def pick_best_test(log_expected: npt.ArrayLike, costs: npt.ArrayLike) -> int:
 
 
 @dataclass(frozen=True)
+class _EcdGroups:
+    """The ECD problems over the active atoms of one selection.
+
+    Attributes:
+        members: (S, U) 0/1 membership of each distinct region holding active mass, or None.
+        multiplicity: (G,) how many ECDs share each weight row (after ``colour_sum``, if any).
+        null_count: ECDs that degenerate to the all-atoms null weight (the null ECD included).
+        colour_sum: (G, U) sparse sum of region rows into colour groups, or None without colouring.
+    """
+
+    members: npt.NDArray[np.floating] | None
+    multiplicity: FloatArray
+    null_count: int
+    colour_sum: sp.csr_array | None = None
+
+
+@dataclass(frozen=True)
 class DirectChoice:
     """A DiRECt selection.
 
@@ -212,10 +229,10 @@ class DirectSelector:
         num_atoms = members.shape[0]
         mass = np.bincount(local, weights=weights, minlength=num_atoms).astype(np.float64)  # c, (S,)
         total = float(mass.sum())
-        groups, multiplicity, null_count = self._groups(members, null_ecd)
+        groups = self._groups(members, null_ecd)
         w_now, w0_now = self._weights_now(mass, groups)
         if np.any(self._is_zero(w_now, total)) or (
-            null_count and self._is_zero(np.array([w0_now]), total)[0]
+            groups.null_count and self._is_zero(np.array([w0_now]), total)[0]
         ):
             return None
         # Informative tests: the active worlds disagree.
@@ -234,20 +251,25 @@ class DirectSelector:
         c1 = np.asarray(onehot @ xi)  # (S, Ti) mass of atom s with x_t = 1
         c0 = mass.astype(self._dtype)[:, None] - c1
         log_remaining = []
+        k = informative.size
         for cx in (c0, c1):
+            stacked = np.empty((num_atoms, 2 * k), dtype=self._dtype)  # [C_x | C_x o C_x]
+            stacked[:, :k] = cx
+            np.multiply(cx, cx, out=stacked[:, k:])
             tx = cx.sum(axis=0, dtype=np.float64)
-            qx = (cx * cx).sum(axis=0, dtype=np.float64)
+            qx = stacked[:, k:].sum(axis=0, dtype=np.float64)
             w0_x = 0.5 * (tx * tx - qx)
             with np.errstate(divide="ignore"):
                 lx = np.zeros(informative.size)
-                if groups is not None:
-                    wx = self._group_weights(cx, groups, tx, qx)
+                if groups.members is not None:
+                    wx = self._group_weights(stacked, groups, tx, qx)
                     if not self._exact:  # exact integer weights are already exactly zero
                         wx = np.where(self._is_zero(wx, tx), 0.0, wx)
-                    lx += multiplicity @ np.log(wx) - float(multiplicity @ np.log(w_now))
-                if null_count:
+                    mult = groups.multiplicity
+                    lx += mult @ np.log(wx) - float(mult @ np.log(w_now))
+                if groups.null_count:
                     w0z = np.where(self._is_zero(w0_x, tx), 0.0, w0_x)
-                    lx += null_count * (np.log(w0z) - np.log(w0_now))
+                    lx += groups.null_count * (np.log(w0z) - np.log(w0_now))
             log_remaining.append((tx, lx))
         (t0, l0), (t1, l1) = log_remaining
         with np.errstate(divide="ignore"):
@@ -261,63 +283,65 @@ class DirectSelector:
             float(log_expected[best]),
         )
 
-    def _groups(
-        self, members: BoolArray, null_ecd: bool
-    ) -> tuple[npt.NDArray[np.floating] | None, FloatArray, int]:
-        """ECD groups over the active atoms.
+    def _groups(self, members: BoolArray, null_ecd: bool) -> _EcdGroups:
+        """The ECD problems over the active atoms ``members`` (S, m).
 
-        Returns (G, multiplicity, null_count): G is (S, U) 0/1 membership of each distinct group
-        that holds active mass (for colouring, one column per region plus the colour index in
-        ``self._group_colour``), multiplicity (U,) how many ECDs share it, and null_count how
-        many ECDs have degenerated to the all-atoms null weight (including the null ECD).
+        Without colouring, regions with identical membership are merged and counted with
+        multiplicity; with colouring, region rows are summed into their colour's ECD. Regions with
+        no active mass degenerate to the null weight and are only counted.
         """
         has_mass = members.any(axis=0)
         if self._colour is None:
             active_regions = members[:, has_mass]
             null_count = int((~has_mass).sum()) + int(null_ecd)
             if active_regions.shape[1] == 0:
-                return None, np.zeros(0), null_count
+                return _EcdGroups(None, np.zeros(0), null_count)
             # Merge regions with identical membership: unique over bit-packed columns (fast hashing).
             packed = np.ascontiguousarray(np.packbits(active_regions, axis=0).T)
             keys = packed.view(np.dtype((np.void, packed.shape[1]))).ravel()
             _, first, counts = np.unique(keys, return_index=True, return_counts=True)
             cols = active_regions[:, first]
-            return cols.astype(self._dtype), counts.astype(np.float64), null_count
+            return _EcdGroups(cols.astype(self._dtype), counts.astype(np.float64), null_count)
         colours = self._colour[has_mass]
         used = np.unique(colours)
         null_count = int(self._colour.max() + 1 - used.size) + int(null_ecd)
-        group_of_region = np.searchsorted(used, colours)
-        self._colour_sum = sp.csr_array(
-            (np.ones(colours.size), (group_of_region, np.arange(colours.size))),
+        colour_sum = sp.csr_array(
+            (np.ones(colours.size), (np.searchsorted(used, colours), np.arange(colours.size))),
             shape=(used.size, colours.size),
         )
-        return members[:, has_mass].astype(self._dtype), np.ones(used.size), null_count
+        members_f = members[:, has_mass].astype(self._dtype)
+        return _EcdGroups(members_f if colours.size else None, np.ones(used.size), null_count, colour_sum)
 
     def _group_weights(
-        self, cx: npt.NDArray[np.floating], groups: npt.NDArray[np.floating], tx: FloatArray, qx: FloatArray
+        self, stacked: npt.NDArray[np.floating], groups: _EcdGroups, tx: FloatArray, qx: FloatArray
     ) -> FloatArray:
-        """(U, tests) ECD weights under one outcome (float64)."""
-        both = groups.T @ np.concatenate([cx, cx * cx], axis=1)
-        self._flops += 2 * groups.shape[0] * groups.shape[1] * 2 * cx.shape[1]
-        k = cx.shape[1]
+        """(G, tests) ECD weights under one outcome (float64).
+
+        ``stacked`` is (S, 2 tests): the atom masses C_x next to their squares C_x o C_x.
+        """
+        members = groups.members
+        assert members is not None
+        both = members.T @ stacked
+        self._flops += 2 * members.shape[0] * members.shape[1] * stacked.shape[1]
+        k = stacked.shape[1] // 2
         # With integer counts below 2**12 worlds every term is an integer below 2**24, so the
         # arithmetic stays exact in float32; otherwise it runs in float64.
         a = both[:, :k]
         diff = a * a
         diff -= both[:, k:]  # (regions, tests): squared region mass minus its atoms' squares
-        if self._colour is not None:
-            diff = np.asarray(self._colour_sum @ diff.astype(np.float64), dtype=self._dtype)
+        if groups.colour_sum is not None:
+            diff = np.asarray(groups.colour_sum @ diff.astype(np.float64), dtype=self._dtype)
         outside = (tx * tx - qx).astype(self._dtype)
         np.subtract(outside[None, :], diff, out=diff)
         return np.asarray(diff, dtype=np.float64) * 0.5
 
-    def _weights_now(
-        self, mass: FloatArray, groups: npt.NDArray[np.floating] | None
-    ) -> tuple[FloatArray, float]:
+    def _weights_now(self, mass: FloatArray, groups: _EcdGroups) -> tuple[FloatArray, float]:
+        """Current ECD weights (G,) and null weight for atom masses ``mass`` (S,)."""
         t = float(mass.sum())
         q = float((mass * mass).sum())
         w0 = 0.5 * (t * t - q)
-        if groups is None:
+        if groups.members is None:
             return np.zeros(0), w0
-        w = self._group_weights(mass.astype(self._dtype)[:, None], groups, np.array([t]), np.array([q]))
+        c = mass.astype(self._dtype)[:, None]
+        w = self._group_weights(np.concatenate([c, c * c], axis=1), groups, np.array([t]), np.array([q]))
         return w[:, 0], w0
