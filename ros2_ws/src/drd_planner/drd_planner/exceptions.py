@@ -29,3 +29,7 @@ class PolicyError(DrdError):
 
 class UnverifiedPathError(DrdError):
     """A path was about to be returned although one of its edges was not checked free."""
+
+
+class GeometryError(DrdError):
+    """A shape, pose, terrain grid, URDF or scene description is invalid or cannot be represented."""
