@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
+from drd_planner.core.episode import EpisodeStatus, GraphPathPolicy, TableOracle, run_episode, verify_path
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import PolicyError, UnverifiedPathError
 
@@ -103,3 +103,78 @@ def test_table_oracle_counts_calls() -> None:
     assert oracle.check(0) is True
     assert oracle.check(1) is False
     assert oracle.calls == 2
+
+
+class ScriptedGraphPolicy(ScriptedPolicy):
+    """A GraphPathPolicy that stands behind a fixed path (None: start and goal disconnected)."""
+
+    def __init__(
+        self,
+        edges: list[int],
+        path: list[int] | None,
+        *,
+        stops_on_library_path: bool = False,
+        max_checks: int | None = None,
+    ) -> None:
+        super().__init__(edges)
+        self.path = None if path is None else np.array(path, dtype=np.int64)
+        self._stops = stops_on_library_path
+        self._max = max_checks
+
+    @property
+    def stops_on_library_path(self) -> bool:
+        return self._stops
+
+    @property
+    def max_checks(self) -> int | None:
+        return self._max
+
+    def proposed_path(self) -> np.ndarray | None:
+        return self.path
+
+
+def test_graph_policy_is_recognised_only_with_the_extra_members() -> None:
+    assert isinstance(ScriptedGraphPolicy([], [0]), GraphPathPolicy)
+    assert not isinstance(ScriptedPolicy([]), GraphPathPolicy)
+
+
+def test_graph_policy_ends_on_its_own_path_not_on_a_library_path() -> None:
+    world = np.ones(5, dtype=bool)
+    # Library path 0 = [0, 1] is proven after two checks; the policy's own path [2, 4] after four.
+    result = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 4, 3], [2, 4]), TableOracle(world))
+    assert result.status is EpisodeStatus.PATH_FOUND
+    assert [c.edge for c in result.checks] == [0, 1, 2, 4]
+    assert result.path_index is None
+    np.testing.assert_array_equal(result.path_edges, [2, 4])
+    # With the flag set, the library path ends it as for any policy.
+    flagged = ScriptedGraphPolicy([0, 1, 2, 4], [2, 4], stops_on_library_path=True)
+    result = run_episode(LIB, COSTS, flagged, TableOracle(world))
+    assert (result.num_checks, result.path_index) == (2, 0)
+
+
+def test_graph_policy_blocked_library_does_not_end_it() -> None:
+    # Edges 0, 2 and 1 block all three library paths; the policy's path [3] is still checked.
+    world = np.array([False, False, False, True, True])
+    result = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 2, 1, 3], [3]), TableOracle(world))
+    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.num_checks == 4
+    np.testing.assert_array_equal(result.path_edges, [3])
+
+
+def test_graph_policy_disconnected_and_budgets() -> None:
+    world = np.ones(5, dtype=bool)
+    gone = run_episode(LIB, COSTS, ScriptedGraphPolicy([0], None), TableOracle(world))
+    assert gone.status is EpisodeStatus.NO_FREE_PATH
+    assert gone.num_checks == 0 and gone.blocked_evidence is None and gone.path_edges is None
+    capped = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 3], [3], max_checks=2), TableOracle(world))
+    assert (capped.status, capped.num_checks) == (EpisodeStatus.MAX_CHECKS, 2)
+    tighter = run_episode(
+        LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 3], [3], max_checks=2), TableOracle(world), max_checks=1
+    )
+    assert (tighter.status, tighter.num_checks) == (EpisodeStatus.MAX_CHECKS, 1)
+    # The path verified by the last allowed check counts as found.
+    last = run_episode(LIB, COSTS, ScriptedGraphPolicy([2, 3], [2, 3], max_checks=2), TableOracle(world))
+    assert last.status is EpisodeStatus.PATH_FOUND
+    # A policy that stops asking before its path is checked gives up; nothing unverified is returned.
+    quits = run_episode(LIB, COSTS, ScriptedGraphPolicy([2], [2, 3]), TableOracle(world))
+    assert quits.status is EpisodeStatus.POLICY_GAVE_UP and quits.path_edges is None

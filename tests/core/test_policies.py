@@ -55,7 +55,16 @@ def test_same_seed_same_checks() -> None:
     for name in POLICIES:
         runs = []
         for _ in range(2):
-            ctx = PolicyContext(problem.library, problem.edge_costs, theta, tree, seed=3)
+            ctx = PolicyContext(
+                problem.library,
+                problem.edge_costs,
+                theta,
+                tree,
+                seed=3,
+                graph=problem.graph,
+                start=problem.start,
+                goal=problem.goal,
+            )
             result = run_episode(
                 problem.library,
                 problem.edge_costs,

@@ -54,6 +54,30 @@ class Policy(Protocol):
         ...
 
 
+@runtime_checkable
+class GraphPathPolicy(Policy, Protocol):
+    """A policy whose answer is its own path in the graph, not a library path (LazySP).
+
+    The runner ends its episode with PATH_FOUND (``path_index`` None, ``path_edges`` the proposed
+    path) once every edge of :meth:`proposed_path` was checked free, and with NO_FREE_PATH when that
+    returns None. Library paths stop it too only if :attr:`stops_on_library_path` is True.
+    """
+
+    @property
+    def stops_on_library_path(self) -> bool:
+        """Whether a proven-free library path (or every library path blocked) also ends the episode."""
+        ...
+
+    @property
+    def max_checks(self) -> int | None:
+        """The policy's own check budget (the runner uses the smaller of it and the caller's)."""
+        ...
+
+    def proposed_path(self) -> IntArray | None:
+        """Edge ids, start to goal, of the path the policy stands behind now; None if none exists."""
+        ...
+
+
 class TableOracle:
     """An oracle that answers from one world's row of the outcome matrix X."""
 
@@ -101,8 +125,9 @@ class EpisodeResult:
     Attributes:
         checks: every check in order.
         status: how the episode ended.
-        path_index: index of the proven-free library path, when status is PATH_FOUND.
-        path_edges: that path's edge ids in traversal order.
+        path_index: index of the proven-free library path, when status is PATH_FOUND (None when a
+            :class:`GraphPathPolicy` found its own path).
+        path_edges: the proven-free path's edge ids in traversal order.
         blocked_evidence: for NO_FREE_PATH, (m,) the checked blocked edge that rules out each path.
     """
 
@@ -174,20 +199,40 @@ def run_episode(
     library path has a checked blocked edge (NO_FREE_PATH), (3) the policy has nothing left to ask
     (POLICY_GAVE_UP), or (4) ``max_checks`` checks were made (MAX_CHECKS).
 
+    A :class:`GraphPathPolicy` is instead stopped by its own path: before each selection, PATH_FOUND
+    (``path_index`` None) when every edge of ``proposed_path()`` was checked free, NO_FREE_PATH (no
+    ``blocked_evidence``) when it is None. Rules (1) and (2) then apply only if the policy's
+    ``stops_on_library_path`` says so, and its ``max_checks`` caps the episode too.
+
     Raises:
         PolicyError: the policy chose an edge outside the graph or one already checked.
         UnverifiedPathError: never, unless the bookkeeping itself is broken (a last safety net).
     """
     costs = np.asarray(edge_costs, dtype=np.float64)
     progress = _LibraryProgress(library)
+    graph_policy = policy if isinstance(policy, GraphPathPolicy) else None
+    library_stops = graph_policy is None or graph_policy.stops_on_library_path
+    limit = max_checks
+    if graph_policy is not None and graph_policy.max_checks is not None:
+        limit = graph_policy.max_checks if limit is None else min(limit, graph_policy.max_checks)
     outcome: dict[int, bool] = {}
     log: list[CheckRecord] = []
+    own_path: IntArray | None = None
     status = EpisodeStatus.POLICY_GAVE_UP
     while True:
-        if max_checks is not None and len(log) >= max_checks:
+        t0 = time.perf_counter()  # a graph policy's re-planning in proposed_path() is selection time
+        if graph_policy is not None:
+            proposed = graph_policy.proposed_path()
+            if proposed is None:
+                status = EpisodeStatus.NO_FREE_PATH
+                break
+            if all(outcome.get(int(e)) is True for e in proposed):
+                own_path = np.array(proposed, dtype=np.int64)
+                status = EpisodeStatus.PATH_FOUND
+                break
+        if limit is not None and len(log) >= limit:
             status = EpisodeStatus.MAX_CHECKS
             break
-        t0 = time.perf_counter()
         choice = policy.select()
         t1 = time.perf_counter()
         if choice is None:
@@ -204,18 +249,27 @@ def run_episode(
         log.append(CheckRecord(len(log), edge, free, policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
         progress.record(edge, free)
         policy.observe(edge, free)
+        if not library_stops:
+            continue
         if free and progress.proven_path(costs) is not None:
             status = EpisodeStatus.PATH_FOUND
             break
         if not free and progress.all_blocked():
             status = EpisodeStatus.NO_FREE_PATH
             break
-    path_index = progress.proven_path(costs) if status is EpisodeStatus.PATH_FOUND else None
-    path_edges = None
-    if path_index is not None:
-        path_edges = library.path_edges[path_index]
+    path_index: int | None = None
+    path_edges: IntArray | None = None
+    if own_path is not None:
+        path_edges = own_path
+    elif status is EpisodeStatus.PATH_FOUND:
+        path_index = progress.proven_path(costs)
+        if path_index is not None:
+            path_edges = library.path_edges[path_index]
+    if path_edges is not None:
         verify_path(path_edges, outcome)
-    evidence = progress.blocker.copy() if status is EpisodeStatus.NO_FREE_PATH else None
+    evidence = None
+    if status is EpisodeStatus.NO_FREE_PATH and library_stops and progress.all_blocked():
+        evidence = progress.blocker.copy()
     return EpisodeResult(tuple(log), status, path_index, path_edges, evidence)
 
 

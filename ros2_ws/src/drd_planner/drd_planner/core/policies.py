@@ -1,6 +1,8 @@
-"""Policies on the episode runner: BiSECt alone, the DiRECt tree then BiSECt, and the tree alone.
+"""Policies on the episode runner, all registered in :data:`POLICIES`.
 
-Every policy is pure and seeded: the same inputs and seed give the same checks.
+BiSECt alone, the DiRECt tree then BiSECt, the tree alone, and the baselines
+(:mod:`drd_planner.core.baselines`, :mod:`drd_planner.core.lazysp`). Every policy is pure and
+seeded: the same inputs and seed give the same checks.
 """
 
 from __future__ import annotations
@@ -11,8 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.core.baselines import LazySPSet, MaxTally, MVoI, RandomEdge, SetCover, WeightedMaxTally
 from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.lazysp import SELECTORS, LazySP, lazysp_name
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree
 from drd_planner.exceptions import PolicyError, ProblemError
@@ -250,7 +255,10 @@ def _check_tree_fits(tree: DecisionTree, library: PathLibrary) -> None:
 
 @dataclass(frozen=True)
 class PolicyContext:
-    """What a policy factory may use: the library, costs, training bias, tree and a seed."""
+    """What a policy factory may use: the library, costs, training bias, tree and a seed.
+
+    ``graph``, ``start`` and ``goal`` are needed by the policies in :data:`GRAPH_POLICIES`.
+    """
 
     library: PathLibrary
     edge_costs: FloatArray
@@ -259,6 +267,9 @@ class PolicyContext:
     seed: int
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
+    graph: ExplicitGraph | None = None
+    start: int | None = None
+    goal: int | None = None
 
 
 PolicyFactory = Callable[[PolicyContext], Policy]
@@ -270,6 +281,34 @@ def _need_tree(ctx: PolicyContext) -> DecisionTree:
     return ctx.tree
 
 
+def _need_graph(ctx: PolicyContext) -> ExplicitGraph:
+    if ctx.graph is None:
+        raise ProblemError("this policy needs the graph (PolicyContext.graph)")
+    if ctx.graph.num_edges != ctx.library.num_edges:
+        raise ProblemError(
+            f"graph has {ctx.graph.num_edges} edges but the library indexes {ctx.library.num_edges}"
+        )
+    return ctx.graph
+
+
+def _lazysp(selector: str) -> PolicyFactory:
+    def make(ctx: PolicyContext) -> Policy:
+        graph = _need_graph(ctx)
+        if ctx.start is None or ctx.goal is None:
+            raise ProblemError("lazysp needs the start and goal vertices (PolicyContext.start/goal)")
+        return LazySP(graph, ctx.start, ctx.goal, selector=selector, seed=ctx.seed)
+
+    return make
+
+
+def _lazysp_set(weighted: bool) -> PolicyFactory:
+    def make(ctx: PolicyContext) -> Policy:
+        lengths = ctx.library.path_costs(_need_graph(ctx).lengths)  # geometric length of each path
+        return LazySPSet(ctx.library, ctx.train_theta, lengths, weighted=weighted, seed=ctx.seed)
+
+    return make
+
+
 POLICIES: Mapping[str, PolicyFactory] = {
     "direct_bisect": lambda c: DirectBisectPolicy(
         _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha
@@ -277,7 +316,29 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "direct_only": lambda c: DirectOnlyPolicy(_need_tree(c), c.library, seed=c.seed),
     "bisect": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=True),
     "bisect_all": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=False),
+    "max_tally": lambda c: MaxTally(c.library, c.train_theta, name="max_tally", seed=c.seed),
+    "max_tally_all": lambda c: MaxTally(
+        c.library, c.train_theta, name="max_tally_all", max_prob_region=False, seed=c.seed
+    ),
+    "weighted_max_tally": lambda c: WeightedMaxTally(
+        c.library, c.train_theta, name="weighted_max_tally", max_prob_region=False, seed=c.seed
+    ),
+    "set_cover": lambda c: SetCover(c.library, c.train_theta, name="set_cover", seed=c.seed),
+    "set_cover_all": lambda c: SetCover(
+        c.library, c.train_theta, name="set_cover_all", max_prob_region=False, seed=c.seed
+    ),
+    "mvoi": lambda c: MVoI(c.library, c.train_theta, seed=c.seed),
+    "random": lambda c: RandomEdge(c.library, c.train_theta, name="random", seed=c.seed),
+    "random_all": lambda c: RandomEdge(
+        c.library, c.train_theta, name="random_all", max_prob_region=False, seed=c.seed
+    ),
+    "lazysp_set": _lazysp_set(weighted=True),
+    "lazysp_set_random": _lazysp_set(weighted=False),
+    **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
 }
 
 #: Policies that need a decision tree.
 TREE_POLICIES = frozenset({"direct_bisect", "direct_only"})
+
+#: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``).
+GRAPH_POLICIES: tuple[str, ...] = (*(lazysp_name(s) for s in SELECTORS), "lazysp_set", "lazysp_set_random")
