@@ -1,0 +1,252 @@
+"""Child process that runs OMPL's LazyPRM on an explicit graph; started by :mod:`drd_planner.bench.ompl_peer`.
+
+OMPL 1.7.0's Python bindings can crash while the interpreter tears down, so everything OMPL touches
+lives in this process. It reads a request (``request.npz`` with the graph and the worlds' rows of X,
+``config.json`` with the scalars), writes one JSON line per world to the result file (flushed after
+each line, then a final ``{"done": true}`` line) and leaves with ``os._exit`` so that no teardown
+runs. ``--probe`` only imports OMPL and prints one JSON line.
+
+How LazyPRM is made to search exactly our graph:
+
+* The roadmap is handed to ``LazyPRM(PlannerData)``: one vertex per graph vertex (each its own
+  ``State`` object, since PlannerData merges vertices that share a state pointer) and one edge per
+  graph edge weighted with the graph's length.
+* Vertices live in a RealVectorStateSpace(d) at the positions the parent chose
+  (:func:`drd_planner.bench.ompl_peer.embed_vertices`: coordinates, or the scaled vertex index).
+  LazyPRM keeps its default path-length objective (created in C++, so no Python call per A* step)
+  with an infinite cost threshold, so its first path is final.
+* LazyPRM still adds the start and goal states of the query as new milestones, and samples one
+  milestone per solve iteration. The connection radius (far below the smallest distance between
+  two vertices) and one neighbour at most make the start and goal copies connect only to their
+  own graph vertex (a zero-length "connector" edge, answered free without a check) and leave the
+  samples isolated.
+* The motion validator maps both states to graph vertices, and the vertex pair to a graph edge id;
+  it answers from the world's row of X and records every distinct edge asked. On a directed graph
+  a request to traverse an edge backwards is refused without a check (LazyPRM's roadmap is
+  undirected, so it may try).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.exceptions import ProblemError
+
+
+def _import_ompl() -> tuple[Any, Any, Any]:
+    from ompl import base as ob  # imported in this process only
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    return ob, og, ou
+
+
+class _Bookkeeper:
+    """Answers checks for one world at a time and records what was asked."""
+
+    def __init__(self, graph: ExplicitGraph) -> None:
+        self.graph = graph
+        self.row: npt.NDArray[np.bool_] = np.zeros(graph.num_edges, dtype=bool)
+        self.reset(self.row)
+
+    def reset(self, row: npt.NDArray[np.bool_]) -> None:
+        """Start a new world: ``row`` (E,) bool, True where the edge is free."""
+        self.row = row
+        self.checked: dict[int, bool] = {}
+        self.motion_calls = 0
+        self.connector_calls = 0
+        self.reverse_rejections = 0
+        self.state_checks = 0
+        self.removed = 0
+
+    def motion(self, u: int, v: int) -> bool:
+        """Outcome of moving from graph vertex ``u`` to ``v``."""
+        self.motion_calls += 1
+        if u == v:
+            self.connector_calls += 1
+            return True
+        try:
+            eid = self.graph.edge_id(u, v)
+        except ProblemError:
+            self.graph.edge_id(v, u)  # raises when (u, v) is no edge in either direction
+            # A directed edge traversed backwards: refused without a check.
+            self.reverse_rejections += 1
+            self.removed += 1
+            return False
+        free = self.checked.get(eid)
+        if free is None:
+            free = bool(self.row[eid])
+            self.checked[eid] = free
+        if not free:
+            self.removed += 1
+        return free
+
+
+def _space(ob: Any, coords: npt.NDArray[np.float64]) -> Any:
+    dim = coords.shape[1]
+    space = ob.RealVectorStateSpace(dim)
+    bounds = ob.RealVectorBounds(dim)
+    for k in range(dim):
+        bounds.setLow(k, float(coords[:, k].min()) - 1.0)
+        bounds.setHigh(k, float(coords[:, k].max()) + 1.0)
+    space.setBounds(bounds)
+    return space
+
+
+def _run(request: Path, config_path: Path, out: IO[str]) -> None:
+    ob, og, ou = _import_ompl()
+    config = json.loads(config_path.read_text())
+    with np.load(request, allow_pickle=False) as data:
+        edges = np.asarray(data["edges"], dtype=np.int64)
+        lengths = np.asarray(data["lengths"], dtype=np.float64)
+        coords = np.asarray(data["states"], dtype=np.float64)
+        rows = np.asarray(data["X"], dtype=bool)
+    graph = ExplicitGraph(edges, lengths, int(config["num_vertices"]), bool(config["directed"]))
+    vertex_of = {tuple(row): i for i, row in enumerate(coords.tolist())}
+    if coords.shape[0] != graph.num_vertices or len(vertex_of) != graph.num_vertices:
+        raise RuntimeError(f"need {graph.num_vertices} distinct vertex states, got {coords.shape[0]}")
+    ou.setLogLevel(ou.LOG_ERROR)
+    ou.RNG.setSeed(int(config["seed"]))
+
+    space = _space(ob, coords)
+    dim = coords.shape[1]
+    si = ob.SpaceInformation(space)
+    book = _Bookkeeper(graph)
+
+    def vertex(state: Any) -> int:
+        return vertex_of[tuple(float(state[k]) for k in range(dim))]
+
+    def state_valid(state: Any) -> bool:
+        book.state_checks += 1
+        return True  # vertex validity is folded into the edge outcomes of X (ALGORITHMS.md 6.1)
+
+    def check_motion(self: Any, s1: Any, s2: Any, *last_valid: Any) -> bool:
+        return book.motion(vertex(s1), vertex(s2))
+
+    # A Python subclass of ob.MotionValidator whose checkMotion OMPL calls back.
+    validator_class = type("TableMotionValidator", (ob.MotionValidator,), {"checkMotion": check_motion})
+    si.setStateValidityChecker(ob.StateValidityCheckerFn(state_valid))
+    validator = validator_class(si)
+    si.setMotionValidator(validator)
+    si.setup()
+
+    roadmap = ob.PlannerData(si)
+    keep_alive = []
+    for row in coords.tolist():
+        st = ob.State(space)
+        for k, value in enumerate(row):
+            st[k] = value
+        keep_alive.append(st)
+        roadmap.addVertex(ob.PlannerDataVertex(st()))
+    for (u, v), length in zip(edges.tolist(), lengths.tolist(), strict=True):
+        roadmap.addEdge(int(u), int(v), ob.PlannerDataEdge(), ob.Cost(float(length)))
+    if roadmap.numVertices() != graph.num_vertices or roadmap.numEdges() != graph.num_edges:
+        raise RuntimeError(
+            f"PlannerData holds {roadmap.numVertices()} vertices / {roadmap.numEdges()} edges, "
+            f"graph has {graph.num_vertices} / {graph.num_edges}"
+        )
+
+    start_state, goal_state = ob.State(space), ob.State(space)
+    for k in range(dim):
+        start_state[k] = float(coords[int(config["start"]), k])
+        goal_state[k] = float(coords[int(config["goal"]), k])
+    time_limit = float(config["time_limit_s"])
+
+    for world, row in zip(config["world_ids"], rows, strict=True):
+        book.reset(row)
+        planner = og.LazyPRM(roadmap)
+        planner.setRange(float(config["connect_radius"]))
+        planner.setMaxNearestNeighbors(1)
+        pdef = ob.ProblemDefinition(si)
+        pdef.setStartAndGoalStates(start_state, goal_state)
+        planner.setProblemDefinition(pdef)
+        planner.setup()
+        milestones_before, edges_before = int(planner.milestoneCount()), int(planner.edgeCount())
+        t0 = time.perf_counter()
+
+        def stop(t0: float = t0, planner: Any = planner) -> bool:
+            # Iteration 1 runs the lazy search to a path or to a disconnected start and goal;
+            # later iterations would only add isolated samples.
+            return int(planner.getIterationCount()) >= 2 or time.perf_counter() - t0 > time_limit
+
+        status = planner.solve(ob.PlannerTerminationCondition(ob.PlannerTerminationConditionFn(stop)))
+        wall = time.perf_counter() - t0
+        solved = pdef.hasExactSolution()
+        path_vertices: list[int] = []
+        if solved:
+            path = pdef.getSolutionPath()
+            for i in range(path.getStateCount()):
+                v = vertex(path.getState(i))
+                if not path_vertices or path_vertices[-1] != v:
+                    path_vertices.append(v)
+        record = {
+            "world": int(world),
+            "status": str(status),
+            "solved": bool(solved),
+            "path_vertices": path_vertices,
+            "checked_edges": list(book.checked),
+            "motion_calls": book.motion_calls,
+            "connector_calls": book.connector_calls,
+            "reverse_rejections": book.reverse_rejections,
+            "state_checks": book.state_checks,
+            "edges_removed": book.removed,
+            "iterations": int(planner.getIterationCount()),
+            "milestones_before": milestones_before,
+            "milestones_after": int(planner.milestoneCount()),
+            "edges_before": edges_before,
+            "edges_after": int(planner.edgeCount()),
+            "wall_s": wall,
+        }
+        out.write(json.dumps(record) + "\n")
+        out.flush()
+    out.write(json.dumps({"done": True}) + "\n")
+    out.flush()
+
+
+def _probe() -> dict[str, Any]:
+    ob, og, _ = _import_ompl()
+    return {"ok": True, "has_lazyprm": hasattr(og, "LazyPRM"), "has_planner_data": hasattr(ob, "PlannerData")}
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: ``--probe`` or ``--request R --config C --result OUT``; never returns (``os._exit``)."""
+    parser = argparse.ArgumentParser(prog="python -m drd_planner.bench.ompl_worker")
+    parser.add_argument("--probe", action="store_true")
+    parser.add_argument("--request", type=Path)
+    parser.add_argument("--config", type=Path)
+    parser.add_argument("--result", type=Path)
+    args = parser.parse_args(argv)
+    code = 0
+    try:
+        if args.probe:
+            sys.stdout.write(json.dumps(_probe()) + "\n")
+        else:
+            if args.request is None or args.config is None or args.result is None:
+                parser.error("--request, --config and --result are required")
+            with args.result.open("w") as out:
+                try:
+                    _run(args.request, args.config, out)
+                except Exception as exc:
+                    out.write(json.dumps({"error": f"{type(exc).__name__}: {exc}"}) + "\n")
+                    out.flush()
+                    raise
+    except Exception as exc:
+        sys.stderr.write(f"ompl_worker: {type(exc).__name__}: {exc}\n")
+        code = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # skip interpreter teardown, where the OMPL bindings crash
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,55 @@
+import numpy as np
+import pytest
+
+from drd_planner.core.episode import TableOracle, run_episode
+from drd_planner.core.policies import DirectBisectPolicy
+from drd_planner.core.switch_threshold import select_switch_threshold
+from drd_planner.core.tree import build_tree
+from drd_planner.domains.planar import make_planar_problem
+from drd_planner.exceptions import ProblemError
+
+
+@pytest.fixture(scope="module")
+def problem():  # type: ignore[no-untyped-def]
+    return make_planar_problem(num_vertices=60, model="one_wall", num_worlds=120, max_paths=40, seed=3)
+
+
+def test_choice_is_the_best_validated_candidate(problem) -> None:  # type: ignore[no-untyped-def]
+    choice = select_switch_threshold(problem, candidates=(0.1, 0.3, 1.0), seed=1)
+    assert set(choice.mean_checks) == {0.1, 0.3, 1.0}
+    assert choice.mean_checks[choice.eta] == min(choice.mean_checks.values())
+    worlds = problem.worlds
+    held = np.asarray(choice.validation_ids)
+    # Only feasible training worlds are held out; the test worlds are never touched.
+    assert np.isin(held, worlds.train_ids).all()
+    assert not np.isin(held, worlds.test_ids).any()
+    assert worlds.R[held].any(axis=1).all()
+
+
+def test_validation_means_are_recomputable(problem) -> None:  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    choice = select_switch_threshold(problem, candidates=(0.2,), seed=5)
+    worlds = problem.worlds
+    held = np.asarray(choice.validation_ids)
+    fit = np.setdiff1d(worlds.train_ids, held)
+    tree = build_tree(dataclasses.replace(problem, worlds=worlds.subset(fit, held)), progress=False)
+    total = 0
+    for w in held:
+        policy = DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.2)
+        total += run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[w])).num_checks
+    assert choice.mean_checks[0.2] == pytest.approx(total / held.size)
+
+
+def test_same_seed_same_choice_and_ties_go_to_larger_eta(problem) -> None:  # type: ignore[no-untyped-def]
+    a = select_switch_threshold(problem, seed=7)
+    b = select_switch_threshold(problem, seed=7)
+    assert a == b
+    best = min(a.mean_checks.values())
+    assert a.eta == max(e for e, v in a.mean_checks.items() if v == best)
+
+
+@pytest.mark.parametrize("cands", [(), (0.0,), (1.5,), (-0.1, 0.5)])
+def test_bad_candidates_are_refused(problem, cands) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ProblemError, match="eta candidates"):
+        select_switch_threshold(problem, candidates=cands)
