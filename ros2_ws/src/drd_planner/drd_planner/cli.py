@@ -1,4 +1,4 @@
-"""The ``drd`` command line: build trees, benchmark policies, plan once, and a self-contained demo."""
+"""The ``drd`` command line: build datasets and trees, benchmark policies, plan once, and a demo."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -16,6 +17,9 @@ from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
 from drd_planner.exceptions import DrdError
+
+if TYPE_CHECKING:
+    from drd_planner.bench.suite import SuiteOptions
 
 
 def _policies(text: str) -> list[str]:
@@ -38,86 +42,188 @@ def _tree_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _tree_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    return {
+        "expand_threshold": args.threshold,
+        "colouring": args.colouring,
+        "top_regions": args.top_regions,
+        "max_prob_region": args.candidates == "max-prob-region",
+    }
+
+
 def _build_tree_from_args(problem: Problem, args: argparse.Namespace) -> DecisionTree:
     from drd_planner.core.tree import build_tree
 
-    return build_tree(
-        problem,
-        expand_threshold=args.threshold,
-        colouring=args.colouring,
-        top_regions=args.top_regions,
-        max_prob_region=args.candidates == "max-prob-region",
+    return build_tree(problem, **_tree_kwargs(args))
+
+
+def _eta_arg(text: str) -> float | None:
+    """``--eta``: 'auto' (None: validate per dataset) or a number in (0, 1]."""
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'auto' or a number in (0, 1], got {text!r}") from None
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"eta must lie in (0, 1], got {value}")
+    return value
+
+
+def _tree_eta(problem: Problem, args: argparse.Namespace) -> tuple[float, str]:
+    """The switch threshold stored in a tree file, and a note on where it came from."""
+    from drd_planner.core.switch_threshold import select_switch_threshold
+
+    if args.eta is not None:
+        return float(args.eta), f"eta {args.eta:g} (given)"
+    choice = select_switch_threshold(problem, seed=args.seed)
+    means = ", ".join(f"{k:g}: {v:.2f}" for k, v in sorted(choice.mean_checks.items()))
+    held = len(choice.validation_ids)
+    return (
+        choice.eta,
+        f"eta {choice.eta:g} (validated on {held} held-out training worlds; mean checks {means})",
     )
 
 
 def cmd_build_tree(args: argparse.Namespace) -> int:
     """``drd build-tree``: build a DiRECt tree from a dataset's training worlds and save it."""
-    from drd_planner.data.gccd import load_gccd_folder
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
     from drd_planner.data.tree_file import TreeBundle, save_tree
 
-    problem = load_gccd_folder(args.gccd)
+    problem = load_problem_from_args(args)
     tree = _build_tree_from_args(problem, args)
+    eta, eta_note = _tree_eta(problem, args)
     bundle = TreeBundle(
         problem=dataclasses.replace(problem, worlds=None),
         tree=tree,
-        domain="gccd",
-        provenance={"command": " ".join(sys.argv), "dataset": problem.name, "software": __version__},
+        eta=eta,
+        domain=problem_domain(problem),
+        provenance={
+            "command": " ".join(sys.argv),
+            "dataset": problem.name,
+            "software": __version__,
+            "eta": eta_note,
+        },
     )
     out = save_tree(args.out, bundle)
     print(
-        f"wrote {out}: {tree.num_nodes} nodes, depth {tree.depth()}, built in {tree.info['build_seconds']:.2f} s"
+        f"wrote {out}: {tree.num_nodes} nodes, depth {tree.depth()}, built in {tree.info['build_seconds']:.2f} s; "
+        f"{eta_note}"
     )
     return 0
 
 
+def _sizes(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+
+
+def _suite_options(args: argparse.Namespace) -> SuiteOptions:
+    from drd_planner.bench.runner import DEFAULT_POLICIES
+    from drd_planner.bench.stats import TIE_SUBSET
+    from drd_planner.bench.suite import SuiteOptions
+
+    return SuiteOptions(
+        policies=tuple(args.policies) if args.policies else DEFAULT_POLICIES,
+        seed=args.seed,
+        eta=args.eta,
+        max_worlds=args.max_worlds,
+        max_checks=args.max_checks,
+        tree_options=_tree_kwargs(args),
+        reference=args.reference,
+        tie_subset=tuple(args.tie_subset) if args.tie_subset is not None else TIE_SUBSET,
+        resamples=args.resamples,
+        figures=Path(args.figures) if args.figures else None,
+        training_sizes=args.training_sizes,
+        figure_world=args.figure_world,
+    )
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
-    """``drd bench``: every policy on every test world of an authors'-format dataset."""
-    from drd_planner.bench.runner import benchmark_json, markdown_table, run_benchmark
-    from drd_planner.data.gccd import load_gccd_folder
+    """``drd bench``: every policy on every test world of one dataset (``--gccd``/``--dataset``) or all (``--all``)."""
+    from drd_planner.bench.runner import check_policy_names, json_safe
+    from drd_planner.bench.suite import (
+        SuiteResult,
+        costs_figure,
+        dataset_json,
+        run_dataset,
+        run_suite,
+        suite_json,
+        suite_markdown,
+    )
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
     from drd_planner.data.tree_file import check_bundle_fits, load_tree
 
-    problem = load_gccd_folder(args.gccd)
-    tree = None
-    if args.tree:
-        bundle = load_tree(args.tree, expected_domain="gccd")
-        check_bundle_fits(bundle, problem)
-        tree = bundle.tree
-    elif any(p in ("direct_bisect", "direct_only") for p in args.policies):
-        tree = _build_tree_from_args(problem, args)
-    result = run_benchmark(
-        problem, policies=args.policies, tree=tree, seed=args.seed, eta=args.eta, max_worlds=args.max_worlds
-    )
-    doc = benchmark_json(result)
-    table = markdown_table([result], args.policies)
-    print(table, end="")
+    options = _suite_options(args)
+    check_policy_names(options.policies)
+    for name, value in (("--max-worlds", args.max_worlds), ("--max-checks", args.max_checks)):
+        if value is not None and value < 1:
+            raise DrdError(f"{name} must be at least 1, got {value}")
+    if args.all:
+        if args.tree:
+            raise DrdError("--tree fits one dataset and cannot be used with --all")
+        suite = run_suite(args.all, options)
+        figures = costs_figure(suite.runs, options)
+        doc = suite_json(suite, options, figures=figures)
+    else:
+        problem = load_problem_from_args(args)
+        tree = None
+        if args.tree:
+            bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
+            check_bundle_fits(bundle, problem)
+            tree = bundle.tree
+            if options.eta is None:  # the threshold stored with the tree, unless --eta says otherwise
+                options = dataclasses.replace(options, eta=bundle.eta)
+        run = run_dataset(problem, options, tree=tree)
+        suite = SuiteResult([run], [], run.seconds)
+        figures = costs_figure(suite.runs, options)
+        doc = dataset_json(run, options)
+        doc["figures"] += [str(p) for p in figures]
+    report = suite_markdown(suite, options)
+    print(report, end="")
+    for name, reason in suite.skipped:
+        print(f"skipped {name}: {reason}")
+    for run in suite.runs:
+        for note in run.notes:
+            print(f"note: {note}")
     if args.json:
-        Path(args.json).write_text(json.dumps(doc, indent=1))
+        Path(args.json).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
         print(f"wrote {args.json}")
     if args.markdown:
-        Path(args.markdown).write_text(table)
+        Path(args.markdown).write_text(report)
+        print(f"wrote {args.markdown}")
+    if options.figures is not None:
+        count = sum(len(r.figures) for r in suite.runs) + len(figures)
+        print(f"wrote {count} figure files under {options.figures}")
+    print(f"total wall time {suite.seconds:.1f} s")
     return 0
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
     """``drd plan``: one offline plan with a saved tree on one world of a dataset (no ROS)."""
-    from drd_planner.core.bisect import bias_from_worlds
-    from drd_planner.core.episode import TableOracle, run_episode
-    from drd_planner.core.policies import POLICIES, PolicyContext
-    from drd_planner.data.gccd import load_gccd_folder
+    from drd_planner.bench.runner import run_world, train_bias
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
     from drd_planner.data.tree_file import check_bundle_fits, load_tree
 
-    bundle = load_tree(args.tree, expected_domain="gccd")
-    problem = load_gccd_folder(args.gccd)
+    problem = load_problem_from_args(args)
+    bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
     check_bundle_fits(bundle, problem)
     worlds = problem.require_worlds()
     if not 0 <= args.world < worlds.num_worlds:
         raise DrdError(f"--world must lie in [0, {worlds.num_worlds})")
-    theta = bias_from_worlds(worlds.X[worlds.train_ids], alpha=bundle.alpha)
-    ctx = PolicyContext(
-        problem.library, problem.edge_costs, theta, bundle.tree, args.seed, bundle.eta, bundle.alpha
+    theta = train_bias(problem, alpha=bundle.alpha)
+    result = run_world(
+        problem,
+        args.policy,
+        args.world,
+        theta=theta,
+        tree=bundle.tree,
+        seed=args.seed,
+        eta=bundle.eta,
+        alpha=bundle.alpha,
     )
-    policy = POLICIES[args.policy](ctx)
-    result = run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[args.world]))
     _print_episode(problem, result)
     return 0 if result.success else 1
 
@@ -131,11 +237,9 @@ def _print_episode(problem: Problem, result: EpisodeResult) -> None:
             ends = f" ({u}->{v})"
         state = "free   " if rec.free else "BLOCKED"
         print(f"  check {rec.step + 1:3d}: edge {rec.edge:5d}{ends:14s} {state} [{rec.stage}]")
-    if result.success and result.path_index is not None:
-        path = problem.library.path_edges[result.path_index]
-        print(
-            f"  -> path {result.path_index} ({path.size} edges) verified free after {result.num_checks} checks"
-        )
+    if result.success and result.path_edges is not None:
+        which = "graph path" if result.path_index is None else f"path {result.path_index}"
+        print(f"  -> {which} ({result.path_edges.size} edges) verified free after {result.num_checks} checks")
     else:
         print(f"  -> {result.status.value} after {result.num_checks} checks")
 
@@ -181,36 +285,70 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``drd``."""
+    from drd_planner.core.policies import POLICIES
+    from drd_planner.data.dataset_cli import add_build_dataset_parser, add_problem_source_arguments
+
     parser = argparse.ArgumentParser(prog="drd", description="DiRECt + BiSECt active edge evaluation.")
     parser.add_argument("--version", action="version", version=f"drd_planner {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
+    add_build_dataset_parser(sub)
 
     p = sub.add_parser("build-tree", help="build a DiRECt decision tree file from a dataset")
-    p.add_argument("--gccd", required=True, help="authors'-format dataset folder")
+    add_problem_source_arguments(p)
     p.add_argument("--out", required=True, help="tree file to write (.npz)")
+    p.add_argument(
+        "--eta",
+        type=_eta_arg,
+        default=None,
+        help="switch threshold stored in the file; 'auto' (default) validates it on held-out training worlds",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the validation hold-out")
     _tree_options(p)
     p.set_defaults(func=cmd_build_tree)
 
-    p = sub.add_parser("bench", help="benchmark policies on a dataset's test worlds")
-    p.add_argument("--gccd", required=True, help="authors'-format dataset folder")
+    p = sub.add_parser("bench", help="benchmark policies on a dataset's (or every dataset's) test worlds")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
+    where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
+    where.add_argument("--all", metavar="DIR", help="run every authors'-format dataset folder under DIR")
     p.add_argument(
-        "--policies", type=_policies, default=["direct_bisect", "direct_only", "bisect", "bisect_all"]
+        "--policies", type=_policies, default=None, help="comma-separated (default: the Table-1 set)"
     )
     p.add_argument("--json", help="write the results JSON here")
-    p.add_argument("--markdown", help="write the results table here")
-    p.add_argument("--tree", help="use this tree file instead of building one")
+    p.add_argument("--markdown", help="write the markdown report (Table 1 and absolute numbers) here")
+    p.add_argument("--figures", metavar="DIR", help="write the figures (PNG + SVG) into DIR")
+    p.add_argument("--tree", help="use this tree file instead of building one (not with --all)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--eta", type=float, default=0.2, help="switch to BiSECt at or below this fraction")
+    p.add_argument(
+        "--eta",
+        type=_eta_arg,
+        default=None,
+        help="switch to BiSECt at or below this consistent fraction; 'auto' (default) validates it on "
+        "held-out training worlds",
+    )
     p.add_argument("--max-worlds", type=int, default=None, help="only the first K test worlds")
+    p.add_argument("--max-checks", type=int, default=None, help="cap on checks per episode (failure)")
+    p.add_argument("--reference", default="direct_bisect", help="policy the relative costs are over")
+    p.add_argument(
+        "--tie-subset", type=_policies, default=None, help="tie-filter policies (default: Table-1 subset)"
+    )
+    p.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples of the mean's CI")
+    p.add_argument(
+        "--training-sizes",
+        type=_sizes,
+        default=(50, 100, 200, 450, 900),
+        help="training sizes of the checks-vs-training-size figure ('' for none)",
+    )
+    p.add_argument("--figure-world", type=int, default=0, help="test-list position drawn in Fig. 3")
     _tree_options(p)
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("plan", help="plan once offline with a tree file on one dataset world")
     p.add_argument("--tree", required=True)
-    p.add_argument("--gccd", required=True)
+    add_problem_source_arguments(p)
     p.add_argument("--world", type=int, required=True, help="0-based world row")
     p.add_argument(
-        "--policy", default="direct_bisect", choices=("direct_bisect", "direct_only", "bisect", "bisect_all")
+        "--policy", default="direct_bisect", choices=sorted(POLICIES), help="any registered policy"
     )
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_plan)

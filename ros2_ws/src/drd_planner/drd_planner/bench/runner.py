@@ -2,7 +2,10 @@
 
 The JSON written by :func:`benchmark_json` follows DESIGN.md section 5:
 ``{"dataset", "test_ids", "oracle_lower_bound": {"mean", "per_world"}, "policies": {NAME:
-{"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}}}`` plus a ``tree`` block.
+{"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}}}`` plus a ``tree`` block, the
+run ``settings``, per policy ``failed_worlds`` (positions in ``test_ids``) and ``relative`` (Table-1
+statistics over the reference ``direct_bisect``, see :mod:`drd_planner.bench.stats`; null when the
+reference was not run), ``oracle_lower_bound.relative`` and a ``relative_protocol`` block.
 ``test_ids`` are 0-based row indices of the dataset's world matrix.
 """
 
@@ -14,50 +17,168 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 from tqdm import tqdm
 
+from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1, table1_stats
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
-from drd_planner.core.episode import TableOracle, run_episode
+from drd_planner.core.episode import EpisodeResult, TableOracle, run_episode
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import DrdError
 
-#: Policies ``drd bench`` runs when none are named.
-DEFAULT_POLICIES = ("direct_bisect", "direct_only", "bisect", "bisect_all")
+#: The policies of the paper's Table 1 (and ours), in table order.
+TABLE1_POLICIES = (
+    "direct_bisect",
+    "direct_bisect_fixed",
+    "bisect",
+    "lazysp_set",
+    "lazysp",
+    "max_tally",
+    "set_cover",
+    "mvoi",
+    "random",
+    "direct_only",
+    "bisect_all",
+)
+#: Policies ``run_benchmark`` runs when none are named (the Table-1 set as far as it is registered).
+DEFAULT_POLICIES = tuple(p for p in TABLE1_POLICIES if p in POLICIES)
+
+
+def available_policies(names: Sequence[str] = TABLE1_POLICIES) -> tuple[str, ...]:
+    """The names among ``names`` that are registered in ``POLICIES`` (order kept)."""
+    return tuple(p for p in names if p in POLICIES)
+
+
+def check_policy_names(names: Sequence[str]) -> None:
+    """Raise a clear DrdError naming every unknown policy."""
+    unknown = [p for p in names if p not in POLICIES]
+    if unknown:
+        raise DrdError(f"unknown policy {', '.join(unknown)}; known: {', '.join(sorted(POLICIES))}")
 
 
 @dataclass(frozen=True)
 class PolicyStats:
-    """Per-policy results over the test worlds (in test-id order)."""
+    """Per-policy results over the test worlds (in test-id order).
+
+    Attributes:
+        checks: checks per test world; a failed episode counts the checks it made.
+        failures: number of episodes that proved no path (gave up, hit the cap, or found none).
+        select_ms: selection time of every check, in milliseconds.
+        episode_seconds: wall time of all episodes of this policy, in seconds.
+        failed_worlds: positions (in the test list) of the failed episodes.
+    """
 
     checks: list[int]
     failures: int
     select_ms: list[float]
     episode_seconds: float
+    failed_worlds: list[int] = field(default_factory=list)
 
     def as_json(self) -> dict[str, Any]:
-        """The DESIGN.md section 5 policy block."""
+        """The DESIGN.md section 5 policy block plus ``failed_worlds``."""
         arr = np.asarray(self.checks, dtype=np.float64)
         return {
             "mean_checks": float(arr.mean()) if arr.size else float("nan"),
             "median_checks": float(np.median(arr)) if arr.size else float("nan"),
             "checks": [int(c) for c in self.checks],
             "failures": int(self.failures),
-            "mean_select_ms": float(np.mean(self.select_ms)) if self.select_ms else 0.0,
+            "mean_select_ms": self.mean_select_ms,
+            "failed_worlds": [int(k) for k in self.failed_worlds],
         }
+
+    @property
+    def mean_select_ms(self) -> float:
+        """Mean selection time per check in milliseconds (0 when nothing was checked)."""
+        return float(np.mean(self.select_ms)) if self.select_ms else 0.0
 
 
 @dataclass(frozen=True)
 class BenchmarkResult:
-    """Everything one benchmark run measured."""
+    """Everything one benchmark run measured.
+
+    Attributes:
+        dataset: the problem's name.
+        test_ids: 0-based world rows of the episodes, in order.
+        lower_bound: (n,) oracle lower bound per test world (NaN where no library path is valid).
+        policies: policy name -> its statistics.
+        tree_info: size and build provenance of the decision tree used (empty when none).
+        settings: seed, eta, alpha, max_worlds and max_checks of the run.
+    """
 
     dataset: str
     test_ids: list[int]
     lower_bound: list[float]
     policies: dict[str, PolicyStats]
     tree_info: dict[str, Any] = field(default_factory=dict)
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    def checks(self) -> dict[str, list[int]]:
+        """Policy name -> checks per test world."""
+        return {name: stats.checks for name, stats in self.policies.items()}
+
+
+def policy_context(
+    problem: Problem,
+    *,
+    theta: npt.NDArray[np.float64],
+    tree: DecisionTree | None,
+    seed: int,
+    eta: float = DEFAULT_ETA,
+    alpha: float = DEFAULT_ALPHA,
+) -> PolicyContext:
+    """The context a policy factory gets: library, unit costs, (E,) training bias, tree, seed and graph.
+
+    The graph, start and goal are what the full-graph policies (``lazysp``, ``lazysp_set``) need.
+    """
+    return PolicyContext(
+        problem.library,
+        problem.edge_costs,
+        theta,
+        tree,
+        seed,
+        eta=eta,
+        alpha=alpha,
+        graph=problem.graph,
+        start=problem.start,
+        goal=problem.goal,
+    )
+
+
+def train_bias(problem: Problem, *, alpha: float = DEFAULT_ALPHA) -> npt.NDArray[np.float64]:
+    """(E,) BiSECt bias learnt from the problem's training worlds."""
+    worlds = problem.require_worlds()
+    train = worlds.train_ids
+    return bias_from_worlds(worlds.X[train], worlds.weights(train), alpha=alpha)
+
+
+def run_world(
+    problem: Problem,
+    name: str,
+    world: int,
+    *,
+    theta: npt.NDArray[np.float64],
+    tree: DecisionTree | None,
+    seed: int,
+    eta: float = DEFAULT_ETA,
+    alpha: float = DEFAULT_ALPHA,
+    max_checks: int | None = None,
+) -> EpisodeResult:
+    """One episode of policy ``name`` on world row ``world`` against its row of X.
+
+    ``run_benchmark`` calls this with ``seed + k`` for the k-th test world, so the same call here
+    reproduces any of its episodes (figures use that).
+    """
+    check_policy_names([name])
+    worlds = problem.require_worlds()
+    if not 0 <= world < worlds.num_worlds:
+        raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
+    ctx = policy_context(problem, theta=theta, tree=tree, seed=seed, eta=eta, alpha=alpha)
+    policy = POLICIES[name](ctx)
+    oracle = TableOracle(worlds.X[world])
+    return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
 
 
 def run_benchmark(
@@ -69,6 +190,7 @@ def run_benchmark(
     eta: float = DEFAULT_ETA,
     alpha: float = DEFAULT_ALPHA,
     max_worlds: int | None = None,
+    max_checks: int | None = None,
     progress: bool | None = None,
 ) -> BenchmarkResult:
     """Run each policy once per test world (seeded per world) and collect the check counts.
@@ -81,11 +203,14 @@ def run_benchmark(
         eta: switch threshold of ``direct_bisect``.
         alpha: data weight of the bias.
         max_worlds: only the first ``max_worlds`` test worlds (smoke runs).
+        max_checks: cap on the checks of one episode (None: no cap); capped episodes are failures.
         progress: show progress bars (None: only on a terminal).
     """
-    unknown = [p for p in policies if p not in POLICIES]
-    if unknown:
-        raise DrdError(f"unknown policy {', '.join(unknown)}; known: {', '.join(sorted(POLICIES))}")
+    check_policy_names(policies)
+    if max_worlds is not None and max_worlds < 1:
+        raise DrdError(f"max_worlds must be at least 1, got {max_worlds}")
+    if max_checks is not None and max_checks < 1:
+        raise DrdError(f"max_checks must be at least 1, got {max_checks}")
     worlds = problem.require_worlds()
     test_ids = worlds.test_ids if max_worlds is None else worlds.test_ids[:max_worlds]
     tree_info: dict[str, Any] = {}
@@ -93,43 +218,101 @@ def run_benchmark(
         tree = build_tree(problem, progress=progress)
     if tree is not None:
         tree_info = {"nodes": tree.num_nodes, "depth": tree.depth(), **tree.info}
-    train = worlds.train_ids
-    theta = bias_from_worlds(worlds.X[train], worlds.weights(train), alpha=alpha)
+    theta = train_bias(problem, alpha=alpha)
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
     for name in policies:
         checks: list[int] = []
         select_ms: list[float] = []
-        failures = 0
+        failed: list[int] = []
         t0 = time.perf_counter()
         for k, world in enumerate(tqdm(test_ids, desc=name, unit="world", disable=_disable(progress))):
-            ctx = PolicyContext(problem.library, problem.edge_costs, theta, tree, seed + k, eta, alpha)
-            policy = POLICIES[name](ctx)
-            result = run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[world]))
+            result = run_world(
+                problem,
+                name,
+                int(world),
+                theta=theta,
+                tree=tree,
+                seed=seed + k,
+                eta=eta,
+                alpha=alpha,
+                max_checks=max_checks,
+            )
             checks.append(result.num_checks)
             select_ms.extend(c.select_ms for c in result.checks)
-            failures += int(not result.success)
-        results[name] = PolicyStats(checks, failures, select_ms, time.perf_counter() - t0)
-    return BenchmarkResult(problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info)
+            if not result.success:
+                failed.append(k)
+        results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
+    settings = {"seed": seed, "eta": eta, "alpha": alpha, "max_worlds": max_worlds, "max_checks": max_checks}
+    return BenchmarkResult(
+        problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, settings
+    )
 
 
 def _disable(progress: bool | None) -> bool | None:
     return None if progress is None else not progress
 
 
-def benchmark_json(result: BenchmarkResult) -> dict[str, Any]:
-    """The JSON document of DESIGN.md section 5."""
+def result_table1(
+    result: BenchmarkResult,
+    *,
+    reference: str = REFERENCE,
+    tie_subset: Sequence[str] = TIE_SUBSET,
+    resamples: int = DEFAULT_RESAMPLES,
+    seed: int = 0,
+) -> Table1 | None:
+    """Table-1 statistics of a run (see :func:`drd_planner.bench.stats.table1_stats`); None without the reference."""
+    if reference not in result.policies:
+        return None
+    return table1_stats(
+        result.checks(),
+        reference=reference,
+        tie_subset=tie_subset,
+        lower_bound=result.lower_bound,
+        resamples=resamples,
+        seed=seed,
+    )
+
+
+def benchmark_json(
+    result: BenchmarkResult,
+    *,
+    reference: str = REFERENCE,
+    tie_subset: Sequence[str] = TIE_SUBSET,
+    resamples: int = DEFAULT_RESAMPLES,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """The JSON document of DESIGN.md section 5, extended with the Table-1 ``relative`` statistics.
+
+    Args:
+        result: a benchmark run.
+        reference: the policy the relative extra costs are normalised by (no ``relative`` blocks,
+            i.e. nulls, when it was not run).
+        tie_subset: the tie-filter policies (see :func:`drd_planner.bench.stats.tie_filter`).
+        resamples: bootstrap resamples of the means' 95% intervals.
+        seed: bootstrap seed.
+    """
     lb = np.asarray(result.lower_bound, dtype=np.float64)
+    table = result_table1(result, reference=reference, tie_subset=tie_subset, resamples=resamples, seed=seed)
+    policies: dict[str, Any] = {}
+    for name, stats in result.policies.items():
+        block = stats.as_json()
+        block["relative"] = None if table is None else table.policies[name].as_json()
+        policies[name] = block
+    oracle_relative = None if table is None or table.oracle is None else table.oracle.as_json()
     return {
         "dataset": result.dataset,
         "test_ids": result.test_ids,
         "oracle_lower_bound": {
             "mean": nanmean_or_nan(lb),
             "per_world": [None if np.isnan(v) else float(v) for v in lb],
+            "relative": oracle_relative,
         },
-        "policies": {name: stats.as_json() for name, stats in result.policies.items()},
+        "policies": policies,
+        "relative_protocol": None if table is None else table.protocol_json(),
         "tree": result.tree_info,
+        "settings": result.settings,
     }
 
 
@@ -150,6 +333,17 @@ def markdown_table(results: Sequence[BenchmarkResult], policies: Sequence[str]) 
         lb = nanmean_or_nan(np.asarray(res.lower_bound, dtype=np.float64))
         rows.append(f"| {res.dataset} | " + " | ".join(cells) + f" | {lb:.2f} |")
     return "\n".join(rows) + "\n"
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively (dicts, lists, tuples)."""
+    if isinstance(value, float):
+        return value if np.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    return value
 
 
 def nanmean_or_nan(values: np.ndarray) -> float:

@@ -313,6 +313,9 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "direct_bisect": lambda c: DirectBisectPolicy(
         _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha
     ),
+    "direct_bisect_fixed": lambda c: DirectBisectPolicy(
+        _need_tree(c), c.library, c.edge_costs, eta=DEFAULT_ETA, alpha=c.alpha, name="direct_bisect_fixed"
+    ),
     "direct_only": lambda c: DirectOnlyPolicy(_need_tree(c), c.library, seed=c.seed),
     "bisect": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=True),
     "bisect_all": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=False),
@@ -337,8 +340,10 @@ POLICIES: Mapping[str, PolicyFactory] = {
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
 }
 
-#: Policies that need a decision tree.
-TREE_POLICIES = frozenset({"direct_bisect", "direct_only"})
+#: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method with the
+#: paper-style fixed threshold ``DEFAULT_ETA`` whatever ``PolicyContext.eta`` says, so that a run with
+#: a validated eta (see ``core.switch_threshold``) can report both side by side.
+TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only"})
 
 #: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``).
 GRAPH_POLICIES: tuple[str, ...] = (*(lazysp_name(s) for s in SELECTORS), "lazysp_set", "lazysp_set_random")

@@ -1,0 +1,332 @@
+"""Run the benchmark over one dataset or every dataset folder under a root, with figures and reports.
+
+:func:`run_dataset` benchmarks one loaded problem (and draws its figures); :func:`run_suite` does that for
+every authors'-format folder under a root (sorted by name), skipping folders that lack the required files
+with a note. :func:`suite_json` and :func:`suite_markdown` turn the runs into one document each.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from drd_planner import __version__
+from drd_planner.bench.learning_curve import DEFAULT_SIZES, TrainingCurve, training_size_curve
+from drd_planner.bench.plots import (
+    FIG3_POLICIES,
+    has_vertex_xy,
+    plot_checked_edges,
+    plot_normalised_costs,
+    plot_training_curve,
+)
+from drd_planner.bench.report import full_report
+from drd_planner.bench.runner import (
+    DEFAULT_POLICIES,
+    BenchmarkResult,
+    available_policies,
+    benchmark_json,
+    check_policy_names,
+    result_table1,
+    run_benchmark,
+    run_world,
+    train_bias,
+)
+from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1
+from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, TREE_POLICIES
+from drd_planner.core.problem import Problem
+from drd_planner.core.switch_threshold import SwitchThresholdChoice, select_switch_threshold
+from drd_planner.core.tree import DecisionTree, build_tree
+from drd_planner.data.gccd import REQUIRED_FILES, load_gccd_folder
+from drd_planner.exceptions import DrdError
+
+
+@dataclass(frozen=True)
+class SuiteOptions:
+    """Settings of a benchmark run (one dataset or many).
+
+    Attributes:
+        policies: policies to run, in report column order.
+        seed: base seed of the episodes (test world k uses seed + k), the bootstrap and the subsets.
+        eta: switch threshold of ``direct_bisect``; None chooses it per dataset by validation on held-out
+            training worlds (:func:`drd_planner.core.switch_threshold.select_switch_threshold`).
+        alpha: data weight of the tree policies' bias.
+        max_worlds: only the first K test worlds of each dataset (None: all).
+        max_checks: per-episode check cap (None: none); capped episodes count as failures.
+        tree_options: keyword arguments for :func:`drd_planner.core.tree.build_tree`.
+        reference, tie_subset, resamples: Table-1 statistics settings (see :mod:`drd_planner.bench.stats`).
+        figures: folder for the figures, or None for none.
+        training_sizes: training-set sizes of the checks-vs-training-size figure (empty: no such figure).
+        figure_world: position in the test list of the world drawn in the checked-edges figure.
+    """
+
+    policies: tuple[str, ...] = DEFAULT_POLICIES
+    seed: int = 0
+    eta: float | None = None
+    alpha: float = DEFAULT_ALPHA
+    max_worlds: int | None = None
+    max_checks: int | None = None
+    tree_options: Mapping[str, Any] = field(default_factory=dict)
+    reference: str = REFERENCE
+    tie_subset: tuple[str, ...] = TIE_SUBSET
+    resamples: int = DEFAULT_RESAMPLES
+    figures: Path | None = None
+    training_sizes: tuple[int, ...] = DEFAULT_SIZES
+    figure_world: int = 0
+
+
+@dataclass(frozen=True)
+class DatasetRun:
+    """One dataset's benchmark, statistics, figures and notes."""
+
+    result: BenchmarkResult
+    table: Table1 | None
+    figures: list[Path]
+    notes: list[str]
+    curve: TrainingCurve | None
+    seconds: float
+
+
+@dataclass(frozen=True)
+class SuiteResult:
+    """Every dataset's run, the skipped folders (name, reason) and the total wall time in seconds."""
+
+    runs: list[DatasetRun]
+    skipped: list[tuple[str, str]]
+    seconds: float
+
+
+def discover_datasets(root: str | Path) -> tuple[list[Path], list[tuple[str, str]]]:
+    """The authors'-format folders under ``root`` (sorted) and, for the others, why they are skipped.
+
+    Raises:
+        DrdError: ``root`` is not a folder, or holds no runnable dataset folder.
+    """
+    base = Path(root)
+    if not base.is_dir():
+        raise DrdError(f"dataset root not found: {base}")
+    runnable: list[Path] = []
+    skipped: list[tuple[str, str]] = []
+    for folder in sorted(p for p in base.iterdir() if p.is_dir()):
+        missing = [f for f in REQUIRED_FILES if not (folder / f).is_file()]
+        if missing:
+            more = f" and {len(missing) - 1} more required files" if len(missing) > 1 else ""
+            skipped.append(
+                (folder.name, f"not an authors'-format graph dataset (missing {missing[0]}{more})")
+            )
+        else:
+            runnable.append(folder)
+    if not runnable:
+        raise DrdError(f"no dataset folder under {base} has all of {', '.join(REQUIRED_FILES)}")
+    return runnable, skipped
+
+
+def _needs_tree(options: SuiteOptions) -> bool:
+    return any(p in TREE_POLICIES for p in options.policies) or options.figures is not None
+
+
+def run_dataset(
+    problem: Problem,
+    options: SuiteOptions,
+    *,
+    tree: DecisionTree | None = None,
+    progress: bool | None = None,
+) -> DatasetRun:
+    """Benchmark one problem, compute its Table-1 statistics and write its figures.
+
+    Args:
+        problem: a problem with a world database.
+        options: the run settings.
+        tree: a prebuilt tree (built from ``options.tree_options`` when needed and not given).
+        progress: per-policy progress bars (None: only on a terminal).
+    """
+    t0 = time.perf_counter()
+    check_policy_names(options.policies)
+    eta, eta_choice = _resolve_eta(problem, options)
+    options = dataclasses.replace(options, eta=eta)
+    if tree is None and _needs_tree(options):
+        tree = build_tree(problem, progress=False, **dict(options.tree_options))
+    result = run_benchmark(
+        problem,
+        policies=options.policies,
+        tree=tree,
+        seed=options.seed,
+        eta=eta,
+        alpha=options.alpha,
+        max_worlds=options.max_worlds,
+        max_checks=options.max_checks,
+        progress=progress,
+    )
+    if eta_choice is not None:
+        result.settings["eta_selection"] = eta_choice.as_json()
+    table = result_table1(
+        result,
+        reference=options.reference,
+        tie_subset=options.tie_subset,
+        resamples=options.resamples,
+        seed=options.seed,
+    )
+    figures: list[Path] = []
+    notes: list[str] = []
+    curve = None
+    if options.figures is not None:
+        assert tree is not None
+        figures += _checked_edges_figure(problem, result, tree, options, notes)
+        curve = _training_figure(problem, options, figures, notes)
+    return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0)
+
+
+def _resolve_eta(problem: Problem, options: SuiteOptions) -> tuple[float, SwitchThresholdChoice | None]:
+    """A concrete eta: the validated one when ``options.eta`` is None and a tree is used."""
+    if options.eta is not None:
+        return options.eta, None
+    if not _needs_tree(options):
+        return DEFAULT_ETA, None
+    expand = float(options.tree_options.get("expand_threshold", 0.05))
+    choice = select_switch_threshold(problem, seed=options.seed, alpha=options.alpha, expand_threshold=expand)
+    return choice.eta, choice
+
+
+def _eta(options: SuiteOptions) -> float:
+    """``options.eta`` after :func:`_resolve_eta` (never None there)."""
+    return DEFAULT_ETA if options.eta is None else options.eta
+
+
+def _checked_edges_figure(
+    problem: Problem, result: BenchmarkResult, tree: DecisionTree, options: SuiteOptions, notes: list[str]
+) -> list[Path]:
+    assert options.figures is not None
+    if not has_vertex_xy(problem):
+        notes.append(f"{problem.name}: no vertex coordinates, checked-edges figure skipped")
+        return []
+    k = options.figure_world
+    if not 0 <= k < len(result.test_ids):
+        raise DrdError(f"figure world {k} is outside the {len(result.test_ids)} test worlds run")
+    world = result.test_ids[k]
+    theta = train_bias(problem, alpha=options.alpha)
+    episodes = {
+        name: run_world(
+            problem,
+            name,
+            world,
+            theta=theta,
+            tree=tree,
+            seed=options.seed + k,
+            eta=_eta(options),
+            alpha=options.alpha,
+            max_checks=options.max_checks,
+        )
+        for name in available_policies(FIG3_POLICIES)
+    }
+    out = options.figures / f"checked_edges_{problem.name}"
+    return plot_checked_edges(problem, episodes, out, world=world)
+
+
+def _training_figure(
+    problem: Problem, options: SuiteOptions, figures: list[Path], notes: list[str]
+) -> TrainingCurve | None:
+    assert options.figures is not None
+    if not options.training_sizes:
+        return None
+    limit = problem.require_worlds().train_ids.size
+    sizes = [s for s in options.training_sizes if 1 <= s <= limit]
+    if len(sizes) < len(options.training_sizes):
+        notes.append(f"{problem.name}: training sizes above {limit} (the training set) left out")
+    if not sizes:
+        return None
+    curve = training_size_curve(
+        problem,
+        sizes=sizes,
+        seed=options.seed,
+        max_worlds=options.max_worlds,
+        eta=_eta(options),
+        alpha=options.alpha,
+        tree_options=options.tree_options,
+    )
+    figures += plot_training_curve(curve, options.figures / f"training_size_{problem.name}")
+    return curve
+
+
+def costs_figure(runs: Sequence[DatasetRun], options: SuiteOptions) -> list[Path]:
+    """The normalised-cost figure over every run that has Table-1 statistics (none: nothing written)."""
+    if options.figures is None:
+        return []
+    tables = {run.result.dataset: run.table for run in runs if run.table is not None}
+    if not tables:
+        return []
+    baselines = [p for p in options.policies if p != options.reference]
+    failures = {
+        run.result.dataset: {name: stats.failures for name, stats in run.result.policies.items()}
+        for run in runs
+    }
+    return plot_normalised_costs(tables, baselines, options.figures / "normalised_costs", failures=failures)
+
+
+def run_suite(root: str | Path, options: SuiteOptions, *, progress: bool | None = None) -> SuiteResult:
+    """Run :func:`run_dataset` on every dataset folder under ``root`` (sorted) with a progress bar.
+
+    Folders without the required files are skipped (listed in the result with the reason); a folder
+    that has them but is malformed raises its DatasetError.
+    """
+    t0 = time.perf_counter()
+    check_policy_names(options.policies)
+    folders, skipped = discover_datasets(root)
+    runs: list[DatasetRun] = []
+    bar = tqdm(folders, desc="datasets", unit="dataset", disable=None if progress is None else not progress)
+    for folder in bar:
+        bar.set_postfix_str(folder.name)
+        runs.append(run_dataset(load_gccd_folder(folder), options, progress=False))
+    bar.close()
+    return SuiteResult(runs, skipped, time.perf_counter() - t0)
+
+
+def dataset_json(run: DatasetRun, options: SuiteOptions) -> dict[str, Any]:
+    """One dataset's DESIGN.md section 5 document with ``wall_seconds``, ``notes`` and ``figures``.
+
+    A ``training_curve`` block is added when that figure was drawn.
+    """
+    doc = benchmark_json(
+        run.result,
+        reference=options.reference,
+        tie_subset=options.tie_subset,
+        resamples=options.resamples,
+        seed=options.seed,
+    )
+    doc["wall_seconds"] = run.seconds
+    doc["notes"] = run.notes
+    doc["figures"] = [str(p) for p in run.figures]
+    if run.curve is not None:
+        doc["training_curve"] = run.curve.as_json()
+    return doc
+
+
+def suite_json(suite: SuiteResult, options: SuiteOptions, *, figures: Sequence[Path] = ()) -> dict[str, Any]:
+    """One document for many datasets: each dataset's :func:`dataset_json` under ``datasets``.
+
+    ``figures`` lists figures drawn over all datasets (the normalised-cost chart).
+    """
+    return {
+        "software": f"drd_planner {__version__}",
+        "policies": list(options.policies),
+        "reference": options.reference,
+        "datasets": [dataset_json(run, options) for run in suite.runs],
+        "skipped": [{"folder": name, "reason": reason} for name, reason in suite.skipped],
+        "figures": [str(p) for p in figures],
+        "wall_seconds": suite.seconds,
+    }
+
+
+def suite_markdown(suite: SuiteResult, options: SuiteOptions) -> str:
+    """The full markdown report over every dataset of the suite."""
+    return full_report(
+        [run.result for run in suite.runs],
+        [run.table for run in suite.runs],
+        options.policies,
+        reference=options.reference,
+        skipped=suite.skipped,
+    )

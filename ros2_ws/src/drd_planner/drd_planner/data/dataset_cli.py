@@ -1,0 +1,279 @@
+"""Command-line glue for datasets: ``drd build-dataset`` and the ``--gccd DIR | --dataset FILE`` source.
+
+``drd_planner.cli`` wires these in with::
+
+    add_build_dataset_parser(sub)                 # registers "build-dataset" (func=cmd_build_dataset)
+    add_problem_source_arguments(bench_parser)    # --gccd DIR | --dataset FILE (one required)
+    problem = load_problem_from_args(args)        # either source as a Problem with worlds
+    load_tree(args.tree, expected_domain=problem_domain(problem))
+
+The module also runs on its own: ``python -m drd_planner.data.dataset_cli build-dataset ...``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drd_planner.core.problem import Problem
+from drd_planner.domains.base import DOMAIN_CLASSES
+from drd_planner.exceptions import DatasetError, DrdError
+
+__all__ = [
+    "add_build_dataset_parser",
+    "add_problem_source_arguments",
+    "cmd_build_dataset",
+    "default_workers",
+    "load_problem_from_args",
+    "main",
+    "parse_domain_spec",
+    "problem_domain",
+    "recreate_command",
+]
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be non-negative, got {value}")
+    return value
+
+
+def _fraction(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must lie in [0, 1], got {value}")
+    return value
+
+
+def default_workers() -> int:
+    """Local worker processes by default: the CPUs this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def parse_domain_spec(text: str | None) -> dict[str, Any] | None:
+    """``--domain-spec``: a JSON object given inline (starts with ``{``) or the path of a JSON file.
+
+    Raises:
+        DatasetError: neither valid inline JSON nor a readable file holding a JSON object.
+    """
+    if text is None:
+        return None
+    if text.lstrip().startswith("{"):
+        source, raw = "the inline JSON", text
+    else:
+        path = Path(text)
+        if not path.is_file():
+            raise DatasetError(f"--domain-spec: {text!r} is neither a JSON object nor an existing file")
+        source, raw = str(path), path.read_text()
+    try:
+        spec = json.loads(raw)
+    except json.JSONDecodeError as exc:
+        raise DatasetError(f"--domain-spec: {source} is not valid JSON ({exc})") from None
+    if not isinstance(spec, dict):
+        raise DatasetError(f"--domain-spec: {source} must hold a JSON object, not {type(spec).__name__}")
+    return spec
+
+
+def recreate_command(
+    *,
+    domain: str,
+    world_model: str,
+    num_worlds: int,
+    seed: int,
+    domain_spec: Mapping[str, Any] | None = None,
+    domain_factory: str | None = None,
+    max_paths: int = 500,
+    test_fraction: float = 0.1,
+    k: int = 5,
+) -> str:
+    """A ``drd build-dataset`` command line that recreates a dataset: only content-affecting options.
+
+    ``--out``, ``--workers``, ``--scheduler`` and ``--chunk-size`` are left out, since they do not change
+    the file's contents, so a dataset's bytes do not depend on how it was computed.
+    """
+    argv = ["drd", "build-dataset", "--domain", domain, "--world-model", world_model]
+    argv += ["--worlds", str(num_worlds), "--seed", str(seed), "--max-paths", str(max_paths)]
+    argv += ["--test-fraction", repr(float(test_fraction))]
+    if k != 5:
+        argv += ["--k", str(k)]
+    if domain_spec:
+        argv += ["--domain-spec", json.dumps(dict(domain_spec), sort_keys=True)]
+    if domain_factory:
+        argv += ["--domain-factory", domain_factory]
+    return shlex.join(argv)
+
+
+def cmd_build_dataset(args: argparse.Namespace) -> int:
+    """``drd build-dataset``: sample worlds, check every edge in parallel, build library/R/split, save.
+
+    Raises:
+        DrdError: any user-triggered failure (the caller prints one line and exits 2).
+    """
+    from drd_planner.data.dataset_builder import build_dataset
+
+    spec = parse_domain_spec(args.domain_spec)
+    workers = args.workers if args.workers is not None else default_workers()
+    command = recreate_command(
+        domain=args.domain,
+        world_model=args.world_model,
+        num_worlds=args.worlds,
+        seed=args.seed,
+        domain_spec=spec,
+        domain_factory=args.domain_factory,
+        max_paths=args.max_paths,
+        test_fraction=args.test_fraction,
+        k=args.k,
+    )
+    report = build_dataset(
+        args.out,
+        domain=args.domain,
+        world_model=args.world_model,
+        num_worlds=args.worlds,
+        seed=args.seed,
+        domain_spec=spec,
+        domain_factory=args.domain_factory,
+        workers=workers,
+        scheduler=args.scheduler,
+        chunk_size=args.chunk_size,
+        k=args.k,
+        max_paths=args.max_paths,
+        test_fraction=args.test_fraction,
+        include_trajectories=not args.no_trajectories,
+        max_chunks=args.max_chunks,
+        keep_parts=args.keep_parts,
+        command=command,
+    )
+    where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{workers} local worker(s)"
+    done = report.resumed_chunks + report.evaluated_chunks
+    if not report.complete or report.dataset is None:
+        print(
+            f"stopped after {report.evaluated_chunks} new chunk(s): {done}/{report.num_chunks} done in "
+            f"{report.out}.parts; run the same command again to resume"
+        )
+        return 0
+    ds = report.dataset
+    print(
+        f"wrote {report.out}: {ds.num_worlds} worlds x {ds.graph.num_edges} edges "
+        f"({100 * float(np.mean(ds.X)):.1f}% free), {ds.library.num_paths} library paths "
+        f"(of {report.union_size} distinct), {ds.train_ids.size} train / {ds.test_ids.size} test worlds; "
+        f"{report.num_chunks} chunks ({report.resumed_chunks} resumed) checked in "
+        f"{report.eval_seconds:.2f} s on {where}, {report.total_seconds:.2f} s total"
+    )
+    return 0
+
+
+def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``build-dataset`` on an ``add_subparsers()`` object; returns the new parser."""
+    p: argparse.ArgumentParser = subparsers.add_parser(
+        "build-dataset",
+        help="sample worlds, check every edge (in parallel), build the path library and split",
+        description=(
+            "Sample worlds from a domain's world model, check every graph edge in every world (local "
+            "processes, or a Dask cluster with --scheduler), build the path library (Yen k shortest "
+            "paths per world, union, seeded subsample), R and the train/test split, and write a dataset "
+            "file. Finished chunks are kept in OUT.parts, so an interrupted build resumes where it stopped."
+        ),
+    )
+    p.add_argument("--domain", required=True, help=f"domain name ({', '.join(sorted(DOMAIN_CLASSES))})")
+    p.add_argument("--world-model", required=True, help="the domain's world model to sample")
+    p.add_argument("--worlds", type=_positive_int, required=True, help="number of worlds n")
+    p.add_argument("--seed", type=_non_negative_int, required=True, help="base seed (non-negative)")
+    p.add_argument("--out", required=True, help="dataset file to write (.npz)")
+    p.add_argument(
+        "--workers", type=_positive_int, default=None, help="local worker processes (default: all CPUs)"
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask scheduler (tcp://host:port)")
+    p.add_argument("--chunk-size", type=_positive_int, default=16, help="worlds per task (default 16)")
+    p.add_argument("--max-paths", type=_positive_int, default=500, help="library size cap m (default 500)")
+    p.add_argument("--test-fraction", type=_fraction, default=0.1, help="held-out share (default 0.1)")
+    p.add_argument("--k", type=_positive_int, default=5, help="Yen's k shortest paths per world (default 5)")
+    p.add_argument("--domain-spec", metavar="JSON|FILE", help="domain parameters: inline JSON or a JSON file")
+    p.add_argument(
+        "--domain-factory",
+        metavar="MODULE:ATTR",
+        help="build a domain outside the registry with this class (from_spec) or function",
+    )
+    p.add_argument("--no-trajectories", action="store_true", help="do not store edge trajectories")
+    p.add_argument("--keep-parts", action="store_true", help="keep OUT.parts after writing OUT")
+    p.add_argument("--max-chunks", type=_positive_int, help="stop after this many new chunks (resume later)")
+    p.set_defaults(func=cmd_build_dataset)
+    return p
+
+
+def add_problem_source_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the required choice ``--gccd DIR`` (authors' folder) | ``--dataset FILE`` (our dataset file)."""
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
+    group.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
+
+
+def load_problem_from_args(args: argparse.Namespace) -> Problem:
+    """The problem (with worlds) named by ``--dataset`` or ``--gccd``.
+
+    Raises:
+        DatasetError: the file or folder is missing, corrupt or inconsistent.
+    """
+    from drd_planner.data.dataset_file import load_dataset_problem
+    from drd_planner.data.gccd import load_gccd_folder
+
+    if getattr(args, "dataset", None):
+        return load_dataset_problem(args.dataset)
+    if getattr(args, "gccd", None):
+        return load_gccd_folder(args.gccd)
+    raise DatasetError("give a dataset: --gccd DIR or --dataset FILE")
+
+
+def problem_domain(problem: Problem) -> str:
+    """The domain a tree for ``problem`` must be built for: the dataset's domain, or "gccd"."""
+    return str(problem.metadata.get("domain", "gccd"))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``build-dataset`` without the rest of ``drd``; errors print one line and exit 2."""
+    parser = argparse.ArgumentParser(prog="drd", description="drd_planner dataset tools")
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_build_dataset_parser(sub)
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except DrdError as exc:
+        print(f"drd: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(
+            "drd: interrupted (finished chunks are kept; run the same command again to resume)",
+            file=sys.stderr,
+        )
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
