@@ -211,3 +211,22 @@ def test_default_terrain_path_follows_drd_shared_data(
     assert default_terrain_path() == tmp_path / "terrain" / "srtm_front_range_144.asc"
     with pytest.raises(ProblemError, match="DRD_SHARED_DATA"):
         HelicopterDomain().make_world("terrain", 0)
+
+
+def test_wires_on_known_line_sites_pick_a_subset_of_them() -> None:
+    from drd_planner.domains.helicopter_worlds import WiresParams as _Wires
+
+    sites = (200.0, 350.0, 500.0)
+    params = _Wires(line_sites=sites, lines=(1, 3))
+    domain = HelicopterDomain.from_spec({"models": {"wires": params_to_dict(params)}})
+    seen: set[float] = set()
+    for seed in range(12):
+        lines = domain.make_world("wires", seed).info["lines"]
+        xs = [line["x"] for line in lines]
+        assert 1 <= len(xs) <= 3
+        assert set(xs) <= set(sites)
+        assert len(set(xs)) == len(xs)
+        seen |= set(xs)
+    assert seen == set(sites)
+    with pytest.raises(ProblemError, match="line_sites"):
+        _Wires(line_sites=(1.0, float("nan")))

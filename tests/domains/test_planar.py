@@ -1,14 +1,22 @@
-"""Tests of the planar domain: RGG, exact segment/box checks, world models, self-generated problems."""
+"""Tests of the planar domain: RGG, exact segment/box checks, world models, the Domain, problems."""
 
 from __future__ import annotations
 
+import itertools
+import json
+
 import numpy as np
 import pytest
+from conftest import gccd_folder
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
+from drd_planner.data.gccd import load_gccd_folder
+from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
 from drd_planner.domains.planar import (
     WORLD_MODELS,
+    PlanarChecker,
+    PlanarDomain,
     edge_free_matrix,
     make_planar_problem,
     one_wall_patterns,
@@ -16,6 +24,13 @@ from drd_planner.domains.planar import (
     rgg_radius,
     sample_worlds,
     segments_hit_boxes,
+)
+from drd_planner.domains.planar_worlds import (
+    PLANAR_VARIANT,
+    SE2_VARIANT,
+    generate_world,
+    two_wall_patterns,
+    wall_patterns,
 )
 from drd_planner.exceptions import ProblemError
 
@@ -253,6 +268,11 @@ def test_forest_and_moving_wall_structure() -> None:
         assert 0.2 <= (w[1, 1] + w[0, 3]) / 2 <= 0.8
 
 
+def test_sample_worlds_prefix_property() -> None:
+    short, long = sample_worlds("two_wall", 4, seed=3), sample_worlds("two_wall", 9, seed=3)
+    assert all(np.array_equal(a, b) for a, b in zip(short, long[:4], strict=True))
+
+
 def test_keep_clear_and_bad_model() -> None:
     points = np.array([[0.3, 0.3], [0.5, 0.5], [0.05, 0.05]])
     for model in ("one_wall", "forest"):
@@ -262,7 +282,7 @@ def test_keep_clear_and_bad_model() -> None:
             covered &= (points[:, None, 1] >= sq[:, 1]) & (points[:, None, 1] <= sq[:, 3])
             assert not covered.any()
     with pytest.raises(ProblemError, match="unknown planar world model"):
-        sample_worlds("two_wall", 3, seed=0)
+        sample_worlds("spiral", 3, seed=0)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -312,3 +332,286 @@ def test_make_planar_problem_determinism() -> None:
     assert a.graph is not None and c.graph is not None
     assert a.graph.vertex_states is not None and c.graph.vertex_states is not None
     assert not np.array_equal(a.graph.vertex_states, c.graph.vertex_states)
+
+
+# --------------------------------------------------------------------------------------------------
+# All seven world models: structure with known answers
+
+
+def free(p0: tuple[float, float], p1: tuple[float, float], boxes: np.ndarray) -> bool:
+    """Whether one segment misses every box."""
+    return not hit(p0, p1, boxes)
+
+
+def free_intervals_on_vertical(
+    boxes: np.ndarray, x: float, resolution: int = 20000
+) -> list[tuple[float, float]]:
+    """Free y-intervals of the vertical line at ``x`` (sampled finely; for structure checks only)."""
+    ys = (np.arange(resolution) + 0.5) / resolution
+    on_line = boxes[(boxes[:, 0] <= x) & (boxes[:, 2] >= x)]
+    blocked = ((ys[:, None] >= on_line[:, 1]) & (ys[:, None] <= on_line[:, 3])).any(axis=1)
+    out, start = [], None
+    for y, b in zip(ys.tolist(), blocked.tolist(), strict=True):
+        if not b and start is None:
+            start = y
+        if b and start is not None:
+            out.append((start, y))
+            start = None
+    if start is not None:
+        out.append((start, 1.0))
+    return out
+
+
+@pytest.mark.parametrize("model", WORLD_MODELS)
+def test_generate_world_is_deterministic_per_seed(model: str) -> None:
+    dom = PlanarDomain(num_vertices=50, seed=1)
+    a = [dom.make_world(model, s) for s in range(8)]
+    b = [dom.make_world(model, s) for s in range(8)]
+    assert all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
+    assert all(np.array_equal(u, generate_world(model, seed=s)) for s, u in enumerate(a))
+    assert len({u.tobytes() for u in a}) == 8  # different seeds, different worlds
+    for w in a:
+        assert w.dtype == np.float64 and w.ndim == 2 and w.shape[1] == 4
+        assert (w[:, 2] > w[:, 0]).all() and (w[:, 3] > w[:, 1]).all()
+    with pytest.raises(ProblemError, match="non-negative integer"):
+        dom.make_world(model, -1)
+    with pytest.raises(ProblemError, match="unknown planar world model"):
+        dom.make_world("spiral", 0)
+
+
+def test_one_wall_band_blocks_everything_but_open_slots() -> None:
+    block, gap = 1 / 12, 0.1
+    slot_lo = block + np.arange(5) * (block + gap)  # lower edges of the 5 slots
+    for seed in range(40):
+        w = generate_world("one_wall", seed=seed)
+        wall = w[np.isclose(w[:, 0], 0.4) & np.isclose(w[:, 2], 0.6)]
+        squares = w[~(np.isclose(w[:, 0], 0.4) & np.isclose(w[:, 2], 0.6))]
+        intervals = free_intervals_on_vertical(wall, 0.5)
+        assert 2 <= len(intervals) <= 5
+        for lo, hi in intervals:  # every opening is exactly one slot
+            i = int(np.argmin(np.abs(slot_lo - lo)))
+            assert lo == pytest.approx(slot_lo[i], abs=1e-3) and hi == pytest.approx(
+                slot_lo[i] + gap, abs=1e-3
+            )
+        for i in range(5):
+            mid = slot_lo[i] + gap / 2
+            is_open = any(lo < mid < hi for lo, hi in intervals)
+            assert free((0.3, mid), (0.7, mid), wall) is is_open  # straight through the slot
+            assert not free((0.3, slot_lo[i] - 0.01), (0.7, slot_lo[i] - 0.01), wall)  # through a block
+            # a segment entering the slot but leaving it inside the band hits the wall
+            assert not free((0.3, mid), (0.7, mid + gap), wall)
+        assert np.allclose(squares[:, 2] - squares[:, 0], 0.1)
+
+
+def test_one_and_two_wall_pattern_lists() -> None:
+    p1 = one_wall_patterns(3)
+    assert np.array_equal(p1, wall_patterns(seed=3, walls=1, max_patterns=15))
+    p2 = two_wall_patterns(3)
+    assert 1 <= p2.shape[0] <= 20 and p2.shape[1] == 10
+    assert (p2[:, :5].sum(axis=1) >= 2).all() and (p2[:, 5:].sum(axis=1) >= 2).all()
+    with pytest.raises(ProblemError):
+        wall_patterns(seed=0, walls=0, max_patterns=5)
+    # each world uses one pattern of the domain's fixed list
+    patterns = {tuple(r) for r in p2.tolist()}
+    seen = set()
+    centres = np.array([[0.0, 0.0]])
+    counts = []
+    for seed in range(300):
+        w = generate_world("two_wall", seed=seed, pattern_seed=3)
+        pattern = []
+        for x in (0.3, 0.7):
+            wall = w[np.isclose(w[:, 0], x - 0.075) & np.isclose(w[:, 2], x + 0.075)]
+            mids = 1 / 12 + np.arange(5) * (1 / 12 + 0.1) + 0.05
+            pattern += [int(free((x - 0.1, m), (x + 0.1, m), wall)) for m in mids]
+        assert tuple(pattern) in patterns
+        seen.add(tuple(pattern))
+        counts.append(len(w) - 12 - (10 - sum(pattern)))  # squares = boxes - blocks - closed slots
+        centres = np.concatenate([centres, (w[:, :2] + w[:, 2:]) / 2])
+    assert len(seen) == len(patterns)
+    assert np.mean(counts) == pytest.approx(3.0, abs=0.35)  # Poisson(3)
+
+
+def test_moving_wall_has_exactly_one_gap() -> None:
+    for seed in range(50):
+        w = generate_world("moving_wall", seed=seed)
+        x = (w[0, 0] + w[0, 2]) / 2
+        (lo, hi), *rest = free_intervals_on_vertical(w, x)
+        assert rest == []
+        assert hi - lo == pytest.approx(0.1, abs=1e-3)
+        mid = (lo + hi) / 2
+        assert free((0.0, mid), (1.0, mid), w)
+        assert not free((0.0, mid + 0.06), (1.0, mid + 0.06), w)
+        assert not free((0.0, mid - 0.06), (1.0, mid - 0.06), w)
+
+
+def test_baffle_s_passage() -> None:
+    for seed in range(50):
+        w = generate_world("baffle", seed=seed)
+        assert w.shape == (2, 4) and np.allclose(w[:, 2] - w[:, 0], 0.1)
+        left, right = w[np.argsort(w[:, 0])]
+        assert left[1] == 0.0 and right[3] == 1.0  # rising from the bottom, hanging from the top
+        cx = (left[2] + right[0]) / 2
+        cy = (left[3] + right[1]) / 2
+        assert right[0] - left[2] == pytest.approx(0.1)  # passage width
+        assert left[3] - right[1] == pytest.approx(0.15)  # vertical overlap
+        assert 0.3 <= cx <= 0.7 and 0.2 <= cy <= 0.8
+        s_path = [(cx - 0.25, cy + 0.1), (cx, cy + 0.1), (cx, cy - 0.1), (cx + 0.25, cy - 0.1)]
+        assert all(free(a, b, w) for a, b in itertools.pairwise(s_path))
+        assert not free((0.0, cy), (1.0, cy), w)  # no straight way across at the centre height
+
+
+def test_maze_has_one_left_right_tunnel() -> None:
+    walls_x = (0.2, 0.4, 0.6, 0.8)
+    for seed in range(50):
+        w = generate_world("maze", seed=seed)
+        centres = []
+        for x in walls_x:
+            (lo, hi), *rest = free_intervals_on_vertical(w, x)  # one gap of height 0.1 per wall
+            assert rest == [] and hi - lo == pytest.approx(0.1, abs=1e-3)
+            centres.append((lo + hi) / 2)
+        # a polyline from the corner (0, 0) to the corner (1, 1) through the gaps and column centres
+        path = [(0.1, 0.005), (0.1, centres[0])]
+        for i, x in enumerate(walls_x):
+            nxt = centres[i + 1] if i + 1 < len(centres) else 0.995
+            path += [(x + 0.1, centres[i]), (x + 0.1, nxt)]
+        assert all(free(a, b, w) for a, b in itertools.pairwise(path))
+        # every box is a wall of thickness 0.02: vertical ones full width, horizontal ones (clipped at the
+        # border) at most 0.02 high
+        width, height = w[:, 2] - w[:, 0], w[:, 3] - w[:, 1]
+        assert (np.isclose(width, 0.02) | (height <= 0.02 + 1e-12)).all()
+
+
+def test_bugtrap_is_a_u_opening_towards_the_start() -> None:
+    orientations = set()
+    for seed in range(60):
+        w = generate_world("bugtrap", seed=seed)
+        assert w.shape == (3, 4)  # planar variant: the trap only
+        lo, hi = w[:, :2].min(axis=0), w[:, 2:].max(axis=0)
+        size = hi - lo
+        vertical = bool(size[1] > size[0])
+        orientations.add(vertical)
+        assert sorted(size.tolist()) == pytest.approx([0.35, 0.6])
+        inner = (lo + hi) / 2
+        if vertical:  # back on the right: open towards -x
+            assert free(tuple(inner), (inner[0] - 0.5, inner[1]), w)
+            blocked = [(inner[0] + 0.5, inner[1]), (inner[0], inner[1] + 0.5), (inner[0], inner[1] - 0.5)]
+        else:  # back on top: open towards -y
+            assert free(tuple(inner), (inner[0], inner[1] - 0.5), w)
+            blocked = [(inner[0], inner[1] + 0.5), (inner[0] + 0.5, inner[1]), (inner[0] - 0.5, inner[1])]
+        assert all(not free(tuple(inner), b, w) for b in blocked)
+        thickness = np.minimum(w[:, 2] - w[:, 0], w[:, 3] - w[:, 1])
+        assert np.allclose(thickness, 0.05)
+    assert orientations == {True, False}
+
+
+def test_se2_variants_differ_where_the_spec_says() -> None:
+    for seed in range(40):
+        w = generate_world("bugtrap", seed=seed, variant=SE2_VARIANT)
+        trap, squares = w[:3], w[3:]
+        size = trap[:, 2:].max(axis=0) - trap[:, :2].min(axis=0)
+        assert size[1] > size[0]  # vertical only
+        assert np.allclose(squares[:, 2] - squares[:, 0], 0.05)
+        w = generate_world("one_wall", seed=seed, variant=SE2_VARIANT)
+        sq = w[np.isclose(w[:, 2] - w[:, 0], 0.1)]
+        centres = (sq[:, :2] + sq[:, 2:]) / 2
+        assert ((centres >= [0.2, 0.1]) & (centres <= [0.8, 0.9])).all()
+    assert PLANAR_VARIANT.bugtrap_square_rate == 0.0 and SE2_VARIANT.bugtrap_square_rate == 6.0
+    assert len(SE2_VARIANT.forest_means) == 4 and SE2_VARIANT.forest_variance == 0.005
+
+
+# --------------------------------------------------------------------------------------------------
+# Checker and Domain
+
+
+def test_planar_checker_hand_placed_box() -> None:
+    states = np.array([[0.1, 0.1], [0.9, 0.1], [0.1, 0.9], [0.9, 0.9], [0.5, 0.5]])
+    edges = np.array([[0, 1], [0, 2], [1, 3], [2, 3], [0, 3], [4, 1]])
+    lengths = np.linalg.norm(states[edges[:, 1]] - states[edges[:, 0]], axis=1)
+    g = ExplicitGraph(edges, lengths, 5, vertex_states=states)
+    box = np.array([[0.4, 0.0, 0.6, 0.3]])  # crosses the bottom edge (0, 1) and touches nothing else
+    checker = PlanarChecker(g, box)
+    assert isinstance(checker, EdgeChecker)
+    assert checker.check_many(np.arange(6)).tolist() == [False, True, True, True, True, True]
+    assert [checker.check(e) for e in range(6)] == [False, True, True, True, True, True]
+    assert checker.check_many([5, 0, 0]).tolist() == [True, False, False]  # any order, repeats
+    assert checker.check_many(np.zeros(0, dtype=np.int64)).shape == (0,)
+    covering_vertex_4 = PlanarChecker(g, np.array([[0.45, 0.45, 0.55, 0.55]]))
+    assert covering_vertex_4.check_many(np.arange(6)).tolist() == [True, True, True, True, False, False]
+    assert PlanarChecker(g, np.zeros((0, 4))).check_many(np.arange(6)).all()
+    for bad in ([6], [-1], [0.5], [True]):
+        with pytest.raises(ProblemError, match="edge ids"):
+            checker.check_many(bad)
+
+
+def test_planar_checker_matches_edge_free_matrix() -> None:
+    dom = PlanarDomain(num_vertices=120, seed=5)
+    worlds = [dom.make_world(m, s) for m in WORLD_MODELS for s in range(3)]
+    x = edge_free_matrix(dom.graph, worlds)
+    all_edges = np.arange(dom.graph.num_edges)
+    for h, w in enumerate(worlds):
+        assert np.array_equal(dom.checker(w).check_many(all_edges), x[h])
+
+
+def test_planar_domain_protocol_and_spec_round_trip() -> None:
+    dom = domain_from_spec("planar", {"num_vertices": 150, "seed": 3, "pattern_seed": 7})
+    assert isinstance(dom, PlanarDomain) and isinstance(dom, Domain)
+    assert dom.name == "planar" and dom.world_models == WORLD_MODELS and len(WORLD_MODELS) == 7
+    g, s, t = random_geometric_graph(150, seed=3)
+    assert np.array_equal(dom.graph.edges, g.edges) and (dom.start, dom.goal) == (s, t)
+    spec = json.loads(json.dumps(dom.spec()))
+    again = domain_from_spec("planar", spec)
+    assert again == dom and again.spec() == dom.spec()
+    assert np.array_equal(again.make_world("two_wall", 4), dom.make_world("two_wall", 4))
+
+    def walls(d: PlanarDomain) -> set[bytes]:
+        return {d.make_world("one_wall", s)[:11].tobytes() for s in range(40)}  # the wall comes first
+
+    assert walls(PlanarDomain(pattern_seed=8)) != walls(PlanarDomain(pattern_seed=7)) == walls(dom)
+    assert dom.edge_trajectories() is None
+    assert json.loads(json.dumps(dom.check_metadata()))["vehicle"] == "point"
+    assert domain_from_spec("planar").spec() == PlanarDomain().spec()
+    with pytest.raises(ProblemError, match="unknown spec keys"):
+        domain_from_spec("planar", {"nodes": 10})
+    for bad in ({"num_vertices": 1}, {"seed": -1}, {"eta": "big"}, {"keep_clear": 1}, {"num_vertices": 2.5}):
+        with pytest.raises(ProblemError):
+            domain_from_spec("planar", bad)
+
+
+def test_planar_domain_keep_clear() -> None:
+    dom = PlanarDomain(num_vertices=100, seed=0, keep_clear=True)
+    pts = dom.keep_clear_points()
+    assert pts is not None and pts.shape == (2, 2)
+    for s in range(100):
+        assert dom.checker(dom.make_world("one_wall", s)).check_many(np.arange(0)).shape == (0,)
+        w = dom.make_world("forest", s)
+        inside = (pts[:, None, 0] >= w[:, 0]) & (pts[:, None, 0] <= w[:, 2])
+        inside &= (pts[:, None, 1] >= w[:, 1]) & (pts[:, None, 1] <= w[:, 3])
+        assert not inside.any()
+    assert PlanarDomain().keep_clear_points() is None
+
+
+# --------------------------------------------------------------------------------------------------
+# Calibration against the authors' datasets (their graph, our worlds)
+
+AUTHORS_2D = {
+    "one_wall": "dataset_2d_1",
+    "two_wall": "dataset_2d_2",
+    "forest": "dataset_2d_3",
+    "moving_wall": "dataset_2d_4",
+    "maze": "dataset_2d_5",
+    "baffle": "dataset_2d_6",
+    "bugtrap": "dataset_2d_7",
+}
+
+
+@pytest.mark.parametrize("model", WORLD_MODELS)
+def test_free_edge_fraction_matches_the_authors_on_their_graph(model: str) -> None:
+    problem = load_gccd_folder(gccd_folder(AUTHORS_2D[model]))
+    assert problem.graph is not None
+    x_theirs = problem.require_worlds().X
+    all_edges = np.arange(problem.graph.num_edges)
+    x_ours = np.array(
+        [PlanarChecker(problem.graph, generate_world(model, seed=s)).check_many(all_edges) for s in range(60)]
+    )
+    # measured with 300 worlds: within 0.02 for every model (bugtrap 0.818 vs 0.799)
+    assert x_ours.mean() == pytest.approx(x_theirs.mean(), abs=0.04)

@@ -214,6 +214,8 @@ class Dataset:
         meta = {
             "source": "dataset",
             "domain": self.domain,
+            "domain_spec": self.domain_spec,
+            "check_metadata": self.check_metadata,
             "world_model": self.world_model,
             "seed": self.seed,
             "num_worlds": self.num_worlds,

@@ -9,7 +9,9 @@ function of its arguments.
 Models (ranges ``[lo, hi]`` are drawn uniformly per world):
 
 - ``"wires"``: rolling terrain (a sum of Gaussian bumps) crossed by power lines. Each line passes the
-  corridor's centre line at x ~ ``line_x`` with a heading ``line_angle_deg`` off the y axis, has towers
+  corridor's centre line at x ~ ``line_x`` (or, with ``line_sites``, at a random subset of those known
+  corridor crossings, as on a map whose lines may or may not be there) with a heading ``line_angle_deg`` off
+  the y axis, has towers
   (vertical cylinders) every ``span`` metres of ``tower_height`` above the terrain, and 1..3 conductors
   ``conductor_gap`` apart hanging with a parabolic sag of ``sag`` metres.
 - ``"canyon"``: a plateau of ``wall_height`` cut by a valley whose centre line meanders as a sine series
@@ -245,9 +247,17 @@ class WiresParams(_Common):
     conductor_gap: float = 5.0
     sag: Range = (5.0, 25.0)
     wire_diameter: float = 0.03
+    line_sites: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         self._check_common()
+        if self.line_sites is not None:
+            sites = tuple(float(v) for v in self.line_sites)
+            if not sites or not all(math.isfinite(v) for v in sites):
+                raise ProblemError(
+                    f"wires line_sites must be a non-empty list of finite x, got {self.line_sites!r}"
+                )
+            object.__setattr__(self, "line_sites", sites)
         _ranges(self, ("bumps", "lines", "conductors"), low=0, integer=True)
         _ranges(self, ("bump_height", "line_x", "line_angle_deg", "tower_height"))
         _ranges(self, ("bump_sigma", "span"), low=1e-9)
@@ -479,8 +489,14 @@ def _wires_world(rng: np.random.Generator, p: WiresParams, frame: WorldFrame) ->
     solids: list[tuple[str, Shape, Pose]] = []
     lines_info: list[dict[str, Any]] = []
     half_extent = max(abs(ys[0]), abs(ys[-1]))
-    for li in range(_integer(rng, p.lines)):
-        x_c = _uniform(rng, p.line_x)
+    num_lines = _integer(rng, p.lines)
+    sites: list[float] | None = None
+    if p.line_sites is not None:  # known power-line corridors: which are present varies per world
+        num_lines = min(num_lines, len(p.line_sites))
+        picked = np.sort(rng.choice(len(p.line_sites), size=num_lines, replace=False))
+        sites = [p.line_sites[int(i)] for i in picked]
+    for li in range(num_lines):
+        x_c = _uniform(rng, p.line_x) if sites is None else sites[li]
         angle = math.radians(_uniform(rng, p.line_angle_deg))
         span = _uniform(rng, p.span)
         height = _uniform(rng, p.tower_height)

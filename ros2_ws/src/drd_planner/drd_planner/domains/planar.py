@@ -1,30 +1,22 @@
-"""The planar (2D) domain: a random geometric graph in the unit square and seeded box-world models.
+"""The planar (2D) domain: a random geometric graph in the unit square and seeded box worlds.
 
 Everything here is self-contained and exact: obstacles are closed axis-aligned boxes and an edge (a
 straight segment between its end vertices) is checked analytically with a vectorised slab test, so no
-FCL and no occupancy grid are needed. It backs ``drd demo`` and the tests that need a problem without
-external data.
+FCL and no occupancy grid are needed. Every one of the seven world models (one_wall, two_wall, forest,
+moving_wall, baffle, maze, bugtrap; :mod:`drd_planner.domains.planar_worlds`, ALGORITHMS.md section 6.2)
+is a union of axis-aligned rectangles, so boxes represent them without approximation.
 
-World models follow the authors' 2D scripts (ALGORITHMS.md section 6.2; [CODE]
-``dataset_processing/2D_dataset_creation/example_environments``):
+:class:`PlanarDomain` is the :class:`drd_planner.domains.base.Domain` of the dataset builder;
+:func:`make_planar_problem` builds a complete small problem for ``drd demo`` and the tests.
 
-- ``"one_wall"``: a wall of width 0.2 centred at x = 0.5 spanning the full height, with 5 slots of height 0.1
-  (6 solid blocks of height 1/12 between and around them). A fixed list of up to 15 open/closed slot
-  patterns with at least 2 open is drawn once per seed; each world picks one uniformly and adds a
-  Poisson(8) forest of 0.1 x 0.1 squares with centres uniform in the unit square.
-- ``"forest"``: 12 squares of side 0.1 whose centres come from a 5-component Gaussian mixture (means
-  (0.3,0.3), (0.1,0.5), (0.7,0.7), (0.9,0.5), (0.5,0.5); covariance 0.01 I; equal weights), rejected
-  outside [0.075, 0.925]^2, plus a Poisson(4) number of squares uniform in that box.
-- ``"moving_wall"``: a full-height wall of width 0.15 centred at x ~ U[0.2, 0.8] with one gap of height
-  0.1 whose centre is at y ~ U[0.2, 0.8].
-
-Units: the unit square, lengths are Euclidean distances in the same unit.
+Units: the unit square; lengths are Euclidean distances in the same unit.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -37,34 +29,26 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.data.library_builder import build_path_library, split_worlds
+from drd_planner.domains.planar_worlds import (
+    PLANAR_VARIANT,
+    WORLD_MODELS,
+    as_boxes,
+    generate_world,
+    one_wall_patterns,
+    world_from_rng,
+)
 from drd_planner.exceptions import ProblemError
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 IntArray = npt.NDArray[np.int64]
-PointSampler = Callable[[np.random.Generator], FloatArray | None]
 
-WORLD_MODELS: tuple[str, ...] = ("one_wall", "forest", "moving_wall")
-
-SQUARE_SIDE = 0.1
-ONE_WALL_X = 0.5
-ONE_WALL_WIDTH = 0.2
-ONE_WALL_SLOTS = 5
-ONE_WALL_SLOT_HEIGHT = 0.1
-ONE_WALL_MAX_PATTERNS = 15
-ONE_WALL_FOREST_RATE = 8.0
-FOREST_MEANS: FloatArray = np.array([[0.3, 0.3], [0.1, 0.5], [0.7, 0.7], [0.9, 0.5], [0.5, 0.5]])
-FOREST_SIGMA = math.sqrt(0.01)
-FOREST_SQUARES = 12
-FOREST_RATE = 4.0
-FOREST_BOX = (0.075, 0.925)
-MOVING_WALL_WIDTH = 0.15
-MOVING_WALL_GAP = 0.1
-MOVING_WALL_X_RANGE = (0.2, 0.8)
-MOVING_WALL_GAP_RANGE = (0.2, 0.8)
+_CHUNK_ELEMENTS = 1 << 20  # segment x box pairs per vectorised block
 
 __all__ = [
     "WORLD_MODELS",
+    "PlanarChecker",
+    "PlanarDomain",
     "edge_free_matrix",
     "make_planar_problem",
     "one_wall_patterns",
@@ -72,6 +56,7 @@ __all__ = [
     "rgg_radius",
     "sample_worlds",
     "segments_hit_boxes",
+    "validate_edge_ids",
 ]
 
 
@@ -138,18 +123,6 @@ def random_geometric_graph(
 # Exact segment / box collision
 
 
-def _as_boxes(boxes: npt.ArrayLike) -> FloatArray:
-    """Validate and return boxes as a (k, 4) float64 array of (xmin, ymin, xmax, ymax)."""
-    b = np.asarray(boxes, dtype=np.float64)
-    if b.size == 0:
-        return np.zeros((0, 4), dtype=np.float64)
-    if b.ndim != 2 or b.shape[1] != 4:
-        raise ProblemError(f"boxes must have shape (k, 4) as (xmin, ymin, xmax, ymax), got {b.shape}")
-    if not np.all(np.isfinite(b)) or np.any(b[:, 2] < b[:, 0]) or np.any(b[:, 3] < b[:, 1]):
-        raise ProblemError("boxes must be finite with xmin <= xmax and ymin <= ymax")
-    return b
-
-
 def segments_hit_boxes(p0: npt.ArrayLike, p1: npt.ArrayLike, boxes: npt.ArrayLike) -> BoolArray:
     """Exact intersection of segments with closed axis-aligned boxes (slab test).
 
@@ -168,7 +141,7 @@ def segments_hit_boxes(p0: npt.ArrayLike, p1: npt.ArrayLike, boxes: npt.ArrayLik
     b = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
     if a.shape != b.shape:
         raise ProblemError(f"segment start and end arrays differ in shape: {a.shape} vs {b.shape}")
-    bx = _as_boxes(boxes)
+    bx = as_boxes(boxes)
     d = b - a
     t_enter = np.zeros((a.shape[0], bx.shape[0]))
     t_exit = np.ones((a.shape[0], bx.shape[0]))
@@ -210,109 +183,28 @@ def edge_free_matrix(graph: ExplicitGraph, boxes_per_world: Sequence[npt.ArrayLi
     p1 = states[graph.edges[:, 1]]
     x = np.ones((len(boxes_per_world), graph.num_edges), dtype=bool)
     for h, boxes in enumerate(boxes_per_world):
-        bx = _as_boxes(boxes)
+        bx = as_boxes(boxes)
         if bx.shape[0]:
             x[h] = ~segments_hit_boxes(p0, p1, bx).any(axis=1)
     return x
 
 
 # --------------------------------------------------------------------------------------------------
-# World models
-
-
-def one_wall_patterns(seed: int) -> IntArray:
-    """The fixed slot-pattern list of the one-wall model for a seed.
-
-    Like the authors' script: 15 random 0/1 rows over the 5 slots (1 = open), rows with fewer than 2 open
-    slots dropped (redrawn in the unlikely case that none is left), duplicates kept.
-
-    Returns:
-        (p, 5) int64 patterns, 1 <= p <= 15.
-    """
-    rng = np.random.default_rng(seed)
-    while True:
-        draws = rng.integers(0, 2, size=(ONE_WALL_MAX_PATTERNS, ONE_WALL_SLOTS), dtype=np.int64)
-        patterns: IntArray = np.asarray(draws[draws.sum(axis=1) >= 2], dtype=np.int64)
-        if patterns.shape[0]:
-            return np.asarray(patterns, dtype=np.int64)
-
-
-def _one_wall_boxes(pattern: IntArray) -> FloatArray:
-    """Boxes (k, 4) of the wall with slots open where ``pattern`` is 1."""
-    gap = ONE_WALL_SLOT_HEIGHT
-    block = (1.0 - ONE_WALL_SLOTS * gap) / (ONE_WALL_SLOTS + 1)
-    x0, x1 = ONE_WALL_X - ONE_WALL_WIDTH / 2, ONE_WALL_X + ONE_WALL_WIDTH / 2
-    out = []
-    for i in range(ONE_WALL_SLOTS + 1):
-        y0 = i * (block + gap)
-        out.append((x0, y0, x1, y0 + block))
-    for i in range(ONE_WALL_SLOTS):
-        if pattern[i] == 0:
-            y0 = i * (block + gap) + block
-            out.append((x0, y0, x1, y0 + gap))
-    return np.array(out, dtype=np.float64)
-
-
-def _squares(centres: FloatArray) -> FloatArray:
-    """Boxes (k, 4) of side 0.1 centred at (k, 2) points."""
-    h = SQUARE_SIDE / 2
-    return np.concatenate([centres - h, centres + h], axis=1).reshape(-1, 4)
-
-
-def _covers(centre: FloatArray, keep_clear: FloatArray) -> bool:
-    """Whether the square centred at ``centre`` (2,) covers any of the (p, 2) points."""
-    if keep_clear.shape[0] == 0:
-        return False
-    return bool(np.any(np.all(np.abs(keep_clear - centre) <= SQUARE_SIDE / 2, axis=1)))
-
-
-def _draw_centres(
-    rng: np.random.Generator,
-    count: int,
-    draw_one: PointSampler,
-    keep_clear: FloatArray,
-    max_tries: int = 1000,
-) -> FloatArray:
-    """``count`` square centres (count, 2) from ``draw_one(rng) -> (2,) | None``, redrawing covering ones."""
-    out: list[FloatArray] = []
-    tries = 0
-    while len(out) < count and tries < max_tries * max(count, 1):
-        tries += 1
-        c = draw_one(rng)
-        if c is None or _covers(c, keep_clear):
-            continue
-        out.append(c)
-    return np.array(out, dtype=np.float64).reshape(-1, 2)
-
-
-def _uniform_point(lo: float, hi: float) -> PointSampler:
-    """A sampler of points uniform in [lo, hi]^2."""
-
-    def draw(rng: np.random.Generator) -> FloatArray:
-        return lo + (hi - lo) * rng.random(2)
-
-    return draw
-
-
-def _mixture_point(rng: np.random.Generator) -> FloatArray | None:
-    """A point of the forest's Gaussian mixture, or None when it falls outside the forest box."""
-    mean = FOREST_MEANS[rng.integers(FOREST_MEANS.shape[0])]
-    c = mean + FOREST_SIGMA * rng.standard_normal(2)
-    lo, hi = FOREST_BOX
-    if np.any(c < lo) or np.any(c > hi):
-        return None
-    return np.asarray(c, dtype=np.float64)
+# World models (defined in planar_worlds)
 
 
 def sample_worlds(
     model: str, n: int, *, seed: int, keep_clear: npt.ArrayLike | None = None
 ) -> list[FloatArray]:
-    """Sample n box worlds from a world model.
+    """Sample n planar box worlds from a world model.
+
+    World i is drawn from the i-th child of ``numpy.random.SeedSequence(seed)``; the slot-pattern lists of the
+    wall models come from ``seed`` itself.
 
     Args:
-        model: one of :data:`WORLD_MODELS` ("one_wall", "forest", "moving_wall").
+        model: one of :data:`WORLD_MODELS`.
         n: number of worlds.
-        seed: seed of ``numpy.random.default_rng`` (same seed, same worlds).
+        seed: master seed (same seed, same worlds; a longer list extends a shorter one).
         keep_clear: optional (p, 2) points (for example the start and goal vertices) that no random square
             may cover; a covering square is redrawn. Walls are not moved.
 
@@ -326,33 +218,195 @@ def sample_worlds(
         raise ProblemError(f"unknown planar world model {model!r}; choose one of {', '.join(WORLD_MODELS)}")
     if n < 0:
         raise ProblemError(f"number of worlds must be non-negative, got {n}")
-    clear = (
-        np.zeros((0, 2)) if keep_clear is None else np.asarray(keep_clear, dtype=np.float64).reshape(-1, 2)
-    )
-    rng = np.random.default_rng(seed)
-    worlds: list[FloatArray] = []
-    if model == "one_wall":
-        patterns = one_wall_patterns(int(rng.integers(2**32)))
-        walls = [_one_wall_boxes(p) for p in patterns]
-        uniform = _uniform_point(0.0, 1.0)
-        for _ in range(n):
-            wall = walls[int(rng.integers(len(walls)))]
-            squares = _squares(_draw_centres(rng, int(rng.poisson(ONE_WALL_FOREST_RATE)), uniform, clear))
-            worlds.append(np.concatenate([wall, squares], axis=0))
-    elif model == "forest":
-        uniform = _uniform_point(*FOREST_BOX)
-        for _ in range(n):
-            mixture = _draw_centres(rng, FOREST_SQUARES, _mixture_point, clear)
-            extra = _draw_centres(rng, int(rng.poisson(FOREST_RATE)), uniform, clear)
-            worlds.append(_squares(np.concatenate([mixture, extra], axis=0)))
-    else:  # moving_wall
-        for _ in range(n):
-            x = rng.uniform(*MOVING_WALL_X_RANGE)
-            y = rng.uniform(*MOVING_WALL_GAP_RANGE)
-            x0, x1 = x - MOVING_WALL_WIDTH / 2, x + MOVING_WALL_WIDTH / 2
-            g0, g1 = y - MOVING_WALL_GAP / 2, y + MOVING_WALL_GAP / 2
-            worlds.append(np.array([[x0, 0.0, x1, g0], [x0, g1, x1, 1.0]], dtype=np.float64))
-    return worlds
+    children = np.random.SeedSequence(seed).spawn(n)
+    return [
+        world_from_rng(model, np.random.default_rng(c), pattern_seed=seed, keep_clear=keep_clear)
+        for c in children
+    ]
+
+
+# --------------------------------------------------------------------------------------------------
+# Domain
+
+
+def validate_edge_ids(edges: npt.ArrayLike, num_edges: int) -> IntArray:
+    """Edge ids as a (K,) int64 array.
+
+    Raises:
+        ProblemError: non-integer ids or ids outside [0, num_edges).
+    """
+    arr = np.asarray(edges)
+    if arr.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if arr.dtype == np.bool_ or not np.issubdtype(arr.dtype, np.integer):
+        raise ProblemError(f"edge ids must be integers, got dtype {arr.dtype}")
+    ids = arr.astype(np.int64).ravel()
+    if ids.min() < 0 or ids.max() >= num_edges:
+        raise ProblemError(f"edge ids must lie in [0, {num_edges}), got range [{ids.min()}, {ids.max()}]")
+    return ids
+
+
+class PlanarChecker:
+    """Exact edge checker of one box world: an edge is free iff its straight segment meets no box.
+
+    The segment test includes both end vertices, so a free edge also has free endpoints.
+    """
+
+    def __init__(self, graph: ExplicitGraph, boxes: npt.ArrayLike) -> None:
+        """Check the edges of ``graph`` ((V, 2) vertex coordinates) against (k, 4) closed boxes."""
+        states = graph.vertex_states
+        if states is None or states.shape[1] != 2:
+            raise ProblemError("a planar checker needs a graph with (V, 2) vertex coordinates")
+        self._p0 = states[graph.edges[:, 0]]
+        self._p1 = states[graph.edges[:, 1]]
+        self._boxes = as_boxes(boxes)
+        self._num_edges = graph.num_edges
+
+    @property
+    def boxes(self) -> FloatArray:
+        """(k, 4) boxes of the world."""
+        return self._boxes
+
+    def check(self, edge: int) -> bool:
+        """True when edge ``edge`` is collision-free."""
+        return bool(self.check_many(np.array([edge]))[0])
+
+    def check_many(self, edges: npt.ArrayLike) -> BoolArray:
+        """(K,) bool, True where each of the (K,) edge ids is collision-free."""
+        ids = validate_edge_ids(edges, self._num_edges)
+        free = np.ones(ids.size, dtype=bool)
+        k = self._boxes.shape[0]
+        if k == 0 or ids.size == 0:
+            return free
+        rows = max(1, _CHUNK_ELEMENTS // k)
+        for lo in range(0, ids.size, rows):
+            chunk = ids[lo : lo + rows]
+            hits = segments_hit_boxes(self._p0[chunk], self._p1[chunk], self._boxes)
+            free[lo : lo + rows] = ~hits.any(axis=1)
+        return free
+
+
+def _int_field(name: str, value: object, minimum: int) -> int:
+    """``value`` as an int >= minimum, or a ProblemError naming the field."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ProblemError(f"planar domain: {name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class PlanarDomain:
+    """The planar domain: a seeded random geometric graph in the unit square and box worlds.
+
+    Graph: :func:`random_geometric_graph` (``num_vertices`` points, radius :func:`rgg_radius` with ``eta``,
+    start nearest (0, 0), goal nearest (1, 1)). Worlds: the seven models of
+    :mod:`drd_planner.domains.planar_worlds` (planar parameters). Edges: straight segments, checked exactly.
+
+    Attributes:
+        num_vertices: N, the number of random points (100, 150 or 200 in the authors' datasets).
+        seed: seed of the graph's points.
+        eta: radius multiplier (1 in the authors' datasets).
+        pattern_seed: seed of the fixed slot-pattern lists shared by all worlds of ``one_wall`` / ``two_wall``.
+        keep_clear: keep random squares off the start and goal vertices (the authors did not).
+    """
+
+    num_vertices: int = 100
+    seed: int = 0
+    eta: float = 1.0
+    pattern_seed: int = 0
+    keep_clear: bool = False
+    _built: tuple[ExplicitGraph, int, int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "num_vertices", _int_field("num_vertices", self.num_vertices, 2))
+        object.__setattr__(self, "seed", _int_field("seed", self.seed, 0))
+        object.__setattr__(self, "pattern_seed", _int_field("pattern_seed", self.pattern_seed, 0))
+        if isinstance(self.eta, bool) or not isinstance(self.eta, int | float) or not math.isfinite(self.eta):
+            raise ProblemError(f"planar domain: eta must be a finite number, got {self.eta!r}")
+        object.__setattr__(self, "eta", float(self.eta))
+        if not isinstance(self.keep_clear, bool):
+            raise ProblemError(f"planar domain: keep_clear must be true or false, got {self.keep_clear!r}")
+        built = random_geometric_graph(self.num_vertices, seed=self.seed, eta=self.eta)
+        object.__setattr__(self, "_built", built)
+
+    @classmethod
+    def from_spec(cls, spec: Mapping[str, Any]) -> PlanarDomain:
+        """Build from :meth:`spec` output (missing keys take their defaults).
+
+        Raises:
+            ProblemError: unknown keys or invalid values.
+        """
+        allowed = {f.name for f in fields(cls) if f.init}
+        unknown = sorted(set(spec) - allowed)
+        if unknown:
+            raise ProblemError(f"planar domain: unknown spec keys {unknown}; known: {sorted(allowed)}")
+        return cls(**dict(spec))
+
+    def spec(self) -> dict[str, Any]:
+        """JSON-able parameters; ``PlanarDomain.from_spec(d.spec()) == d``."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.init}
+
+    @property
+    def name(self) -> str:
+        """``"planar"``."""
+        return "planar"
+
+    @property
+    def graph(self) -> ExplicitGraph:
+        """The undirected random geometric graph; ``vertex_states`` (V, 2) are (x, y)."""
+        return self._built[0]
+
+    @property
+    def start(self) -> int:
+        """The vertex nearest (0, 0)."""
+        return self._built[1]
+
+    @property
+    def goal(self) -> int:
+        """The vertex nearest (1, 1)."""
+        return self._built[2]
+
+    @property
+    def world_models(self) -> tuple[str, ...]:
+        """All seven planar world models."""
+        return WORLD_MODELS
+
+    def keep_clear_points(self) -> FloatArray | None:
+        """(2, 2) start and goal coordinates when ``keep_clear`` is set, else None."""
+        if not self.keep_clear:
+            return None
+        states = self.graph.vertex_states
+        assert states is not None
+        return np.asarray(states[[self.start, self.goal]], dtype=np.float64)
+
+    def make_world(self, model: str, seed: int) -> FloatArray:
+        """The (k, 4) boxes of ``model`` drawn with ``seed`` (see :func:`planar_worlds.generate_world`)."""
+        return generate_world(
+            model,
+            seed=seed,
+            variant=PLANAR_VARIANT,
+            pattern_seed=self.pattern_seed,
+            keep_clear=self.keep_clear_points(),
+        )
+
+    def checker(self, world: npt.ArrayLike) -> PlanarChecker:
+        """An exact checker of this graph's edges against the (k, 4) boxes ``world``."""
+        return PlanarChecker(self.graph, world)
+
+    def edge_trajectories(self) -> None:
+        """None: planar edges are straight segments between their end vertices."""
+        return None
+
+    def check_metadata(self) -> dict[str, Any]:
+        """How edges are checked (exact segment / closed-box intersection, point robot, no margin)."""
+        return {
+            "method": "exact straight segment vs closed axis-aligned boxes (slab test), endpoints included",
+            "vehicle": "point",
+            "margin": 0.0,
+            "length_unit": "unit square (dimensionless)",
+            "world_variant": PLANAR_VARIANT.name,
+            "pattern_seed": self.pattern_seed,
+            "keep_clear": self.keep_clear,
+        }
 
 
 # --------------------------------------------------------------------------------------------------
