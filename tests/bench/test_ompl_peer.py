@@ -225,3 +225,19 @@ def _print_lazysp(problem: Problem, ompl_checks: list[int]) -> None:
         print(f"lazysp comparison unavailable: {exc}")
         return
     print(f"lazysp checks {res.policies['lazysp'].checks} vs ompl_lazyprm {ompl_checks}")
+
+
+def test_benchmark_reports_the_peer_as_policy_ompl_lazyprm(capsys: pytest.CaptureFixture[str]) -> None:
+    from drd_planner.bench.runner import run_benchmark
+
+    ok, message = ompl_available()
+    result = run_benchmark(tiny_problem(), policies=["bisect", "ompl_lazyprm"], progress=False)
+    if not ok:
+        assert "ompl_lazyprm" not in result.policies
+        assert message in capsys.readouterr().err
+        return
+    stats = result.policies["ompl_lazyprm"]
+    direct = run_ompl_lazyprm(tiny_problem(), result.test_ids, seed=0, time_limit_s=5.0)
+    assert stats.checks == direct["checks"]
+    assert stats.failures == direct["failures"]
+    assert len(stats.select_ms) >= len(stats.checks)

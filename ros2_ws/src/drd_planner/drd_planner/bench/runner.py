@@ -11,6 +11,7 @@ reference was not run), ``oracle_lower_bound.relative`` and a ``relative_protoco
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -52,9 +53,15 @@ def available_policies(names: Sequence[str] = TABLE1_POLICIES) -> tuple[str, ...
     return tuple(p for p in names if p in POLICIES)
 
 
+#: External peers run outside the episode runner (in their own process), reported like policies.
+PEER_POLICIES = ("ompl_lazyprm",)
+#: Wall-clock limit of one peer solve, in seconds.
+PEER_TIME_LIMIT_S = 10.0
+
+
 def check_policy_names(names: Sequence[str]) -> None:
     """Raise a clear DrdError naming every unknown policy."""
-    unknown = [p for p in names if p not in POLICIES]
+    unknown = [p for p in names if p not in POLICIES and p not in PEER_POLICIES]
     if unknown:
         raise DrdError(f"unknown policy {', '.join(unknown)}; known: {', '.join(sorted(POLICIES))}")
 
@@ -223,6 +230,11 @@ def run_benchmark(
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
     for name in policies:
+        if name in PEER_POLICIES:
+            peer = _run_peer(problem, test_ids, seed=seed)
+            if peer is not None:
+                results[name] = peer
+            continue
         checks: list[int] = []
         select_ms: list[float] = []
         failed: list[int] = []
@@ -248,6 +260,27 @@ def run_benchmark(
     return BenchmarkResult(
         problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, settings
     )
+
+
+def _run_peer(problem: Problem, test_ids: npt.NDArray[np.int64], *, seed: int) -> PolicyStats | None:
+    """OMPL's LazyPRM on the same graph (``ompl_lazyprm``); None, with a note on stderr, when OMPL is absent.
+
+    Its ``select_ms`` is the peer's whole solve time per world divided by its checks (search and lazy
+    validation together: OMPL does not expose selection time separately).
+    """
+    from drd_planner.bench.ompl_peer import ompl_available, run_ompl_lazyprm
+
+    available, message = ompl_available()
+    if not available:
+        print(message, file=sys.stderr)
+        return None
+    t0 = time.perf_counter()
+    out = run_ompl_lazyprm(problem, test_ids, seed=seed, time_limit_s=PEER_TIME_LIMIT_S)
+    checks = [int(c) for c in out["checks"]]
+    failed = [k for k, w in enumerate(out["worlds"]) if not w["success"]]
+    per_check = [1e3 * float(w["wall_s"]) / max(int(w["checks"]), 1) for w in out["worlds"]]
+    select_ms = [ms for ms, c in zip(per_check, checks, strict=True) for _ in range(max(c, 1))]
+    return PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
 
 
 def _disable(progress: bool | None) -> bool | None:
