@@ -16,6 +16,7 @@ from drd_planner import __version__
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
+from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
 
 if TYPE_CHECKING:
@@ -354,7 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser("demo", help="self-contained demo on a generated planar problem")
-    p.add_argument("--model", default="one_wall", choices=("one_wall", "forest", "moving_wall"))
+    p.add_argument("--model", default="one_wall", choices=PLANAR_WORLD_MODELS, help="planar world model")
     p.add_argument("--worlds", type=int, default=300)
     p.add_argument("--episodes", type=int, default=3)
     p.add_argument("--seed", type=int, default=0)
