@@ -16,14 +16,8 @@ from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import DirectBisectPolicy
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
-from drd_planner.data.tree_file import (
-    FORMAT_VERSION,
-    TreeBundle,
-    _array_digest,
-    _payload_digest,
-    load_tree,
-    save_tree,
-)
+from drd_planner.data.npz_format import array_digest, payload_digest
+from drd_planner.data.tree_file import FORMAT_VERSION, TreeBundle, load_tree, save_tree
 from drd_planner.domains.planar import make_planar_problem
 from drd_planner.exceptions import TreeFileError
 
@@ -83,9 +77,9 @@ def _write_npz(path: Path, arrays: dict[str, np.ndarray], header: dict[str, Any]
 def _rechecksum(arrays: dict[str, np.ndarray]) -> None:
     """Recompute the header's checksums in place so that only the content is wrong."""
     header = _header(arrays)
-    digests = {k: _array_digest(k, v) for k, v in arrays.items() if k != "header"}
+    digests = {k: array_digest(k, v) for k, v in arrays.items() if k != "header"}
     header["array_sha256"] = digests
-    header["payload_sha256"] = _payload_digest(digests, header)
+    header["payload_sha256"] = payload_digest(digests, header)
     arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
 
 

@@ -15,7 +15,6 @@ Arrays: graph (``edges`` (E, 2), ``lengths`` (E,), optional ``vertex_states`` (V
 
 from __future__ import annotations
 
-import hashlib
 import io
 import itertools
 import json
@@ -33,6 +32,7 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
+from drd_planner.data.npz_format import array_digest, payload_digest
 from drd_planner.exceptions import DrdError, TreeFileError
 
 FORMAT_NAME = "drd_planner.tree"
@@ -80,24 +80,6 @@ class TreeBundle:
     provenance: dict[str, Any] = field(default_factory=dict)
 
 
-def _array_digest(name: str, arr: npt.NDArray[Any]) -> str:
-    h = hashlib.sha256()
-    h.update(name.encode())
-    h.update(str(arr.dtype.str).encode())
-    h.update(repr(tuple(arr.shape)).encode())
-    h.update(np.ascontiguousarray(arr).tobytes())
-    return h.hexdigest()
-
-
-def _payload_digest(digests: dict[str, str], header: dict[str, Any] | None = None) -> str:
-    """SHA-256 over every array digest and every header field except the digests themselves."""
-    h = hashlib.sha256("".join(f"{k}:{digests[k]};" for k in sorted(digests)).encode())
-    if header is not None:
-        fields = {k: v for k, v in header.items() if k not in ("array_sha256", "payload_sha256")}
-        h.update(json.dumps(fields, sort_keys=True).encode())
-    return h.hexdigest()
-
-
 def _concat(seqs: tuple[npt.NDArray[np.int64], ...]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     offsets = np.concatenate([[0], np.cumsum([s.size for s in seqs])]).astype(np.int64)
     return np.concatenate(seqs).astype(np.int64), offsets
@@ -127,7 +109,7 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
     if problem.library.vertex_paths is not None:
         arrays["vertex_paths"], arrays["vertex_offsets"] = _concat(problem.library.vertex_paths)
     arrays = {k: np.ascontiguousarray(v, dtype=({**_REQUIRED, **_OPTIONAL})[k]) for k, v in arrays.items()}
-    digests = {k: _array_digest(k, v) for k, v in arrays.items()}
+    digests = {k: array_digest(k, v) for k, v in arrays.items()}
     header = {
         "format": FORMAT_NAME,
         "format_version": FORMAT_VERSION,
@@ -146,7 +128,7 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         "array_sha256": digests,
     }
     header = json.loads(json.dumps(header, sort_keys=True))  # exactly what a reader will see
-    header["payload_sha256"] = _payload_digest(digests, header)
+    header["payload_sha256"] = payload_digest(digests, header)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     header_bytes = np.frombuffer(json.dumps(header, sort_keys=True).encode(), dtype=np.uint8)
@@ -188,9 +170,9 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
     if not isinstance(digests, dict) or set(digests) != set(contents):
         raise TreeFileError(f"{src} is corrupt: its arrays do not match the header's list")
     for name, arr in contents.items():
-        if _array_digest(name, arr) != digests[name]:
+        if array_digest(name, arr) != digests[name]:
             raise TreeFileError(f"{src} is corrupt: checksum mismatch in array {name!r}")
-    if _payload_digest(digests, header) != header.get("payload_sha256"):
+    if payload_digest(digests, header) != header.get("payload_sha256"):
         raise TreeFileError(f"{src} is corrupt: payload checksum mismatch")
     missing = [k for k in _REQUIRED if k not in contents]
     if missing:
