@@ -41,6 +41,30 @@ def test_validation_means_are_recomputable(problem) -> None:  # type: ignore[no-
     assert choice.mean_checks[0.2] == pytest.approx(total / held.size)
 
 
+@pytest.mark.parametrize("options", [{"max_prob_region": False}, {"top_regions": 3}])
+def test_validation_tree_is_built_with_the_final_trees_options(problem, options) -> None:  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    choice = select_switch_threshold(problem, candidates=(0.05,), seed=5, tree_options=options)
+    default = select_switch_threshold(problem, candidates=(0.05,), seed=5)
+    worlds = problem.worlds
+    held = np.asarray(choice.validation_ids)
+    fit = np.setdiff1d(worlds.train_ids, held)
+    sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held))
+    trees = {"given": build_tree(sub, progress=False, **options), "default": build_tree(sub, progress=False)}
+    means = {}
+    for key, tree in trees.items():
+        total = 0
+        for w in held:
+            policy = DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.05)
+            total += run_episode(
+                problem.library, problem.edge_costs, policy, TableOracle(worlds.X[w])
+            ).num_checks
+        means[key] = total / held.size
+    assert choice.mean_checks[0.05] == pytest.approx(means["given"])
+    assert default.mean_checks[0.05] == pytest.approx(means["default"])
+
+
 def test_same_seed_same_choice_and_ties_go_to_larger_eta(problem) -> None:  # type: ignore[no-untyped-def]
     a = select_switch_threshold(problem, seed=7)
     b = select_switch_threshold(problem, seed=7)

@@ -3,6 +3,8 @@
 from pathlib import Path
 
 import numpy as np
+import pytest
+from conftest import SHARED_DATA
 
 from drd_planner.cli import main
 from drd_planner.data.tree_file import load_tree
@@ -28,3 +30,26 @@ def test_tree_from_dataset_rebuilds_its_domain_and_checker(tmp_path: Path) -> No
     root_edge = int(bundle.tree.edge[0])
     world = domain.make_world("wires", 0)
     assert isinstance(domain.checker(world).check(max(root_edge, 0)), bool)
+
+
+def _shipped_trees() -> list[Path]:
+    return sorted((Path(__file__).resolve().parents[2] / "trees").glob("*.npz"))
+
+
+def test_shipped_trees_exist() -> None:
+    names = {p.stem for p in _shipped_trees()}
+    assert {"heli_wires", "heli_terrain", "arm_table_clutter"} <= names
+
+
+@pytest.mark.parametrize("path", _shipped_trees(), ids=lambda p: p.stem)
+def test_shipped_tree_rebuilds_its_graph_from_the_stored_spec(path: Path) -> None:
+    bundle = load_tree(path)
+    meta = bundle.problem.metadata
+    if meta["domain"] == "arm" and not (SHARED_DATA / "panda").is_dir():
+        pytest.skip(f"shared Panda model {SHARED_DATA / 'panda'} not present (set DRD_SHARED_DATA)")
+    domain = domain_from_spec(meta["domain"], meta["domain_spec"])
+    assert np.array_equal(domain.graph.edges, bundle.problem.graph.edges)
+    assert np.allclose(domain.graph.lengths, bundle.problem.graph.lengths)
+    assert (domain.start, domain.goal) == (bundle.problem.start, bundle.problem.goal)
+    assert meta["check_metadata"] == domain.check_metadata()
+    assert 0.0 < bundle.eta <= 1.0 and bundle.tree.num_nodes >= 1

@@ -230,3 +230,48 @@ def test_wires_on_known_line_sites_pick_a_subset_of_them() -> None:
     assert seen == set(sites)
     with pytest.raises(ProblemError, match="line_sites"):
         _Wires(line_sites=(1.0, float("nan")))
+
+
+def test_terrain_site_keeps_every_world_on_one_operating_area(tmp_path: Path) -> None:
+    rows, cols = 160, 160
+    yy, xx = np.mgrid[0:rows, 0:cols]
+    heights = 300.0 + 40.0 * np.sin(xx / 9.0) * np.cos(yy / 13.0) + 0.5 * xx
+    path = tmp_path / "hills.asc"
+    _write_grid(path, heights, f"NCOLS {cols}\nNROWS {rows}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n")
+    site = {
+        "path": str(path),
+        "site": [0.5, 0.4],
+        "site_jitter": 50.0,
+        "rotation_deg": [-10, 10],
+        "mirror": 0,
+        "metres_per_cell": [20, 30],
+    }
+    domain = HelicopterDomain(models={"terrain": site})
+    infos = [domain.make_world("terrain", seed).info for seed in range(12)]
+    for info in infos:
+        mpc = info["metres_per_cell"]
+        ci, cj = info["centre_cell"]
+        assert abs(ci - 0.5 * (rows - 1)) <= 50.0 / mpc + 1e-9
+        assert abs(cj - 0.4 * (cols - 1)) <= 50.0 / mpc + 1e-9
+        assert -10.0 <= info["rotation_deg"] <= 10.0
+        assert info["flipped"] is False
+        assert 20.0 <= mpc <= 30.0
+    anywhere = HelicopterDomain(models={"terrain": {"path": str(path)}})
+    centres = np.array([anywhere.make_world("terrain", seed).info["centre_cell"] for seed in range(12)])
+    assert np.ptp(centres[:, 0]) > 20.0  # without a site the crops spread over the grid
+
+
+@pytest.mark.parametrize(
+    ("values", "message"),
+    [
+        ({"site": [0.5]}, "site must be"),
+        ({"site": [0.5, 1.5]}, "fractions must lie"),
+        ({"site_jitter": -1.0}, "site_jitter"),
+        ({"site_jitter": float("nan")}, "site_jitter"),
+        ({"mirror": 2.0}, "mirror"),
+        ({"rotation_deg": [10, -10]}, "rotation_deg"),
+    ],
+)
+def test_terrain_site_parameters_are_validated(values: dict[str, object], message: str) -> None:
+    with pytest.raises(ProblemError, match=message):
+        TerrainParams(**values)  # type: ignore[arg-type]

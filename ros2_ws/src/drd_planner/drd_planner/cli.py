@@ -77,7 +77,9 @@ def _tree_eta(problem: Problem, args: argparse.Namespace) -> tuple[float, str]:
 
     if args.eta is not None:
         return float(args.eta), f"eta {args.eta:g} (given)"
-    choice = select_switch_threshold(problem, seed=args.seed)
+    options = _tree_kwargs(args)
+    expand = float(options.pop("expand_threshold", 0.05))
+    choice = select_switch_threshold(problem, seed=args.seed, expand_threshold=expand, tree_options=options)
     means = ", ".join(f"{k:g}: {v:.2f}" for k, v in sorted(choice.mean_checks.items()))
     held = len(choice.validation_ids)
     return (

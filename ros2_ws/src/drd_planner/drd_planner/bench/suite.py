@@ -188,7 +188,13 @@ def _resolve_eta(problem: Problem, options: SuiteOptions) -> tuple[float, Switch
     if not _needs_tree(options):
         return DEFAULT_ETA, None
     expand = float(options.tree_options.get("expand_threshold", 0.05))
-    choice = select_switch_threshold(problem, seed=options.seed, alpha=options.alpha, expand_threshold=expand)
+    choice = select_switch_threshold(
+        problem,
+        seed=options.seed,
+        alpha=options.alpha,
+        expand_threshold=expand,
+        tree_options=options.tree_options,
+    )
     return choice.eta, choice
 
 

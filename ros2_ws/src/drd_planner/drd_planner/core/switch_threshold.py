@@ -16,8 +16,9 @@ which relies less on the tree). The test worlds are never looked at.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -64,6 +65,7 @@ def select_switch_threshold(
     seed: int = 0,
     alpha: float = DEFAULT_ALPHA,
     expand_threshold: float = 0.05,
+    tree_options: Mapping[str, Any] | None = None,
 ) -> SwitchThresholdChoice:
     """Pick eta by validation on held-out feasible training worlds (see the module docstring).
 
@@ -74,6 +76,9 @@ def select_switch_threshold(
         seed: seeds the hold-out draw.
         alpha: data weight of the leaf bias.
         expand_threshold: the tree's expansion threshold (as for the final tree).
+        tree_options: further keyword arguments of :func:`drd_planner.core.tree.build_tree`
+            (candidates, IncDRD, colouring), the same as for the final tree, so the validation
+            tree is built the way the tree that will use eta is.
 
     Raises:
         ProblemError: no candidates, a candidate outside (0, 1], or no feasible training world.
@@ -93,7 +98,8 @@ def select_switch_threshold(
     held_out = np.sort(rng.choice(feasible, size=k, replace=False))
     fit = np.setdiff1d(train, held_out)
     sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held_out))
-    tree = build_tree(sub, expand_threshold=expand_threshold, progress=False)
+    options = {k: v for k, v in (tree_options or {}).items() if k not in ("expand_threshold", "progress")}
+    tree = build_tree(sub, expand_threshold=expand_threshold, progress=False, **options)
     costs = problem.edge_costs
     means: dict[float, float] = {}
     for eta in cands:

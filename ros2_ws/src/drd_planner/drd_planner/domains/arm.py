@@ -16,9 +16,10 @@ scene's margin included). Forward kinematics is batched over all samples of an e
 levels through the scene API: one bounding sphere per link first, then the spheres of the links whose
 bounding sphere touches something.
 
-Defaults (Panda; 600 Halton samples, k = 8, resolution 0.05 rad): 489 vertices and 2479 edges, about
-31 interior samples per edge; start and goal reach left and right over the table (:data:`DEFAULT_START`,
-:data:`DEFAULT_GOAL`); the direct start-goal edge (1.6 rad) is the shortest path.
+Defaults (Panda; 600 Halton samples, k = 8, resolution 0.05 rad): 489 vertices and 2475 edges, about
+31 interior samples per edge. Start and goal (:data:`DEFAULT_START`, :data:`DEFAULT_GOAL`) hold the
+gripper low over the front left and front right of the table, so objects on the table often block the
+direct start-goal edge (1.6 rad, the shortest path) and the arm must lift over or reach around them.
 
 The robot model is read from the shared Panda files (``$DRD_SHARED_DATA/panda`` or
 ``../shared/data/panda`` next to the repository) unless the spec names other files.
@@ -58,10 +59,10 @@ FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
 
-#: Default start: the Panda moved from its SRDF "ready" pose to reach over the left of the table (rad).
-DEFAULT_START: tuple[float, ...] = (0.8, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785)
-#: Default goal: the mirror image, reaching over the right of the table (rad).
-DEFAULT_GOAL: tuple[float, ...] = (-0.8, 0.2, 0.0, -2.0, 0.0, 2.2, 0.785)
+#: Default start: the gripper low (about 0.13 m above the base) over the front left of the table (rad).
+DEFAULT_START: tuple[float, ...] = (0.5, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785)
+#: Default goal: the mirror image, low over the front right of the table (rad).
+DEFAULT_GOAL: tuple[float, ...] = (-0.5, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785)
 #: Clearance (m) added to the robot's spheres at start and goal when placing random obstacles.
 KEEP_CLEAR_CLEARANCE = 0.02
 #: Interpolated configurations per forward-kinematics block in :meth:`ArmEdgeChecker.check_many`.

@@ -8,8 +8,8 @@ robot's root frame (z up, the robot base at the origin, "in front" = +x). Models
   z 0.05-0.9 m.
 - ``"table_clutter"``: a table top (0.6-0.9 m deep, 1.0-1.6 m wide, 0.04 m thick) whose near edge is
   0.3-0.5 m from the base in the direction (azimuth) -0.35-0.35 rad, its top 0.0-0.2 m above the base,
-  turned by up to 0.2 rad about z against that direction, on four 0.05 m legs, plus 3-8 upright boxes
-  (footprint edges 0.03-0.2 m, height 0.1-0.4 m) and cylinders (radius 0.02-0.06 m, height 0.1-0.35 m)
+  turned by up to 0.2 rad about z against that direction, on four 0.05 m legs, plus 8-16 upright boxes
+  (footprint edges 0.03-0.2 m, height 0.15-0.45 m) and cylinders (radius 0.02-0.06 m, height 0.1-0.35 m)
   standing on the top with random yaw.
 
 No obstacle may touch the keep-clear spheres (the robot at its start and goal configurations,
@@ -52,9 +52,9 @@ TABLE_AZIMUTH = (-0.35, 0.35)
 TABLE_TOP_HEIGHT = (0.0, 0.2)
 TABLE_TURN = (-0.2, 0.2)
 TABLE_LEG = 0.05
-TABLE_OBJECTS = (3, 8)
+TABLE_OBJECTS = (8, 16)
 TABLE_BOX_FOOTPRINT = (0.03, 0.2)
-TABLE_BOX_HEIGHT = (0.1, 0.4)
+TABLE_BOX_HEIGHT = (0.15, 0.45)
 TABLE_CYLINDER_RADIUS = (0.02, 0.06)
 TABLE_CYLINDER_HEIGHT = (0.1, 0.35)
 #: Objects keep this far (m) inside the table top's edges.

@@ -27,6 +27,10 @@ Models (ranges ``[lo, hi]`` are drawn uniformly per world):
   ``open_fraction`` of it lies at least the vehicle clearance below the start altitude. Within
   ``keep_clear_radius`` of the start and goal it is capped ``ground_gap`` below that (a smooth pad), so
   both are always clear. Windows with unknown (NODATA) heights are redrawn up to ``max_tries`` times.
+  By default the crop may lie anywhere, at any rotation (``rotation_deg``), mirrored with probability
+  ``mirror``; with ``site`` = [row, col] (fractions of the grid) the crop is centred on that one
+  operating area, shifted by up to ``site_jitter`` metres per axis (map registration error), so all
+  worlds share its ridges and valleys and only their exact position, scale and height vary.
 
 Every model also adds no-fly zones (``nofly``: a count of random zones, or a list of zone dicts, see
 :class:`NoFlyZone`): full-height vertical cylinders or rectangular prisms kept ``nofly_keep_clear``
@@ -309,11 +313,34 @@ class TerrainParams(_Common):
     ground_gap: Range = (0.0, 25.0)
     keep_clear_radius: float = 80.0
     max_tries: int = 50
+    site: tuple[float, float] | None = None
+    site_jitter: float = 0.0
+    rotation_deg: Range = (0.0, 360.0)
+    mirror: float = 0.5
 
     def __post_init__(self) -> None:
         self._check_common()
         if self.path is not None and not isinstance(self.path, str):
             raise ProblemError(f"terrain path must be a string or null, got {self.path!r}")
+        if self.site is not None:
+            try:
+                row, col = (float(v) for v in self.site)
+            except (TypeError, ValueError):
+                raise ProblemError(
+                    f"terrain site must be [row, col] fractions or null, got {self.site!r}"
+                ) from None
+            if not (0.0 <= row <= 1.0 and 0.0 <= col <= 1.0):
+                raise ProblemError(f"terrain site fractions must lie in [0, 1], got {self.site!r}")
+            object.__setattr__(self, "site", (row, col))
+        jitter = self.site_jitter
+        if isinstance(jitter, bool) or not isinstance(jitter, int | float) or not (0.0 <= jitter < math.inf):
+            raise ProblemError(f"terrain site_jitter must be a finite number >= 0 (m), got {jitter!r}")
+        object.__setattr__(self, "site_jitter", float(jitter))
+        mirror = self.mirror
+        if isinstance(mirror, bool) or not isinstance(mirror, int | float) or not (0.0 <= mirror <= 1.0):
+            raise ProblemError(f"terrain mirror must be a probability in [0, 1], got {mirror!r}")
+        object.__setattr__(self, "mirror", float(mirror))
+        _ranges(self, ("rotation_deg",))
         _ranges(self, ("metres_per_cell", "relief"), low=1e-9)
         _ranges(self, ("ground_gap",))
         _ranges(self, ("open_fraction",), low=0.0)
@@ -649,10 +676,20 @@ def _terrain_world(rng: np.random.Generator, p: TerrainParams, frame: WorldFrame
         radius_cells = half_diag / mpc
         if 2.0 * radius_cells > min(rows, cols) - 1:
             continue
-        ci = rng.uniform(radius_cells, rows - 1 - radius_cells)
-        cj = rng.uniform(radius_cells, cols - 1 - radius_cells)
-        theta = rng.uniform(0.0, 2.0 * math.pi)
-        flip = bool(rng.random() < 0.5)
+        if p.site is None:
+            ci = rng.uniform(radius_cells, rows - 1 - radius_cells)
+            cj = rng.uniform(radius_cells, cols - 1 - radius_cells)
+        else:
+            jitter_cells = p.site_jitter / mpc
+            ci = p.site[0] * (rows - 1) + rng.uniform(-jitter_cells, jitter_cells)
+            cj = p.site[1] * (cols - 1) + rng.uniform(-jitter_cells, jitter_cells)
+            if not (
+                radius_cells <= ci <= rows - 1 - radius_cells
+                and radius_cells <= cj <= cols - 1 - radius_cells
+            ):
+                continue
+        theta = math.radians(_uniform(rng, p.rotation_deg))
+        flip = bool(rng.random() < p.mirror)
         dx, dy = (gx - cx) / mpc, (gy - cy) / mpc
         if flip:
             dx = -dx
@@ -684,6 +721,7 @@ def _terrain_world(rng: np.random.Generator, p: TerrainParams, frame: WorldFrame
     raise ProblemError(
         f"terrain grid {path} ({rows} x {cols} cells) has no NaN-free window for a {2 * half_diag:.0f} m corridor "
         f"at {p.metres_per_cell} m per cell after {p.max_tries} tries; lower metres_per_cell"
+        + ("" if p.site is None else " or move the site away from the grid's border")
     )
 
 
