@@ -132,7 +132,12 @@ def cross_validate(
     etas: list[float] = []
     everything = np.arange(worlds.num_worlds, dtype=np.int64)
     for k, held in enumerate(
-        tqdm(deal, desc=f"{problem.name} folds", unit="fold", disable=progress is False or None)
+        tqdm(
+            deal,
+            desc=f"{problem.name} folds",
+            unit="fold",
+            disable=None if progress is None else not progress,
+        )
     ):
         held = np.sort(held)
         fit = np.setdiff1d(everything, held)
