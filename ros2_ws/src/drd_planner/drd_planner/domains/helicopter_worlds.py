@@ -120,6 +120,15 @@ def _positive(obj: Any, names: tuple[str, ...]) -> None:
         object.__setattr__(obj, name, number)
 
 
+def _bounded(obj: Any, name: str, low: float, high: float) -> None:
+    """Validate and normalise a float field that must be finite and lie in [low, high] (frozen dataclass)."""
+    value = getattr(obj, name)
+    number = float(value) if isinstance(value, int | float) and not isinstance(value, bool) else math.nan
+    if not (math.isfinite(number) and low <= number <= high):
+        raise ProblemError(f"{name} must be a finite number in [{low:g}, {high:g}], got {value!r}")
+    object.__setattr__(obj, name, number)
+
+
 @dataclass(frozen=True)
 class NoFlyZone:
     """A vertical no-fly column.
@@ -332,14 +341,8 @@ class TerrainParams(_Common):
             if not (0.0 <= row <= 1.0 and 0.0 <= col <= 1.0):
                 raise ProblemError(f"terrain site fractions must lie in [0, 1], got {self.site!r}")
             object.__setattr__(self, "site", (row, col))
-        jitter = self.site_jitter
-        if isinstance(jitter, bool) or not isinstance(jitter, int | float) or not (0.0 <= jitter < math.inf):
-            raise ProblemError(f"terrain site_jitter must be a finite number >= 0 (m), got {jitter!r}")
-        object.__setattr__(self, "site_jitter", float(jitter))
-        mirror = self.mirror
-        if isinstance(mirror, bool) or not isinstance(mirror, int | float) or not (0.0 <= mirror <= 1.0):
-            raise ProblemError(f"terrain mirror must be a probability in [0, 1], got {mirror!r}")
-        object.__setattr__(self, "mirror", float(mirror))
+        _bounded(self, "site_jitter", 0.0, math.inf)
+        _bounded(self, "mirror", 0.0, 1.0)
         _ranges(self, ("rotation_deg",))
         _ranges(self, ("metres_per_cell", "relief"), low=1e-9)
         _ranges(self, ("ground_gap",))
