@@ -25,3 +25,16 @@ def gccd_graph_datasets() -> list[str]:
     if not GCCD.is_dir():
         return []
     return sorted(p.name for p in GCCD.iterdir() if (p / "graph.txt").is_file())
+
+
+@pytest.fixture(params=["rosbags", "rclpy"])
+def msgs(request: pytest.FixtureRequest) -> object:
+    """A message factory: every message conversion is tested with rosbags dataclasses and rclpy classes."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from drd_msgs_py.factory import RclpyMessages, RosbagsMessages
+
+    if request.param == "rosbags":
+        return RosbagsMessages(get_typestore(Stores.ROS2_JAZZY))
+    pytest.importorskip("visualization_msgs.msg", reason="rclpy message wheels not installed")
+    return RclpyMessages()

@@ -65,7 +65,14 @@ def test_run_world_reproduces_the_benchmark_episodes(problem: Problem, tree: Dec
             for k, world in enumerate(res.test_ids)
         ]
         assert again == res.policies[name].checks
-    assert res.settings == {"seed": 7, "eta": 0.2, "alpha": 0.99, "max_worlds": 4, "max_checks": None}
+    assert res.settings == {
+        "seed": 7,
+        "eta": 0.2,
+        "pseudo_count": None,
+        "alpha": 0.99,
+        "max_worlds": 4,
+        "max_checks": None,
+    }
 
 
 def test_failures_and_the_check_cap(problem: Problem, tree: DecisionTree) -> None:

@@ -19,7 +19,7 @@ from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.npz_format import array_digest, payload_digest
 from drd_planner.data.tree_file import FORMAT_VERSION, TreeBundle, load_tree, save_tree
 from drd_planner.domains.planar import make_planar_problem
-from drd_planner.exceptions import TreeFileError
+from drd_planner.exceptions import ProblemError, TreeFileError
 
 TREE_ARRAYS = (
     "edge",
@@ -306,7 +306,7 @@ def test_another_format_version_is_refused(saved: Path) -> None:
     header["format_version"] = 999
     del arrays["header"]
     _write_npz(saved, arrays, header)  # checksums still match the arrays
-    _refused(saved, "version 999", f"version {FORMAT_VERSION}")
+    _refused(saved, "version 999", "versions 1, 2")
 
 
 def test_another_domain_is_refused(saved: Path) -> None:
@@ -388,3 +388,69 @@ def test_edited_header_field_is_refused(tmp_path: Path, bundle: TreeBundle) -> N
     arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
     np.savez(path, **arrays)  # type: ignore[arg-type]
     _refused(path, "payload checksum")
+
+
+# --------------------------------------------------------------------------------------------------
+# Format version 2: the training worlds of the posterior leaf
+# --------------------------------------------------------------------------------------------------
+
+
+def test_training_worlds_and_pseudo_count_round_trip(
+    tmp_path: Path, bundle: TreeBundle, planar: tuple[Problem, DecisionTree]
+) -> None:
+    problem, tree = planar
+    assert tree.world_free is not None
+    worlds = problem.require_worlds()
+    np.testing.assert_array_equal(tree.world_free, worlds.X[np.ix_(worlds.train_ids, tree.library_edges)])
+    posterior = dataclasses.replace(bundle, pseudo_count=12.5)
+    loaded = load_tree(save_tree(tmp_path / "p.npz", posterior))
+    assert loaded.pseudo_count == 12.5
+    assert loaded.tree.world_free is not None and loaded.tree.world_free.dtype == np.bool_
+    np.testing.assert_array_equal(loaded.tree.world_free, tree.world_free)
+    assert loaded.tree.world_weights is None
+    for world in worlds.test_ids[:10]:
+        logs = []
+        for t in (tree, loaded.tree):
+            policy = DirectBisectPolicy(t, problem.library, problem.edge_costs, eta=0.15, pseudo_count=12.5)
+            result = run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[world]))
+            logs.append([(c.edge, c.free, c.stage) for c in result.checks])
+        assert logs[0] == logs[1]
+
+
+def _as_version_1(path: Path) -> None:
+    arrays = _read_npz(path)
+    header = _header(arrays)
+    del arrays["header"], arrays["world_free_bits"]
+    header["format_version"] = 1
+    for key in ("pseudo_count", "num_train_worlds"):
+        header.pop(key)
+    digests = {k: array_digest(k, v) for k, v in arrays.items()}
+    header["array_sha256"] = digests
+    header["payload_sha256"] = payload_digest(digests, header)
+    _write_npz(path, arrays, header)
+
+
+def test_version_1_file_loads_with_a_fixed_leaf(saved: Path, planar: tuple[Problem, DecisionTree]) -> None:
+    problem, _ = planar
+    _as_version_1(saved)
+    loaded = load_tree(saved)
+    assert loaded.tree.world_free is None and loaded.pseudo_count is None
+    DirectBisectPolicy(loaded.tree, problem.library, problem.edge_costs, eta=1.0)  # the paper's leaf works
+    with pytest.raises(ProblemError, match="format version 1"):
+        DirectBisectPolicy(loaded.tree, problem.library, problem.edge_costs, eta=1.0, pseudo_count=5.0)
+
+
+def test_packed_training_worlds_of_wrong_shape_are_refused(saved: Path) -> None:
+    arrays = _read_npz(saved)
+    arrays["world_free_bits"] = arrays["world_free_bits"][:-1].copy()
+    _rechecksum(arrays)
+    _write_npz(saved, arrays)
+    _refused(saved, "inconsistent", "world_free_bits")
+
+
+def test_pseudo_count_without_training_worlds_is_refused(tmp_path: Path, bundle: TreeBundle) -> None:
+    bare = dataclasses.replace(
+        bundle, tree=dataclasses.replace(bundle.tree, world_free=None), pseudo_count=5.0
+    )
+    with pytest.raises(TreeFileError, match="training worlds"):
+        save_tree(tmp_path / "bare.npz", bare)

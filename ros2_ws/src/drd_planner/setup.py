@@ -42,6 +42,7 @@ setup(
     entry_points={
         "console_scripts": [
             "drd = drd_planner.cli:main",
+            "planner_node = drd_planner.ros.node:main",
         ],
     },
 )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -71,21 +72,43 @@ def _eta_arg(text: str) -> float | None:
     return value
 
 
-def _tree_eta(problem: Problem, args: argparse.Namespace) -> tuple[float, str]:
-    """The switch threshold stored in a tree file, and a note on where it came from."""
+def _kappa_arg(text: str) -> tuple[float | None, ...]:
+    """``--kappa``: 'auto' (validate among the defaults), 'none' (fixed leaf bias) or a number > 0."""
+    from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS
+
+    word = text.strip().lower()
+    if word == "auto":
+        return DEFAULT_PSEUDO_COUNTS
+    if word == "none":
+        return (None,)
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'auto', 'none' or a number > 0, got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"kappa must be a positive number of worlds, got {value}")
+    return (value,)
+
+
+def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, float | None, str]:
+    """The switch threshold and leaf pseudo-count stored in a tree file, and a note on their origin."""
     from drd_planner.core.switch_threshold import select_switch_threshold
 
-    if args.eta is not None:
-        return float(args.eta), f"eta {args.eta:g} (given)"
+    kappas = _kappas(args)
+    if args.eta is not None and len(kappas) == 1:
+        kappa = kappas[0]
+        return float(args.eta), kappa, f"eta {args.eta:g}, kappa {kappa} (given)"
     options = _tree_kwargs(args)
     expand = float(options.pop("expand_threshold", 0.05))
-    choice = select_switch_threshold(problem, seed=args.seed, expand_threshold=expand, tree_options=options)
-    means = ", ".join(f"{k:g}: {v:.2f}" for k, v in sorted(choice.mean_checks.items()))
-    held = len(choice.validation_ids)
-    return (
-        choice.eta,
-        f"eta {choice.eta:g} (validated on {held} held-out training worlds; mean checks {means})",
+    choice = select_switch_threshold(
+        problem,
+        candidates=None if args.eta is None else (args.eta,),
+        pseudo_counts=kappas,
+        seed=args.seed,
+        expand_threshold=expand,
+        tree_options=options,
     )
+    return choice.eta, choice.pseudo_count, choice.describe()
 
 
 def cmd_build_tree(args: argparse.Namespace) -> int:
@@ -95,11 +118,12 @@ def cmd_build_tree(args: argparse.Namespace) -> int:
 
     problem = load_problem_from_args(args)
     tree = _build_tree_from_args(problem, args)
-    eta, eta_note = _tree_eta(problem, args)
+    eta, kappa, eta_note = _tree_leaf(problem, args)
     bundle = TreeBundle(
         problem=dataclasses.replace(problem, worlds=None),
         tree=tree,
         eta=eta,
+        pseudo_count=kappa,
         domain=problem_domain(problem),
         provenance={
             "command": " ".join(sys.argv),
@@ -132,6 +156,7 @@ def _suite_options(args: argparse.Namespace) -> SuiteOptions:
         policies=tuple(args.policies) if args.policies else DEFAULT_POLICIES,
         seed=args.seed,
         eta=args.eta,
+        pseudo_counts=_kappas(args),
         max_worlds=args.max_worlds,
         max_checks=args.max_checks,
         tree_options=_tree_kwargs(args),
@@ -177,8 +202,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
             bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
             check_bundle_fits(bundle, problem)
             tree = bundle.tree
-            if options.eta is None:  # the threshold stored with the tree, unless --eta says otherwise
+            if options.eta is None:  # the settings stored with the tree, unless --eta/--kappa say otherwise
                 options = dataclasses.replace(options, eta=bundle.eta)
+            if args.kappa is None:
+                options = dataclasses.replace(options, pseudo_counts=(bundle.pseudo_count,))
         run = run_dataset(problem, options, tree=tree)
         suite = SuiteResult([run], [], run.seconds)
         figures = costs_figure(suite.runs, options)
@@ -226,6 +253,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         seed=args.seed,
         eta=bundle.eta,
         alpha=bundle.alpha,
+        pseudo_count=bundle.pseudo_count,
     )
     _print_episode(problem, result)
     return 0 if result.success else 1
@@ -286,6 +314,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _kappa_option(p: argparse.ArgumentParser) -> None:
+    """``--kappa``: the posterior leaf's pseudo-count; unset (None) means 'auto'."""
+    p.add_argument(
+        "--kappa",
+        type=_kappa_arg,
+        default=None,
+        help="pseudo-count (in worlds) of the posterior leaf that keeps re-conditioning BiSECt's bias on the "
+        "training worlds after the switch; 'none' keeps the paper's fixed leaf bias; 'auto' (default) "
+        "validates it together with eta",
+    )
+
+
+def _kappas(args: argparse.Namespace) -> tuple[float | None, ...]:
+    """The ``--kappa`` candidates (the validated defaults when not given)."""
+    from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS
+
+    return DEFAULT_PSEUDO_COUNTS if args.kappa is None else tuple(args.kappa)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``drd``."""
     from drd_planner.core.policies import POLICIES
@@ -305,6 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="switch threshold stored in the file; 'auto' (default) validates it on held-out training worlds",
     )
+    _kappa_option(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the validation hold-out")
     _tree_options(p)
     p.set_defaults(func=cmd_build_tree)
@@ -329,6 +377,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="switch to BiSECt at or below this consistent fraction; 'auto' (default) validates it on "
         "held-out training worlds",
     )
+    _kappa_option(p)
     p.add_argument("--max-worlds", type=int, default=None, help="only the first K test worlds")
     p.add_argument("--max-checks", type=int, default=None, help="cap on checks per episode (failure)")
     p.add_argument("--reference", default="direct_bisect", help="policy the relative costs are over")

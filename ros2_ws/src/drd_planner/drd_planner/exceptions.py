@@ -33,3 +33,7 @@ class UnverifiedPathError(DrdError):
 
 class GeometryError(DrdError):
     """A shape, pose, terrain grid, URDF or scene description is invalid or cannot be represented."""
+
+
+class PlanningError(DrdError):
+    """A planning request cannot be served: no maps yet, a goal no loaded tree serves, a wrong frame."""

@@ -24,7 +24,7 @@ from drd_planner.bench.runner import run_benchmark
 from drd_planner.bench.stats import bootstrap_mean_ci
 from drd_planner.core.policies import DEFAULT_ALPHA, TREE_POLICIES
 from drd_planner.core.problem import Problem
-from drd_planner.core.switch_threshold import select_switch_threshold
+from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS, select_switch_threshold
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
 
@@ -94,6 +94,7 @@ def cross_validate(
     folds: int = 10,
     seed: int = 0,
     eta: float | None = None,
+    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS,
     alpha: float = DEFAULT_ALPHA,
     tree_options: Mapping[str, Any] | None = None,
     progress: bool | None = None,
@@ -106,6 +107,8 @@ def cross_validate(
         folds: number of folds (>= 2).
         seed: seeds the deal of worlds into folds, the eta validation and the policies.
         eta: switch threshold; None validates it per fold on that fold's training worlds.
+        pseudo_counts: candidate kappas of the posterior leaf (None: fixed leaf bias), validated per
+            fold together with eta; a single candidate fixes it.
         alpha: data weight of the bias.
         tree_options: keyword arguments of :func:`drd_planner.core.tree.build_tree`.
         progress: show a progress bar over folds (None: only on a terminal).
@@ -130,6 +133,10 @@ def cross_validate(
     failures = dict.fromkeys(policies, 0)
     lower: list[float] = []
     etas: list[float] = []
+    chosen_kappas: list[float | None] = []
+    kappas = tuple(pseudo_counts)
+    if not kappas:
+        raise DrdError("pseudo_counts needs at least one candidate (None for the fixed leaf bias)")
     everything = np.arange(worlds.num_worlds, dtype=np.int64)
     for k, held in enumerate(
         tqdm(
@@ -142,20 +149,33 @@ def cross_validate(
         held = np.sort(held)
         fit = np.setdiff1d(everything, held)
         sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held))
-        fold_eta = eta
-        if fold_eta is None:
-            fold_eta = (
-                select_switch_threshold(
-                    sub, seed=seed, alpha=alpha, expand_threshold=expand, tree_options=options
-                ).eta
-                if needs_tree
-                else 1.0
+        fold_eta, fold_kappa = eta, kappas[0] if len(kappas) == 1 else None
+        if needs_tree and (eta is None or len(kappas) > 1):
+            choice = select_switch_threshold(
+                sub,
+                candidates=None if eta is None else (eta,),
+                pseudo_counts=kappas,
+                seed=seed,
+                alpha=alpha,
+                expand_threshold=expand,
+                tree_options=options,
             )
+            fold_eta, fold_kappa = choice.eta, choice.pseudo_count
+        elif fold_eta is None:
+            fold_eta = 1.0
         tree = build_tree(sub, expand_threshold=expand, progress=False, **options) if needs_tree else None
         result = run_benchmark(
-            sub, policies=policies, tree=tree, seed=seed, eta=fold_eta, alpha=alpha, progress=False
+            sub,
+            policies=policies,
+            tree=tree,
+            seed=seed,
+            eta=fold_eta,
+            alpha=alpha,
+            pseudo_count=fold_kappa,
+            progress=False,
         )
         etas.append(float(fold_eta))
+        chosen_kappas.append(fold_kappa)
         order.append(np.asarray(result.test_ids, dtype=np.int64))
         fold_of.append(np.full(len(result.test_ids), k, dtype=np.int64))
         lower.extend(result.lower_bound)
@@ -178,6 +198,8 @@ def cross_validate(
             "seed": seed,
             "alpha": alpha,
             "eta": eta,
+            "pseudo_counts": list(kappas),
+            "chosen_pseudo_counts": chosen_kappas,
             "tree_options": dict(tree_options or {}),
         },
     )

@@ -73,6 +73,7 @@ def training_size_curve(
     max_worlds: int | None = None,
     eta: float = DEFAULT_ETA,
     alpha: float = DEFAULT_ALPHA,
+    pseudo_count: float | None = None,
     tree_options: Mapping[str, Any] | None = None,
 ) -> TrainingCurve:
     """Rebuild the tree on nested seeded training subsets and measure each policy on the test worlds.
@@ -84,6 +85,7 @@ def training_size_curve(
         max_worlds: only the first ``max_worlds`` test worlds.
         eta: switch threshold of ``direct_bisect``.
         alpha: data weight of the bias.
+        pseudo_count: kappa of ``direct_bisect``'s posterior leaf (None: fixed leaf bias).
         tree_options: keyword arguments for :func:`drd_planner.core.tree.build_tree`.
 
     Raises:
@@ -114,6 +116,7 @@ def training_size_curve(
             seed=seed,
             eta=eta,
             alpha=alpha,
+            pseudo_count=pseudo_count,
             max_worlds=max_worlds,
             progress=False,
         )

@@ -135,6 +135,7 @@ def policy_context(
     seed: int,
     eta: float = DEFAULT_ETA,
     alpha: float = DEFAULT_ALPHA,
+    pseudo_count: float | None = None,
 ) -> PolicyContext:
     """The context a policy factory gets: library, unit costs, (E,) training bias, tree, seed and graph.
 
@@ -148,6 +149,7 @@ def policy_context(
         seed,
         eta=eta,
         alpha=alpha,
+        pseudo_count=pseudo_count,
         graph=problem.graph,
         start=problem.start,
         goal=problem.goal,
@@ -171,6 +173,7 @@ def run_world(
     seed: int,
     eta: float = DEFAULT_ETA,
     alpha: float = DEFAULT_ALPHA,
+    pseudo_count: float | None = None,
     max_checks: int | None = None,
 ) -> EpisodeResult:
     """One episode of policy ``name`` on world row ``world`` against its row of X.
@@ -182,7 +185,9 @@ def run_world(
     worlds = problem.require_worlds()
     if not 0 <= world < worlds.num_worlds:
         raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
-    ctx = policy_context(problem, theta=theta, tree=tree, seed=seed, eta=eta, alpha=alpha)
+    ctx = policy_context(
+        problem, theta=theta, tree=tree, seed=seed, eta=eta, alpha=alpha, pseudo_count=pseudo_count
+    )
     policy = POLICIES[name](ctx)
     oracle = TableOracle(worlds.X[world])
     return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
@@ -196,6 +201,7 @@ def run_benchmark(
     seed: int = 0,
     eta: float = DEFAULT_ETA,
     alpha: float = DEFAULT_ALPHA,
+    pseudo_count: float | None = None,
     max_worlds: int | None = None,
     max_checks: int | None = None,
     progress: bool | None = None,
@@ -209,6 +215,7 @@ def run_benchmark(
         seed: base seed; world k of the test list uses ``seed + k``.
         eta: switch threshold of ``direct_bisect``.
         alpha: data weight of the bias.
+        pseudo_count: kappa of ``direct_bisect``'s posterior leaf; None keeps the leaf bias fixed.
         max_worlds: only the first ``max_worlds`` test worlds (smoke runs).
         max_checks: cap on the checks of one episode (None: no cap); capped episodes are failures.
         progress: show progress bars (None: only on a terminal).
@@ -249,6 +256,7 @@ def run_benchmark(
                 seed=seed + k,
                 eta=eta,
                 alpha=alpha,
+                pseudo_count=pseudo_count,
                 max_checks=max_checks,
             )
             checks.append(result.num_checks)
@@ -256,7 +264,14 @@ def run_benchmark(
             if not result.success:
                 failed.append(k)
         results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
-    settings = {"seed": seed, "eta": eta, "alpha": alpha, "max_worlds": max_worlds, "max_checks": max_checks}
+    settings = {
+        "seed": seed,
+        "eta": eta,
+        "pseudo_count": pseudo_count,
+        "alpha": alpha,
+        "max_worlds": max_worlds,
+        "max_checks": max_checks,
+    }
     return BenchmarkResult(
         problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, settings
     )

@@ -40,7 +40,11 @@ from drd_planner.bench.runner import (
 from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, TREE_POLICIES
 from drd_planner.core.problem import Problem
-from drd_planner.core.switch_threshold import SwitchThresholdChoice, select_switch_threshold
+from drd_planner.core.switch_threshold import (
+    DEFAULT_PSEUDO_COUNTS,
+    SwitchThresholdChoice,
+    select_switch_threshold,
+)
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.gccd import REQUIRED_FILES, load_gccd_folder
 from drd_planner.exceptions import DrdError
@@ -55,6 +59,8 @@ class SuiteOptions:
         seed: base seed of the episodes (test world k uses seed + k), the bootstrap and the subsets.
         eta: switch threshold of ``direct_bisect``; None chooses it per dataset by validation on held-out
             training worlds (:func:`drd_planner.core.switch_threshold.select_switch_threshold`).
+        pseudo_counts: candidate kappas of ``direct_bisect``'s posterior leaf (None: fixed leaf bias),
+            validated together with eta; one candidate fixes it.
         alpha: data weight of the tree policies' bias.
         max_worlds: only the first K test worlds of each dataset (None: all).
         max_checks: per-episode check cap (None: none); capped episodes count as failures.
@@ -68,6 +74,7 @@ class SuiteOptions:
     policies: tuple[str, ...] = DEFAULT_POLICIES
     seed: int = 0
     eta: float | None = None
+    pseudo_counts: tuple[float | None, ...] = DEFAULT_PSEUDO_COUNTS
     alpha: float = DEFAULT_ALPHA
     max_worlds: int | None = None
     max_checks: int | None = None
@@ -147,8 +154,8 @@ def run_dataset(
     """
     t0 = time.perf_counter()
     check_policy_names(options.policies)
-    eta, eta_choice = _resolve_eta(problem, options)
-    options = dataclasses.replace(options, eta=eta)
+    eta, kappa, eta_choice = _resolve_leaf(problem, options)
+    options = dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,))
     if tree is None and _needs_tree(options):
         tree = build_tree(problem, progress=False, **dict(options.tree_options))
     result = run_benchmark(
@@ -158,6 +165,7 @@ def run_dataset(
         seed=options.seed,
         eta=eta,
         alpha=options.alpha,
+        pseudo_count=kappa,
         max_worlds=options.max_worlds,
         max_checks=options.max_checks,
         progress=progress,
@@ -181,26 +189,37 @@ def run_dataset(
     return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0)
 
 
-def _resolve_eta(problem: Problem, options: SuiteOptions) -> tuple[float, SwitchThresholdChoice | None]:
-    """A concrete eta: the validated one when ``options.eta`` is None and a tree is used."""
-    if options.eta is not None:
-        return options.eta, None
-    if not _needs_tree(options):
-        return DEFAULT_ETA, None
+def _resolve_leaf(
+    problem: Problem, options: SuiteOptions
+) -> tuple[float, float | None, SwitchThresholdChoice | None]:
+    """A concrete eta and kappa: validated unless both are fixed or no tree is used."""
+    if not options.pseudo_counts:
+        raise DrdError("pseudo_counts needs at least one candidate (None for the fixed leaf bias)")
+    fixed_kappa = len(options.pseudo_counts) == 1
+    if not _needs_tree(options) or (options.eta is not None and fixed_kappa):
+        eta = DEFAULT_ETA if options.eta is None else options.eta
+        return eta, options.pseudo_counts[0] if fixed_kappa else None, None
     expand = float(options.tree_options.get("expand_threshold", 0.05))
     choice = select_switch_threshold(
         problem,
+        candidates=None if options.eta is None else (options.eta,),
+        pseudo_counts=options.pseudo_counts,
         seed=options.seed,
         alpha=options.alpha,
         expand_threshold=expand,
         tree_options=options.tree_options,
     )
-    return choice.eta, choice
+    return choice.eta, choice.pseudo_count, choice
 
 
 def _eta(options: SuiteOptions) -> float:
-    """``options.eta`` after :func:`_resolve_eta` (never None there)."""
+    """``options.eta`` after :func:`_resolve_leaf` (never None there)."""
     return DEFAULT_ETA if options.eta is None else options.eta
+
+
+def _kappa(options: SuiteOptions) -> float | None:
+    """The leaf's kappa after :func:`_resolve_leaf` (one candidate left)."""
+    return options.pseudo_counts[0] if options.pseudo_counts else None
 
 
 def _checked_edges_figure(
@@ -225,6 +244,7 @@ def _checked_edges_figure(
             seed=options.seed + k,
             eta=_eta(options),
             alpha=options.alpha,
+            pseudo_count=_kappa(options),
             max_checks=options.max_checks,
         )
         for name in available_policies(FIG3_POLICIES)
@@ -252,6 +272,7 @@ def _training_figure(
         max_worlds=options.max_worlds,
         eta=_eta(options),
         alpha=options.alpha,
+        pseudo_count=_kappa(options),
         tree_options=options.tree_options,
     )
     figures += plot_training_curve(curve, options.figures / f"training_size_{problem.name}")

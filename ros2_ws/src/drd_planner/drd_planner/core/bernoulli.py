@@ -101,6 +101,20 @@ class BernoulliLibraryState:
         keep = self._alive[paths]
         return seg[keep], paths[keep]
 
+    def set_theta(self, theta: npt.ArrayLike) -> None:
+        """Replace the bias of the untested edges and recompute every path's log p_i.
+
+        Observed edges stay clamped to their outcome; dead paths stay dead.
+        """
+        th = np.asarray(theta, dtype=np.float64).ravel()
+        if th.shape != self._theta.shape or not np.all((th >= 0) & (th <= 1)):
+            raise ProblemError(f"theta must be ({self._theta.size},) values in [0, 1]")
+        th = np.clip(th, THETA_EPS, 1.0 - THETA_EPS)
+        self._theta = th
+        self._log_theta = np.log(th)
+        self._log_1m_theta = np.log1p(-th)
+        self._logp = np.asarray(self._csr @ np.where(self._tested, 0.0, self._log_theta), dtype=np.float64)
+
     def observe(self, edge: int, free: bool) -> None:
         """Clamp ``edge`` to its outcome and update the paths through it."""
         if self._tested[edge]:

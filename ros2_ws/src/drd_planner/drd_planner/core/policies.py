@@ -19,6 +19,7 @@ from drd_planner.core.episode import Policy
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, LazySP, lazysp_name
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.posterior import ConsistentWorldsBias
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree
 from drd_planner.exceptions import PolicyError, ProblemError
 
@@ -28,6 +29,8 @@ FloatArray = npt.NDArray[np.float64]
 DEFAULT_ETA = 0.2
 #: Default weight of the data term in the leaf bias.
 DEFAULT_ALPHA = 0.99
+#: kappa of ``bisect_posterior`` when the context gives none.
+DEFAULT_PSEUDO_COUNT = 20.0
 
 
 class BisectPolicy:
@@ -94,7 +97,11 @@ class DirectBisectPolicy:
     """The paper's method: walk the DiRECt tree, then BiSECt (MaxProbReg) with the node's bias.
 
     The switch happens when the tree has no child for the outcome, the node has no edge, or the
-    node's consistent fraction is at or below ``eta``.
+    node's consistent fraction is at or below ``eta``. With ``pseudo_count`` (kappa) set, BiSECt's
+    bias keeps being re-conditioned on every later outcome (the authors' ``update_posterior``
+    option, :class:`~drd_planner.core.posterior.ConsistentWorldsBias`); None keeps it fixed after
+    the switch as in the paper's benchmark. The posterior needs a tree that carries its training
+    worlds (``DecisionTree.world_free``).
     """
 
     def __init__(
@@ -105,9 +112,17 @@ class DirectBisectPolicy:
         *,
         eta: float = DEFAULT_ETA,
         alpha: float = DEFAULT_ALPHA,
+        pseudo_count: float | None = None,
         name: str = "direct_bisect",
     ) -> None:
         _check_tree_fits(tree, library)
+        if pseudo_count is not None and tree.world_free is None:
+            raise ProblemError(
+                "the posterior-updating leaf needs the training worlds in the tree "
+                "(rebuild the tree; tree files of format version 1 do not carry them)"
+            )
+        self._pseudo_count = pseudo_count
+        self._posterior: ConsistentWorldsBias | None = None
         self._tree = tree
         self._library = library
         self._costs = np.asarray(edge_costs, dtype=np.float64)
@@ -139,9 +154,22 @@ class DirectBisectPolicy:
     def _should_switch(self, node: int) -> bool:
         return bool(self._tree.edge[node] == NO_EDGE or self._tree.active_fraction[node] <= self._eta)
 
+    @property
+    def pseudo_count(self) -> float | None:
+        """Kappa of the posterior-updating leaf, or None (fixed bias after the switch)."""
+        return self._pseudo_count
+
     def _switch(self, node: int) -> None:
         self._switch_node = node
-        theta = self._tree.bias(node, alpha=self._alpha)
+        if self._pseudo_count is None:
+            theta = self._tree.bias(node, alpha=self._alpha)
+        else:
+            outcomes = self._tree.training_outcomes
+            assert outcomes is not None
+            self._posterior = ConsistentWorldsBias(
+                outcomes, pseudo_count=self._pseudo_count, alpha=self._alpha, observations=self._observed
+            )
+            theta = self._posterior.theta()
         self._bisect = Bisect(self._library, theta, self._costs, observations=self._observed)
 
     def select(self) -> int | None:
@@ -159,6 +187,9 @@ class DirectBisectPolicy:
         self._observed[edge] = free
         if self._bisect is not None:
             self._bisect.observe(edge, free)
+            if self._posterior is not None:
+                self._posterior.observe(edge, free)
+                self._bisect.set_theta(self._posterior.theta())
             return
         if edge != self._walker.edge():
             raise PolicyError(
@@ -257,7 +288,9 @@ def _check_tree_fits(tree: DecisionTree, library: PathLibrary) -> None:
 class PolicyContext:
     """What a policy factory may use: the library, costs, training bias, tree and a seed.
 
-    ``graph``, ``start`` and ``goal`` are needed by the policies in :data:`GRAPH_POLICIES`.
+    ``eta`` and ``pseudo_count`` configure ``direct_bisect``'s switch and leaf (see
+    :class:`DirectBisectPolicy`). ``graph``, ``start`` and ``goal`` are needed by the policies in
+    :data:`GRAPH_POLICIES`.
     """
 
     library: PathLibrary
@@ -267,6 +300,7 @@ class PolicyContext:
     seed: int
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
+    pseudo_count: float | None = None
     graph: ExplicitGraph | None = None
     start: int | None = None
     goal: int | None = None
@@ -311,13 +345,22 @@ def _lazysp_set(weighted: bool) -> PolicyFactory:
 
 POLICIES: Mapping[str, PolicyFactory] = {
     "direct_bisect": lambda c: DirectBisectPolicy(
-        _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha
+        _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha, pseudo_count=c.pseudo_count
     ),
     "direct_bisect_fixed": lambda c: DirectBisectPolicy(
         _need_tree(c), c.library, c.edge_costs, eta=DEFAULT_ETA, alpha=c.alpha, name="direct_bisect_fixed"
     ),
     "direct_only": lambda c: DirectOnlyPolicy(_need_tree(c), c.library, seed=c.seed),
     "bisect": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=True),
+    "bisect_posterior": lambda c: DirectBisectPolicy(
+        _need_tree(c),
+        c.library,
+        c.edge_costs,
+        eta=1.0,
+        alpha=c.alpha,
+        pseudo_count=DEFAULT_PSEUDO_COUNT if c.pseudo_count is None else c.pseudo_count,
+        name="bisect_posterior",
+    ),
     "bisect_all": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=False),
     "max_tally": lambda c: MaxTally(c.library, c.train_theta, name="max_tally", seed=c.seed),
     "max_tally_all": lambda c: MaxTally(
@@ -340,10 +383,13 @@ POLICIES: Mapping[str, PolicyFactory] = {
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
 }
 
-#: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method with the
-#: paper-style fixed threshold ``DEFAULT_ETA`` whatever ``PolicyContext.eta`` says, so that a run with
-#: a validated eta (see ``core.switch_threshold``) can report both side by side.
-TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only"})
+#: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method exactly as in
+#: the paper's benchmark (threshold ``DEFAULT_ETA``, fixed leaf bias) whatever the context says, so
+#: that a run with validated settings (see ``core.switch_threshold``) can report both side by side.
+#: ``bisect_posterior`` is BiSECt whose bias is re-conditioned on the training worlds from the first
+#: check on (the tree's root with the posterior leaf): it needs the tree only for its training worlds,
+#: and shows how much of ``direct_bisect``'s gain the posterior alone gives.
+TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only", "bisect_posterior"})
 
 #: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``).
 GRAPH_POLICIES: tuple[str, ...] = (*(lazysp_name(s) for s in SELECTORS), "lazysp_set", "lazysp_set_random")

@@ -11,6 +11,10 @@ seeded fraction of the *feasible* training worlds (the test protocol draws test 
 feasible ones), builds a tree on the rest, runs the combined policy for every candidate eta on
 the held-out worlds and returns the eta with the fewest mean checks (ties go to the larger eta,
 which relies less on the tree). The test worlds are never looked at.
+
+The same validation also chooses the leaf's posterior pseudo-count kappa
+(:mod:`drd_planner.core.posterior`) among ``pseudo_counts``; None there is the paper's fixed leaf
+bias, and it wins ties, as does the larger eta and then the larger kappa.
 """
 
 from __future__ import annotations
@@ -30,48 +34,71 @@ from drd_planner.exceptions import ProblemError
 
 #: Candidate thresholds; 1.0 means "switch at the root" (BiSECt with the training bias).
 DEFAULT_ETA_CANDIDATES: tuple[float, ...] = (0.05, 0.1, 0.2, 0.4, 0.6, 1.0)
+#: Candidate posterior pseudo-counts of the leaf; None keeps the bias fixed after the switch.
+DEFAULT_PSEUDO_COUNTS: tuple[float | None, ...] = (None, 5.0, 20.0, 50.0)
 #: Fraction of the feasible training worlds held out for validation.
 DEFAULT_VALIDATION_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
 class SwitchThresholdChoice:
-    """The chosen eta and the validation evidence behind it.
+    """The chosen eta and leaf pseudo-count, and the validation evidence behind them.
 
     Attributes:
         eta: the chosen threshold.
-        mean_checks: candidate eta -> mean checks on the validation worlds.
+        pseudo_count: the chosen posterior pseudo-count, None for the fixed leaf bias.
+        mean_checks: (eta, pseudo_count) candidate -> mean checks on the validation worlds.
         validation_ids: (k,) world rows held out (0-based rows of the problem's world database).
     """
 
     eta: float
-    mean_checks: dict[float, float]
+    pseudo_count: float | None
+    mean_checks: dict[tuple[float, float | None], float]
     validation_ids: tuple[int, ...]
 
     def as_json(self) -> dict[str, object]:
         """A JSON-able summary (for benchmark files and tree provenance)."""
         return {
             "eta": self.eta,
-            "mean_checks": {f"{k:g}": v for k, v in sorted(self.mean_checks.items())},
+            "pseudo_count": self.pseudo_count,
+            "mean_checks": {_label(*k): v for k, v in sorted(self.mean_checks.items(), key=_order)},
             "num_validation_worlds": len(self.validation_ids),
         }
+
+    def describe(self) -> str:
+        """One line for logs: the choice and every candidate's mean."""
+        means = ", ".join(f"{_label(*k)}: {v:.2f}" for k, v in sorted(self.mean_checks.items(), key=_order))
+        return (
+            f"{_label(self.eta, self.pseudo_count)} (validated on {len(self.validation_ids)} held-out "
+            f"training worlds; mean checks {means})"
+        )
+
+
+def _label(eta: float, pseudo_count: float | None) -> str:
+    return f"eta {eta:g}" + ("" if pseudo_count is None else f" kappa {pseudo_count:g}")
+
+
+def _order(item: tuple[tuple[float, float | None], float]) -> tuple[float, float]:
+    (eta, kappa), _ = item
+    return (eta, -1.0 if kappa is None else kappa)
 
 
 def select_switch_threshold(
     problem: Problem,
     *,
-    candidates: Sequence[float] = DEFAULT_ETA_CANDIDATES,
+    candidates: Sequence[float] | None = None,
     validation_fraction: float = DEFAULT_VALIDATION_FRACTION,
     seed: int = 0,
     alpha: float = DEFAULT_ALPHA,
     expand_threshold: float = 0.05,
     tree_options: Mapping[str, Any] | None = None,
+    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS,
 ) -> SwitchThresholdChoice:
-    """Pick eta by validation on held-out feasible training worlds (see the module docstring).
+    """Pick eta and the leaf pseudo-count by validation on held-out feasible training worlds (see the module docstring).
 
     Args:
         problem: a problem with a world database; only its training worlds are used.
-        candidates: thresholds to try, each in (0, 1].
+        candidates: thresholds to try, each in (0, 1] (None: :data:`DEFAULT_ETA_CANDIDATES`).
         validation_fraction: share of the training worlds held out (at least one world).
         seed: seeds the hold-out draw.
         alpha: data weight of the leaf bias.
@@ -79,13 +106,22 @@ def select_switch_threshold(
         tree_options: further keyword arguments of :func:`drd_planner.core.tree.build_tree`
             (candidates, IncDRD, colouring), the same as for the final tree, so the validation
             tree is built the way the tree that will use eta is.
+        pseudo_counts: leaf posterior pseudo-counts to try (None: the fixed leaf bias).
 
     Raises:
-        ProblemError: no candidates, a candidate outside (0, 1], or no feasible training world.
+        ProblemError: no candidates, a candidate outside (0, 1], a pseudo-count that is not
+            positive, or no feasible training world.
     """
+    if candidates is None:
+        candidates = DEFAULT_ETA_CANDIDATES
     cands = sorted({float(c) for c in candidates})
     if not cands or cands[0] <= 0.0 or cands[-1] > 1.0:
         raise ProblemError(f"eta candidates must be non-empty and lie in (0, 1]; got {list(candidates)}")
+    kappas = sorted(
+        {None if k is None else float(k) for k in pseudo_counts}, key=lambda k: -1.0 if k is None else k
+    )
+    if not kappas or any(k is not None and not (k > 0 and np.isfinite(k)) for k in kappas):
+        raise ProblemError(f"pseudo-counts must be non-empty, each None or > 0; got {list(pseudo_counts)}")
     if not 0.0 < validation_fraction < 1.0:
         raise ProblemError(f"validation_fraction must lie in (0, 1); got {validation_fraction}")
     worlds = problem.require_worlds()
@@ -101,14 +137,18 @@ def select_switch_threshold(
     options = {k: v for k, v in (tree_options or {}).items() if k not in ("expand_threshold", "progress")}
     tree = build_tree(sub, expand_threshold=expand_threshold, progress=False, **options)
     costs = problem.edge_costs
-    means: dict[float, float] = {}
+    means: dict[tuple[float, float | None], float] = {}
     for eta in cands:
-        total = 0
-        for world in held_out:
-            policy = DirectBisectPolicy(tree, problem.library, costs, eta=eta, alpha=alpha)
-            result = run_episode(problem.library, costs, policy, TableOracle(worlds.X[world]))
-            total += result.num_checks
-        means[eta] = total / held_out.size
+        for kappa in kappas:
+            total = 0
+            for world in held_out:
+                policy = DirectBisectPolicy(
+                    tree, problem.library, costs, eta=eta, alpha=alpha, pseudo_count=kappa
+                )
+                result = run_episode(problem.library, costs, policy, TableOracle(worlds.X[world]))
+                total += result.num_checks
+            means[(eta, kappa)] = total / held_out.size
     best = min(means.values())
-    eta = max(e for e, v in means.items() if v <= best + 1e-12)
-    return SwitchThresholdChoice(eta, means, tuple(int(h) for h in held_out))
+    tied = [k for k, v in means.items() if v <= best + 1e-12]
+    eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
+    return SwitchThresholdChoice(eta, kappa, means, tuple(int(h) for h in held_out))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from collections import deque
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ import numpy.typing as npt
 from tqdm import tqdm
 
 from drd_planner.core.direct import DirectSelector
+from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import ProblemError
 
@@ -46,6 +48,10 @@ class DecisionTree:
         num_edges: E of the graph the tree was built for.
         num_paths: m of the library it was built for.
         info: build provenance (threshold, times, counts), JSON-safe.
+        world_free: (n, K) bool outcome of each library edge in each training world, or None (tree
+            files of format version 1). Needed only by the posterior-updating leaf
+            (:mod:`drd_planner.core.posterior`).
+        world_weights: (n,) float64 prior weights of those worlds, or None for uniform.
     """
 
     edge: npt.NDArray[np.int32]
@@ -58,6 +64,17 @@ class DecisionTree:
     num_edges: int
     num_paths: int
     info: dict[str, Any] = field(default_factory=dict)
+    world_free: npt.NDArray[np.bool_] | None = None
+    world_weights: FloatArray | None = None
+
+    @cached_property
+    def training_outcomes(self) -> TrainingOutcomes | None:
+        """The training worlds prepared for the posterior leaf (computed once), or None without them."""
+        if self.world_free is None:
+            return None
+        return TrainingOutcomes(
+            self.world_free, self.library_edges, self.num_edges, weights=self.world_weights
+        )
 
     @property
     def num_nodes(self) -> int:
@@ -242,6 +259,8 @@ def build_tree(
         num_edges=problem.num_edges,
         num_paths=problem.num_paths,
         info=info,
+        world_free=np.ascontiguousarray(X[:, lib_edges], dtype=bool),
+        world_weights=None if prior is None else np.asarray(prior, dtype=np.float64),
     )
 
 

@@ -10,7 +10,10 @@ Arrays: graph (``edges`` (E, 2), ``lengths`` (E,), optional ``vertex_states`` (V
 ``costs`` (E,), library (``path_edges`` concatenated with ``path_offsets`` (m + 1,), optional
 ``vertex_paths`` / ``vertex_offsets``), tree nodes (``node_edge``, ``node_children`` (N, 2),
 ``node_num_active``, ``node_active_fraction``, ``node_best_path``), leaf bias
-(``library_edges`` (K,), ``free_fraction`` (N, K) float32).
+(``library_edges`` (K,), ``free_fraction`` (N, K) float32); since version 2 also the training worlds'
+library-edge outcomes for the posterior leaf (``world_free_bits`` (n, ceil(K / 8)) uint8, rows of
+``numpy.packbits``, and optional ``world_weights`` (n,)) and the leaf's ``pseudo_count`` in the header.
+Version 1 files still load; they have no training worlds, so their leaf bias stays fixed.
 """
 
 from __future__ import annotations
@@ -36,7 +39,9 @@ from drd_planner.data.npz_format import array_digest, payload_digest
 from drd_planner.exceptions import DrdError, TreeFileError
 
 FORMAT_NAME = "drd_planner.tree"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions this build reads.
+READABLE_VERSIONS = (1, 2)
 
 _REQUIRED = {
     "edges": np.int64,
@@ -56,6 +61,8 @@ _OPTIONAL = {
     "vertex_states": np.float64,
     "vertex_paths": np.int64,
     "vertex_offsets": np.int64,
+    "world_free_bits": np.uint8,
+    "world_weights": np.float64,
 }
 
 
@@ -69,6 +76,7 @@ class TreeBundle:
         domain: the domain name (``planar``, ``gccd``, ``helicopter``, ``arm``, ...).
         eta: switch threshold to BiSECt.
         alpha: weight of the data term in the leaf bias.
+        pseudo_count: kappa of the posterior leaf, or None for the paper's fixed leaf bias.
         provenance: JSON-safe build information (dataset, seed, command, timings).
     """
 
@@ -77,6 +85,7 @@ class TreeBundle:
     domain: str
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
+    pseudo_count: float | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
 
 
@@ -108,6 +117,12 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         arrays["vertex_states"] = graph.vertex_states
     if problem.library.vertex_paths is not None:
         arrays["vertex_paths"], arrays["vertex_offsets"] = _concat(problem.library.vertex_paths)
+    if tree.world_free is not None:
+        arrays["world_free_bits"] = np.packbits(tree.world_free, axis=1)
+        if tree.world_weights is not None:
+            arrays["world_weights"] = tree.world_weights
+    elif bundle.pseudo_count is not None:
+        raise TreeFileError("a posterior leaf (pseudo_count) needs a tree that carries its training worlds")
     arrays = {k: np.ascontiguousarray(v, dtype=({**_REQUIRED, **_OPTIONAL})[k]) for k, v in arrays.items()}
     digests = {k: array_digest(k, v) for k, v in arrays.items()}
     header = {
@@ -122,6 +137,8 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         "goal": problem.goal,
         "eta": bundle.eta,
         "alpha": bundle.alpha,
+        "pseudo_count": bundle.pseudo_count,
+        "num_train_worlds": None if tree.world_free is None else int(tree.world_free.shape[0]),
         "tree_info": tree.info,
         "problem_metadata": problem.metadata,
         "provenance": bundle.provenance,
@@ -162,9 +179,10 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
     if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
         raise TreeFileError(f"{src} is not a drd_planner tree file")
     version = header.get("format_version")
-    if version != FORMAT_VERSION:
+    if version not in READABLE_VERSIONS:
         raise TreeFileError(
-            f"{src} has tree format version {version}; this build reads version {FORMAT_VERSION}"
+            f"{src} has tree format version {version}; this build reads versions "
+            f"{', '.join(str(v) for v in READABLE_VERSIONS)}"
         )
     digests = header.get("array_sha256")
     if not isinstance(digests, dict) or set(digests) != set(contents):
@@ -262,12 +280,37 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
         num_edges=graph.num_edges,
         num_paths=library.num_paths,
         info=dict(header.get("tree_info") or {}),
+        world_free=_world_free(c, header),
+        world_weights=c.get("world_weights"),
     )
+    kappa = header.get("pseudo_count")
+    if kappa is not None and (tree.world_free is None or not float(kappa) > 0):
+        raise ValueError("pseudo_count is set but the file has no training worlds, or it is not positive")
     return TreeBundle(
         problem=problem,
         tree=tree,
         domain=str(header["domain"]),
         eta=float(header["eta"]),
         alpha=float(header["alpha"]),
+        pseudo_count=None if kappa is None else float(kappa),
         provenance=dict(header.get("provenance") or {}),
     )
+
+
+def _world_free(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> npt.NDArray[np.bool_] | None:
+    """The (n, K) training-world outcomes unpacked from ``world_free_bits`` (None if absent)."""
+    if "world_free_bits" not in c:
+        if "world_weights" in c:
+            raise ValueError("world_weights without world_free_bits")
+        return None
+    bits = c["world_free_bits"]
+    k = c["library_edges"].size
+    n = header.get("num_train_worlds")
+    if bits.ndim != 2 or not isinstance(n, int) or bits.shape != (n, (k + 7) // 8):
+        raise ValueError("world_free_bits has the wrong shape for the library and num_train_worlds")
+    weights = c.get("world_weights")
+    if weights is not None and (
+        weights.shape != (n,) or np.any(weights < 0) or not np.all(np.isfinite(weights))
+    ):
+        raise ValueError("world_weights must be n finite non-negative values")
+    return np.unpackbits(bits, axis=1, count=k).astype(bool)

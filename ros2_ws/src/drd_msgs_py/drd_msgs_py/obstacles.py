@@ -1,0 +1,328 @@
+"""Obstacles: ``visualization_msgs/MarkerArray`` <-> collision parts (shapes with world poses).
+
+Marker semantics (DESIGN.md section 6):
+
+- CUBE: a box of ``scale`` (x, y, z) metres; SPHERE: a sphere of diameter ``scale.x`` (= y = z);
+  CYLINDER: a cylinder along the marker's z with diameter ``scale.x`` (= y) and height ``scale.z``;
+- LINE_STRIP: a wire (or any thin body) of diameter ``scale.x`` through ``points`` (given in the marker
+  frame): one capsule per segment, so a wire with sag arrives as its polyline;
+- TRIANGLE_LIST: a triangle mesh, three ``points`` per triangle (a surface, as FCL treats meshes);
+- actions ADD (= MODIFY) replaces the obstacle ``ns/id``, DELETE removes it, DELETEALL removes all.
+
+:func:`obstacle_update` validates a whole array before anything is applied: one bad marker and the
+array is refused with a :class:`MessageError` that names it, so a consumer keeps its previous map.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import MessageFactory
+from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
+
+__all__ = [
+    "CUBE",
+    "CYLINDER",
+    "LINE_STRIP",
+    "SPHERE",
+    "TRIANGLE_LIST",
+    "Obstacle",
+    "ObstacleUpdate",
+    "markers_from_obstacles",
+    "obstacle_update",
+]
+
+FloatArray = npt.NDArray[np.float64]
+
+CUBE, SPHERE, CYLINDER, LINE_STRIP, LINE_LIST, TRIANGLE_LIST = 1, 2, 3, 4, 5, 11
+ADD, DELETE, DELETEALL = 0, 2, 3
+_TYPE_NAMES = {
+    0: "ARROW",
+    1: "CUBE",
+    2: "SPHERE",
+    3: "CYLINDER",
+    4: "LINE_STRIP",
+    5: "LINE_LIST",
+    6: "CUBE_LIST",
+    7: "SPHERE_LIST",
+    8: "POINTS",
+    9: "TEXT_VIEW_FACING",
+    10: "MESH_RESOURCE",
+    11: "TRIANGLE_LIST",
+    12: "ARROW_STRIP",
+}
+#: Relative tolerance for "equal" marker scales (sphere x = y = z, cylinder x = y).
+SCALE_RTOL = 1e-6
+#: How far a quaternion's norm may be from 1 before it is refused as malformed.
+QUATERNION_TOL = 1e-3
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """One named obstacle: the collision parts of one marker.
+
+    Attributes:
+        key: ``"<ns>/<id>"`` of the marker.
+        parts: (shape, world pose) pairs (several for a LINE_STRIP).
+        kind: the marker type name (``CUBE``, ``LINE_STRIP``, ...).
+    """
+
+    key: str
+    parts: tuple[tuple[Shape, Pose], ...]
+    kind: str
+
+
+@dataclass(frozen=True)
+class ObstacleUpdate:
+    """A validated MarkerArray as operations, in message order.
+
+    Attributes:
+        operations: ``("clear", "")``, ``("delete", key)`` or ``("add", key)``; each ``add`` key has
+            its obstacle in ``obstacles``.
+        obstacles: key -> the last obstacle added under that key in this update.
+        frame_id: the frame every marker was in.
+    """
+
+    operations: tuple[tuple[str, str], ...]
+    obstacles: dict[str, Obstacle]
+    frame_id: str
+
+    def apply(self, current: dict[str, Obstacle]) -> dict[str, Obstacle]:
+        """The obstacle map after this update (a new dict; ``current`` is not changed)."""
+        out = dict(current)
+        for op, key in self.operations:
+            if op == "clear":
+                out.clear()
+            elif op == "delete":
+                out.pop(key, None)
+            else:
+                out[key] = self.obstacles[key]
+        return out
+
+
+def _finite(values: Sequence[float], what: str) -> tuple[float, ...]:
+    try:
+        out = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        raise MessageError(f"{what} must be numbers") from None
+    if not all(math.isfinite(v) for v in out):
+        raise MessageError(f"{what} must be finite, got {out}")
+    return out
+
+
+def _pose(msg: Any, what: str) -> Pose:
+    p, q = msg.position, msg.orientation
+    position = _finite((p.x, p.y, p.z), f"{what} position")
+    quat = _finite((q.x, q.y, q.z, q.w), f"{what} orientation")
+    norm = math.sqrt(sum(v * v for v in quat))
+    if abs(norm - 1.0) > QUATERNION_TOL:
+        raise MessageError(f"{what} orientation is not a unit quaternion (norm {norm:.6g})")
+    return Pose(position, quat)
+
+
+def _points(msg: Any, what: str) -> FloatArray:
+    pts = [_finite((p.x, p.y, p.z), f"{what} point {i}") for i, p in enumerate(msg.points)]
+    return np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+
+
+def _positive_scale(values: tuple[float, ...], what: str) -> None:
+    if any(v <= 0.0 for v in values):
+        raise MessageError(f"{what} must be > 0 (zero-size shapes are refused), got {values}")
+
+
+def _same(a: float, b: float) -> bool:
+    return abs(a - b) <= SCALE_RTOL * max(abs(a), abs(b))
+
+
+def _line_strip(points: FloatArray, diameter: float, pose: Pose, what: str) -> tuple[tuple[Shape, Pose], ...]:
+    if points.shape[0] < 2:
+        raise MessageError(f"{what}: a LINE_STRIP needs at least 2 points, got {points.shape[0]}")
+    world = pose.transform_points(points)
+    parts: list[tuple[Shape, Pose]] = []
+    for a, b in itertools.pairwise(world):
+        axis = b - a
+        length = float(np.linalg.norm(axis))
+        if length <= 1e-9:
+            continue  # repeated point: nothing between them
+        z = axis / length
+        helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        x = np.cross(helper, z)
+        x /= np.linalg.norm(x)
+        rotation = np.column_stack([x, np.cross(z, x), z])
+        parts.append((Capsule(diameter / 2.0, length), Pose.from_rotation(rotation, (a + b) / 2.0)))
+    if not parts:
+        raise MessageError(f"{what}: every LINE_STRIP point is the same (zero-length wire)")
+    return tuple(parts)
+
+
+def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
+    kind = int(marker.type)
+    name = _TYPE_NAMES.get(kind, f"type {kind}")
+    pose = _pose(marker.pose, what)
+    scale = _finite((marker.scale.x, marker.scale.y, marker.scale.z), f"{what} scale")
+    try:
+        if kind == CUBE:
+            _positive_scale(scale, f"{what} CUBE scale")
+            parts: tuple[tuple[Shape, Pose], ...] = ((Box(scale), pose),)
+        elif kind == SPHERE:
+            _positive_scale(scale, f"{what} SPHERE scale")
+            if not (_same(scale[0], scale[1]) and _same(scale[0], scale[2])):
+                raise MessageError(f"{what}: SPHERE scale must be equal on x, y, z (ellipsoids unsupported)")
+            parts = ((Sphere(scale[0] / 2.0), pose),)
+        elif kind == CYLINDER:
+            _positive_scale(scale, f"{what} CYLINDER scale")
+            if not _same(scale[0], scale[1]):
+                raise MessageError(
+                    f"{what}: CYLINDER scale.x and scale.y must be equal (elliptic unsupported)"
+                )
+            parts = ((Cylinder(scale[0] / 2.0, scale[2]), pose),)
+        elif kind == LINE_STRIP:
+            _positive_scale(scale[:1], f"{what} LINE_STRIP scale.x (diameter)")
+            parts = _line_strip(_points(marker, what), scale[0], pose, what)
+        elif kind == TRIANGLE_LIST:
+            pts = _points(marker, what)
+            if pts.shape[0] < 3 or pts.shape[0] % 3:
+                raise MessageError(f"{what}: TRIANGLE_LIST needs 3k points (k >= 1), got {pts.shape[0]}")
+            faces = np.arange(pts.shape[0], dtype=np.int64).reshape(-1, 3)
+            parts = ((TriangleMesh(pts, faces), pose),)
+        else:
+            raise MessageError(
+                f"{what}: unsupported marker type {name}; use CUBE, SPHERE, CYLINDER, LINE_STRIP or TRIANGLE_LIST"
+            )
+    except GeometryError as exc:
+        raise MessageError(f"{what}: {exc}") from exc
+    return Obstacle(key, parts, name)
+
+
+def obstacle_update(msg: Any, *, frame_id: str) -> ObstacleUpdate:
+    """Validate a MarkerArray (rclpy or rosbags) and turn it into an :class:`ObstacleUpdate`.
+
+    Args:
+        msg: ``visualization_msgs/MarkerArray``.
+        frame_id: the planning frame; every marker must be in it (no TF lookups here).
+
+    Raises:
+        MessageError: a marker in another frame, of an unsupported type or action, with NaN or
+            infinite numbers, a non-unit quaternion, a zero or negative size, too few points.
+    """
+    markers = getattr(msg, "markers", None)
+    if markers is None:
+        raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
+    operations: list[tuple[str, str]] = []
+    obstacles: dict[str, Obstacle] = {}
+    for i, marker in enumerate(markers):
+        key = f"{marker.ns}/{int(marker.id)}"
+        what = f"marker {i} ({key})"
+        action = int(marker.action)
+        if action == DELETEALL:
+            operations.append(("clear", ""))
+            continue
+        frame = str(marker.header.frame_id)
+        if frame != frame_id:
+            raise MessageError(f"{what} is in frame {frame!r}; the planner works in {frame_id!r}")
+        if action == DELETE:
+            operations.append(("delete", key))
+        elif action == ADD:
+            obstacles[key] = _obstacle(marker, key, what)
+            operations.append(("add", key))
+        else:
+            raise MessageError(f"{what}: unsupported marker action {action} (ADD=0, DELETE=2, DELETEALL=3)")
+    return ObstacleUpdate(tuple(operations), obstacles, frame_id)
+
+
+def _header(msgs: MessageFactory, frame_id: str, stamp: tuple[int, int]) -> Any:
+    return msgs(
+        "std_msgs/msg/Header",
+        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
+        frame_id=frame_id,
+    )
+
+
+def _pose_msg(msgs: MessageFactory, pose: Pose) -> Any:
+    p, q = pose.position, pose.quaternion_xyzw
+    return msgs(
+        "geometry_msgs/msg/Pose",
+        position=msgs("geometry_msgs/msg/Point", x=float(p[0]), y=float(p[1]), z=float(p[2])),
+        orientation=msgs(
+            "geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])
+        ),
+    )
+
+
+def _point_msgs(msgs: MessageFactory, points: FloatArray) -> list[Any]:
+    return [msgs("geometry_msgs/msg/Point", x=float(x), y=float(y), z=float(z)) for x, y, z in points]
+
+
+def markers_from_obstacles(
+    obstacles: Sequence[tuple[str, Shape | FloatArray, Pose | float]],
+    *,
+    frame_id: str,
+    stamp: tuple[int, int] = (0, 0),
+    msgs: MessageFactory,
+    delete_all_first: bool = True,
+    color: tuple[float, float, float, float] = (0.8, 0.3, 0.2, 0.8),
+) -> Any:
+    """A MarkerArray for ``obstacles``, the inverse of :func:`obstacle_update`.
+
+    Args:
+        obstacles: ``(key, shape, pose)`` for Box, Sphere, Cylinder and TriangleMesh, or
+            ``(key, points, diameter)`` with (K >= 2, 3) world points for a wire (LINE_STRIP).
+            Keys look like ``"ns/id"``.
+        frame_id: the frame of every marker.
+        stamp: (sec, nanosec) of the headers.
+        msgs: the message factory (rclpy or rosbags classes).
+        delete_all_first: start with a DELETEALL marker, so the array replaces the whole map.
+        color: RGBA of the markers (for RViz).
+
+    Raises:
+        MessageError: a key that is not ``ns/id`` or a shape with no marker form (a bare Capsule:
+            send it as a two-point LINE_STRIP).
+    """
+    header = _header(msgs, frame_id, stamp)
+    rgba = msgs("std_msgs/msg/ColorRGBA", r=color[0], g=color[1], b=color[2], a=color[3])
+    markers: list[Any] = []
+    if delete_all_first:
+        markers.append(msgs("visualization_msgs/msg/Marker", header=header, action=DELETEALL))
+    identity = Pose()
+    for key, shape, pose in obstacles:
+        ns, _, ident = key.rpartition("/")
+        if not ident.lstrip("-").isdigit():
+            raise MessageError(f"obstacle key must look like 'ns/<int id>', got {key!r}")
+        fields: dict[str, Any] = {"header": header, "ns": ns, "id": int(ident), "action": ADD, "color": rgba}
+        if isinstance(shape, np.ndarray):
+            fields |= {
+                "type": LINE_STRIP,
+                "pose": _pose_msg(msgs, identity),
+                "scale": msgs("geometry_msgs/msg/Vector3", x=float(pose), y=0.0, z=0.0),  # type: ignore[arg-type]
+                "points": _point_msgs(msgs, np.asarray(shape, dtype=np.float64).reshape(-1, 3)),
+            }
+        else:
+            assert isinstance(pose, Pose)
+            fields["pose"] = _pose_msg(msgs, pose)
+            if isinstance(shape, Box):
+                kind, size = CUBE, tuple(float(v) for v in shape.size)
+            elif isinstance(shape, Sphere):
+                kind, size = SPHERE, (2 * shape.radius,) * 3
+            elif isinstance(shape, Cylinder):
+                kind, size = CYLINDER, (2 * shape.radius, 2 * shape.radius, shape.length)
+            elif isinstance(shape, TriangleMesh):
+                kind, size = TRIANGLE_LIST, (1.0, 1.0, 1.0)
+                fields["points"] = _point_msgs(msgs, shape.vertices[shape.faces.reshape(-1)])
+            else:
+                raise MessageError(f"{key}: {type(shape).__name__} has no marker form; send a LINE_STRIP")
+            fields |= {
+                "type": kind,
+                "scale": msgs("geometry_msgs/msg/Vector3", x=size[0], y=size[1], z=size[2]),
+            }
+        markers.append(msgs("visualization_msgs/msg/Marker", **fields))
+    return msgs("visualization_msgs/msg/MarkerArray", markers=markers)

@@ -1,0 +1,235 @@
+"""Builders for what the planner publishes: the plan, the check log, the summary and RViz markers.
+
+All take a :class:`~drd_msgs_py.factory.MessageFactory`, so the same code makes rclpy messages for
+the node and rosbags messages for bags and tests. Shapes: ``states`` (K, >= 3) metres (x, y, z and,
+for the helicopter, heading in radians as column 3); joint positions (K, J) radians.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_msgs_py.factory import MessageFactory
+
+__all__ = [
+    "CheckRecord",
+    "checked_edges_markers",
+    "edge_checks_message",
+    "joint_trajectory_message",
+    "path_message",
+    "summary_status",
+]
+
+FloatArray = npt.NDArray[np.float64]
+OK, WARN, ERROR = 0, 1, 2
+_LINE_LIST, _DELETEALL, _ADD = 5, 3, 0
+
+
+@dataclass(frozen=True)
+class CheckRecord:
+    """One edge check as the node reports it.
+
+    Attributes:
+        step: 1-based position in the plan's check order.
+        edge: edge id.
+        free: outcome.
+        stage: ``tree`` or ``bisect`` (which part of the method chose the edge).
+        check_ms: wall time of the collision check, ms (0 when answered from the cache).
+        endpoints: the edge's (u, v) vertex ids.
+        cached: whether the outcome came from the per-map-version cache.
+    """
+
+    step: int
+    edge: int
+    free: bool
+    stage: str
+    check_ms: float
+    endpoints: tuple[int, int]
+    cached: bool = False
+
+
+def _header(msgs: MessageFactory, frame_id: str, stamp: tuple[int, int]) -> Any:
+    return msgs(
+        "std_msgs/msg/Header",
+        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
+        frame_id=frame_id,
+    )
+
+
+def _yaw_quaternion(msgs: MessageFactory, yaw: float) -> Any:
+    return msgs("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+
+
+def path_message(
+    states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
+) -> Any:
+    """``nav_msgs/Path`` through (K, >= 3) states; column 3 (if present) is the heading in radians."""
+    pts = np.asarray(states, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] < 3:
+        raise ValueError(f"path states must be (K, >= 3), got {pts.shape}")
+    header = _header(msgs, frame_id, stamp)
+    poses = []
+    for row in pts:
+        yaw = float(row[3]) if pts.shape[1] > 3 else 0.0
+        pose = msgs(
+            "geometry_msgs/msg/Pose",
+            position=msgs("geometry_msgs/msg/Point", x=float(row[0]), y=float(row[1]), z=float(row[2])),
+            orientation=_yaw_quaternion(msgs, yaw),
+        )
+        poses.append(msgs("geometry_msgs/msg/PoseStamped", header=header, pose=pose))
+    return msgs("nav_msgs/msg/Path", header=header, poses=poses)
+
+
+def joint_trajectory_message(
+    joint_names: Sequence[str],
+    positions: npt.ArrayLike,
+    *,
+    frame_id: str,
+    stamp: tuple[int, int] = (0, 0),
+    seconds_per_point: float = 1.0,
+    msgs: MessageFactory,
+) -> Any:
+    """``trajectory_msgs/JointTrajectory`` through (K, J) joint positions (radians), evenly timed."""
+    q = np.asarray(positions, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != len(joint_names):
+        raise ValueError(f"positions must be (K, {len(joint_names)}), got {q.shape}")
+    points = []
+    for k, row in enumerate(q):
+        t = k * seconds_per_point
+        points.append(
+            msgs(
+                "trajectory_msgs/msg/JointTrajectoryPoint",
+                positions=row.astype(np.float64),
+                time_from_start=msgs(
+                    "builtin_interfaces/msg/Duration", sec=int(t), nanosec=round((t - int(t)) * 1e9)
+                ),
+            )
+        )
+    return msgs(
+        "trajectory_msgs/msg/JointTrajectory",
+        header=_header(msgs, frame_id, stamp),
+        joint_names=list(joint_names),
+        points=points,
+    )
+
+
+def _key_values(msgs: MessageFactory, values: Mapping[str, Any]) -> list[Any]:
+    return [msgs("diagnostic_msgs/msg/KeyValue", key=str(k), value=str(v)) for k, v in values.items()]
+
+
+def edge_checks_message(
+    checks: Sequence[CheckRecord],
+    *,
+    stamp: tuple[int, int] = (0, 0),
+    hardware_id: str = "drd_planner",
+    msgs: MessageFactory,
+) -> Any:
+    """``diagnostic_msgs/DiagnosticArray``: one status per check, in order (OK = free, ERROR = blocked)."""
+    status = [
+        msgs(
+            "diagnostic_msgs/msg/DiagnosticStatus",
+            level=OK if c.free else ERROR,
+            name=f"edge/{c.edge}",
+            message="free" if c.free else "in collision",
+            hardware_id=hardware_id,
+            values=_key_values(
+                msgs,
+                {
+                    "step": c.step,
+                    "stage": c.stage,
+                    "check_ms": f"{c.check_ms:.3f}",
+                    "cached": str(c.cached).lower(),
+                    "u": c.endpoints[0],
+                    "v": c.endpoints[1],
+                },
+            ),
+        )
+        for c in checks
+    ]
+    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=_header(msgs, "", stamp), status=status)
+
+
+def summary_status(
+    *,
+    ok: bool,
+    message: str,
+    values: Mapping[str, Any],
+    name: str = "drd_planner: plan",
+    hardware_id: str = "drd_planner",
+    level: int | None = None,
+    msgs: MessageFactory,
+) -> Any:
+    """One ``DiagnosticStatus`` summarising a request (OK, or ERROR with the reason in ``message``)."""
+    return msgs(
+        "diagnostic_msgs/msg/DiagnosticStatus",
+        level=(OK if ok else ERROR) if level is None else level,
+        name=name,
+        message=message,
+        hardware_id=hardware_id,
+        values=_key_values(msgs, values),
+    )
+
+
+def diagnostics_message(
+    statuses: Sequence[Any], *, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
+) -> Any:
+    """``diagnostic_msgs/DiagnosticArray`` of ``statuses``."""
+    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=_header(msgs, "", stamp), status=list(statuses))
+
+
+def checked_edges_markers(
+    segments: npt.ArrayLike,
+    outcome: npt.ArrayLike,
+    *,
+    frame_id: str,
+    stamp: tuple[int, int] = (0, 0),
+    width: float = 2.0,
+    msgs: MessageFactory,
+) -> Any:
+    """RViz LINE_LISTs after a DELETEALL: green free, red blocked, grey unchecked library edges.
+
+    Args:
+        segments: (S, 2, 3) polyline segments (metres); an edge's trajectory gives several.
+        outcome: (S,) per segment 1 = free, 0 = blocked, -1 = not checked.
+        frame_id: frame of the markers.
+        stamp: (sec, nanosec) of the headers.
+        width: line width, metres.
+        msgs: the message factory.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
+    out = np.asarray(outcome, dtype=np.int64).reshape(-1)
+    if out.shape[0] != seg.shape[0]:
+        raise ValueError("one outcome per segment")
+    header = _header(msgs, frame_id, stamp)
+    markers = [msgs("visualization_msgs/msg/Marker", header=header, action=_DELETEALL)]
+    colours = {1: (0.1, 0.8, 0.2, 1.0), 0: (0.9, 0.1, 0.1, 1.0), -1: (0.6, 0.6, 0.6, 0.5)}
+    names = {1: "free", 0: "blocked", -1: "unchecked"}
+    for value, rgba in colours.items():
+        rows = seg[out == value]
+        if rows.size == 0:
+            continue
+        points = [
+            msgs("geometry_msgs/msg/Point", x=float(p[0]), y=float(p[1]), z=float(p[2]))
+            for p in rows.reshape(-1, 3)
+        ]
+        markers.append(
+            msgs(
+                "visualization_msgs/msg/Marker",
+                header=header,
+                ns=names[value],
+                id=0,
+                type=_LINE_LIST,
+                action=_ADD,
+                pose=msgs("geometry_msgs/msg/Pose", orientation=msgs("geometry_msgs/msg/Quaternion", w=1.0)),
+                scale=msgs("geometry_msgs/msg/Vector3", x=width),
+                color=msgs("std_msgs/msg/ColorRGBA", r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]),
+                points=points,
+            )
+        )
+    return msgs("visualization_msgs/msg/MarkerArray", markers=markers)

@@ -1,0 +1,139 @@
+"""Terrain: organized ``sensor_msgs/PointCloud2`` <-> :class:`~drd_planner.geometry.terrain.Heightfield`.
+
+The cloud is a grid: ``height`` rows by ``width`` columns of float32 ``x, y, z`` (metres, other
+fields allowed and ignored). Row i lies at y = y0 + i * cell, column j at x = x0 + j * cell, as in
+the heightfield. A NaN ``z`` is an unknown height; x and y must be finite and on the grid (within
+:data:`GRID_TOL` of a cell). A cloud that is not such a grid is refused with a :class:`MessageError`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import MessageFactory
+from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.terrain import Heightfield
+
+__all__ = ["GRID_TOL", "cloud_from_heightfield", "heightfield_from_cloud"]
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Allowed deviation of a point's x, y from its grid position, as a fraction of the cell size.
+GRID_TOL = 1e-3
+_FLOAT32 = 7  # sensor_msgs/PointField.FLOAT32
+
+
+def _as_bytes(data: Any) -> npt.NDArray[np.uint8]:
+    if isinstance(data, np.ndarray):
+        return np.ascontiguousarray(data, dtype=np.uint8).reshape(-1)
+    try:
+        return np.frombuffer(memoryview(data), dtype=np.uint8)
+    except TypeError:
+        return np.asarray(list(data), dtype=np.uint8)
+
+
+def _field_offsets(msg: Any) -> dict[str, int]:
+    offsets: dict[str, int] = {}
+    for field in msg.fields:
+        offsets[str(field.name)] = int(field.offset)
+        if str(field.name) in ("x", "y", "z") and (int(field.datatype) != _FLOAT32 or int(field.count) != 1):
+            raise MessageError(f"PointCloud2 field {field.name!r} must be one float32 (datatype 7)")
+    missing = [n for n in ("x", "y", "z") if n not in offsets]
+    if missing:
+        raise MessageError(f"PointCloud2 lacks field(s) {', '.join(missing)}")
+    return offsets
+
+
+def heightfield_from_cloud(msg: Any, *, frame_id: str) -> Heightfield:
+    """The heightfield of an organized terrain cloud (rclpy or rosbags message).
+
+    Raises:
+        MessageError: wrong frame, not organized (height < 2 or width < 2), empty, ragged (data size
+            not rows x row_step), big-endian, fields missing or not float32, x/y not finite or not on
+            a regular square grid, or no known height at all.
+    """
+    frame = str(msg.header.frame_id)
+    if frame != frame_id:
+        raise MessageError(f"terrain cloud is in frame {frame!r}; the planner works in {frame_id!r}")
+    rows, cols = int(msg.height), int(msg.width)
+    if rows < 2 or cols < 2:
+        raise MessageError(f"terrain cloud must be organized with >= 2 rows and columns, got {rows} x {cols}")
+    if bool(msg.is_bigendian):
+        raise MessageError("big-endian terrain clouds are not supported")
+    offsets = _field_offsets(msg)
+    step, row_step = int(msg.point_step), int(msg.row_step)
+    if step < 12 or any(o + 4 > step for o in (offsets["x"], offsets["y"], offsets["z"])):
+        raise MessageError(f"PointCloud2 point_step {step} does not hold the x, y, z fields")
+    if row_step < cols * step:
+        raise MessageError(f"PointCloud2 row_step {row_step} < width x point_step {cols * step}")
+    raw = _as_bytes(msg.data)
+    if raw.size != rows * row_step:
+        raise MessageError(
+            f"PointCloud2 data has {raw.size} bytes, expected height x row_step = {rows * row_step} (ragged cloud)"
+        )
+    grid = raw.reshape(rows, row_step)[:, : cols * step].reshape(rows, cols, step)
+
+    def column(name: str) -> FloatArray:
+        o = offsets[name]
+        return np.ascontiguousarray(grid[:, :, o : o + 4]).view("<f4")[..., 0].astype(np.float64)
+
+    x, y, z = column("x"), column("y"), column("z")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise MessageError("terrain cloud x and y must be finite (only z may be NaN = unknown)")
+    if np.any(np.isinf(z)):
+        raise MessageError("terrain cloud z must be finite or NaN, not infinite")
+    if np.all(np.isnan(z)):
+        raise MessageError("terrain cloud has no known height (every z is NaN)")
+    x0, y0 = float(x[0, 0]), float(y[0, 0])
+    cell = float(x[0, 1] - x0)
+    if not cell > 0:
+        raise MessageError("terrain cloud columns must go along +x with a positive spacing")
+    jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
+    tol = GRID_TOL * cell + 1e-4 * max(1.0, abs(x0), abs(y0))  # float32 coordinates
+    if np.max(np.abs(x - (x0 + jj * cell))) > tol or np.max(np.abs(y - (y0 + ii * cell))) > tol:
+        raise MessageError("terrain cloud is not a regular square grid (rows along +y, columns along +x)")
+    try:
+        return Heightfield((x0, y0), cell, z)
+    except GeometryError as exc:
+        raise MessageError(f"terrain cloud: {exc}") from exc
+
+
+def cloud_from_heightfield(
+    terrain: Heightfield, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
+) -> Any:
+    """An organized float32 x, y, z cloud of ``terrain`` (the inverse of :func:`heightfield_from_cloud`)."""
+    rows, cols = terrain.shape
+    jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
+    xyz = np.stack(
+        [
+            terrain.origin[0] + jj * terrain.cell_size,
+            terrain.origin[1] + ii * terrain.cell_size,
+            terrain.heights,
+        ],
+        axis=-1,
+    ).astype("<f4")
+    fields = [
+        msgs("sensor_msgs/msg/PointField", name=name, offset=4 * k, datatype=_FLOAT32, count=1)
+        for k, name in enumerate("xyz")
+    ]
+    header = msgs(
+        "std_msgs/msg/Header",
+        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
+        frame_id=frame_id,
+    )
+    return msgs(
+        "sensor_msgs/msg/PointCloud2",
+        header=header,
+        height=rows,
+        width=cols,
+        fields=fields,
+        is_bigendian=False,
+        point_step=12,
+        row_step=12 * cols,
+        data=np.frombuffer(xyz.tobytes(), dtype=np.uint8),
+        is_dense=not bool(np.isnan(terrain.heights).any()),
+    )

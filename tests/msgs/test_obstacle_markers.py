@@ -1,0 +1,160 @@
+"""MarkerArray <-> obstacles: round trips, exact geometry, and every refusal."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.obstacles import CUBE, LINE_STRIP, markers_from_obstacles, obstacle_update
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.scene import Scene
+from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
+from drd_planner.geometry.wires import Wire
+
+FRAME = "map"
+
+
+def _world(msgs: Any) -> Any:
+    yaw = math.radians(30)
+    tet = TriangleMesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+    )
+    wire = Wire([0, 0, 30], [100, 0, 30], sag=4.0, diameter=0.05)
+    return markers_from_obstacles(
+        [
+            ("box/1", Box((2, 3, 4)), Pose((1, 2, 3), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2)))),
+            ("ball/2", Sphere(1.5), Pose((5, 5, 5))),
+            ("nofly/3", Cylinder(50.0, 200.0), Pose((300, 0, 100))),
+            ("mesh/4", tet, Pose((-5, 0, 0))),
+            ("wire/5", wire.points(5), 0.05),
+        ],
+        frame_id=FRAME,
+        stamp=(12, 5),
+        msgs=msgs,
+    )
+
+
+def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
+    update = obstacle_update(_world(msgs), frame_id=FRAME)
+    assert update.operations[0] == ("clear", "")
+    assert [k for op, k in update.operations[1:]] == ["box/1", "ball/2", "nofly/3", "mesh/4", "wire/5"]
+    obs = update.apply({})
+    ((box, pose),) = obs["box/1"].parts
+    assert box == Box((2, 3, 4))
+    np.testing.assert_allclose(pose.position, (1, 2, 3))
+    assert obs["ball/2"].parts[0][0] == Sphere(1.5)
+    assert obs["nofly/3"].parts[0][0] == Cylinder(50.0, 200.0)
+    mesh = obs["mesh/4"].parts[0][0]
+    assert isinstance(mesh, TriangleMesh) and mesh.faces.shape == (4, 3)
+    chain = obs["wire/5"].parts
+    assert len(chain) == 4 and all(
+        isinstance(s, Capsule) and s.radius == pytest.approx(0.025) for s, _ in chain
+    )
+
+
+def test_wire_capsules_touch_what_the_wire_touches(msgs: Any) -> None:
+    update = obstacle_update(_world(msgs), frame_id=FRAME)
+    scene = Scene()
+    for key, obstacle in update.apply({}).items():
+        for k, (shape, pose) in enumerate(obstacle.parts):
+            scene.add(shape, pose, name=f"{key}#{k}")
+    # The polyline's third knot is at x = 50, z = 30 - 4 (full sag): a small sphere there hits.
+    assert scene.spheres_collide([[50.0, 0.0, 26.0]], 0.1)
+    assert not scene.spheres_collide([[50.0, 0.0, 28.0]], 0.1)  # above the sagging middle
+    assert scene.spheres_collide([[300.0, 0.0, 100.0]], 1.0)  # inside the no-fly cylinder (a solid)
+
+
+def test_delete_and_delete_all_apply_in_order(msgs: Any) -> None:
+    first = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
+    header = msgs("std_msgs/msg/Header", frame_id=FRAME)
+    delete = msgs("visualization_msgs/msg/Marker", header=header, ns="box", id=1, action=2)
+    after = obstacle_update(
+        msgs("visualization_msgs/msg/MarkerArray", markers=[delete]), frame_id=FRAME
+    ).apply(first)
+    assert "box/1" not in after and "ball/2" in after and "box/1" in first
+    clear = msgs("visualization_msgs/msg/Marker", header=header, action=3)
+    assert (
+        obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME).apply(
+            first
+        )
+        == {}
+    )
+
+
+def _one(msgs: Any, **fields: Any) -> Any:
+    base: dict[str, Any] = {
+        "header": msgs("std_msgs/msg/Header", frame_id=FRAME),
+        "ns": "o",
+        "id": 1,
+        "type": CUBE,
+        "action": 0,
+        "pose": msgs("geometry_msgs/msg/Pose", orientation=msgs("geometry_msgs/msg/Quaternion", w=1.0)),
+        "scale": msgs("geometry_msgs/msg/Vector3", x=1.0, y=1.0, z=1.0),
+    }
+    base.update(fields)
+    return msgs("visualization_msgs/msg/MarkerArray", markers=[msgs("visualization_msgs/msg/Marker", **base)])
+
+
+def _build(msgs: Any, value: Any) -> Any:
+    """(type, {field: value-or-(type, {...})}) -> a message; anything else unchanged."""
+    if isinstance(value, tuple):
+        return msgs(value[0], **{k: _build(msgs, v) for k, v in value[1].items()})
+    return value
+
+
+@pytest.mark.parametrize(
+    ("fields", "words"),
+    [
+        ({"type": 0}, "unsupported marker type ARROW"),
+        ({"type": 10}, "MESH_RESOURCE"),
+        ({"action": 7}, "unsupported marker action 7"),
+        ({"scale": ("geometry_msgs/msg/Vector3", {"x": 0.0, "y": 1.0, "z": 1.0})}, "zero-size"),
+        ({"scale": ("geometry_msgs/msg/Vector3", {"x": -1.0, "y": 1.0, "z": 1.0})}, "> 0"),
+        ({"scale": ("geometry_msgs/msg/Vector3", {"x": float("nan"), "y": 1.0, "z": 1.0})}, "finite"),
+        ({"type": 2, "scale": ("geometry_msgs/msg/Vector3", {"x": 1.0, "y": 2.0, "z": 1.0})}, "ellipsoids"),
+        ({"type": 3, "scale": ("geometry_msgs/msg/Vector3", {"x": 1.0, "y": 2.0, "z": 1.0})}, "elliptic"),
+        (
+            {
+                "pose": (
+                    "geometry_msgs/msg/Pose",
+                    {"orientation": ("geometry_msgs/msg/Quaternion", {"w": 0.0})},
+                )
+            },
+            "unit quaternion",
+        ),
+        (
+            {
+                "pose": (
+                    "geometry_msgs/msg/Pose",
+                    {"orientation": ("geometry_msgs/msg/Quaternion", {"w": 2.0})},
+                )
+            },
+            "unit quaternion",
+        ),
+        ({"header": ("std_msgs/msg/Header", {"frame_id": "odom"})}, "frame 'odom'"),
+        ({"type": LINE_STRIP}, "at least 2 points"),
+        ({"type": 11}, "3k points"),
+    ],
+)
+def test_malformed_markers_are_refused(msgs: Any, fields: dict[str, Any], words: str) -> None:
+    built = {k: _build(msgs, v) for k, v in fields.items()}
+    with pytest.raises(MessageError, match=words):
+        obstacle_update(_one(msgs, **built), frame_id=FRAME)
+
+
+def test_nan_point_and_repeated_points_are_refused(msgs: Any) -> None:
+    p = msgs("geometry_msgs/msg/Point", x=1.0, y=2.0, z=3.0)
+    with pytest.raises(MessageError, match="zero-length"):
+        obstacle_update(_one(msgs, type=LINE_STRIP, points=[p, p]), frame_id=FRAME)
+    bad = msgs("geometry_msgs/msg/Point", x=float("nan"), y=0.0, z=0.0)
+    with pytest.raises(MessageError, match="point 1"):
+        obstacle_update(_one(msgs, type=LINE_STRIP, points=[p, bad]), frame_id=FRAME)
+
+
+def test_not_a_marker_array_is_refused(msgs: Any) -> None:
+    with pytest.raises(MessageError, match="MarkerArray"):
+        obstacle_update(msgs("std_msgs/msg/String", data="x"), frame_id=FRAME)
