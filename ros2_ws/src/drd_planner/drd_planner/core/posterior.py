@@ -68,7 +68,7 @@ class TrainingOutcomes:
         self.column = np.full(num_edges, -1, dtype=np.int64)
         self.column[lib] = np.arange(lib.size)
         self.total_mass = float(self.weights.sum())
-        self.free_mass: FloatArray = self._free_mass(np.arange(x.shape[0]))
+        self.free_mass: FloatArray = self.free_mass_of(np.arange(x.shape[0]))
         self.marginal: FloatArray = (
             self.free_mass / self.total_mass if self.total_mass > 0 else np.full(lib.size, 0.5)
         )
@@ -78,7 +78,7 @@ class TrainingOutcomes:
         """N."""
         return int(self.world_free.shape[0])
 
-    def _free_mass(self, rows: IntArray) -> FloatArray:
+    def free_mass_of(self, rows: IntArray) -> FloatArray:
         """(K,) weighted count of ``rows`` in which each library edge is free."""
         x = self.world_free[rows]
         if self.uniform:
@@ -133,7 +133,7 @@ class ConsistentWorldsBias:
             self._mass, self._free_mass = 0.0, np.zeros_like(self._free_mass)
             return
         self._mass -= float(self._o.weights[dropping].sum())
-        self._free_mass = self._free_mass - self._o._free_mass(dropping)
+        self._free_mass = self._free_mass - self._o.free_mass_of(dropping)
 
     def theta(self) -> FloatArray:
         """(E,) bias; 0.5 off the library."""
