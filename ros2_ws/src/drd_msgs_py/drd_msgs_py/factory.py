@@ -20,7 +20,7 @@ import numpy as np
 
 from drd_msgs_py.exceptions import MessageError
 
-__all__ = ["MessageFactory", "RclpyMessages", "RosbagsMessages"]
+__all__ = ["MessageFactory", "RclpyMessages", "RosbagsMessages", "header"]
 
 _NUMPY_OF = {
     "bool": np.bool_,
@@ -151,3 +151,12 @@ class RosbagsMessages:
         if int(sub[0]) == 1 and sub[1][0] in _NUMPY_OF:
             return np.zeros(size if kind == 3 else 0, dtype=_NUMPY_OF[sub[1][0]])
         return [self._default(sub) for _ in range(size)] if kind == 3 else []
+
+
+def header(msgs: MessageFactory, frame_id: str, stamp: tuple[int, int]) -> Any:
+    """A ``std_msgs/Header`` in ``frame_id`` stamped (sec, nanosec)."""
+    return msgs(
+        "std_msgs/msg/Header",
+        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
+        frame_id=frame_id,
+    )

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.factory import MessageFactory
+from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
@@ -240,14 +240,6 @@ def obstacle_update(msg: Any, *, frame_id: str) -> ObstacleUpdate:
     return ObstacleUpdate(tuple(operations), obstacles, frame_id)
 
 
-def _header(msgs: MessageFactory, frame_id: str, stamp: tuple[int, int]) -> Any:
-    return msgs(
-        "std_msgs/msg/Header",
-        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
-        frame_id=frame_id,
-    )
-
-
 def _pose_msg(msgs: MessageFactory, pose: Pose) -> Any:
     p, q = pose.position, pose.quaternion_xyzw
     return msgs(
@@ -288,17 +280,17 @@ def markers_from_obstacles(
         MessageError: a key that is not ``ns/id`` or a shape with no marker form (a bare Capsule:
             send it as a two-point LINE_STRIP).
     """
-    header = _header(msgs, frame_id, stamp)
+    head = header(msgs, frame_id, stamp)
     rgba = msgs("std_msgs/msg/ColorRGBA", r=color[0], g=color[1], b=color[2], a=color[3])
     markers: list[Any] = []
     if delete_all_first:
-        markers.append(msgs("visualization_msgs/msg/Marker", header=header, action=DELETEALL))
+        markers.append(msgs("visualization_msgs/msg/Marker", header=head, action=DELETEALL))
     identity = Pose()
     for key, shape, pose in obstacles:
         ns, _, ident = key.rpartition("/")
         if not ident.lstrip("-").isdigit():
             raise MessageError(f"obstacle key must look like 'ns/<int id>', got {key!r}")
-        fields: dict[str, Any] = {"header": header, "ns": ns, "id": int(ident), "action": ADD, "color": rgba}
+        fields: dict[str, Any] = {"header": head, "ns": ns, "id": int(ident), "action": ADD, "color": rgba}
         if isinstance(shape, np.ndarray):
             fields |= {
                 "type": LINE_STRIP,

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from drd_msgs_py.factory import MessageFactory
+from drd_msgs_py.factory import MessageFactory, header
 
 __all__ = [
     "CheckRecord",
@@ -54,14 +54,6 @@ class CheckRecord:
     cached: bool = False
 
 
-def _header(msgs: MessageFactory, frame_id: str, stamp: tuple[int, int]) -> Any:
-    return msgs(
-        "std_msgs/msg/Header",
-        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
-        frame_id=frame_id,
-    )
-
-
 def _yaw_quaternion(msgs: MessageFactory, yaw: float) -> Any:
     return msgs("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
 
@@ -73,7 +65,7 @@ def path_message(
     pts = np.asarray(states, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] < 3:
         raise ValueError(f"path states must be (K, >= 3), got {pts.shape}")
-    header = _header(msgs, frame_id, stamp)
+    head = header(msgs, frame_id, stamp)
     poses = []
     for row in pts:
         yaw = float(row[3]) if pts.shape[1] > 3 else 0.0
@@ -82,8 +74,8 @@ def path_message(
             position=msgs("geometry_msgs/msg/Point", x=float(row[0]), y=float(row[1]), z=float(row[2])),
             orientation=_yaw_quaternion(msgs, yaw),
         )
-        poses.append(msgs("geometry_msgs/msg/PoseStamped", header=header, pose=pose))
-    return msgs("nav_msgs/msg/Path", header=header, poses=poses)
+        poses.append(msgs("geometry_msgs/msg/PoseStamped", header=head, pose=pose))
+    return msgs("nav_msgs/msg/Path", header=head, poses=poses)
 
 
 def joint_trajectory_message(
@@ -113,7 +105,7 @@ def joint_trajectory_message(
         )
     return msgs(
         "trajectory_msgs/msg/JointTrajectory",
-        header=_header(msgs, frame_id, stamp),
+        header=header(msgs, frame_id, stamp),
         joint_names=list(joint_names),
         points=points,
     )
@@ -152,7 +144,7 @@ def edge_checks_message(
         )
         for c in checks
     ]
-    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=_header(msgs, "", stamp), status=status)
+    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=header(msgs, "", stamp), status=status)
 
 
 def summary_status(
@@ -180,7 +172,7 @@ def diagnostics_message(
     statuses: Sequence[Any], *, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
 ) -> Any:
     """``diagnostic_msgs/DiagnosticArray`` of ``statuses``."""
-    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=_header(msgs, "", stamp), status=list(statuses))
+    return msgs("diagnostic_msgs/msg/DiagnosticArray", header=header(msgs, "", stamp), status=list(statuses))
 
 
 def checked_edges_markers(
@@ -206,8 +198,8 @@ def checked_edges_markers(
     out = np.asarray(outcome, dtype=np.int64).reshape(-1)
     if out.shape[0] != seg.shape[0]:
         raise ValueError("one outcome per segment")
-    header = _header(msgs, frame_id, stamp)
-    markers = [msgs("visualization_msgs/msg/Marker", header=header, action=_DELETEALL)]
+    head = header(msgs, frame_id, stamp)
+    markers = [msgs("visualization_msgs/msg/Marker", header=head, action=_DELETEALL)]
     colours = {1: (0.1, 0.8, 0.2, 1.0), 0: (0.9, 0.1, 0.1, 1.0), -1: (0.6, 0.6, 0.6, 0.5)}
     names = {1: "free", 0: "blocked", -1: "unchecked"}
     for value, rgba in colours.items():
@@ -221,7 +213,7 @@ def checked_edges_markers(
         markers.append(
             msgs(
                 "visualization_msgs/msg/Marker",
-                header=header,
+                header=head,
                 ns=names[value],
                 id=0,
                 type=_LINE_LIST,

@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.factory import MessageFactory
+from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.terrain import Heightfield
 
@@ -120,14 +120,9 @@ def cloud_from_heightfield(
         msgs("sensor_msgs/msg/PointField", name=name, offset=4 * k, datatype=_FLOAT32, count=1)
         for k, name in enumerate("xyz")
     ]
-    header = msgs(
-        "std_msgs/msg/Header",
-        stamp=msgs("builtin_interfaces/msg/Time", sec=int(stamp[0]), nanosec=int(stamp[1])),
-        frame_id=frame_id,
-    )
     return msgs(
         "sensor_msgs/msg/PointCloud2",
-        header=header,
+        header=header(msgs, frame_id, stamp),
         height=rows,
         width=cols,
         fields=fields,
