@@ -42,7 +42,7 @@ class CheckRecord:
         stage: ``tree`` or ``bisect`` (which part of the method chose the edge).
         check_ms: wall time of the collision check, ms (0 when answered from the cache).
         endpoints: the edge's (u, v) vertex ids.
-        cached: whether the outcome came from the per-map-version cache.
+        cached: whether the outcome came from the per-map-snapshot cache.
     """
 
     step: int

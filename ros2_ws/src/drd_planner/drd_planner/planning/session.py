@@ -3,7 +3,7 @@
 :class:`PlanningSession` rebuilds the tree's domain (graph, start, goal, checker) from the spec
 stored in the tree file, refuses a file whose stored graph does not match that spec, and serves
 requests: :meth:`PlanningSession.plan` walks the tree, checks each asked edge on the snapshot's
-scene only when asked (results cached per map version), switches to BiSECt at the leaf and
+scene only when asked (results cached per map snapshot), switches to BiSECt at the leaf and
 returns a :class:`PlanResult`. The returned path is re-verified against the check log before it
 is handed out: every one of its edges was checked free on that snapshot (the safety invariant).
 """
@@ -42,7 +42,7 @@ class SessionCheck:
         stage: ``tree`` or ``bisect``.
         check_ms: collision-check wall time, ms (0 when answered from the cache).
         select_ms: time the policy took to choose the edge, ms.
-        cached: answered from the cache of this map version.
+        cached: answered from the cache of this map snapshot.
     """
 
     step: int
