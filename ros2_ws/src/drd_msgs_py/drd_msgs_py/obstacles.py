@@ -28,7 +28,8 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
+from drd_planner.geometry.shapes import Box, Cylinder, Shape, Sphere, TriangleMesh
+from drd_planner.geometry.wires import capsule_between
 
 __all__ = [
     "CUBE",
@@ -40,6 +41,7 @@ __all__ = [
     "ObstacleUpdate",
     "markers_from_obstacles",
     "obstacle_update",
+    "pose_from_msg",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -120,7 +122,8 @@ def _finite(values: Sequence[float], what: str) -> tuple[float, ...]:
     return out
 
 
-def _pose(msg: Any, what: str) -> Pose:
+def pose_from_msg(msg: Any, what: str) -> Pose:
+    """A ``geometry_msgs/Pose`` as a :class:`Pose`; NaN/inf or a non-unit quaternion raise MessageError."""
     p, q = msg.position, msg.orientation
     position = _finite((p.x, p.y, p.z), f"{what} position")
     quat = _finite((q.x, q.y, q.z, q.w), f"{what} orientation")
@@ -148,27 +151,20 @@ def _line_strip(points: FloatArray, diameter: float, pose: Pose, what: str) -> t
     if points.shape[0] < 2:
         raise MessageError(f"{what}: a LINE_STRIP needs at least 2 points, got {points.shape[0]}")
     world = pose.transform_points(points)
-    parts: list[tuple[Shape, Pose]] = []
-    for a, b in itertools.pairwise(world):
-        axis = b - a
-        length = float(np.linalg.norm(axis))
-        if length <= 1e-9:
-            continue  # repeated point: nothing between them
-        z = axis / length
-        helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        x = np.cross(helper, z)
-        x /= np.linalg.norm(x)
-        rotation = np.column_stack([x, np.cross(z, x), z])
-        parts.append((Capsule(diameter / 2.0, length), Pose.from_rotation(rotation, (a + b) / 2.0)))
+    parts = tuple(
+        capsule_between(a, b, diameter / 2.0)
+        for a, b in itertools.pairwise(world)
+        if np.linalg.norm(b - a) > 1e-9  # a repeated point: nothing between them
+    )
     if not parts:
         raise MessageError(f"{what}: every LINE_STRIP point is the same (zero-length wire)")
-    return tuple(parts)
+    return parts
 
 
 def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
     kind = int(marker.type)
     name = _TYPE_NAMES.get(kind, f"type {kind}")
-    pose = _pose(marker.pose, what)
+    pose = pose_from_msg(marker.pose, what)
     scale = _finite((marker.scale.x, marker.scale.y, marker.scale.z), f"{what} scale")
     try:
         if kind == CUBE:

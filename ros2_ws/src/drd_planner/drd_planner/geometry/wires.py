@@ -21,7 +21,7 @@ from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import FloatArray, Pose, frozen_array
 from drd_planner.geometry.shapes import Capsule
 
-__all__ = ["Wire"]
+__all__ = ["Wire", "capsule_between"]
 
 
 @dataclass(frozen=True, eq=False, init=False, repr=False)
@@ -101,15 +101,21 @@ class Wire:
             raise GeometryError(f"wire capsule chain needs segments >= 1, got {segments!r}")
         n = int(n)
         radius = self.diameter / 2.0 + self.sag / n**2
-        knots = self.points(n + 1)
-        chain: list[tuple[Capsule, Pose]] = []
-        for a, b in itertools.pairwise(knots):
-            axis = b - a
-            length = float(np.linalg.norm(axis))
-            chain.append(
-                (Capsule(radius, length), Pose.from_rotation(_frame_with_z(axis / length), (a + b) / 2.0))
-            )
-        return chain
+        return [capsule_between(a, b, radius) for a, b in itertools.pairwise(self.points(n + 1))]
+
+
+def capsule_between(a: npt.ArrayLike, b: npt.ArrayLike, radius: float) -> tuple[Capsule, Pose]:
+    """The capsule of ``radius`` metres whose segment joins the (3,) points ``a`` and ``b`` (metres), with its pose.
+
+    Raises:
+        GeometryError: ``a`` and ``b`` coincide or ``radius`` is not > 0.
+    """
+    first, second = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    axis = second - first
+    length = float(np.linalg.norm(axis))
+    if not length > 0.0:
+        raise GeometryError("a capsule needs two distinct end points")
+    return Capsule(radius, length), Pose.from_rotation(_frame_with_z(axis / length), (first + second) / 2.0)
 
 
 def _frame_with_z(z_axis: FloatArray) -> FloatArray:

@@ -19,7 +19,6 @@ published unless every one of its edges was checked free on the snapshot it was 
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +36,7 @@ from visualization_msgs.msg import MarkerArray
 
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RclpyMessages
-from drd_msgs_py.obstacles import obstacle_update
+from drd_msgs_py.obstacles import obstacle_update, pose_from_msg
 from drd_msgs_py.plans import (
     CheckRecord,
     checked_edges_markers,
@@ -279,19 +278,11 @@ class PlannerNode(LifecycleNode):
 
 
 def _goal_xyz(goal: Any, frame: str) -> np.ndarray:
-    """(3,) goal position of a PoseStamped in ``frame`` (metres)."""
+    """(3,) goal position of a PoseStamped in ``frame`` (metres); NaN or a bad quaternion is refused."""
     got = str(goal.header.frame_id)
     if got != frame:
         raise MessageError(f"goal is in frame {got!r}; the planner works in {frame!r}")
-    p = goal.pose.position
-    xyz = np.array([p.x, p.y, p.z], dtype=np.float64)
-    if not np.all(np.isfinite(xyz)):
-        raise MessageError(f"goal position must be finite, got {xyz.tolist()}")
-    q = goal.pose.orientation
-    norm = math.sqrt(q.x**2 + q.y**2 + q.z**2 + q.w**2)
-    if not math.isfinite(norm) or abs(norm - 1.0) > 1e-3:
-        raise MessageError(f"goal orientation is not a unit quaternion (norm {norm:.6g})")
-    return xyz
+    return np.array(pose_from_msg(goal.pose, "goal").position, dtype=np.float64)
 
 
 def main(args: list[str] | None = None) -> None:
