@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Set up a virtual environment with both packages and run one job.
-#   scripts/run.sh demo    the main job: `drd demo` on the embedded planar scenario
+#   scripts/run.sh demo    the main job: the planner node on the bundled helicopter Wires bag (planner_demo)
 #   scripts/run.sh test    the whole suite: ruff, mypy, pytest
 # Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv when missing).
 set -euo pipefail
@@ -36,7 +36,7 @@ py="$venv/bin/python"
 
 case "$job" in
   demo)
-    "$venv/bin/drd" demo
+    "$venv/bin/planner_demo" "${@:2}"
     ;;
   test)
     "$venv/bin/ruff" check .

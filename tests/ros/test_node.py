@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-import os
+import shutil
+import signal
+import subprocess
+import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -13,67 +16,39 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
-from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
+from harness import Peer, private_context, spin_for, spin_until, use_domain  # noqa: E402
 from lifecycle_msgs.msg import State  # noqa: E402
-from nav_msgs.msg import Path as PathMsg  # noqa: E402
 from nav_msgs.srv import GetPlan  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from sensor_msgs.msg import PointCloud2  # noqa: E402
-from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.obstacles import obstacle_update  # noqa: E402
+from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update  # noqa: E402
 from drd_msgs_py.terrain import heightfield_from_cloud  # noqa: E402
 from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.data.tree_file import load_tree  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
+from drd_planner.geometry.pose import Pose  # noqa: E402
+from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
-from drd_planner.ros.node import LATCHED, PlannerNode  # noqa: E402
+from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
-os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-os.environ["ROS_DOMAIN_ID"] = str(60 + os.getpid() % 40)
+use_domain(60)
 
 
 @pytest.fixture
 def context() -> Iterator[Any]:
-    ctx = rclpy.context.Context()
-    rclpy.init(context=ctx)
-    yield ctx
-    ctx.try_shutdown()
+    with private_context() as ctx:
+        yield ctx
 
 
 def _node(ctx: Any, trees: list[str]) -> PlannerNode:
     return PlannerNode(context=ctx, parameter_overrides=[Parameter("tree_paths", value=trees)])
-
-
-class _Peer:
-    """Publishes maps and requests, records what the planner publishes."""
-
-    def __init__(self, ctx: Any) -> None:
-        self.node = rclpy.create_node("peer", context=ctx)
-        self.obstacles = self.node.create_publisher(MarkerArray, "obstacles", LATCHED)
-        self.terrain = self.node.create_publisher(PointCloud2, "terrain", LATCHED)
-        self.goals = self.node.create_publisher(PoseStamped, "goal_pose", 10)
-        self.plans: list[PathMsg] = []
-        self.checks: list[DiagnosticArray] = []
-        self.diagnostics: list[DiagnosticArray] = []
-        self.node.create_subscription(PathMsg, "plan", self.plans.append, LATCHED)
-        self.node.create_subscription(DiagnosticArray, "edge_checks", self.checks.append, 10)
-        self.node.create_subscription(DiagnosticArray, "/diagnostics", self.diagnostics.append, 10)
-
-
-def _spin_until(executor: Any, done: Callable[[], bool], timeout: float = 20.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        executor.spin_once(timeout_sec=0.05)
-        if done():
-            return True
-    return False
 
 
 def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
@@ -86,7 +61,7 @@ def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
 
 def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
     node = _node(context, [str(TREE)])
-    peer = _Peer(context)
+    peer = Peer(context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     executor.add_node(peer.node)
@@ -101,13 +76,13 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
         )
         # A request before the maps: a clear error and no plan.
         peer.goals.publish(_goal(session))
-        assert _spin_until(executor, lambda: any("no maps" in e for e in node.errors))
+        assert spin_until(executor, lambda: any("no maps" in e for e in node.errors))
         assert not peer.plans
         peer.terrain.publish(cloud)
         peer.obstacles.publish(markers)
-        assert _spin_until(executor, lambda: node.snapshot.version >= 2)
+        assert spin_until(executor, lambda: node.snapshot.version >= 2)
         peer.goals.publish(_goal(session))
-        assert _spin_until(executor, lambda: bool(peer.plans) and bool(peer.checks))
+        assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.checks))
         plan, log = peer.plans[-1], peer.checks[-1]
         assert plan.header.frame_id == "map" and len(plan.poses) > 2
         last = plan.poses[-1].pose.position
@@ -136,7 +111,7 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
         request = GetPlan.Request()
         request.goal = _goal(session)
         future = client.call_async(request)
-        assert _spin_until(executor, future.done)
+        assert spin_until(executor, future.done)
         assert len(future.result().plan.poses) == len(plan.poses)
         assert node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
         assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
@@ -180,3 +155,141 @@ def test_bad_requests_and_maps_leave_errors_not_plans(context: Any) -> None:
         assert State.PRIMARY_STATE_INACTIVE == node._state_machine.current_state[0]
     finally:
         node.destroy_node()
+
+
+def _world(session: PlanningSession, seed: int = 3) -> tuple[Any, Any]:
+    domain = session.domain
+    assert isinstance(domain, HelicopterDomain)
+    return helicopter_world_messages(
+        domain.make_world("wires", seed), wire_segments=8, frame_id="map", msgs=RclpyMessages()
+    )
+
+
+def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> None:
+    node = _node(context, ["heli_wires"])  # a shipped tree by name
+    peer = Peer(context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(peer.node)
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+        session = node.sessions[0]
+        markers, cloud = _world(session)
+        peer.terrain.publish(cloud)
+        peer.obstacles.publish(markers)
+        assert spin_until(executor, lambda: node.snapshot.version >= 2)
+        sent = 8
+        for k in range(sent):
+            goal = _goal(session)
+            goal.header.stamp.sec = k + 1
+            peer.goals.publish(goal)
+
+        def served() -> int:
+            return sum(1 + int(s["coalesced"]) for s in peer.summaries() if s["request"] == "goal_pose")
+
+        assert spin_until(executor, lambda: served() >= sent)
+        spin_for(executor, 0.3)
+        summaries = [s for s in peer.summaries() if s["request"] == "goal_pose"]
+        assert served() == sent  # every request answered or counted as superseded, none twice
+        assert summaries[-1]["request_stamp"] == f"{sent}.000000000"  # the newest one is always served
+        assert len(peer.plans) == len(summaries)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        peer.node.destroy_node()
+
+
+def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
+    beside = Path(sys.executable).parent / "planner_node"  # the venv's scripts, even when not on PATH
+    exe = str(beside) if beside.is_file() else shutil.which("planner_node")
+    if exe is None:
+        pytest.skip(
+            "the planner_node console script is not installed (pip install -e ros2_ws/src/drd_planner)"
+        )
+    args = ["--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    process = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    peer = Peer(context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(peer.node)
+    try:
+        session = PlanningSession(load_tree(TREE))
+        markers, cloud = _world(session)
+        peer.terrain.publish(cloud)
+        peer.obstacles.publish(markers)
+        # The node latches onto the maps whenever it comes up (transient_local); then ask until it answers.
+        deadline = time.monotonic() + 60.0
+        while not peer.plans and time.monotonic() < deadline and process.poll() is None:
+            peer.goals.publish(_goal(session))
+            spin_until(executor, lambda: bool(peer.plans), timeout=2.0)
+        assert peer.plans, "no plan from planner_node"
+        last = peer.plans[-1].poses[-1].pose.position
+        assert np.allclose([last.x, last.y, last.z], session.goal_state[:3])
+    finally:
+        process.send_signal(signal.SIGINT)
+        try:
+            output, _ = process.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            output, _ = process.communicate()
+        executor.shutdown()
+        peer.node.destroy_node()
+    assert "loaded 1 tree(s): heli_wires" in output
+    assert "Traceback" not in output
+
+
+def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(context: Any) -> None:
+    node = _node(context, [str(TREE)])
+    peer = Peer(context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(peer.node)
+    msgs = RclpyMessages()
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+        session = node.sessions[0]
+        markers, cloud = _world(session)
+        peer.terrain.publish(cloud)
+        peer.obstacles.publish(markers)
+        assert spin_until(executor, lambda: node.snapshot.version >= 2)
+        peer.goals.publish(_goal(session))
+        assert spin_until(executor, lambda: bool(peer.plans))
+        first = node.published
+        assert first is not None and first.ok
+        # Far from every plan edge: nothing to re-check, the plan stays, no new plan is published.
+        far = Pose(position=(-5000.0, -5000.0, 0.0))
+        update = markers_from_obstacles(
+            [("extra/1", Sphere(5.0), far)], frame_id="map", msgs=msgs, delete_all_first=False
+        )
+        peer.obstacles.publish(update)
+        assert spin_until(executor, lambda: bool(peer.summaries("drd_planner: map update")))
+        kept = peer.summaries("drd_planner: map update")[-1]
+        assert kept["result"] == "plan_kept" and kept["rechecked"] == "0"
+        assert len(peer.plans) == 1 and node.published is first
+        # A box on the middle of a plan edge: the plan is blocked, a new one is published and says why.
+        edge = first.path_edges[len(first.path_edges) // 2]
+        states = session.edge_states(edge)
+        middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
+        update = markers_from_obstacles(
+            [("extra/2", Box((30.0, 30.0, 30.0)), middle)], frame_id="map", msgs=msgs, delete_all_first=False
+        )
+        peer.obstacles.publish(update)
+
+        def replans() -> list[dict[str, str]]:
+            return [s for s in peer.summaries() if s["request"] == "map_update"]
+
+        assert spin_until(
+            executor, lambda: len(peer.plans) >= 2 and bool(replans()) and len(peer.checks) >= 2
+        )
+        replanned = replans()[-1]
+        assert f"plan edge {edge} blocked" in replanned["replan_reason"]
+        second = node.published
+        assert second is not None and edge not in second.path_edges
+        free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
+        assert set(second.path_edges) <= free  # the new plan was checked free on the new map
+        assert second.map_version == node.snapshot.version
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        peer.node.destroy_node()

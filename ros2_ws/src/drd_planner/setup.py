@@ -1,10 +1,16 @@
 """ament_python / pip setup for drd_planner."""
 
 from glob import glob
+from os.path import relpath
 
 from setuptools import find_packages, setup
 
 PACKAGE = "drd_planner"
+# The shipped trees and bags live at the repository root (../../../ from here); a source checkout or the
+# Docker image has them there, an sdist does not (then the node takes tree file paths instead of names).
+SHIPPED = {
+    kind: sorted(glob(f"../../../{kind}/*.{ext}")) for kind, ext in (("trees", "npz"), ("bags", "mcap"))
+}
 
 setup(
     name=PACKAGE,
@@ -16,6 +22,11 @@ setup(
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/launch", glob("launch/*.py")),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+        *(
+            (f"share/{PACKAGE}/{kind}", [relpath(f) for f in files])
+            for kind, files in SHIPPED.items()
+            if files
+        ),
     ],
     python_requires=">=3.10",
     install_requires=[
@@ -28,6 +39,7 @@ setup(
         "trimesh>=4.0",
         "dask[distributed]>=2024.1",
         "yourdfpy>=0.0.56",
+        "rosbags>=0.11",
     ],
     extras_require={
         "plots": ["matplotlib>=3.6"],
@@ -43,6 +55,8 @@ setup(
         "console_scripts": [
             "drd = drd_planner.cli:main",
             "planner_node = drd_planner.ros.node:main",
+            "drd_replay = drd_planner.ros.replay:main",
+            "planner_demo = drd_planner.ros.demo:main",
         ],
     },
 )

@@ -1,9 +1,12 @@
-"""A sampled helicopter world as the messages a map server would send (for bags, demos and tests).
+"""Sampled worlds as the messages a map server would send (for bags, demos and tests).
 
-Wires become LINE_STRIPs through the knots of the capsule chain the planner's own scene uses
+Helicopter: wires become LINE_STRIPs through the knots of the capsule chain the planner's own scene uses
 (``wire_segments`` capsules per span) with ``scale.x`` the chain's diameter (the wire's plus twice the
 chord error), so the node's scene from these messages equals ``HelicopterDomain.scene(world)``.
 Towers and no-fly zones become CYLINDER / CUBE markers, the terrain an organized cloud.
+
+Arm: each posed primitive (box, cylinder, sphere) of an ``ArmWorld`` becomes one CUBE / CYLINDER /
+SPHERE marker in the robot's root frame, so the node's scene from them equals ``ArmWorld.to_scene()``.
 """
 
 from __future__ import annotations
@@ -15,9 +18,10 @@ import numpy as np
 from drd_msgs_py.factory import MessageFactory
 from drd_msgs_py.obstacles import markers_from_obstacles
 from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.helicopter_worlds import HelicopterWorld
 
-__all__ = ["helicopter_world_messages"]
+__all__ = ["arm_world_messages", "helicopter_world_messages"]
 
 
 def helicopter_world_messages(
@@ -47,3 +51,25 @@ def helicopter_world_messages(
     markers = markers_from_obstacles(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)
     cloud = cloud_from_heightfield(world.terrain, frame_id=frame_id, stamp=stamp, msgs=msgs)
     return markers, cloud
+
+
+def arm_world_messages(
+    world: ArmWorld,
+    *,
+    frame_id: str = "panda_link0",
+    stamp: tuple[int, int] = (0, 0),
+    msgs: MessageFactory,
+) -> Any:
+    """MarkerArray (DELETEALL first) of an arm world's solids, in the robot's root frame.
+
+    Each primitive keeps its name as the marker namespace (id 0; key ``<name>/0``), so RViz lists
+    ``table_top``, ``box_3``, ... and an update can replace one object by name.
+
+    Args:
+        world: the world (primitives: Box, Cylinder along local +z, Sphere; sizes and poses in metres).
+        frame_id: the robot's root frame (``panda_link0`` for the Panda).
+        stamp: (sec, nanosec) of the headers.
+        msgs: the message factory (rclpy or rosbags classes).
+    """
+    obstacles: list[tuple[str, Any, Any]] = [(f"{p.name}/0", p.shape, p.pose) for p in world.obstacles]
+    return markers_from_obstacles(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)

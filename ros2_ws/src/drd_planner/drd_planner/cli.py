@@ -232,11 +232,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    """``drd plan``: one offline plan with a saved tree on one world of a dataset (no ROS)."""
+    """``drd plan``: one offline plan with a saved tree on one world of a dataset, or at a bag's request (no ROS)."""
     from drd_planner.bench.runner import run_world, train_bias
     from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
     from drd_planner.data.tree_file import check_bundle_fits, load_tree
 
+    if args.bag:
+        return _plan_bag(args)
+    if args.world is None:
+        raise DrdError("--world is required with --gccd / --dataset")
     problem = load_problem_from_args(args)
     bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
     check_bundle_fits(bundle, problem)
@@ -259,20 +263,86 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+def _print_check(number: int, edge: int, ends: tuple[int, int] | None, free: bool, stage: str) -> None:
+    """One line of the check log (``number`` 1-based)."""
+    where = f" ({ends[0]}->{ends[1]})" if ends is not None else ""
+    state = "free   " if free else "BLOCKED"
+    print(f"  check {number:3d}: edge {edge:5d}{where:14s} {state} [{stage}]")
+
+
 def _print_episode(problem: Problem, result: EpisodeResult) -> None:
     graph = problem.graph
-    for rec in result.checks:
-        ends = ""
+    for k, rec in enumerate(result.checks):
+        ends = None
         if graph is not None:
             u, v = graph.edges[rec.edge]
-            ends = f" ({u}->{v})"
-        state = "free   " if rec.free else "BLOCKED"
-        print(f"  check {rec.step + 1:3d}: edge {rec.edge:5d}{ends:14s} {state} [{rec.stage}]")
+            ends = (int(u), int(v))
+        _print_check(k + 1, rec.edge, ends, rec.free, rec.stage)
     if result.success and result.path_edges is not None:
         which = "graph path" if result.path_index is None else f"path {result.path_index}"
         print(f"  -> {which} ({result.path_edges.size} edges) verified free after {result.num_checks} checks")
     else:
         print(f"  -> {result.status.value} after {result.num_checks} checks")
+
+
+def _plan_bag(args: argparse.Namespace) -> int:
+    """``drd plan --bag``: plan on the maps in force at a bag's K-th request, as the node would."""
+    from drd_msgs_py.bags import bag_frame, maps_at_request, read_bag, request_goal
+    from drd_msgs_py.exceptions import MessageError
+    from drd_planner.data.tree_file import load_tree
+    from drd_planner.domains.arm import ArmDomain
+    from drd_planner.planning.session import PlanningSession
+    from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
+
+    if args.policy != "direct_bisect":
+        raise DrdError("--bag plans as the node does (direct_bisect); --policy cannot be changed")
+    if args.world is not None:
+        raise DrdError("--world selects a dataset world; with --bag use --request")
+    tree_path = resolve_tree_path(args.tree)
+    session = PlanningSession(load_tree(tree_path), name=tree_path.stem)
+    domain = session.domain
+    try:
+        messages = read_bag(resolve_bag_path(args.bag))
+        frame = args.frame or bag_frame(messages) or "map"
+        maps, request = maps_at_request(
+            messages,
+            args.request,
+            frame_id=frame,
+            margin=session.margin,
+            robot_from_description=domain.robot_from_description if isinstance(domain, ArmDomain) else None,
+        )
+        goal = request_goal(request, frame_id=frame, joint_names=session.joint_names)
+    except MessageError as exc:
+        raise DrdError(str(exc)) from exc
+    snapshot = maps.snapshot
+    start_ns = messages[0].time_ns
+    terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
+    robot = "" if maps.robot_description is None else ", robot_description"
+    print(
+        f"bag {args.bag}: request {request.index} ({request.kind} at +{(request.time_ns - start_ns) / 1e9:.2f} s); "
+        f"maps in {frame!r}: version {snapshot.version}, {len(snapshot.obstacles)} obstacles, terrain {terrain}{robot}"
+    )
+    for line in maps.refused:
+        print(f"  refused (map unchanged): {line}")
+    if not session.matches_goal(goal):
+        raise DrdError(
+            f"request {request.index}'s goal {np.round(goal, 3).tolist()} does not match tree {session.name} "
+            f"(goal {np.round(session.goal_state, 3).tolist()})"
+        )
+    result = session.plan(snapshot, seed=args.seed)
+    for k, check in enumerate(result.checks):
+        _print_check(k + 1, check.edge, check.endpoints, check.free, check.stage)
+    if not result.ok:
+        print(f"  -> {result.status} after {len(result.checks)} checks: {result.message}")
+        return 1
+    print(f"  -> path ({len(result.path_edges)} edges) verified free after {len(result.checks)} checks")
+    print(f"  path edges: {list(result.path_edges)}")
+    columns = "joint angles, rad" if session.is_arm else "x, y, z m; heading rad"
+    print(f"  path vertices ({columns}):")
+    for vertex in result.path_vertices:
+        state = session.vertex_state(vertex)
+        print(f"    {vertex:5d}: " + " ".join(f"{v:9.3f}" for v in state))
+    return 0
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -395,10 +465,21 @@ def build_parser() -> argparse.ArgumentParser:
     _tree_options(p)
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("plan", help="plan once offline with a tree file on one dataset world")
-    p.add_argument("--tree", required=True)
-    add_problem_source_arguments(p)
-    p.add_argument("--world", type=int, required=True, help="0-based world row")
+    p = sub.add_parser(
+        "plan", help="plan once offline with a tree file on one dataset world, or at a request of a bag"
+    )
+    p.add_argument("--tree", required=True, help="tree file (or a shipped tree's name with --bag)")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
+    where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
+    where.add_argument(
+        "--bag",
+        metavar="BAG",
+        help="rosbag2 MCAP bag of maps and requests (or a shipped bag's name): plan as the node would",
+    )
+    p.add_argument("--world", type=int, default=None, help="0-based world row (--gccd / --dataset)")
+    p.add_argument("--request", type=int, default=0, help="0-based request of the --bag (default 0)")
+    p.add_argument("--frame", default=None, help="planning frame for --bag (default: the maps' frame)")
     p.add_argument(
         "--policy", default="direct_bisect", choices=sorted(POLICIES), help="any registered policy"
     )

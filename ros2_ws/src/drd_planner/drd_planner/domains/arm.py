@@ -94,6 +94,7 @@ __all__ = [
     "check_arm_edge",
     "default_panda_dir",
     "load_robot",
+    "robot_texts",
     "statically_valid",
 ]
 
@@ -124,18 +125,17 @@ def _robot_from_text(urdf: str, sphere_urdf: str | None, srdf: str | None) -> Ro
     return RobotModel.from_urdf(urdf, sphere_urdf=sphere_urdf, srdf=srdf)
 
 
-def load_robot(
+def robot_texts(
     urdf_path: str | None = None, sphere_urdf_path: str | None = None, srdf_path: str | None = None
-) -> RobotModel:
-    """The robot model from files; None means the shared Panda files.
+) -> tuple[str, str | None, str | None]:
+    """(URDF, spherized URDF or None, SRDF or None) texts of robot files; None means the shared Panda.
 
     With every path None: ``panda.urdf`` (kinematics), ``panda_spherized.urdf`` (spheres) and
     ``panda.srdf``. With ``urdf_path`` given, the other two default to "none" (the URDF must then be
     spherized itself and adjacent links are excluded from self-collision).
 
     Raises:
-        ProblemError: a file cannot be read.
-        GeometryError: a description is invalid.
+        ProblemError: a file cannot be read, or the shared Panda folder is missing.
     """
     if urdf_path is None:
         folder = default_panda_dir()
@@ -153,7 +153,19 @@ def load_robot(
 
     urdf = read(urdf_path)
     assert urdf is not None
-    return _robot_from_text(urdf, read(sphere_urdf_path), read(srdf_path))
+    return urdf, read(sphere_urdf_path), read(srdf_path)
+
+
+def load_robot(
+    urdf_path: str | None = None, sphere_urdf_path: str | None = None, srdf_path: str | None = None
+) -> RobotModel:
+    """The robot model from files (see :func:`robot_texts`; None means the shared Panda files).
+
+    Raises:
+        ProblemError: a file cannot be read.
+        GeometryError: a description is invalid.
+    """
+    return _robot_from_text(*robot_texts(urdf_path, sphere_urdf_path, srdf_path))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -588,7 +600,8 @@ class ArmDomain:
             raise ProblemError(f"invalid arm spec: {exc}") from exc
         s = self._spec
         try:
-            self.robot = load_robot(s["urdf_path"], s["sphere_urdf_path"], s["srdf_path"])
+            self._robot_texts = robot_texts(s["urdf_path"], s["sphere_urdf_path"], s["srdf_path"])
+            self.robot = _robot_from_text(*self._robot_texts)
         except GeometryError as exc:
             raise ProblemError(f"arm robot model: {exc}") from exc
         if len(s["start"]) != self.robot.dof or len(s["goal"]) != self.robot.dof:
@@ -656,12 +669,58 @@ class ArmDomain:
         """A world from a MoveIt PlanningScene YAML file (boxes, cylinders, spheres)."""
         return world_from_planning_scene(path)
 
-    def checker(self, world: ArmWorld | Scene) -> ArmEdgeChecker:
-        """An edge checker for a world (scene with the domain margin) or a ready scene (its own margin)."""
+    def checker(self, world: ArmWorld | Scene, *, robot: RobotModel | None = None) -> ArmEdgeChecker:
+        """An edge checker for a world (scene with the domain margin) or a ready scene (its own margin).
+
+        Args:
+            world: the obstacles.
+            robot: another description of the same arm (see :meth:`robot_from_description`); its
+                self-collision is then tested too, since the roadmap was pruned for :attr:`robot` only.
+        """
         scene = world.to_scene(margin=self.margin) if isinstance(world, ArmWorld) else world
         if not isinstance(scene, Scene):
             raise ProblemError(f"arm checker needs an ArmWorld or a Scene, got {type(world).__name__}")
-        return ArmEdgeChecker(robot=self.robot, graph=self._graph, scene=scene, samples=self.samples)
+        other = robot is not None and robot is not self.robot
+        return ArmEdgeChecker(
+            robot=robot if robot is not None else self.robot,
+            graph=self._graph,
+            scene=scene,
+            samples=self.samples,
+            self_collision=other,
+        )
+
+    def robot_from_description(self, urdf: str) -> RobotModel:
+        """The robot of a ``robot_description`` URDF text, checked against this domain's arm.
+
+        Kinematics come from ``urdf``. Collision spheres come from ``urdf`` when its collision geometry
+        is spheres, else from this domain's spherized model (a description with mesh collisions, as
+        most robot stacks publish). Self-collision exclusions come from this domain's SRDF.
+
+        Raises:
+            ProblemError: invalid URDF, or a chain whose joints differ from this domain's.
+        """
+        _, default_spheres, srdf = self._robot_texts
+        try:
+            robot = _robot_from_text(urdf, None, srdf)
+        except GeometryError as own_spheres:
+            if default_spheres is None:
+                raise ProblemError(f"robot_description: {own_spheres}") from own_spheres
+            try:
+                robot = _robot_from_text(urdf, default_spheres, srdf)
+            except GeometryError as exc:
+                raise ProblemError(f"robot_description: {exc}") from exc
+        want, got = self.robot.chain.joint_names, robot.chain.joint_names
+        if got != want:
+            raise ProblemError(
+                f"robot_description has chain joints {list(got)}; the tree was built for {list(want)}"
+            )
+        return robot
+
+    def end_effector_positions(self, q: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
+        """(N, 3) position (m, root frame) of the chain's tip link for (N, D) configurations (rad)."""
+        model = robot if robot is not None else self.robot
+        tip = model.chain.link_index(model.chain.tip_link)
+        return np.asarray(model.link_poses(q)[:, tip, :3, 3], dtype=np.float64)
 
     def edge_trajectories(self) -> None:
         """None: edges are straight lines in joint space."""

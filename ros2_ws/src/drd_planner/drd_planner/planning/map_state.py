@@ -7,6 +7,7 @@ plan. Snapshots build their :class:`~drd_planner.geometry.scene.Scene` once, laz
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -16,6 +17,7 @@ import numpy.typing as npt
 
 from drd_planner.geometry.aabb import shape_aabb
 from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
@@ -33,12 +35,21 @@ class MapSnapshot:
         obstacles: key (``ns/id``) -> collision parts in the planning frame (metres).
         terrain: the terrain heightfield, or None before one arrived.
         margin: collision margin of the scene, metres.
+        robot: the arm of the latest ``robot_description`` (None: the tree's own model).
+        obstacle_map: an obstacle map has been received (an empty one is a valid map: a clear table).
     """
 
     version: int
     obstacles: Mapping[str, Parts] = field(default_factory=dict)
     terrain: Heightfield | None = None
     margin: float = 0.0
+    robot: RobotModel | None = None
+    obstacle_map: bool = False
+
+    @property
+    def has_maps(self) -> bool:
+        """Whether any map (terrain or an obstacle map, even an empty one) has been received."""
+        return self.terrain is not None or self.obstacle_map or bool(self.obstacles)
 
     @cached_property
     def scene(self) -> Scene:
@@ -53,11 +64,17 @@ class MapSnapshot:
 
     def with_obstacles(self, obstacles: Mapping[str, Parts]) -> MapSnapshot:
         """The next version with ``obstacles`` replacing the obstacle map."""
-        return MapSnapshot(self.version + 1, dict(obstacles), self.terrain, self.margin)
+        return dataclasses.replace(
+            self, version=self.version + 1, obstacles=dict(obstacles), obstacle_map=True
+        )
 
     def with_terrain(self, terrain: Heightfield) -> MapSnapshot:
         """The next version with ``terrain``."""
-        return MapSnapshot(self.version + 1, self.obstacles, terrain, self.margin)
+        return dataclasses.replace(self, version=self.version + 1, terrain=terrain)
+
+    def with_robot(self, robot: RobotModel) -> MapSnapshot:
+        """The next version with the arm of a new ``robot_description``."""
+        return dataclasses.replace(self, version=self.version + 1, robot=robot)
 
 
 def obstacle_boxes(parts: Iterable[tuple[Shape, Pose]]) -> tuple[FloatArray, FloatArray]:
@@ -69,11 +86,13 @@ def obstacle_boxes(parts: Iterable[tuple[Shape, Pose]]) -> tuple[FloatArray, Flo
 
 
 def changed_parts(old: MapSnapshot, new: MapSnapshot) -> list[tuple[Shape, Pose]] | None:
-    """Parts that appeared, changed or disappeared between two snapshots; None if the terrain changed.
+    """Parts that appeared, changed or disappeared between two snapshots; None if the terrain or robot changed.
 
     A replan only has to re-check the plan's edges that come near one of these parts (removed ones
     cannot block anything, but they are reported so callers can tell "nothing changed" apart).
     """
+    if old.robot is not new.robot:
+        return None
     if old.terrain is not new.terrain:
         same = (
             old.terrain is not None

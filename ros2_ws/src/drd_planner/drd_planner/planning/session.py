@@ -21,14 +21,17 @@ import numpy.typing as npt
 from drd_planner.core.episode import EpisodeStatus, run_episode
 from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.data.tree_file import TreeBundle
+from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
 from drd_planner.exceptions import DrdError, PlanningError, TreeFileError, UnverifiedPathError
 from drd_planner.planning.map_state import MapSnapshot
 
 FloatArray = npt.NDArray[np.float64]
 
-#: How far (metres, in x, y, z) a requested goal may be from the tree's goal state.
+#: How far (metres, in x, y, z) a requested goal position may be from the tree's goal position.
 DEFAULT_GOAL_TOLERANCE = 1.0
+#: How far (radians, per joint) a requested goal configuration may be from the tree's goal (arm).
+DEFAULT_JOINT_TOLERANCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,10 @@ class PlanningSession:
         bundle: the loaded tree file (with ``domain_spec`` in its problem metadata).
         name: a label for logs (the file stem).
         max_checks: cap on checks per request (None: none).
-        goal_tolerance: metres within which a requested goal matches the tree's goal.
+        goal_tolerance: metres (per axis) within which a requested goal position matches the tree's goal
+            position (the helicopter's goal, or the arm's end-effector position at its goal).
+        joint_tolerance: radians (per joint) within which a requested arm configuration matches the
+            tree's goal configuration.
 
     Raises:
         TreeFileError: the bundle has no domain spec, or its stored graph differs from the graph its
@@ -130,6 +136,7 @@ class PlanningSession:
         name: str = "tree",
         max_checks: int | None = None,
         goal_tolerance: float = DEFAULT_GOAL_TOLERANCE,
+        joint_tolerance: float = DEFAULT_JOINT_TOLERANCE,
     ) -> None:
         meta = bundle.problem.metadata
         if "domain_spec" not in meta or "domain" not in meta:
@@ -151,6 +158,7 @@ class PlanningSession:
         self._name = name
         self._max_checks = max_checks
         self._goal_tolerance = goal_tolerance
+        self._joint_tolerance = joint_tolerance
         self._trajectories = domain.edge_trajectories()
         self._cache_snapshot: MapSnapshot | None = None
         self._cache: dict[int, bool] = {}
@@ -198,18 +206,55 @@ class PlanningSession:
         """(d,) the tree's goal state."""
         return self.vertex_state(self._domain.goal)
 
+    @property
+    def is_arm(self) -> bool:
+        """Whether the tree plans in an arm's joint space (states are joint angles)."""
+        return isinstance(self._domain, ArmDomain)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The arm's chain joint names, root to tip (empty for other domains)."""
+        return self._domain.robot.chain.joint_names if isinstance(self._domain, ArmDomain) else ()
+
+    def positions(self, states: npt.ArrayLike, snapshot: MapSnapshot | None = None) -> FloatArray:
+        """(K, 3) positions (m, planning frame) of (K, d) states: x, y, z, or the arm's end effector.
+
+        The arm uses ``snapshot.robot`` when the snapshot carries a ``robot_description``.
+        """
+        q = np.asarray(states, dtype=np.float64).reshape(-1, self.goal_state.size)
+        if isinstance(self._domain, ArmDomain):
+            robot = snapshot.robot if snapshot is not None else None
+            return self._domain.end_effector_positions(q, robot)
+        return np.array(q[:, :3], dtype=np.float64)
+
+    @property
+    def goal_position(self) -> FloatArray:
+        """(3,) the goal position (m): the helicopter's goal, or the arm's end effector at its goal."""
+        position: FloatArray = self.positions(self.goal_state)[0]
+        return position
+
     def matches_goal(self, goal: npt.ArrayLike) -> bool:
-        """Whether a requested goal (x, y, z metres, or joint angles) is this tree's goal."""
+        """Whether a requested goal is this tree's: a (3,) position in metres, or an arm's joint angles."""
         want = np.asarray(goal, dtype=np.float64).ravel()
-        have = self.goal_state[: want.size]
-        return bool(want.size == have.size and np.all(np.abs(want - have) <= self._goal_tolerance))
+        if want.size == 3:
+            have, tolerance = self.goal_position, self._goal_tolerance
+        else:
+            have, tolerance = self.goal_state, self._joint_tolerance
+        return bool(want.size == have.size and np.all(np.abs(want - have) <= tolerance))
 
     def edge_states(self, edge: int) -> FloatArray:
-        """(K, d) the edge's trajectory samples (straight segment between its vertices if none)."""
+        """(K, d) the edge's trajectory samples from its first vertex to its second.
+
+        Domains without stored trajectories (the arm) move in a straight line between the vertices;
+        it is sampled so that no coordinate moves more than the domain's check resolution per step.
+        """
         if self._trajectories is not None:
             return np.asarray(self._trajectories[edge], dtype=np.float64)
         u, v = self._domain.graph.edges[edge]
-        return np.stack([self.vertex_state(int(u)), self.vertex_state(int(v))])
+        a, b = self.vertex_state(int(u)), self.vertex_state(int(v))
+        resolution = float(getattr(self._domain, "resolution", 0.0))
+        steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution))) if resolution > 0 else 1
+        return np.asarray(a + np.linspace(0.0, 1.0, steps + 1)[:, None] * (b - a), dtype=np.float64)
 
     def path_vertices(self, edges: npt.ArrayLike) -> list[int]:
         """Vertex ids along a path of edges from the start (undirected edges may be walked backwards)."""
@@ -233,7 +278,9 @@ class PlanningSession:
         return np.concatenate([rows[0]] + [r[1:] for r in rows[1:]])
 
     def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot``'s scene."""
+        """The domain's edge checker on ``snapshot``'s scene (and its ``robot_description`` arm)."""
+        if isinstance(self._domain, ArmDomain) and snapshot.robot is not None:
+            return self._domain.checker(snapshot.scene, robot=snapshot.robot)
         return self._domain.checker(snapshot.scene)
 
     def plan(self, snapshot: MapSnapshot, *, seed: int = 0, checker: EdgeChecker | None = None) -> PlanResult:
@@ -248,7 +295,7 @@ class PlanningSession:
             PlanningError: the snapshot has no terrain and no obstacles yet (no maps).
             UnverifiedPathError: never, unless the bookkeeping is broken (then nothing is returned).
         """
-        if snapshot.terrain is None and not snapshot.obstacles:
+        if not snapshot.has_maps:
             raise PlanningError("no maps received yet: refusing to plan on an empty world")
         t0 = time.perf_counter()
         if snapshot is not self._cache_snapshot:  # the cache belongs to one snapshot object, not a number
@@ -263,7 +310,7 @@ class PlanningSession:
         edges = self._domain.graph.edges
         checks = tuple(
             SessionCheck(
-                step=c.step,
+                step=c.step + 1,  # the runner counts from 0
                 edge=c.edge,
                 endpoints=(int(edges[c.edge, 0]), int(edges[c.edge, 1])),
                 free=c.free,

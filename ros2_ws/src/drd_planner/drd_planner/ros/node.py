@@ -2,24 +2,38 @@
 
 Interface (DESIGN.md section 6; names relative to the node namespace):
 
-- subscriptions (after ``activate``): ``obstacles`` (MarkerArray) and ``terrain`` (PointCloud2), both
-  reliable + transient_local depth 1; ``goal_pose`` (PoseStamped) requests, reliable depth 10;
+- subscriptions (after ``activate``): ``obstacles`` (MarkerArray), ``terrain`` (PointCloud2) and
+  ``robot_description`` (String, arm), all reliable + transient_local depth 1; requests ``goal_pose``
+  (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and ``goal_joints``
+  (JointState, arm), reliable depth 10;
 - service ``get_plan`` (``nav_msgs/srv/GetPlan``): the same answer as a ``goal_pose`` request;
-- publications: ``plan`` (Path, transient_local), ``edge_checks`` (DiagnosticArray, one status per
-  check), ``/diagnostics`` (one summary per request, or the error), ``checked_edges`` (MarkerArray).
+- publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
+  ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
+  status per check), ``/diagnostics`` (one summary per plan, re-check or error), ``checked_edges``
+  (MarkerArray).
 
-Parameters: ``tree_paths`` (tree files; one per goal), ``frame_id`` (planning frame, ``map``), ``seed``,
-``max_checks`` (0: no cap), ``goal_tolerance`` (metres).
+Parameters: ``tree_paths`` (tree files or shipped tree names such as ``heli_wires``; one tree per
+goal), ``frame_id`` (planning frame), ``seed``, ``max_checks`` (0: no cap), ``goal_tolerance``
+(metres), ``joint_tolerance`` (radians), ``autostart`` (``planner_node`` configures and activates
+itself), ``replan_on_map_update``.
 
-Consistency: callbacks run one at a time, so a plan runs to its end on the map snapshot it started from;
-a map that arrives meanwhile is applied afterwards and is used by the next request. A bad message or a
-bad request is reported on ``/diagnostics`` and in the log; it never stops the node, and no plan is
-published unless every one of its edges was checked free on the snapshot it was planned on.
+Consistency. Maps and requests arrive in one callback group, plans run in another, so a plan runs to
+its end on the map snapshot it started from; a map that arrives meanwhile makes a new snapshot that the
+next plan uses. Topic requests are *coalesced*: while a plan runs, a newer request for the same tree
+supersedes an older one that has not started (the summary's ``coalesced`` value counts them); service
+calls are each answered. After a plan was published, a map update re-checks only the plan's edges the
+update can affect (:mod:`drd_planner.planning.replan`): the plan is kept if they stay free, replanned
+(and the reason put on ``/diagnostics``) if one is blocked, and withdrawn (an empty Path) if no library
+path is free any more. A bad message or request is reported on ``/diagnostics`` and in the log; it
+never stops the node, and no plan is published unless every one of its edges was checked free on the
+snapshot it was planned on.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+import threading
+from collections import deque
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -28,10 +42,14 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import try_shutdown
-from sensor_msgs.msg import PointCloud2
+from sensor_msgs.msg import JointState, PointCloud2
+from std_msgs.msg import String
+from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from drd_msgs_py.exceptions import MessageError
@@ -42,6 +60,7 @@ from drd_msgs_py.plans import (
     checked_edges_markers,
     diagnostics_message,
     edge_checks_message,
+    joint_trajectory_message,
     path_message,
     summary_status,
 )
@@ -49,14 +68,58 @@ from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_planner.data.tree_file import load_tree
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planning.shipped import resolve_tree_path
 
-__all__ = ["PlannerNode", "main"]
+__all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
 )
 REQUESTS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+
+#: Served requests kept in :attr:`PlannerNode.history` (each holds its map snapshot).
+HISTORY_LENGTH = 16
+#: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
+TRAJECTORY_JOINT_SPEED = 0.5
+
+
+@dataclass(frozen=True)
+class _Request:
+    """A goal waiting to be planned: the tree it matched, the goal, where it came from."""
+
+    session: PlanningSession
+    source: str
+    stamp: str
+    coalesced: int = 0
+
+
+@dataclass(frozen=True)
+class PlanRecord:
+    """One served request, as kept in :attr:`PlannerNode.history`.
+
+    Attributes:
+        session: the tree that planned it.
+        result: the plan (or why there is none) with its check log.
+        snapshot: the maps it was planned on.
+        request: where it came from (``goal_pose``, ``goal_joints``, ``get_plan``, ``map_update``) and the
+            other summary values of the request.
+    """
+
+    session: PlanningSession
+    result: PlanResult
+    snapshot: MapSnapshot
+    request: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class _Published:
+    """The plan on ``plan`` now: what a map update must re-check."""
+
+    session: PlanningSession
+    result: PlanResult
+    snapshot: MapSnapshot
 
 
 class PlannerNode(LifecycleNode):
@@ -69,6 +132,9 @@ class PlannerNode(LifecycleNode):
         self.declare_parameter("seed", 0)
         self.declare_parameter("max_checks", 0)
         self.declare_parameter("goal_tolerance", 1.0)
+        self.declare_parameter("joint_tolerance", 0.05)
+        self.declare_parameter("autostart", False)
+        self.declare_parameter("replan_on_map_update", True)
         self._msgs = RclpyMessages()
         self._sessions: list[PlanningSession] = []
         self._obstacles: dict[str, Any] = {}
@@ -76,11 +142,20 @@ class PlannerNode(LifecycleNode):
         self._frame = "map"
         self._subs: list[Any] = []
         self._service: Any = None
+        self._intake = MutuallyExclusiveCallbackGroup()  # maps and requests
+        self._work = MutuallyExclusiveCallbackGroup()  # plans, re-checks and the service
+        self._lock = threading.Lock()
+        self._pending: dict[str, _Request] = {}
+        self._map_changed = False
+        self._published: _Published | None = None
+        self._wake = self.create_guard_condition(self._serve, callback_group=self._work)
         self._plan_pub = self.create_publisher(PathMsg, "plan", LATCHED)
+        self._trajectory_pub = self.create_publisher(JointTrajectory, "joint_trajectory", LATCHED)
         self._checks_pub = self.create_publisher(DiagnosticArray, "edge_checks", REQUESTS)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._markers_pub = self.create_publisher(MarkerArray, "checked_edges", 10)
         self._errors: list[str] = []
+        self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
 
     # ------------------------------------------------------------------------------------------------
     # Introspection (tests, diagnostics)
@@ -96,6 +171,16 @@ class PlannerNode(LifecycleNode):
         return self._snapshot
 
     @property
+    def published(self) -> PlanResult | None:
+        """The plan currently on ``plan`` (None: none, or it was withdrawn)."""
+        return self._published.result if self._published is not None else None
+
+    @property
+    def history(self) -> tuple[PlanRecord, ...]:
+        """The last served requests (at most :data:`HISTORY_LENGTH`), oldest first."""
+        return tuple(self._history)
+
+    @property
     def errors(self) -> tuple[str, ...]:
         """Every error reported so far (also on ``/diagnostics``), oldest first; at most 100 kept."""
         return tuple(self._errors)
@@ -105,23 +190,25 @@ class PlannerNode(LifecycleNode):
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Load the trees named in ``tree_paths``; any bad file fails the transition with its reason."""
-        paths = [p for p in self.get_parameter("tree_paths").value if p]
+        names = [p for p in self.get_parameter("tree_paths").value if p]
         self._frame = str(self.get_parameter("frame_id").value)
         max_checks = int(self.get_parameter("max_checks").value)
         tolerance = float(self.get_parameter("goal_tolerance").value)
-        if not paths:
+        joint_tolerance = float(self.get_parameter("joint_tolerance").value)
+        if not names:
             self._report_error("configure: parameter tree_paths names no tree file")
             return TransitionCallbackReturn.FAILURE
         sessions = []
-        for path in paths:
+        for name in names:
             try:
-                bundle = load_tree(path)
+                path = resolve_tree_path(name)
                 sessions.append(
                     PlanningSession(
-                        bundle,
-                        name=Path(path).stem,
+                        load_tree(path),
+                        name=path.stem,
                         max_checks=max_checks if max_checks > 0 else None,
                         goal_tolerance=tolerance,
+                        joint_tolerance=joint_tolerance,
                     )
                 )
             except DrdError as exc:
@@ -132,18 +219,30 @@ class PlannerNode(LifecycleNode):
             self._report_error(f"configure: the trees use different collision margins {sorted(margins)}")
             return TransitionCallbackReturn.FAILURE
         self._sessions = sessions
+        self._obstacles, self._published, self._pending = {}, None, {}
         self._snapshot = MapSnapshot(0, margin=margins.pop())
         self.get_logger().info(f"loaded {len(sessions)} tree(s): {', '.join(s.name for s in sessions)}")
         return TransitionCallbackReturn.SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Subscribe to the maps and requests and offer ``get_plan``."""
+        group = self._intake
         self._subs = [
-            self.create_subscription(MarkerArray, "obstacles", self._on_obstacles, LATCHED),
-            self.create_subscription(PointCloud2, "terrain", self._on_terrain, LATCHED),
-            self.create_subscription(PoseStamped, "goal_pose", self._on_goal, REQUESTS),
+            self.create_subscription(
+                MarkerArray, "obstacles", self._on_obstacles, LATCHED, callback_group=group
+            ),
+            self.create_subscription(PointCloud2, "terrain", self._on_terrain, LATCHED, callback_group=group),
+            self.create_subscription(
+                String, "robot_description", self._on_robot_description, LATCHED, callback_group=group
+            ),
+            self.create_subscription(
+                PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS, callback_group=group
+            ),
+            self.create_subscription(
+                JointState, "goal_joints", self._on_goal_joints, REQUESTS, callback_group=group
+            ),
         ]
-        self._service = self.create_service(GetPlan, "get_plan", self._on_get_plan)
+        self._service = self.create_service(GetPlan, "get_plan", self._on_get_plan, callback_group=self._work)
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -155,6 +254,7 @@ class PlannerNode(LifecycleNode):
         """Forget the trees and the maps."""
         self._drop_interfaces()
         self._sessions, self._obstacles, self._snapshot = [], {}, MapSnapshot(0)
+        self._published, self._pending = None, {}
         return TransitionCallbackReturn.SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -180,7 +280,7 @@ class PlannerNode(LifecycleNode):
             self._report_error(f"obstacles refused, map unchanged: {exc}")
             return
         self._obstacles = update.apply(self._obstacles)
-        self._snapshot = self._snapshot.with_obstacles({k: o.parts for k, o in self._obstacles.items()})
+        self._set_snapshot(self._snapshot.with_obstacles({k: o.parts for k, o in self._obstacles.items()}))
 
     def _on_terrain(self, msg: PointCloud2) -> None:
         try:
@@ -188,13 +288,75 @@ class PlannerNode(LifecycleNode):
         except MessageError as exc:
             self._report_error(f"terrain refused, map unchanged: {exc}")
             return
-        self._snapshot = self._snapshot.with_terrain(terrain)
+        self._set_snapshot(self._snapshot.with_terrain(terrain))
+
+    def _on_robot_description(self, msg: String) -> None:
+        arms = [s for s in self._sessions if s.is_arm]
+        if not arms:
+            self.get_logger().info("robot_description ignored: no arm tree is loaded")
+            return
+        try:
+            robot = arms[0].domain.robot_from_description(str(msg.data))  # type: ignore[attr-defined]
+        except DrdError as exc:
+            self._report_error(f"robot_description refused, the arm model is unchanged: {exc}")
+            return
+        self._set_snapshot(self._snapshot.with_robot(robot))
+        self.get_logger().info(f"robot_description accepted: {robot.chain.robot_name}, {robot.dof} joints")
+
+    def _set_snapshot(self, snapshot: MapSnapshot) -> None:
+        self._snapshot = snapshot
+        if self._published is not None and bool(self.get_parameter("replan_on_map_update").value):
+            with self._lock:
+                self._map_changed = True
+            self._wake.trigger()
 
     # ------------------------------------------------------------------------------------------------
     # Requests
 
-    def _on_goal(self, msg: PoseStamped) -> None:
-        self.plan_for(msg)
+    def _on_goal_pose(self, msg: PoseStamped) -> None:
+        try:
+            xyz = _goal_xyz(msg, self._frame)
+        except MessageError as exc:
+            self._report_error(f"goal_pose refused: {exc}")
+            return
+        self._enqueue(xyz, "goal_pose", msg.header.stamp)
+
+    def _on_goal_joints(self, msg: JointState) -> None:
+        arms = [s for s in self._sessions if s.is_arm]
+        if not arms:
+            self._report_error("goal_joints refused: no arm tree is loaded")
+            return
+        try:
+            q = _joint_goal(msg, arms[0].joint_names)
+        except MessageError as exc:
+            self._report_error(f"goal_joints refused: {exc}")
+            return
+        self._enqueue(q, "goal_joints", msg.header.stamp)
+
+    def _enqueue(self, goal: np.ndarray, source: str, stamp: Any) -> None:
+        session = self._session_for(goal, source)
+        if session is None:
+            return
+        stamp_text = f"{int(stamp.sec)}.{int(stamp.nanosec):09d}"
+        with self._lock:
+            older = self._pending.get(session.name)
+            coalesced = older.coalesced + 1 if older is not None else 0
+            self._pending[session.name] = _Request(session, source, stamp_text, coalesced)
+        self._wake.trigger()
+
+    def _serve(self) -> None:
+        """Plan the newest pending request of each tree, then re-check the published plan if maps changed."""
+        with self._lock:
+            pending, self._pending = list(self._pending.values()), {}
+            map_changed, self._map_changed = self._map_changed, False
+        for request in pending:
+            self._plan_and_publish(
+                request.session,
+                {"request": request.source, "request_stamp": request.stamp, "coalesced": request.coalesced},
+            )
+        published = self._published
+        if map_changed and published is not None and published.snapshot is not self._snapshot:
+            self._recheck(published)
 
     def _on_get_plan(self, request: Any, response: Any) -> Any:
         result = self.plan_for(request.goal)
@@ -202,39 +364,117 @@ class PlannerNode(LifecycleNode):
         return response
 
     def plan_for(self, goal: Any) -> Any | None:
-        """Serve one request: the published Path, or None (the reason went to ``/diagnostics``)."""
+        """Serve one PoseStamped request now: the published Path, or None (the reason went to ``/diagnostics``)."""
         try:
             xyz = _goal_xyz(goal, self._frame)
         except MessageError as exc:
             self._report_error(f"request refused: {exc}")
             return None
-        session = next((s for s in self._sessions if s.matches_goal(xyz)), None)
+        session = self._session_for(xyz, "request")
         if session is None:
-            known = "; ".join(f"{s.name}: {np.round(s.goal_state[:3], 2).tolist()}" for s in self._sessions)
-            self._report_error(
-                f"request refused: goal {np.round(xyz, 2).tolist()} matches no loaded tree ({known})"
-            )
             return None
+        return self._plan_and_publish(session, {"request": "get_plan"})
+
+    def _session_for(self, goal: np.ndarray, source: str) -> PlanningSession | None:
+        session = next((s for s in self._sessions if s.matches_goal(goal)), None)
+        if session is None:
+            what = "goal" if goal.size == 3 else "goal configuration"
+            known = "; ".join(
+                f"{s.name}: {np.round(s.goal_position if goal.size == 3 else s.goal_state, 2).tolist()}"
+                for s in self._sessions
+            )
+            self._report_error(
+                f"{source} refused: {what} {np.round(goal, 2).tolist()} matches no loaded tree ({known or 'none'})"
+            )
+        return session
+
+    def _plan_and_publish(self, session: PlanningSession, values: dict[str, Any]) -> Any | None:
         snapshot = self._snapshot
         try:
             result = session.plan(snapshot, seed=int(self.get_parameter("seed").value))
         except DrdError as exc:
-            self._report_error(f"request refused: {exc}")
+            self._report_error(f"{values.get('request', 'request')} refused: {exc}")
             return None
-        return self._publish(session, result)
+        return self._publish(session, result, snapshot, values)
+
+    # ------------------------------------------------------------------------------------------------
+    # Map updates after a published plan
+
+    def _recheck(self, published: _Published) -> None:
+        snapshot = self._snapshot
+        session = published.session
+        try:
+            outcome = recheck_plan(session, published.result.path_edges, published.snapshot, snapshot)
+        except DrdError as exc:
+            reason = f"re-check after map update failed: {exc}"
+            self._report_error(f"{reason}; replanning")
+        else:
+            if outcome.kept:
+                self._published = _Published(session, published.result, snapshot)
+                status = summary_status(
+                    ok=True,
+                    message=outcome.reason,
+                    values={
+                        "tree": session.name,
+                        "map_version": snapshot.version,
+                        "affected": len(outcome.affected),
+                        "rechecked": len(outcome.rechecked),
+                        "check_s": f"{outcome.total_check_ms / 1e3:.6f}",
+                        "selection_s": f"{outcome.select_ms / 1e3:.6f}",
+                        "result": "plan_kept",
+                    },
+                    name="drd_planner: map update",
+                    msgs=self._msgs,
+                )
+                self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
+                self.get_logger().info(outcome.reason)
+                return
+            reason = outcome.reason
+            self.get_logger().warning(reason)
+        if self._plan_and_publish(session, {"request": "map_update", "replan_reason": reason}) is None:
+            self._withdraw(session, snapshot)
+
+    def _withdraw(self, session: PlanningSession, snapshot: MapSnapshot) -> None:
+        """Take the published plan back: it is no longer known free on the current maps."""
+        if self._published is None:
+            return
+        self._published = None
+        stamp = self._stamp()
+        self._plan_pub.publish(
+            path_message(np.zeros((0, 3)), frame_id=self._frame, stamp=stamp, msgs=self._msgs)
+        )
+        if session.is_arm:
+            self._trajectory_pub.publish(
+                joint_trajectory_message(
+                    session.joint_names,
+                    np.zeros((0, len(session.joint_names))),
+                    frame_id=self._frame,
+                    msgs=self._msgs,
+                )
+            )
+        self._report_error(
+            f"{session.name}: the published plan is blocked on map version {snapshot.version} and no "
+            "replacement was found; published an empty plan"
+        )
+
+    # ------------------------------------------------------------------------------------------------
+    # Publishing
 
     def _stamp(self) -> tuple[int, int]:
         sec, nsec = self.get_clock().now().seconds_nanoseconds()
         return int(sec), int(nsec)
 
-    def _publish(self, session: PlanningSession, result: PlanResult) -> Any | None:
+    def _publish(
+        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, extra: dict[str, Any]
+    ) -> Any | None:
         stamp = self._stamp()
+        self._history.append(PlanRecord(session, result, snapshot, dict(extra)))
         records = [
             CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
             for c in result.checks
         ]
         self._checks_pub.publish(edge_checks_message(records, stamp=stamp, msgs=self._msgs))
-        self._markers_pub.publish(self._checked_markers(session, result, stamp))
+        self._markers_pub.publish(self._checked_markers(session, result, snapshot, stamp))
         values = {
             "tree": result.tree,
             "map_version": result.map_version,
@@ -243,27 +483,47 @@ class PlannerNode(LifecycleNode):
             "blocked": result.num_blocked,
             "tree_checks": sum(c.stage == "tree" for c in result.checks),
             "bisect_checks": sum(c.stage == "bisect" for c in result.checks),
-            "check_s": f"{result.seconds.get('checks', 0.0):.4f}",
-            "selection_s": f"{result.seconds.get('selection', 0.0):.4f}",
-            "total_s": f"{result.seconds.get('total', 0.0):.4f}",
+            "check_s": f"{result.seconds.get('checks', 0.0):.6f}",
+            "selection_s": f"{result.seconds.get('selection', 0.0):.6f}",
+            "total_s": f"{result.seconds.get('total', 0.0):.6f}",
             "result": result.status,
+            **extra,
         }
         status = summary_status(ok=result.ok, message=result.message, values=values, msgs=self._msgs)
         self._diag_pub.publish(diagnostics_message([status], stamp=stamp, msgs=self._msgs))
         if not result.ok:
             self.get_logger().warning(f"{result.tree}: {result.message}; nothing published on plan")
             return None
-        path = path_message(result.states, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
+        positions = session.positions(result.states, snapshot)
+        if session.is_arm:
+            seconds = float(getattr(session.domain, "resolution", 0.05)) / TRAJECTORY_JOINT_SPEED
+            self._trajectory_pub.publish(
+                joint_trajectory_message(
+                    session.joint_names,
+                    result.states,
+                    frame_id=self._frame,
+                    stamp=stamp,
+                    seconds_per_point=seconds,
+                    msgs=self._msgs,
+                )
+            )
+            states = positions
+        else:
+            states = result.states
+        path = path_message(states, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
         self._plan_pub.publish(path)
+        self._published = _Published(session, result, snapshot)
         self.get_logger().info(f"{result.tree}: {result.message}")
         return path
 
-    def _checked_markers(self, session: PlanningSession, result: PlanResult, stamp: tuple[int, int]) -> Any:
+    def _checked_markers(
+        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> Any:
         outcome = {c.edge: int(c.free) for c in result.checks}
         library_edges = session.bundle.problem.library.library_edges
         segments, values = [], []
         for edge in sorted(set(outcome) | {int(e) for e in library_edges}):
-            pts = session.edge_states(edge)[:, :3]
+            pts = session.positions(session.edge_states(edge), snapshot)
             segments.append(np.stack([pts[:-1], pts[1:]], axis=1))
             values.append(np.full(len(pts) - 1, outcome.get(edge, -1)))
         seg = np.concatenate(segments) if segments else np.zeros((0, 2, 3))
@@ -272,7 +532,8 @@ class PlannerNode(LifecycleNode):
 
     def _report_error(self, text: str) -> None:
         self.get_logger().error(text)
-        self._errors = [*self._errors[-99:], text]
+        with self._lock:
+            self._errors = [*self._errors[-99:], text]
         status = summary_status(ok=False, message=text, values={}, msgs=self._msgs)
         self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
 
@@ -285,14 +546,43 @@ def _goal_xyz(goal: Any, frame: str) -> np.ndarray:
     return np.array(pose_from_msg(goal.pose, "goal").position, dtype=np.float64)
 
 
+def _joint_goal(msg: Any, joint_names: tuple[str, ...]) -> np.ndarray:
+    """(D,) goal angles (rad) of a JointState, in the order of ``joint_names``; names may come in any order."""
+    names = [str(n) for n in msg.name]
+    positions = np.asarray(msg.position, dtype=np.float64).ravel()
+    if len(names) != positions.size:
+        raise MessageError(f"{len(names)} joint names but {positions.size} positions")
+    if len(set(names)) != len(names):
+        raise MessageError("joint names repeat")
+    missing = [j for j in joint_names if j not in names]
+    if missing:
+        raise MessageError(f"missing joints {missing}; the tree plans for {list(joint_names)}")
+    q = np.array([positions[names.index(j)] for j in joint_names])
+    if not np.all(np.isfinite(q)):
+        raise MessageError("joint positions must be finite")
+    return q
+
+
 def main(args: list[str] | None = None) -> None:
-    """``planner_node``: run the lifecycle node (configure and activate it with the lifecycle services)."""
+    """``planner_node``: run the lifecycle node (``autostart:=true`` configures and activates it).
+
+    Without ``autostart`` the node waits for the lifecycle services (``ros2 lifecycle set``). Two
+    executor threads: maps and requests keep arriving while a plan runs.
+    """
     rclpy.init(args=args)
     node = PlannerNode()
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(node)
     try:
-        rclpy.spin(node)
-    except KeyboardInterrupt:
+        if bool(node.get_parameter("autostart").value):
+            if node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
+                node.trigger_activate()
+            else:
+                node.get_logger().error("autostart: configure failed; the node waits unconfigured")
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        executor.shutdown()
         node.destroy_node()
         try_shutdown()

@@ -1,0 +1,473 @@
+"""Replan only when needed: after a map update, re-check just the plan edges the update can reach.
+
+A published plan was verified free on the snapshot it was planned on (``old``). When a newer snapshot
+(``new``) arrives, :func:`recheck_plan` finds the plan edges the update can reach (:func:`affected_edges`),
+checks only those on ``new`` with the domain's FCL checker, stops at the first blocked one and says in one
+line what it did (:class:`RecheckResult`). The plan is kept when every re-checked edge is free.
+
+An edge's *sweep spheres* are the spheres its check places (helicopter: the vehicle sphere at every
+trajectory sample; arm: every collision sphere, the fixed base spheres included, at both end vertices and
+every interior sample at the checker's resolution), each grown by the scene margin and by half the largest
+distance it moves between two samples. Its *sweep box* (:func:`edge_sweep_boxes`, metres, planning frame)
+is their bounding box. An edge is affected when its box overlaps the AABB of a part that differs between
+the snapshots and one of its grown spheres touches that AABB.
+
+**Why an edge that is not re-checked is still free on ``new``** (the safety argument):
+
+1. Both checkers decide an edge from its sampled spheres only, each inflated by the scene margin
+   (:class:`~drd_planner.domains.helicopter_checker.HelicopterChecker`,
+   :class:`~drd_planner.domains.arm.ArmEdgeChecker`).
+2. The scene (:class:`~drd_planner.geometry.scene.Scene`) decides each sphere against each part on its own
+   (an FCL pair test, or "centre inside a closed mesh", both only for parts whose AABB overlaps the
+   sphere's AABB) and against the terrain (FCL tiles and "centre under the surface"). Parts do not
+   interact, so an edge's outcome depends only on the terrain, the margin and the multiset of parts that
+   one of its inflated spheres can touch.
+3. A sphere can touch a part only if it touches the part's AABB; the grown spheres contain the checked ones.
+4. :func:`differing_parts` treats a change of the terrain, the margin or the arm model
+   (``robot_description``) as affecting every edge; otherwise it returns the parts present in only one of
+   the two snapshots, compared by value and regardless of their keys (a map re-sent whole, or with
+   renumbered markers, but the same geometry is no change), i.e. exactly the difference between the two
+   scenes. An
+   edge none of whose grown spheres touches one of their AABBs sees the same terrain, margin and relevant
+   parts in both snapshots, so its check on ``new`` answers as it did on ``old``: free.
+
+``old`` must therefore be the snapshot the plan was verified on, not merely the previous update: with
+several updates in between, the difference between the plan's snapshot and the newest one covers them all.
+
+The growth by half a sample step (every point of the continuous motion between two samples lies within
+half the path length between them of one of the two) makes the affected set conservative for the swept
+volume of the continuous motion too, not only for the sampled check. Boxes are cached per session
+(without the margin, which is added per query) and computed only for the edges asked; the spheres are
+recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
+ones) count every plan edge as affected.
+"""
+
+from __future__ import annotations
+
+import time
+import weakref
+from collections import Counter
+from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.domains.arm import ArmDomain
+from drd_planner.domains.base import EdgeChecker
+from drd_planner.domains.helicopter import HelicopterDomain
+from drd_planner.exceptions import PlanningError
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.robot import RobotModel
+from drd_planner.geometry.shapes import Shape
+from drd_planner.planning.map_state import MapSnapshot, changed_parts, obstacle_boxes
+from drd_planner.planning.session import PlanningSession
+
+FloatArray = npt.NDArray[np.float64]
+
+__all__ = [
+    "BOX_SLACK",
+    "RecheckResult",
+    "affected_edges",
+    "cached_sweep_edges",
+    "differing_parts",
+    "edge_sweep_boxes",
+    "recheck_plan",
+]
+
+#: Metres added to every sweep box on top of the geometric bound (floating-point slack of FCL's tests).
+BOX_SLACK = 1e-6
+
+#: Per session, per arm model (None: the domain's own): edge id -> (lo, hi), each (3,) metres, without margin.
+_BOXES: weakref.WeakKeyDictionary[
+    PlanningSession, dict[RobotModel | None, dict[int, tuple[FloatArray, FloatArray]]]
+] = weakref.WeakKeyDictionary()
+#: Arm models (``robot_description`` versions) whose boxes one session keeps; the oldest is dropped first.
+MAX_CACHED_ROBOTS = 4
+#: Per arm robot model: (D, S) bound on how fast each sphere centre moves per unit of each joint (m/rad).
+_ARM_RATES: weakref.WeakKeyDictionary[RobotModel, FloatArray] = weakref.WeakKeyDictionary()
+
+
+@dataclass(frozen=True)
+class RecheckResult:
+    """What re-checking a plan after a map update found.
+
+    Attributes:
+        kept: every re-checked edge is free on the new map, so the plan stays valid.
+        map_version: version of the new snapshot.
+        affected: plan edges (plan order) that the update can reach; ``rechecked`` is a prefix of them.
+        rechecked: edges checked on the new snapshot, in order (stops after the first blocked one).
+        blocked: the edges found in collision (at most one: checking stops there).
+        check_ms: (len(rechecked),) collision-check wall time of each re-check, milliseconds.
+        select_ms: time spent finding the affected edges (sweep boxes and overlaps), milliseconds.
+        all_edges: every plan edge counted as affected (the terrain, the margin or the arm model changed, or
+            the domain has no sweep model).
+        reason: one line for logs and ``/diagnostics``.
+    """
+
+    kept: bool
+    map_version: int
+    affected: tuple[int, ...]
+    rechecked: tuple[int, ...]
+    blocked: tuple[int, ...]
+    check_ms: tuple[float, ...]
+    select_ms: float
+    all_edges: bool
+    reason: str
+
+    @property
+    def total_check_ms(self) -> float:
+        """Sum of :attr:`check_ms`, milliseconds."""
+        return float(sum(self.check_ms))
+
+
+# --------------------------------------------------------------------------------------------------
+# Sweep boxes
+
+
+def _edge_ids(session: PlanningSession, edges: Iterable[int]) -> list[int]:
+    """``edges`` as a list of ints, validated against the session's graph (PlanningError otherwise)."""
+    ids = np.asarray(list(edges)).reshape(-1)
+    if ids.size and not np.issubdtype(ids.dtype, np.integer):
+        raise PlanningError(f"edge ids must be integers, got dtype {ids.dtype}")
+    count = session.domain.graph.num_edges
+    out = [int(e) for e in ids.tolist()]
+    bad = [e for e in out if not 0 <= e < count]
+    if bad:
+        raise PlanningError(f"{session.name}: edge ids {bad[:5]} are not in [0, {count})")
+    return out
+
+
+def _helicopter_spheres(
+    session: PlanningSession, domain: HelicopterDomain, edges: list[int]
+) -> list[tuple[FloatArray, FloatArray]]:
+    """Per edge: the (K, 3) trajectory samples and (K,) reach = vehicle radius + half a sample step.
+
+    The samples are spaced by at most ``lattice.params.sample_spacing`` metres of arc length (the
+    longest chord between two samples is taken too, in case a trajectory was sampled otherwise), so every
+    point of the flown curve lies within half a step of a sample.
+    """
+    spacing = float(domain.lattice.params.sample_spacing)
+    out = []
+    for e in edges:
+        xyz = np.array(session.edge_states(e)[:, :3], dtype=np.float64)
+        chord = float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).max()) if xyz.shape[0] > 1 else 0.0
+        reach = domain.vehicle_radius + 0.5 * max(spacing, chord) + BOX_SLACK
+        out.append((xyz, np.full(xyz.shape[0], reach)))
+    return out
+
+
+def _arm_rates(robot: RobotModel) -> FloatArray:
+    """(D, S) upper bounds (m per rad, or m per m for prismatic joints) on each sphere centre's speed.
+
+    Joint k turns everything on moving frames k + 1 .. D about an axis through frame k + 1's origin, so a
+    centre moves at most its distance from that origin per radian; that distance is bounded, whatever the
+    other joints do, by the joint-origin offsets along the chain (plus the prismatic travel within the
+    limits) and the sphere's offset in its own frame. A prismatic joint moves a centre 1 m per m.
+    """
+    cached = _ARM_RATES.get(robot)
+    if cached is not None:
+        return cached
+    chain, spheres = robot.chain, robot.spheres
+    prismatic = np.array([t == "prismatic" for t in chain.joint_types])
+    travel = np.where(prismatic, np.maximum(np.abs(chain.lower), np.abs(chain.upper)), 0.0)
+    link = np.linalg.norm(chain.joint_origins[:, :3, 3], axis=1) + travel  # frame j -> j + 1 offset bound
+    own = np.linalg.norm(spheres.centres, axis=1)
+    rates = np.zeros((chain.dof, spheres.count))
+    for s, frame in enumerate(spheres.frame_index.tolist()):
+        for k in range(frame):  # joints 0 .. frame - 1 move frame `frame`
+            rates[k, s] = 1.0 if prismatic[k] else float(link[k + 1 : frame].sum() + own[s])
+    _ARM_RATES[robot] = rates
+    return rates
+
+
+def _arm_spheres(
+    domain: ArmDomain, edges: list[int], robot: RobotModel | None
+) -> list[tuple[FloatArray, FloatArray]]:
+    """Per edge: (M, 3) centres and (M,) reach of every robot sphere at every checked configuration.
+
+    The configurations are those :class:`~drd_planner.domains.arm.ArmEdgeChecker` tests (both end
+    vertices and the interior samples of ``domain.samples``; the base spheres are in every one); the
+    reach of a sphere is its radius plus half the distance it can move in one sample step
+    (:func:`_arm_rates` times the edge's joint step).
+    """
+    graph, samples = domain.graph, domain.samples
+    robot = robot if robot is not None else domain.robot
+    states = graph.vertex_states
+    if states is None:
+        raise PlanningError("the arm graph has no vertex states")
+    rates = _arm_rates(robot)
+    radii = robot.spheres.radii
+    blocks: list[FloatArray] = []
+    reaches: list[FloatArray] = []
+    for e in edges:
+        u, v = (int(x) for x in graph.edges[e])
+        interior = samples.configurations(graph, e)
+        blocks.append(np.concatenate([states[[u, v]], interior]))
+        step = np.abs(states[v] - states[u]) / (
+            interior.shape[0] + 1
+        )  # fractions are k / n, n = interior + 1
+        reaches.append(np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, interior.shape[0] + 2))
+    centres = robot.sphere_centres(np.concatenate(blocks))  # (sum of counts, S, 3): one batched FK
+    out = []
+    start = 0
+    for block, reach in zip(blocks, reaches, strict=True):
+        count = block.shape[0]
+        out.append((centres[start : start + count].reshape(-1, 3), reach))
+        start += count
+    return out
+
+
+def _sweep_spheres(
+    session: PlanningSession, edges: list[int], robot: RobotModel | None
+) -> list[tuple[FloatArray, FloatArray]]:
+    """Per edge ``(centres (M, 3), reach (M,))`` in metres, without the margin (see the module docstring).
+
+    ``robot`` is the arm model the checker uses (a snapshot's ``robot_description``; None: the domain's).
+
+    Raises:
+        PlanningError: the domain has no sweep model.
+    """
+    domain = session.domain
+    if isinstance(domain, HelicopterDomain):
+        return _helicopter_spheres(session, domain, edges)
+    if isinstance(domain, ArmDomain):
+        return _arm_spheres(domain, edges, robot)
+    raise PlanningError(f"{session.name}: no sweep model for the {domain.name} domain")
+
+
+def _supports_sweep(session: PlanningSession) -> bool:
+    return isinstance(session.domain, HelicopterDomain | ArmDomain)
+
+
+def edge_sweep_boxes(
+    session: PlanningSession,
+    edges: Iterable[int],
+    *,
+    margin: float | None = None,
+    robot: RobotModel | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """``(lo, hi)``, each (N, 3) metres in the planning frame: a conservative box per edge.
+
+    Each box contains every sphere the domain's edge checker places along the edge (helicopter: the
+    vehicle sphere at each trajectory sample; arm: every collision sphere at the end vertices and interior
+    samples) inflated by ``margin``, plus half the largest motion between two samples (see the module
+    docstring). Boxes are cached per session and arm model; only edges not seen before are computed.
+
+    Args:
+        session: the planning session (its domain gives the robot model and the sampling).
+        edges: (N,) edge ids.
+        margin: the scene's collision margin, metres (default: the session's).
+        robot: the arm model of the snapshot checked against (``MapSnapshot.robot``; None: the domain's
+            own); ignored by the helicopter.
+
+    Raises:
+        PlanningError: an edge id outside the graph, a negative margin, or a domain with no sweep model.
+    """
+    ids = _edge_ids(session, edges)
+    pad = session.margin if margin is None else float(margin)
+    if not (np.isfinite(pad) and pad >= 0.0):
+        raise PlanningError(f"margin must be finite and >= 0 m, got {margin!r}")
+    model = robot if isinstance(session.domain, ArmDomain) and robot is not session.domain.robot else None
+    per_robot = _BOXES.setdefault(session, {})
+    if model not in per_robot and len(per_robot) >= MAX_CACHED_ROBOTS:
+        per_robot.pop(next(iter(per_robot)))
+    cache = per_robot.setdefault(model, {})
+    todo = sorted({e for e in ids if e not in cache})
+    if todo:
+        for e, (centres, reach) in zip(todo, _sweep_spheres(session, todo, model), strict=True):
+            cache[e] = ((centres - reach[:, None]).min(axis=0), (centres + reach[:, None]).max(axis=0))
+    if not ids:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    lo = np.array([cache[e][0] for e in ids]) - pad
+    hi = np.array([cache[e][1] for e in ids]) + pad
+    return lo, hi
+
+
+def cached_sweep_edges(session: PlanningSession, robot: RobotModel | None = None) -> frozenset[int]:
+    """Edge ids whose sweep box the session's cache holds for an arm model (for diagnostics and tests)."""
+    return frozenset(_BOXES.get(session, {}).get(robot, {}))
+
+
+# --------------------------------------------------------------------------------------------------
+# What changed, and which edges it can reach
+
+
+def _part_key(shape: Shape, pose: Pose) -> Hashable:
+    """A value key of a posed part (shapes compare by value; poses by their exact numbers)."""
+    return (shape, pose.position.tobytes(), pose.quaternion_xyzw.tobytes())
+
+
+def differing_parts(old: MapSnapshot, new: MapSnapshot) -> list[tuple[Shape, Pose]] | None:
+    """Parts present in only one of two snapshots (by value); None when terrain, margin or arm changed.
+
+    Starts from :func:`~drd_planner.planning.map_state.changed_parts` (per key) and drops parts whose
+    exact geometry is in both snapshots under any key: the scene is the union of the parts, so a part that
+    only moved to another key (markers renumbered, or an object split into several markers) changes nothing.
+    """
+    if old.margin != new.margin:
+        return None
+    parts = changed_parts(old, new)
+    if not parts:
+        return parts
+    keys = [
+        key
+        for key in set(old.obstacles) | set(new.obstacles)
+        if old.obstacles.get(key) != new.obstacles.get(key)
+    ]
+    before = Counter(_part_key(s, p) for key in keys for s, p in old.obstacles.get(key, ()))
+    after = Counter(_part_key(s, p) for key in keys for s, p in new.obstacles.get(key, ()))
+    gone, came = before - after, after - before
+    out: list[tuple[Shape, Pose]] = []
+    for snapshot, wanted in ((new, came), (old, gone)):
+        for key in keys:
+            for shape, pose in snapshot.obstacles.get(key, ()):
+                k = _part_key(shape, pose)
+                if wanted[k] > 0:
+                    wanted[k] -= 1
+                    out.append((shape, pose))
+    return out
+
+
+def _spheres_touch_boxes(
+    centres: FloatArray, reach: FloatArray, lo: FloatArray, hi: FloatArray, *, chunk: int = 512
+) -> bool:
+    """Whether any of the (M, 3) spheres of (M,) radius ``reach`` touches any of the (P, 3) boxes."""
+    for start in range(0, centres.shape[0], chunk):
+        c = centres[start : start + chunk, None, :]
+        gap = np.maximum(lo[None] - c, 0.0) + np.maximum(c - hi[None], 0.0)  # per axis, 0 inside
+        limit = reach[start : start + chunk, None] ** 2
+        if bool((np.einsum("mpi,mpi->mp", gap, gap) <= limit).any()):
+            return True
+    return False
+
+
+def _affected(
+    session: PlanningSession,
+    plan_edges: Sequence[int],
+    old: MapSnapshot,
+    new: MapSnapshot,
+    *,
+    refine: bool,
+) -> tuple[tuple[int, ...], str]:
+    """(affected edges in plan order, why every edge counts as affected or "" when only some do)."""
+    ordered = tuple(dict.fromkeys(_edge_ids(session, plan_edges)))
+    parts = differing_parts(old, new)
+    if parts is None:
+        return ordered, "terrain, margin or arm model changed"
+    if not parts or not ordered:
+        return (), ""
+    if not _supports_sweep(session):
+        return ordered, f"no sweep model for the {session.domain.name} domain"
+    part_lo, part_hi = obstacle_boxes(parts)
+    lo, hi = edge_sweep_boxes(session, ordered, margin=new.margin, robot=new.robot)
+    near = np.all((lo[:, None, :] <= part_hi[None]) & (hi[:, None, :] >= part_lo[None]), axis=2)
+    candidates = [i for i in range(len(ordered)) if near[i].any()]
+    if not refine or not candidates:
+        return tuple(ordered[i] for i in candidates), ""
+    robot = (
+        new.robot if isinstance(session.domain, ArmDomain) and new.robot is not session.domain.robot else None
+    )
+    spheres = _sweep_spheres(session, [ordered[i] for i in candidates], robot)
+    hits = [
+        ordered[i]
+        for i, (centres, reach) in zip(candidates, spheres, strict=True)
+        if _spheres_touch_boxes(centres, reach + new.margin, part_lo[near[i]], part_hi[near[i]])
+    ]
+    return tuple(hits), ""
+
+
+def affected_edges(
+    session: PlanningSession,
+    plan_edges: Sequence[int],
+    old_snapshot: MapSnapshot,
+    new_snapshot: MapSnapshot,
+    *,
+    refine: bool = True,
+) -> tuple[int, ...]:
+    """Plan edges (plan order, each once) whose check on ``new_snapshot`` may differ from ``old_snapshot``.
+
+    An edge is affected when its sweep box (:func:`edge_sweep_boxes` with the new snapshot's margin)
+    overlaps the AABB of a part that appeared, moved or disappeared (:func:`differing_parts`) and, with
+    ``refine``, one of its grown spheres (the sweep box is their bounding box) touches that AABB too. A
+    changed terrain or margin, or a domain without a sweep model, affects every edge.
+
+    Args:
+        session: the session the plan came from.
+        plan_edges: the plan's edge ids.
+        old_snapshot: the snapshot the plan was verified on.
+        new_snapshot: the latest snapshot.
+        refine: also test the spheres of the edges whose box overlaps a change (False: the box test only).
+
+    Raises:
+        PlanningError: an edge id outside the graph.
+    """
+    return _affected(session, plan_edges, old_snapshot, new_snapshot, refine=refine)[0]
+
+
+# --------------------------------------------------------------------------------------------------
+# Re-checking
+
+
+def recheck_plan(
+    session: PlanningSession,
+    plan_edges: Sequence[int],
+    old_snapshot: MapSnapshot,
+    new_snapshot: MapSnapshot,
+    *,
+    checker: EdgeChecker | None = None,
+) -> RecheckResult:
+    """Re-check on ``new_snapshot`` only the plan edges the update can reach; stop at the first blocked.
+
+    Args:
+        session: the session the plan came from.
+        plan_edges: the plan's edge ids, in order.
+        old_snapshot: the snapshot the plan was verified on (see the module docstring).
+        new_snapshot: the latest snapshot.
+        checker: the edge checker of ``new_snapshot`` (default ``session.checker(new_snapshot)``, built
+            only when some edge needs a check).
+
+    Raises:
+        PlanningError: an edge id outside the graph.
+    """
+    t0 = time.perf_counter()
+    affected, everything = _affected(session, plan_edges, old_snapshot, new_snapshot, refine=True)
+    select_ms = (time.perf_counter() - t0) * 1e3
+    rechecked: list[int] = []
+    check_ms: list[float] = []
+    blocked: list[int] = []
+    if affected:
+        check = checker if checker is not None else session.checker(new_snapshot)
+        for e in affected:
+            t1 = time.perf_counter()
+            free = bool(check.check(e))
+            check_ms.append((time.perf_counter() - t1) * 1e3)
+            rechecked.append(e)
+            if not free:
+                blocked.append(e)
+                break
+    total = len(dict.fromkeys(int(e) for e in plan_edges))
+    version = f"map v{new_snapshot.version}"
+    if blocked:
+        why = f" ({everything})" if everything else ""
+        reason = (
+            f"{version}: plan edge {blocked[0]} blocked by the update{why}, "
+            f"{len(rechecked)} of {len(affected)} affected edges re-checked; replanning"
+        )
+    elif everything:
+        reason = f"{version}: {everything}; all {total} plan edges re-checked free; plan kept"
+    elif affected:
+        reason = f"{version}: {len(affected)} of {total} plan edges near changed obstacles re-checked free; plan kept"
+    else:
+        reason = f"{version}: no plan edge near the changed obstacles; plan kept without checks"
+    return RecheckResult(
+        kept=not blocked,
+        map_version=new_snapshot.version,
+        affected=affected,
+        rechecked=tuple(rechecked),
+        blocked=tuple(blocked),
+        check_ms=tuple(check_ms),
+        select_ms=select_ms,
+        all_edges=bool(everything),
+        reason=reason,
+    )

@@ -1,0 +1,421 @@
+"""Replay a rosbag2 MCAP bag through rclpy with its timing, and record the planner's outputs into a bag.
+
+Library use (in-process, e.g. a test or the main job running a :class:`PlannerNode` in the same executor)::
+
+    summary = replay_bag("bags/heli_wires.mcap", context=ctx, nodes=[planner], record=tmp / "out.mcap")
+
+:func:`replay_bag` publishes every message of the bag as the raw CDR bytes stored in it (rclpy's
+``Publisher.publish(bytes)``; nothing is re-encoded) on a publisher whose QoS is the one the bag offers
+for that topic (map topics reliable + transient_local depth 1 in our bags; see
+:mod:`drd_msgs_py.bags`), at the bag's times divided by ``rate``, while one executor spins the replay
+node and the given ``nodes``. Before the first message it waits (up to ``wait`` seconds) until every
+bag topic has a subscriber and every recorded topic a publisher, so a volatile request is not lost to
+DDS discovery; after the last it keeps spinning for ``settle`` seconds. Meanwhile it records the
+planner's outputs (``plan``, ``joint_trajectory``, ``edge_checks``, ``/diagnostics``,
+``checked_edges``) with raw subscriptions, so the recorded bytes are exactly what the node sent. They
+are stamped on the *bag's* timeline (bag start + elapsed wall time x ``rate``), so input and output
+bags line up, and written with the QoS their publisher offers (from the ROS graph).
+
+Command line (replays into an already running node; the node must be active)::
+
+    python -m drd_planner.ros.replay BAG [--record OUT.mcap] [--rate R] [--settle S] [--wait S]
+
+A missing or corrupt bag exits with status 2 and one line ``drd_replay: error: ...``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.utilities import try_shutdown
+from rosbags.interfaces import Qos, QosDurability, QosReliability
+
+from drd_msgs_py.bags import (
+    BagContents,
+    BagError,
+    RawMessage,
+    default_qos,
+    open_bag,
+    topic_base,
+    write_raw_bag,
+)
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import RclpyMessages
+from drd_planner.exceptions import DrdError
+from drd_planner.planning.shipped import resolve_bag_path
+
+__all__ = ["OUTPUT_TOPICS", "Published", "ReplaySummary", "main", "rclpy_qos", "replay_bag"]
+
+#: What the planner publishes (names relative to its namespace, as in DESIGN.md section 6) -> type.
+OUTPUT_TOPICS: dict[str, str] = {
+    "plan": "nav_msgs/msg/Path",
+    "joint_trajectory": "trajectory_msgs/msg/JointTrajectory",
+    "edge_checks": "diagnostic_msgs/msg/DiagnosticArray",
+    "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
+    "checked_edges": "visualization_msgs/msg/MarkerArray",
+}
+#: Outputs the node publishes transient_local (used when the graph does not tell).
+LATCHED_OUTPUTS = ("plan", "joint_trajectory")
+#: Depth of the recording subscriptions (volatile: a plan latched before the replay is not recorded).
+RECORD_DEPTH = 100
+_SPIN_S = 0.02
+
+
+@dataclass(frozen=True)
+class Published:
+    """One replayed message.
+
+    Attributes:
+        topic: the topic it was published on (resolved).
+        msgtype: ``pkg/msg/Name``.
+        time_ns: its time in the bag.
+        sent_ns: when it went out, on the bag's timeline (the clock of the recorded outputs).
+        late_s: how much later than its scheduled time it went out (wall s; the executor was busy).
+    """
+
+    topic: str
+    msgtype: str
+    time_ns: int
+    sent_ns: int
+    late_s: float
+
+
+@dataclass(frozen=True)
+class ReplaySummary:
+    """What a replay did.
+
+    Attributes:
+        bag: the replayed bag.
+        published: every message published, in order.
+        recorded: every output received, in order, stamped on the bag's timeline (ns).
+        record_path: the bag the outputs were written to (None: not recorded).
+        unmatched: bag topics that still had no subscriber when the timeline started.
+        seconds: wall time of the whole replay (waiting and settling included).
+        interrupted: stopped early by Ctrl-C (what was recorded so far is still written).
+    """
+
+    bag: Path
+    published: tuple[Published, ...]
+    recorded: tuple[RawMessage, ...]
+    record_path: Path | None
+    unmatched: tuple[str, ...]
+    seconds: float
+    interrupted: bool = False
+
+    @property
+    def published_per_topic(self) -> dict[str, int]:
+        """Topic -> messages published."""
+        return dict(Counter(p.topic for p in self.published))
+
+    @property
+    def recorded_per_topic(self) -> dict[str, int]:
+        """Topic -> messages recorded."""
+        return dict(Counter(r.topic for r in self.recorded))
+
+    def recorded_on(self, name: str) -> list[RawMessage]:
+        """The recorded messages of one output (``plan``, ``edge_checks``, ``diagnostics``, ...), in order."""
+        base = topic_base(name)
+        return [r for r in self.recorded if topic_base(r.topic) == base]
+
+
+# ----------------------------------------------------------------------------------------------------
+# QoS between rosbags and rclpy
+
+
+def rclpy_qos(profile: Qos | None, topic: str) -> QoSProfile:
+    """The rclpy profile of a bag's offered QoS (keep-last; ``None`` or unknown policies: :func:`default_qos`)."""
+    fallback = default_qos(topic)
+    chosen = profile or fallback
+    reliability = ReliabilityPolicy.RELIABLE
+    if chosen.reliability == QosReliability.BEST_EFFORT:
+        reliability = ReliabilityPolicy.BEST_EFFORT
+    durable = chosen.durability
+    if durable not in (QosDurability.VOLATILE, QosDurability.TRANSIENT_LOCAL):  # system default, unknown
+        durable = fallback.durability
+    durability = (
+        DurabilityPolicy.TRANSIENT_LOCAL
+        if durable == QosDurability.TRANSIENT_LOCAL
+        else DurabilityPolicy.VOLATILE
+    )
+    depth = chosen.depth if chosen.depth > 0 else fallback.depth
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=reliability, durability=durability
+    )
+
+
+def _offered_qos(node: Any, topic: str) -> Qos:
+    """The QoS a publisher of ``topic`` offers according to the ROS graph (history: our rule)."""
+    base = topic_base(topic)
+    rule = default_qos(topic, latched=LATCHED_OUTPUTS)
+    infos = node.get_publishers_info_by_topic(topic)
+    if not infos:
+        return rule
+    offered = infos[0].qos_profile
+    latched = offered.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    best_effort = offered.reliability == ReliabilityPolicy.BEST_EFFORT
+    out = default_qos(base, latched=(base,) if latched else ())
+    return out._replace(reliability=QosReliability.BEST_EFFORT) if best_effort else out
+
+
+class _Timeline:
+    """Wall clock -> bag time: ``start_ns`` at :meth:`start`, then elapsed seconds x ``rate``."""
+
+    def __init__(self, start_ns: int, rate: float) -> None:
+        self.start_ns, self.rate = start_ns, rate
+        self.t0: float | None = None
+
+    def start(self) -> float:
+        """Start now; the monotonic start time (s)."""
+        self.t0 = time.monotonic()
+        return self.t0
+
+    def now_ns(self) -> int:
+        """The bag time now (``start_ns`` before :meth:`start`)."""
+        if self.t0 is None:
+            return self.start_ns
+        return self.start_ns + round((time.monotonic() - self.t0) * self.rate * 1e9)
+
+
+def _resolve(topic: str, namespace: str | None) -> str:
+    """A bag topic under ``namespace`` (None: as stored, made absolute)."""
+    if namespace is None or namespace.strip("/") == "":
+        return topic if topic.startswith("/") else f"/{topic}"
+    return f"/{namespace.strip('/')}/{topic.lstrip('/')}"
+
+
+# ----------------------------------------------------------------------------------------------------
+# Replay
+
+
+def replay_bag(
+    bag: str | Path | BagContents,
+    *,
+    context: Any = None,
+    nodes: Sequence[Any] = (),
+    record: str | Path | None = None,
+    overwrite: bool = False,
+    rate: float = 1.0,
+    settle: float = 2.0,
+    wait: float = 5.0,
+    namespace: str | None = None,
+    log: Callable[[str], None] | None = None,
+) -> ReplaySummary:
+    """Publish a bag with its timing while spinning ``nodes``, record the planner's outputs (module docstring).
+
+    Args:
+        bag: a bag path, or one already read with :func:`~drd_msgs_py.bags.open_bag`.
+        context: the rclpy context (initialized; None: the default one).
+        nodes: nodes to spin in the same executor (e.g. a configured and active PlannerNode); they
+            must not be spun elsewhere meanwhile. They are removed from the executor afterwards, not destroyed.
+        record: the MCAP file for the outputs (None: do not record).
+        overwrite: replace an existing ``record`` file.
+        rate: playback speed factor (> 0; 2 plays twice as fast).
+        settle: seconds to keep spinning after the last message.
+        wait: at most this many seconds to wait for subscribers/publishers before the first message.
+        namespace: publish the bag's topics and record the outputs under this namespace (the
+            planner's); None: the topic names as stored, outputs at the root.
+        log: called with one progress line at a time (None: silent).
+
+    Raises:
+        BagError: an unreadable bag, or ``record`` exists and ``overwrite`` is False.
+        ValueError: ``rate``, ``settle`` or ``wait`` out of range.
+    """
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a finite number > 0, got {rate}")
+    if not (math.isfinite(settle) and settle >= 0 and math.isfinite(wait) and wait >= 0):
+        raise ValueError(f"settle and wait must be finite and >= 0 s, got {settle}, {wait}")
+    contents = bag if isinstance(bag, BagContents) else open_bag(bag)
+    out = Path(record) if record is not None else None
+    if out is not None and out.exists() and not overwrite:
+        raise BagError(f"{out} exists already (not overwriting)")
+    say = log or (lambda _line: None)
+    classes = RclpyMessages()
+    started = time.monotonic()
+    node = rclpy.create_node("drd_replay", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    for extra in nodes:
+        executor.add_node(extra)
+    start_ns = contents.messages[0].time_ns if contents.messages else 0
+    timeline = _Timeline(start_ns, rate)
+    recorded: list[RawMessage] = []
+
+    try:
+        publishers = {}
+        for name, info in contents.topics.items():
+            resolved = _resolve(name, namespace)
+            try:
+                cls = classes.message_class(info.msgtype)
+            except MessageError as exc:
+                raise BagError(f"{contents.path}: topic {name}: {exc}") from exc
+            publishers[name] = node.create_publisher(
+                cls, resolved, rclpy_qos(next(iter(info.qos), None), name)
+            )
+        subscriptions = {}
+        if out is not None:
+            for output, msgtype in OUTPUT_TOPICS.items():
+                resolved = output if output.startswith("/") else _resolve(output, namespace or "/")
+
+                def keep(data: bytes, topic: str = resolved, kind: str = msgtype) -> None:
+                    recorded.append(RawMessage(topic, kind, timeline.now_ns(), bytes(data)))
+
+                profile = QoSProfile(depth=RECORD_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
+                subscriptions[resolved] = node.create_subscription(
+                    classes.message_class(msgtype), resolved, keep, profile, raw=True
+                )
+        say(
+            f"replaying {contents.path}: {len(contents.messages)} messages on {len(contents.topics)} topics "
+            f"over {contents.duration_ns / 1e9:.2f} s at rate {rate:g}"
+        )
+        published: list[Published] = []
+        interrupted = False
+        unmatched: list[str] = []
+        try:
+            deadline = time.monotonic() + wait
+            while True:
+                unmatched = [
+                    publishers[n].topic_name
+                    for n in publishers
+                    if publishers[n].get_subscription_count() == 0
+                ]
+                silent = [t for t, s in subscriptions.items() if s.get_publisher_count() == 0]
+                if (not unmatched and not silent) or time.monotonic() >= deadline:
+                    break
+                executor.spin_once(timeout_sec=_SPIN_S)
+            for topic in unmatched:
+                say(f"  no subscriber on {topic} after {wait:g} s; publishing anyway")
+            t0 = timeline.start()
+            for raw in contents.messages:
+                due = t0 + (raw.time_ns - start_ns) / 1e9 / rate
+                while (left := due - time.monotonic()) > 0:
+                    executor.spin_once(timeout_sec=min(left, 0.05))
+                sent = timeline.now_ns()
+                publishers[raw.topic].publish(raw.data)
+                late = max(0.0, time.monotonic() - due)
+                topic = publishers[raw.topic].topic_name
+                published.append(Published(topic, raw.msgtype, raw.time_ns, sent, late))
+                say(
+                    f"  +{(raw.time_ns - start_ns) / 1e9:6.2f} s  {publishers[raw.topic].topic_name} ({raw.msgtype})"
+                )
+            end = time.monotonic() + settle
+            while time.monotonic() < end:
+                executor.spin_once(timeout_sec=_SPIN_S)
+        except KeyboardInterrupt:
+            interrupted = True
+            say("  interrupted: writing what was recorded so far")
+        written = None
+        if out is not None:
+            qos_out = {topic: _offered_qos(node, topic) for topic in subscriptions}
+            written = write_raw_bag(out, recorded, qos=qos_out, overwrite=overwrite)
+        summary = ReplaySummary(
+            contents.path,
+            tuple(published),
+            tuple(recorded),
+            written,
+            tuple(unmatched),
+            time.monotonic() - started,
+            interrupted,
+        )
+    finally:
+        for extra in nodes:
+            executor.remove_node(extra)
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
+    counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.recorded_per_topic.items())) or "nothing"
+    say(f"published {len(summary.published)} messages; recorded {counts}")
+    if written is not None:
+        say(f"wrote {written}")
+    return summary
+
+
+# ----------------------------------------------------------------------------------------------------
+# Command line
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {value}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``drd_replay``."""
+    parser = argparse.ArgumentParser(
+        prog="drd_replay",
+        description="Replay a rosbag2 MCAP bag of maps and requests into a running drd_planner node "
+        "and record its outputs.",
+    )
+    parser.add_argument("bag", help="the bag: an .mcap file, a rosbag2 folder, or a shipped bag's name")
+    parser.add_argument("--record", metavar="OUT.mcap", help="write the planner's outputs to this MCAP file")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing --record file")
+    parser.add_argument("--rate", type=_positive, default=1.0, help="playback speed factor (default 1)")
+    parser.add_argument(
+        "--settle", type=_seconds, default=2.0, help="seconds to keep listening after the last message"
+    )
+    parser.add_argument(
+        "--wait", type=_seconds, default=5.0, help="seconds to wait for the node's subscriptions first"
+    )
+    parser.add_argument("--namespace", default=None, help="the planner node's namespace")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``drd_replay``: errors (missing or corrupt bag, existing --record file) print one line and exit 2."""
+    args = build_parser().parse_args(argv)
+    try:
+        contents = open_bag(resolve_bag_path(args.bag))
+        if not contents.messages:
+            raise BagError(f"bag {args.bag} has no messages")
+        if args.record and Path(args.record).exists() and not args.overwrite:
+            raise BagError(f"{args.record} exists already (use --overwrite)")
+    except (MessageError, DrdError) as exc:
+        print(f"drd_replay: error: {exc}", file=sys.stderr)
+        return 2
+    rclpy.init()
+    try:
+        summary = replay_bag(
+            contents,
+            record=args.record,
+            overwrite=args.overwrite,
+            rate=args.rate,
+            settle=args.settle,
+            wait=args.wait,
+            namespace=args.namespace,
+            log=lambda line: print(line, flush=True),
+        )
+    except MessageError as exc:
+        print(f"drd_replay: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        try_shutdown()
+    return 130 if summary.interrupted else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,102 @@
+"""``drd plan --bag``: the check log on the maps at a bag's request, and its errors."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import REPO_ROOT
+
+from drd_msgs_py.bags import BagMessage, maps_at_request, read_bag, write_bag
+from drd_planner.cli import main
+from drd_planner.data.tree_file import load_tree
+from drd_planner.planning.session import PlanningSession
+
+BAG = REPO_ROOT / "bags" / "heli_wires.mcap"
+TREE = REPO_ROOT / "trees" / "heli_wires.npz"
+CHECK = re.compile(r"^  check +(\d+): edge +(\d+) \((\d+)->(\d+)\) +(free|BLOCKED) +\[(\w+)\]$")
+
+
+@pytest.fixture(scope="module")
+def bag() -> Path:
+    if not BAG.is_file():
+        pytest.skip(f"{BAG} not generated (python scripts/make_bags.py)")
+    return BAG
+
+
+def _log(out: str) -> list[tuple[int, bool, str]]:
+    rows = [CHECK.match(line) for line in out.splitlines()]
+    return [(int(m[2]), m[5] == "free", m[6]) for m in rows if m]
+
+
+def _error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("drd: error:"), err
+    return err[0]
+
+
+@pytest.mark.parametrize("request_index", [0, 1])
+def test_plan_bag_prints_the_offline_check_log_and_path(
+    bag: Path, request_index: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", str(request_index)]) == 0
+    out = capsys.readouterr().out
+    session = PlanningSession(load_tree(TREE), name="offline")
+    maps, request = maps_at_request(read_bag(bag), request_index, frame_id="map", margin=session.margin)
+    want = session.plan(maps.snapshot, seed=0)
+    assert _log(out) == [(c.edge, c.free, c.stage) for c in want.checks]
+    assert (
+        f"request {request_index} (goal_pose at +{(request.time_ns - read_bag(bag)[0].time_ns) / 1e9:.2f} s)"
+        in out
+    )
+    assert f"path edges: {list(want.path_edges)}" in out
+    assert f"verified free after {len(want.checks)} checks" in out
+    vertex_rows = [line.split() for line in out.splitlines() if re.match(r"^ +\d+: ", line)]
+    assert [int(r[0].rstrip(":")) for r in vertex_rows] == list(want.path_vertices)
+    states = np.array([[float(v) for v in r[1:]] for r in vertex_rows])
+    np.testing.assert_allclose(states, [session.vertex_state(v) for v in want.path_vertices], atol=5e-4)
+
+
+def test_the_update_changes_the_plan(bag: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    logs = []
+    for k in (0, 1):
+        assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", str(k)]) == 0
+        out = capsys.readouterr().out
+        logs.append(_log(out))
+        assert f"version {2 if k == 0 else 3}" in out
+    assert logs[0] != logs[1]
+    blocked_later = {edge for edge, free, _ in logs[1] if not free}
+    free_first = {edge for edge, free, _ in logs[0] if free}
+    assert blocked_later & free_first, "the obstacle added at 1.5 s blocks an edge that was free at request 0"
+
+
+def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", "2"]) == 2
+    assert "it has 2 request(s)" in _error(capsys)
+    assert main(["plan", "--bag", str(tmp_path / "none.mcap"), "--tree", str(TREE)]) == 2
+    assert "none.mcap" in _error(capsys)
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(bytes(range(256)) * 4)
+    assert main(["plan", "--bag", str(junk), "--tree", str(TREE)]) == 2
+    assert "not a readable rosbag2 MCAP bag" in _error(capsys)
+    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--world", "3"]) == 2
+    assert "--request" in _error(capsys)
+    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--frame", "odom"]) == 2
+    assert "frame 'map'" in _error(capsys)  # the request is in map; the maps were refused too
+    # A request whose goal is not the tree's goal.
+    messages = read_bag(bag)
+    far = []
+    for m in messages:
+        if m.topic == "/goal_pose":
+            m.message.pose.position.x += 400.0
+        far.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
+    moved = write_bag(tmp_path / "far.mcap", far)
+    assert main(["plan", "--bag", str(moved), "--tree", str(TREE)]) == 2
+    assert "does not match tree" in _error(capsys)
+
+
+def test_world_is_still_required_for_datasets(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    assert main(["plan", "--dataset", str(tmp_path / "d.npz"), "--tree", str(TREE)]) == 2
+    assert "--world is required" in _error(capsys)

@@ -1,0 +1,308 @@
+"""MCAP bags (rosbags): round trips, offered QoS, the maps at each request, refusals, the bundled bags."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from conftest import REPO_ROOT, SHARED_DATA
+from rosbags.interfaces import QosDurability, QosReliability
+
+from drd_msgs_py.bags import (
+    BagError,
+    BagMessage,
+    bag_frame,
+    bag_requests,
+    default_qos,
+    jazzy_typestore,
+    maps_at_request,
+    maps_until,
+    open_bag,
+    read_bag,
+    request_goal,
+    write_bag,
+)
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import RosbagsMessages, header
+from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update
+from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_msgs_py.worlds import arm_world_messages
+from drd_planner.data.moveit_scene import ScenePrimitive
+from drd_planner.domains.arm_worlds import ArmWorld
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Box, Cylinder, Sphere
+from drd_planner.geometry.terrain import Heightfield
+
+T0 = 1_000_000_000_000
+SEC = 10**9
+JOINTS = [f"panda_joint{i}" for i in range(1, 8)]
+
+
+@pytest.fixture
+def rb() -> RosbagsMessages:
+    return RosbagsMessages(jazzy_typestore())
+
+
+def _stamp(t: int) -> tuple[int, int]:
+    return t // SEC, t % SEC
+
+
+def _terrain(rb: RosbagsMessages, t: int) -> BagMessage:
+    rng = np.random.default_rng(3)
+    field = Heightfield((-50.0, -40.0), 10.0, rng.uniform(0.0, 20.0, size=(6, 9)))
+    cloud = cloud_from_heightfield(field, frame_id="map", stamp=_stamp(t), msgs=rb)
+    return BagMessage("/terrain", "sensor_msgs/msg/PointCloud2", t, cloud)
+
+
+def _obstacles(rb: RosbagsMessages, t: int, extra: bool = False, frame: str = "map") -> BagMessage:
+    items: list[tuple[str, Any, Any]] = [
+        ("tower/0", Cylinder(2.0, 60.0), Pose((10.0, 0.0, 30.0))),
+        ("nofly/1", Box((40.0, 30.0, 200.0)), Pose((-20.0, 10.0, 100.0))),
+        ("wire/2", np.array([[0.0, -30.0, 40.0], [0.0, 0.0, 35.0], [0.0, 30.0, 40.0]]), 0.1),
+    ]
+    if extra:
+        items.append(("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0))))
+    markers = markers_from_obstacles(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
+    return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
+
+
+def _goal(rb: RosbagsMessages, t: int, xyz: tuple[float, float, float], frame: str = "map") -> BagMessage:
+    pose = rb(
+        "geometry_msgs/msg/Pose",
+        position=rb("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
+        orientation=rb("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=1.0),
+    )
+    msg = rb("geometry_msgs/msg/PoseStamped", header=header(rb, frame, _stamp(t)), pose=pose)
+    return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", t, msg)
+
+
+def _joints(rb: RosbagsMessages, t: int, names: list[str], q: list[float]) -> BagMessage:
+    msg = rb(
+        "sensor_msgs/msg/JointState",
+        header=header(rb, "", _stamp(t)),
+        name=names,
+        position=np.asarray(q, dtype=np.float64),
+    )
+    return BagMessage("/goal_joints", "sensor_msgs/msg/JointState", t, msg)
+
+
+def _scenario(rb: RosbagsMessages) -> list[BagMessage]:
+    """Maps at 0, a request at 0.5 s, a refused map (wrong frame) at 1 s, an update at 1.5 s, a request at 2.5 s."""
+    return [
+        _terrain(rb, T0),
+        _obstacles(rb, T0),
+        _goal(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
+        _obstacles(rb, T0 + SEC, extra=True, frame="odom"),
+        _obstacles(rb, T0 + 3 * SEC // 2, extra=True),
+        _goal(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
+    ]
+
+
+def _cdr(m: BagMessage) -> bytes:
+    return bytes(jazzy_typestore().serialize_cdr(m.message, m.msgtype))
+
+
+def test_round_trip_gives_equal_messages_in_time_order(rb: RosbagsMessages, tmp_path: Path) -> None:
+    messages = [
+        *_scenario(rb),
+        _joints(rb, T0 + 3 * SEC, JOINTS, [0.1 * i for i in range(7)]),
+        BagMessage(
+            "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
+        ),
+    ]
+    shuffled = [messages[i] for i in np.random.default_rng(0).permutation(len(messages))]
+    path = write_bag(tmp_path / "s.mcap", shuffled)
+    assert path.is_file() and not list(tmp_path.glob(".s-*")), "no temporary folder is left behind"
+    back = read_bag(path)
+    want = sorted(messages, key=lambda m: m.time_ns)
+    assert [(m.topic, m.msgtype, m.time_ns) for m in back] == [(m.topic, m.msgtype, m.time_ns) for m in want]
+    assert [_cdr(m) for m in back] == [_cdr(m) for m in want]  # field-for-field equal
+    assert back[-1].message.name == JOINTS and back[-1].message.position[3] == pytest.approx(0.3)
+    raw = open_bag(path)
+    assert raw.duration_ns == 3 * SEC
+    assert {t.name: t.count for t in raw.topics.values()}["/obstacles"] == 3
+
+
+def test_offered_qos_is_latched_on_map_topics_only(rb: RosbagsMessages, tmp_path: Path) -> None:
+    messages = [
+        *_scenario(rb),
+        BagMessage("/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="x")),
+        _joints(rb, T0 + 3 * SEC, JOINTS, [0.0] * 7),
+    ]
+    topics = open_bag(write_bag(tmp_path / "q.mcap", messages)).topics
+    for name in ("/obstacles", "/terrain", "/robot_description"):
+        (qos,) = topics[name].qos
+        assert (qos.durability, qos.reliability, qos.depth) == (
+            QosDurability.TRANSIENT_LOCAL,
+            QosReliability.RELIABLE,
+            1,
+        ), name
+    for name in ("/goal_pose", "/goal_joints"):
+        (qos,) = topics[name].qos
+        assert (qos.durability, qos.reliability, qos.depth) == (
+            QosDurability.VOLATILE,
+            QosReliability.RELIABLE,
+            10,
+        )
+    # An explicit profile wins over the rule.
+    custom = {"/goal_pose": default_qos("obstacles")}
+    topics = open_bag(write_bag(tmp_path / "c.mcap", messages, qos=custom)).topics
+    assert topics["/goal_pose"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
+
+
+def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp_path: Path) -> None:
+    messages = read_bag(write_bag(tmp_path / "m.mcap", _scenario(rb)))
+    requests = bag_requests(messages)
+    assert [(r.index, r.kind, r.time_ns) for r in requests] == [
+        (0, "goal_pose", T0 + SEC // 2),
+        (1, "goal_pose", T0 + 5 * SEC // 2),
+    ]
+    assert bag_frame(messages) == "map"
+    first, req0 = maps_at_request(messages, 0, frame_id="map", margin=2.0)
+    assert (req0.index, req0.position) == (0, 2)
+    snap = first.snapshot
+    assert snap.version == 2 and snap.margin == 2.0 and first.applied == 2 and not first.refused
+    expected = obstacle_update(_obstacles(rb, T0).message, frame_id="map").apply({})
+    assert set(snap.obstacles) == set(expected) == {"tower/0", "nofly/1", "wire/2"}
+    assert all(snap.obstacles[k] == expected[k].parts for k in expected)
+    assert snap.terrain is not None and snap.terrain.shape == (6, 9)
+    # The wrong-frame update is refused (map unchanged, version not bumped); the next one is applied.
+    second, _ = maps_at_request(messages, 1, frame_id="map", margin=2.0)
+    assert second.snapshot.version == 3 and len(second.refused) == 1 and "frame 'odom'" in second.refused[0]
+    assert set(second.snapshot.obstacles) == {"tower/0", "nofly/1", "wire/2", "new_obstacle/0"}
+    # The new sphere is really in the scene at request 1 and not at request 0.
+    probe = (np.array([[5.0, 5.0, 50.0]]), np.array([0.5]))
+    assert second.snapshot.scene.spheres_collide(*probe) and not snap.scene.spheres_collide(*probe)
+    # maps_until is inclusive in time and agrees with maps_at_request.
+    until = maps_until(messages, T0 + 3 * SEC // 2, frame_id="map", margin=2.0)
+    assert until.snapshot.version == 3 and set(until.snapshot.obstacles) == set(second.snapshot.obstacles)
+    assert maps_until(messages, T0 + 3 * SEC // 2 - 1, frame_id="map", margin=2.0).snapshot.version == 2
+    # A planner in another frame refuses every map.
+    other, _ = maps_at_request(messages, 0, frame_id="odom", margin=0.0)
+    assert other.snapshot.version == 0 and len(other.refused) == 2
+
+
+def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) -> None:
+    text = BagMessage(
+        "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
+    )
+    messages = [text, _obstacles(rb, T0), _goal(rb, T0 + 1, (0.0, 0.0, 0.0))]
+    plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
+    assert (
+        plain.robot_description == "<robot/>" and plain.snapshot.version == 1 and plain.snapshot.robot is None
+    )
+
+    def refuse(_urdf: str) -> Any:
+        raise MessageError("no such robot")
+
+    refused, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0, robot_from_description=refuse)
+    assert refused.snapshot.version == 1 and "robot_description" in refused.refused[0]
+
+
+def test_request_goals(rb: RosbagsMessages) -> None:
+    messages = [
+        _goal(rb, T0, (1.0, 2.0, 3.0)),
+        _joints(rb, T0 + 1, JOINTS[::-1], [float(i) for i in range(7)]),
+        _joints(rb, T0 + 2, JOINTS[:6], [0.0] * 6),
+        _goal(rb, T0 + 3, (1.0, 2.0, 3.0), frame="odom"),
+    ]
+    pose, joints, short, odom = bag_requests(messages)
+    np.testing.assert_allclose(request_goal(pose, frame_id="map"), [1.0, 2.0, 3.0])
+    np.testing.assert_allclose(
+        request_goal(joints, frame_id="map", joint_names=JOINTS), [6, 5, 4, 3, 2, 1, 0]
+    )
+    with pytest.raises(MessageError, match="lacks joint"):
+        request_goal(short, frame_id="map", joint_names=JOINTS)
+    with pytest.raises(MessageError, match="frame 'odom'"):
+        request_goal(odom, frame_id="map")
+    with pytest.raises(MessageError, match="arm tree"):
+        request_goal(joints, frame_id="map")
+
+
+def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessages, tmp_path: Path) -> None:
+    with pytest.raises(BagError, match="does not exist"):
+        open_bag(tmp_path / "nope.mcap")
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(np.random.default_rng(1).bytes(3000))
+    with pytest.raises(BagError, match="not a readable rosbag2 MCAP bag"):
+        open_bag(junk)
+    good = write_bag(tmp_path / "good.mcap", _scenario(rb))
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    with pytest.raises(BagError, match=r"cut\.mcap"):
+        open_bag(cut)
+    text = tmp_path / "bag.txt"
+    text.write_text("hello")
+    with pytest.raises(BagError, match=r"bag\.txt"):
+        open_bag(text)
+    with pytest.raises(BagError, match="exists already"):
+        write_bag(good, _scenario(rb))
+    with pytest.raises(BagError, match="has 2 request"):
+        maps_at_request(read_bag(good), 2, frame_id="map", margin=0.0)
+    bad_type = BagMessage("/x", "nosuch_msgs/msg/Thing", T0, None)
+    with pytest.raises(BagError, match="nosuch_msgs"):
+        write_bag(tmp_path / "t.mcap", [bad_type])
+    assert not (tmp_path / "t.mcap").exists()
+
+
+def test_arm_world_markers_rebuild_the_world(msgs: Any) -> None:
+    world = ArmWorld(
+        (
+            ScenePrimitive("table_top", Box((0.8, 1.2, 0.04)), Pose((0.6, 0.0, 0.1), (0.0, 0.0, 0.1, 0.995))),
+            ScenePrimitive("cylinder_1", Cylinder(0.04, 0.3), Pose((0.5, 0.2, 0.27))),
+            ScenePrimitive("obj/2", Sphere(0.05), Pose((0.4, -0.3, 0.2))),
+        ),
+        "table_clutter",
+        7,
+    )
+    markers = arm_world_messages(world, frame_id="panda_link0", stamp=(3, 4), msgs=msgs)
+    got = obstacle_update(markers, frame_id="panda_link0").apply({})
+    assert set(got) == {"table_top/0", "cylinder_1/0", "obj/2/0"}
+    for p in world.obstacles:
+        ((shape, pose),) = got[f"{p.name}/0"].parts
+        assert shape == p.shape
+        np.testing.assert_allclose(pose.position, p.pose.position, atol=1e-12)
+        np.testing.assert_allclose(
+            np.abs(pose.quaternion_xyzw @ p.pose.quaternion_xyzw), 1.0, atol=1e-9
+        )  # same rotation
+    with pytest.raises(MessageError, match="frame"):
+        obstacle_update(markers, frame_id="map")
+
+
+@pytest.mark.parametrize("name", ["heli_wires", "arm_table_clutter"])
+def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Path) -> None:
+    bundled = REPO_ROOT / "bags" / f"{name}.mcap"
+    if not bundled.is_file():
+        pytest.skip(f"{bundled} not generated (python scripts/make_bags.py)")
+    if name.startswith("arm") and not (SHARED_DATA / "panda" / "panda.urdf").is_file():
+        pytest.skip("the shared Panda files are needed to plan on the arm bag")
+    contents = open_bag(bundled)
+    assert bundled.stat().st_size < 2 * 1024 * 1024
+    assert contents.topics["/obstacles"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
+    assert [r.kind for r in bag_requests(contents.decoded())] == [
+        "goal_pose" if "heli" in name else "goal_joints"
+    ] * 2
+    only = "heli" if name.startswith("heli") else "arm"
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(REPO_ROOT / "scripts" / "make_bags.py"),
+            "--only",
+            only,
+            "--out-dir",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "world seed" in run.stdout and "blocked" in run.stdout
+    assert (tmp_path / f"{name}.mcap").read_bytes() == bundled.read_bytes(), (
+        "the bundled bag is stale: run python scripts/make_bags.py"
+    )

@@ -1,0 +1,40 @@
+"""The main job (``planner_demo``): the real node on the bundled helicopter bag, end to end."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
+
+from harness import use_domain
+
+from drd_msgs_py.bags import open_bag
+from drd_planner.ros.demo import main
+
+use_domain(30)
+
+
+def test_main_job_plans_prints_the_check_logs_records_and_draws(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("matplotlib", reason="the plots extra is not installed")
+    assert main(["--out", str(tmp_path), "--rate", "4"]) == 0
+    out = capsys.readouterr().out
+    # The request, the replan forced by the blocking obstacle, and the repeated request: three plans.
+    assert "plan 0: goal_pose on map version 2" in out
+    assert "plan 1: map_update" in out and "blocked by the update" in out
+    assert "plan 2: goal_pose" in out
+    assert out.count("check   1: edge") == 3 and "BLOCKED" in out and "[bisect" in out
+    for k in range(3):
+        png = tmp_path / f"plan_{k}.png"
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    recorded = open_bag(tmp_path / "outputs.mcap")
+    topics = set(recorded.topics)
+    assert {"/plan", "/edge_checks", "/diagnostics", "/checked_edges"} <= topics
+
+
+def test_main_job_refuses_a_missing_bag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--bag", str(tmp_path / "none.mcap"), "--out", str(tmp_path)]) == 2
+    assert "planner_demo: error:" in capsys.readouterr().err
