@@ -15,8 +15,9 @@ from drd_planner.data.tree_file import TreeBundle, load_tree
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
 from drd_planner.exceptions import PlanningError, TreeFileError
+from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.terrain import Heightfield
-from drd_planner.planning.map_state import MapSnapshot, changed_parts
+from drd_planner.planning.map_state import MapSnapshot, changed_parts, terrain_collider
 from drd_planner.planning.session import PlanningSession
 
 SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'
@@ -128,3 +129,23 @@ def test_changed_parts(bundle: TreeBundle) -> None:
     assert changed_parts(snapshot, snapshot.with_terrain(copy)) == []  # equal heights: nothing changed
     raised = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1.0)
     assert changed_parts(snapshot, snapshot.with_terrain(raised)) is None  # terrain changed: check all
+
+
+def test_snapshots_with_the_same_terrain_share_its_collider_and_answer_alike() -> None:
+    bundle = load_tree(Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz")
+    session = PlanningSession(bundle)
+    domain = session.domain
+    assert isinstance(domain, HelicopterDomain)
+    world = domain.make_world("wires", 4)
+    obstacles = {f"p/{k}": ((shape, pose),) for k, (_, shape, pose) in enumerate(world_parts(world))}
+    first = MapSnapshot(1, {}, world.terrain, session.margin).with_obstacles(obstacles)
+    second = first.with_obstacles({})
+    assert first.scene is not second.scene and first.scene.terrain is second.scene.terrain
+    assert terrain_collider(world.terrain) is terrain_collider(world.terrain)  # FCL tiles built once
+    lone = Scene(margin=session.margin)
+    lone.add_terrain(world.terrain)  # its own collider
+    a, b = session.checker(second), session.domain.checker(lone)
+    edges = session.bundle.problem.library.library_edges[:200]
+    assert [a.check(int(e)) for e in edges] == [b.check(int(e)) for e in edges]
+    checked_first = [session.checker(first).check(int(e)) for e in edges]
+    assert checked_first != [a.check(int(e)) for e in edges]  # the obstacles matter, the shared terrain too

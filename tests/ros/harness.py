@@ -12,6 +12,8 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
@@ -69,6 +71,22 @@ class Peer:
                     values["message"] = status.message
                     out.append(values)
         return out
+
+
+@contextmanager
+def active_planner(ctx: Any, node: Any, peer: Peer) -> Iterator[Any]:
+    """Configure and activate ``node``; yield an executor spinning it and ``peer``; destroy both after."""
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(node)
+    executor.add_node(peer.node)
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS, node.errors
+        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+        yield executor
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        peer.node.destroy_node()
 
 
 def spin_until(executor: Any, done: Callable[[], bool], timeout: float = 30.0) -> bool:

@@ -17,7 +17,7 @@ import pytest
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
 from geometry_msgs.msg import PoseStamped  # noqa: E402
-from harness import Peer, private_context, spin_for, spin_until, use_domain  # noqa: E402
+from harness import Peer, active_planner, private_context, spin_for, spin_until, use_domain  # noqa: E402
 from lifecycle_msgs.msg import State  # noqa: E402
 from nav_msgs.srv import GetPlan  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -62,12 +62,7 @@ def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
 def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
     node = _node(context, [str(TREE)])
     peer = Peer(context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(peer.node)
-    try:
-        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
-        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+    with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         domain = session.domain
         assert isinstance(domain, HelicopterDomain)
@@ -115,10 +110,6 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
         assert len(future.result().plan.poses) == len(plan.poses)
         assert node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
         assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        peer.node.destroy_node()
 
 
 def test_bad_tree_file_fails_configure_and_the_node_stays_up(context: Any, tmp_path: Path) -> None:
@@ -168,12 +159,7 @@ def _world(session: PlanningSession, seed: int = 3) -> tuple[Any, Any]:
 def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> None:
     node = _node(context, ["heli_wires"])  # a shipped tree by name
     peer = Peer(context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(peer.node)
-    try:
-        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
-        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+    with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         markers, cloud = _world(session)
         peer.terrain.publish(cloud)
@@ -193,11 +179,10 @@ def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> Non
         summaries = [s for s in peer.summaries() if s["request"] == "goal_pose"]
         assert served() == sent  # every request answered or counted as superseded, none twice
         assert summaries[-1]["request_stamp"] == f"{sent}.000000000"  # the newest one is always served
-        assert len(peer.plans) == len(summaries)
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        peer.node.destroy_node()
+        assert len(peer.checks) == len(
+            summaries
+        )  # one check log per served request (plan is latched, depth 1)
+        assert peer.plans
 
 
 def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
@@ -241,13 +226,8 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
 def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(context: Any) -> None:
     node = _node(context, [str(TREE)])
     peer = Peer(context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(peer.node)
     msgs = RclpyMessages()
-    try:
-        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
-        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+    with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         markers, cloud = _world(session)
         peer.terrain.publish(cloud)
@@ -289,7 +269,3 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
         assert set(second.path_edges) <= free  # the new plan was checked free on the new map
         assert second.map_version == node.snapshot.version
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        peer.node.destroy_node()

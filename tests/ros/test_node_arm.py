@@ -13,8 +13,7 @@ import pytest
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
 from geometry_msgs.msg import PoseStamped  # noqa: E402
-from harness import Peer, private_context, spin_until, use_domain  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from harness import Peer, active_planner, private_context, spin_until, use_domain  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
@@ -65,12 +64,7 @@ def _joint_goal(session: PlanningSession, *, reverse: bool = True) -> JointState
 def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) -> None:
     node = _node(context)
     peer = Peer(context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    executor.add_node(peer.node)
-    try:
-        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
-        assert node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+    with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         domain = session.domain
         assert isinstance(domain, ArmDomain) and session.is_arm
@@ -111,10 +105,6 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         peer.goals.publish(goal)
         assert spin_until(executor, lambda: len(peer.trajectories) > count)
         np.testing.assert_allclose([p.positions for p in peer.trajectories[-1].points], q)
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        peer.node.destroy_node()
 
 
 def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> None:

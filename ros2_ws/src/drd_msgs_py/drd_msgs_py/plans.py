@@ -175,6 +175,43 @@ def diagnostics_message(
     return msgs("diagnostic_msgs/msg/DiagnosticArray", header=header(msgs, "", stamp), status=list(statuses))
 
 
+#: RGBA of the checked-edge markers: free, blocked, not checked.
+EDGE_COLOURS = {1: (0.1, 0.8, 0.2, 1.0), 0: (0.9, 0.1, 0.1, 1.0), -1: (0.6, 0.6, 0.6, 0.5)}
+_EDGE_NAMES = {1: "free", 0: "blocked", -1: "unchecked"}
+
+
+def line_list_marker(
+    segments: npt.ArrayLike,
+    *,
+    ns: str,
+    rgba: tuple[float, float, float, float],
+    frame_id: str,
+    stamp: tuple[int, int] = (0, 0),
+    width: float = 2.0,
+    msgs: MessageFactory,
+) -> Any:
+    """One RViz LINE_LIST ``Marker`` (id 0 in ``ns``) through (S, 2, 3) segments in metres."""
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
+    point = msgs("geometry_msgs/msg/Point")
+    point_class = type(point)
+    try:  # the message class itself is much faster than the factory for thousands of points
+        points = [point_class(x=x, y=y, z=z) for x, y, z in seg.reshape(-1, 3).tolist()]
+    except TypeError:
+        points = [msgs("geometry_msgs/msg/Point", x=x, y=y, z=z) for x, y, z in seg.reshape(-1, 3).tolist()]
+    return msgs(
+        "visualization_msgs/msg/Marker",
+        header=header(msgs, frame_id, stamp),
+        ns=ns,
+        id=0,
+        type=_LINE_LIST,
+        action=_ADD,
+        pose=msgs("geometry_msgs/msg/Pose", orientation=msgs("geometry_msgs/msg/Quaternion", w=1.0)),
+        scale=msgs("geometry_msgs/msg/Vector3", x=width),
+        color=msgs("std_msgs/msg/ColorRGBA", r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]),
+        points=points,
+    )
+
+
 def checked_edges_markers(
     segments: npt.ArrayLike,
     outcome: npt.ArrayLike,
@@ -183,6 +220,7 @@ def checked_edges_markers(
     stamp: tuple[int, int] = (0, 0),
     width: float = 2.0,
     msgs: MessageFactory,
+    background: Sequence[Any] = (),
 ) -> Any:
     """RViz LINE_LISTs after a DELETEALL: green free, red blocked, grey unchecked library edges.
 
@@ -193,35 +231,26 @@ def checked_edges_markers(
         stamp: (sec, nanosec) of the headers.
         width: line width, metres.
         msgs: the message factory.
+        background: ready markers drawn first (e.g. every library edge in grey, built once per tree).
     """
     seg = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
     out = np.asarray(outcome, dtype=np.int64).reshape(-1)
     if out.shape[0] != seg.shape[0]:
         raise ValueError("one outcome per segment")
-    head = header(msgs, frame_id, stamp)
-    markers = [msgs("visualization_msgs/msg/Marker", header=head, action=_DELETEALL)]
-    colours = {1: (0.1, 0.8, 0.2, 1.0), 0: (0.9, 0.1, 0.1, 1.0), -1: (0.6, 0.6, 0.6, 0.5)}
-    names = {1: "free", 0: "blocked", -1: "unchecked"}
-    for value, rgba in colours.items():
+    markers = [msgs("visualization_msgs/msg/Marker", header=header(msgs, frame_id, stamp), action=_DELETEALL)]
+    markers.extend(background)
+    for value in (-1, 0, 1):
         rows = seg[out == value]
-        if rows.size == 0:
-            continue
-        points = [
-            msgs("geometry_msgs/msg/Point", x=float(p[0]), y=float(p[1]), z=float(p[2]))
-            for p in rows.reshape(-1, 3)
-        ]
-        markers.append(
-            msgs(
-                "visualization_msgs/msg/Marker",
-                header=head,
-                ns=names[value],
-                id=0,
-                type=_LINE_LIST,
-                action=_ADD,
-                pose=msgs("geometry_msgs/msg/Pose", orientation=msgs("geometry_msgs/msg/Quaternion", w=1.0)),
-                scale=msgs("geometry_msgs/msg/Vector3", x=width),
-                color=msgs("std_msgs/msg/ColorRGBA", r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]),
-                points=points,
+        if rows.size:
+            markers.append(
+                line_list_marker(
+                    rows,
+                    ns=_EDGE_NAMES[value],
+                    rgba=EDGE_COLOURS[value],
+                    frame_id=frame_id,
+                    stamp=stamp,
+                    width=width,
+                    msgs=msgs,
+                )
             )
-        )
     return msgs("visualization_msgs/msg/MarkerArray", markers=markers)

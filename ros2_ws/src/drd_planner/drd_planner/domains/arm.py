@@ -717,10 +717,17 @@ class ArmDomain:
         return robot
 
     def end_effector_positions(self, q: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
-        """(N, 3) position (m, root frame) of the chain's tip link for (N, D) configurations (rad)."""
+        """(N, 3) tool-point position (m, root frame) for (N, D) configurations (rad).
+
+        The tool point is the origin of the link rigidly attached to the last joint that lies farthest
+        from it (``panda_grasptarget`` between the Panda's fingertips), so paths show where the gripper
+        goes rather than the wrist.
+        """
         model = robot if robot is not None else self.robot
-        tip = model.chain.link_index(model.chain.tip_link)
-        return np.asarray(model.link_poses(q)[:, tip, :3, 3], dtype=np.float64)
+        chain = model.chain
+        attached = np.nonzero(chain.link_frames == chain.dof)[0]
+        tool = int(attached[np.argmax(np.linalg.norm(chain.link_offsets[attached, :3, 3], axis=1))])
+        return np.asarray(model.link_poses(q)[:, tool, :3, 3], dtype=np.float64)
 
     def edge_trajectories(self) -> None:
         """None: edges are straight lines in joint space."""

@@ -165,15 +165,30 @@ class Scene:
         self._insert(key, _Entry("wire", parts))
         return key
 
-    def add_terrain(self, heightfield: Heightfield, *, tile_cells: int = 8, name: str = "terrain") -> str:
+    def add_terrain(
+        self,
+        heightfield: Heightfield,
+        *,
+        tile_cells: int = 8,
+        name: str = "terrain",
+        collider: TerrainCollider | None = None,
+    ) -> str:
         """Set the terrain (replacing any previous one); returns its name.
 
         Args:
             heightfield: the terrain grid in metres.
             tile_cells: cells per side of each FCL mesh tile.
             name: the terrain's obstacle name.
+            collider: a ready collider of ``heightfield`` to share (its FCL tiles never move, so several
+                scenes may hold them); built here when None.
+
+        Raises:
+            GeometryError: ``collider`` belongs to another heightfield.
         """
-        collider = TerrainCollider(heightfield, tile_cells=tile_cells)
+        if collider is None:
+            collider = TerrainCollider(heightfield, tile_cells=tile_cells)
+        elif collider.heightfield is not heightfield:
+            raise GeometryError("the given terrain collider was built for another heightfield")
         if self._terrain_name is not None:
             self.remove(self._terrain_name)
         key = self._claim(name, "terrain", replace=False)

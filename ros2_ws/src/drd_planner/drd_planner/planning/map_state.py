@@ -8,6 +8,7 @@ plan. Snapshots build their :class:`~drd_planner.geometry.scene.Scene` once, laz
 from __future__ import annotations
 
 import dataclasses
+import weakref
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -21,8 +22,22 @@ from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.geometry.terrain_collider import TerrainCollider
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Terrain colliders by heightfield object: snapshots that keep the terrain (an obstacle update) share it.
+_COLLIDERS: weakref.WeakKeyDictionary[Heightfield, TerrainCollider] = weakref.WeakKeyDictionary()
+
+
+def terrain_collider(terrain: Heightfield) -> TerrainCollider:
+    """The FCL tiles of ``terrain``, built once per heightfield object (most of a scene's build time)."""
+    collider = _COLLIDERS.get(terrain)
+    if collider is None:
+        collider = _COLLIDERS[terrain] = TerrainCollider(terrain)
+    return collider
+
+
 Parts = tuple[tuple[Shape, Pose], ...]
 
 
@@ -56,7 +71,7 @@ class MapSnapshot:
         """The FCL scene of this snapshot (built on first use)."""
         scene = Scene(margin=self.margin)
         if self.terrain is not None:
-            scene.add_terrain(self.terrain)
+            scene.add_terrain(self.terrain, collider=terrain_collider(self.terrain))
         for key in sorted(self.obstacles):
             for k, (shape, pose) in enumerate(self.obstacles[key]):
                 scene.add(shape, pose, name=f"{key}#{k}")

@@ -56,11 +56,13 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RclpyMessages
 from drd_msgs_py.obstacles import obstacle_update, pose_from_msg
 from drd_msgs_py.plans import (
+    EDGE_COLOURS,
     CheckRecord,
     checked_edges_markers,
     diagnostics_message,
     edge_checks_message,
     joint_trajectory_message,
+    line_list_marker,
     path_message,
     summary_status,
 )
@@ -77,10 +79,16 @@ __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
 )
-REQUESTS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+#: Requests (topics and the service): reliable and deep enough that a burst reaches the node, which then
+#: coalesces it (with KEEP_LAST 10 the middleware would drop all but the last 10 unseen).
+REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+#: The per-check log.
+CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
 #: Served requests kept in :attr:`PlannerNode.history` (each holds its map snapshot).
 HISTORY_LENGTH = 16
+#: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
+LIBRARY_EDGE_SEGMENTS = 4
 #: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
 TRAJECTORY_JOINT_SPEED = 0.5
 
@@ -151,11 +159,12 @@ class PlannerNode(LifecycleNode):
         self._wake = self.create_guard_condition(self._serve, callback_group=self._work)
         self._plan_pub = self.create_publisher(PathMsg, "plan", LATCHED)
         self._trajectory_pub = self.create_publisher(JointTrajectory, "joint_trajectory", LATCHED)
-        self._checks_pub = self.create_publisher(DiagnosticArray, "edge_checks", REQUESTS)
+        self._checks_pub = self.create_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self._markers_pub = self.create_publisher(MarkerArray, "checked_edges", 10)
         self._errors: list[str] = []
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
+        self._library_markers: dict[tuple[str, Any], Any] = {}
 
     # ------------------------------------------------------------------------------------------------
     # Introspection (tests, diagnostics)
@@ -242,7 +251,9 @@ class PlannerNode(LifecycleNode):
                 JointState, "goal_joints", self._on_goal_joints, REQUESTS, callback_group=group
             ),
         ]
-        self._service = self.create_service(GetPlan, "get_plan", self._on_get_plan, callback_group=self._work)
+        self._service = self.create_service(
+            GetPlan, "get_plan", self._on_get_plan, qos_profile=REQUESTS, callback_group=self._work
+        )
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -254,7 +265,7 @@ class PlannerNode(LifecycleNode):
         """Forget the trees and the maps."""
         self._drop_interfaces()
         self._sessions, self._obstacles, self._snapshot = [], {}, MapSnapshot(0)
-        self._published, self._pending = None, {}
+        self._published, self._pending, self._library_markers = None, {}, {}
         return TransitionCallbackReturn.SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -474,7 +485,6 @@ class PlannerNode(LifecycleNode):
             for c in result.checks
         ]
         self._checks_pub.publish(edge_checks_message(records, stamp=stamp, msgs=self._msgs))
-        self._markers_pub.publish(self._checked_markers(session, result, snapshot, stamp))
         values = {
             "tree": result.tree,
             "map_version": result.map_version,
@@ -493,6 +503,7 @@ class PlannerNode(LifecycleNode):
         self._diag_pub.publish(diagnostics_message([status], stamp=stamp, msgs=self._msgs))
         if not result.ok:
             self.get_logger().warning(f"{result.tree}: {result.message}; nothing published on plan")
+            self._publish_markers(session, result, snapshot, stamp)
             return None
         positions = session.positions(result.states, snapshot)
         if session.is_arm:
@@ -514,21 +525,51 @@ class PlannerNode(LifecycleNode):
         self._plan_pub.publish(path)
         self._published = _Published(session, result, snapshot)
         self.get_logger().info(f"{result.tree}: {result.message}")
+        self._publish_markers(session, result, snapshot, stamp)
         return path
+
+    def _publish_markers(
+        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> None:
+        if self._markers_pub.get_subscription_count() > 0:  # thousands of points: only for a listener
+            self._markers_pub.publish(self._checked_markers(session, result, snapshot, stamp))
 
     def _checked_markers(
         self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> Any:
-        outcome = {c.edge: int(c.free) for c in result.checks}
-        library_edges = session.bundle.problem.library.library_edges
+        """The checked edges at full resolution over the library edges in grey (built once per tree and arm)."""
         segments, values = [], []
-        for edge in sorted(set(outcome) | {int(e) for e in library_edges}):
-            pts = session.positions(session.edge_states(edge), snapshot)
+        for check in result.checks:
+            pts = session.positions(session.edge_states(check.edge), snapshot)
             segments.append(np.stack([pts[:-1], pts[1:]], axis=1))
-            values.append(np.full(len(pts) - 1, outcome.get(edge, -1)))
+            values.append(np.full(len(pts) - 1, int(check.free)))
         seg = np.concatenate(segments) if segments else np.zeros((0, 2, 3))
         val = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
-        return checked_edges_markers(seg, val, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
+        library = self._library_marker(session, snapshot)
+        library.header.stamp.sec, library.header.stamp.nanosec = stamp
+        return checked_edges_markers(
+            seg, val, frame_id=self._frame, stamp=stamp, msgs=self._msgs, background=[library]
+        )
+
+    def _library_marker(self, session: PlanningSession, snapshot: MapSnapshot) -> Any:
+        """Every library edge as a grey LINE_LIST, each drawn with at most :data:`LIBRARY_EDGE_SEGMENTS` segments."""
+        key = (session.name, snapshot.robot if session.is_arm else None)
+        marker = self._library_markers.get(key)
+        if marker is None:
+            segments = []
+            for edge in session.bundle.problem.library.library_edges:
+                pts = session.positions(session.edge_states(int(edge)), snapshot)
+                keep = np.unique(np.linspace(0, len(pts) - 1, LIBRARY_EDGE_SEGMENTS + 1).round().astype(int))
+                segments.append(np.stack([pts[keep[:-1]], pts[keep[1:]]], axis=1))
+            marker = line_list_marker(
+                np.concatenate(segments) if segments else np.zeros((0, 2, 3)),
+                ns="library",
+                rgba=EDGE_COLOURS[-1],
+                frame_id=self._frame,
+                msgs=self._msgs,
+            )
+            self._library_markers = {key: marker}  # one tree and arm model at a time is the common case
+        return marker
 
     def _report_error(self, text: str) -> None:
         self.get_logger().error(text)

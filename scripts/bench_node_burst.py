@@ -1,0 +1,572 @@
+#!/usr/bin/env python3
+# mypy: allow-untyped-calls
+"""Burst benchmark of the planner node: N requests as fast as possible, answered or coalesced, memory.
+
+The real :class:`~drd_planner.ros.node.PlannerNode` runs as ``planner_node`` runs it (a two-thread
+``MultiThreadedExecutor``: maps and requests in one callback group, plans in the other) in a thread of
+this process; a peer node in another thread publishes the maps of the helicopter "wires" world of the
+tree's domain (or the first maps of ``--bag``), then
+
+- ``topic``: N ``goal_pose`` requests back to back. The node plans the newest pending request and
+  counts the ones it superseded in the summary's ``coalesced`` value, so every request must show up
+  on ``/diagnostics`` as answered (a summary) or coalesced (counted in a later summary);
+- ``service``: N ``get_plan`` calls back to back (``call_async``); every call must get its response.
+
+Per 25 handled requests the process's RSS (``/proc/self/statm``, less tracemalloc's own tables), the
+Python heap traced by ``tracemalloc`` and the number of gc-tracked objects are printed, with rows
+before and after the burst (nothing in flight), then latency percentiles (publish or call -> the
+answer reaching the peer) and the answered / coalesced / lost counts. Each mode runs ``--repeat``
+bursts: the first burst under tracemalloc shows the node's steady-state structures (its bounded plan
+history, caches) being replaced by traced copies, so flat memory shows from the second burst on.
+``--json FILE`` writes the same figures.
+
+Usage: python scripts/bench_node_burst.py [--requests 200] [--mode both|topic|service]
+       [--tree trees/heli_wires.npz] [--world-seed 1] [--bag bags/heli_wires.mcap] [--every 25]
+       [--repeat 2] [--trace topic|both|none] [--warm-up-calls N] [--json FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import os
+import threading
+import time
+import tracemalloc
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path as PathMsg
+from nav_msgs.srv import GetPlan
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import PointCloud2
+from visualization_msgs.msg import MarkerArray
+
+import drd_planner.ros.node as node_module
+from drd_msgs_py.factory import RclpyMessages
+from drd_msgs_py.worlds import helicopter_world_messages
+from drd_planner.ros.node import LATCHED, REQUESTS, PlannerNode
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_TREE = REPO_ROOT / "trees" / "heli_wires.npz"
+#: /diagnostics on the peer: deep enough to hold a whole burst of summaries.
+RECORD = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+RECORD_LATCHED = QoSProfile(
+    depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+
+
+def rss_bytes() -> int:
+    """Resident set size of this process now (bytes; Linux ``/proc/self/statm``, else peak RSS)."""
+    try:
+        return int(Path("/proc/self/statm").read_text().split()[1]) * _PAGE
+    except OSError:
+        import resource
+
+        return int(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
+@dataclass
+class MemoryRow:
+    """Memory when ``handled`` requests had been answered or coalesced.
+
+    Attributes:
+        handled: requests answered or coalesced so far.
+        rss: resident set size, bytes, less the memory tracemalloc uses for its own traces.
+        traced: Python heap traced by tracemalloc, bytes (0 when not tracing).
+        objects: objects tracked by the garbage collector (a leak of messages or results grows it).
+    """
+
+    handled: int
+    rss: int
+    traced: int
+    objects: int
+
+
+@dataclass
+class BurstReport:
+    """What one burst gave.
+
+    Attributes:
+        mode: ``topic`` or ``service``.
+        requests: requests sent.
+        answered: requests that got their own answer (a summary, or a service response).
+        coalesced: requests superseded before being served (the summaries' ``coalesced`` values).
+        seconds: first send -> last answer.
+        latencies_s: per answered request, send -> answer at the peer (seconds).
+        memory: one row per ``every`` handled requests, taken during the burst (requests still queued
+            or in flight hold memory then, so these rows show the peak and fall towards the end).
+        before: the row just before the burst, after a garbage collection (nothing in flight).
+        after: the row once every request was handled, after a garbage collection.
+        results: ``result`` value of each summary (``path_found``, ...), service: poses per response.
+    """
+
+    mode: str
+    requests: int
+    answered: int = 0
+    coalesced: int = 0
+    seconds: float = 0.0
+    latencies_s: list[float] = field(default_factory=list)
+    memory: list[MemoryRow] = field(default_factory=list)
+    results: list[str] = field(default_factory=list)
+    before: MemoryRow | None = None
+    after: MemoryRow | None = None
+
+    @property
+    def lost(self) -> int:
+        """Requests neither answered nor coalesced."""
+        return self.requests - self.answered - self.coalesced
+
+
+class Harness:
+    """The node and a peer, each on its own executor spinning in a thread of this process.
+
+    Args:
+        tree: the tree file the node loads.
+        frame_id: the planning frame.
+        domain_id: ROS domain id (None: ``ROS_DOMAIN_ID``).
+        parameters: more node parameters (``replan_on_map_update``, ``seed``, ...).
+        single_threaded: run the node on a SingleThreadedExecutor (every callback in one thread)
+            instead of the two-thread executor ``planner_node`` uses.
+        profiler: a ``cProfile.Profile`` that records the node's executor thread (implies
+            ``single_threaded``, since cProfile sees only the thread it runs in).
+    """
+
+    def __init__(
+        self,
+        *,
+        tree: Path,
+        frame_id: str = "map",
+        domain_id: int | None = None,
+        parameters: Sequence[Parameter] = (),
+        single_threaded: bool = False,
+        profiler: Any = None,
+    ) -> None:
+        self.context = rclpy.context.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = PlannerNode(
+            context=self.context,
+            parameter_overrides=[
+                Parameter("tree_paths", value=[str(tree)]),
+                Parameter("frame_id", value=frame_id),
+                *parameters,
+            ],
+        )
+        if self.node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+            raise RuntimeError(f"configure failed: {self.node.errors[-1:]}")
+        if self.node.trigger_activate() != TransitionCallbackReturn.SUCCESS:
+            raise RuntimeError("activate failed")
+        self.frame_id = frame_id
+        self.peer = rclpy.create_node("burst_peer", context=self.context)
+        self.obstacles = self.peer.create_publisher(MarkerArray, "obstacles", LATCHED)
+        self.terrain = self.peer.create_publisher(PointCloud2, "terrain", LATCHED)
+        self.goals = self.peer.create_publisher(PoseStamped, "goal_pose", REQUESTS)
+        self.client = self.peer.create_client(GetPlan, "get_plan")
+        self._lock = threading.Lock()
+        self._listeners: list[Callable[[Any], None]] = []
+        self._plan_listeners: list[Callable[[Any], None]] = []
+        self.plans = 0  # Path messages received on plan (only counted: a kept message would look like a leak)
+        self.peer.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, RECORD)
+        self.peer.create_subscription(PathMsg, "plan", self._on_plan, RECORD_LATCHED)
+        if single_threaded or profiler is not None:
+            self._node_exec: Any = SingleThreadedExecutor(context=self.context)
+        else:
+            self._node_exec = MultiThreadedExecutor(num_threads=2, context=self.context)
+        self._node_exec.add_node(self.node)
+        self._nudge = self.peer.create_guard_condition(lambda: None)
+        self._peer_exec = SingleThreadedExecutor(context=self.context)
+        self._peer_exec.add_node(self.peer)
+        spin = self._node_exec.spin if profiler is None else lambda: profiler.runcall(self._node_exec.spin)
+        self._threads = [
+            threading.Thread(target=spin, daemon=True),
+            threading.Thread(target=self._peer_exec.spin, daemon=True),
+        ]
+        for thread in self._threads:
+            thread.start()
+
+    def _on_plan(self, msg: Any) -> None:
+        now = time.perf_counter()
+        with self._lock:
+            self.plans += 1
+            listeners = list(self._plan_listeners)
+        for listener in listeners:
+            listener((now, msg))
+
+    def _on_diagnostics(self, msg: Any) -> None:
+        now = time.perf_counter()
+        with self._lock:
+            listeners = list(self._listeners)
+        for status in msg.status:
+            for listener in listeners:
+                listener((now, status))
+
+    def listen_plans(self, listener: Callable[[Any], None]) -> Callable[[], None]:
+        """Call ``listener((receive_time, path))`` for each Path on ``plan``; returns the remover."""
+        with self._lock:
+            self._plan_listeners.append(listener)
+
+        def remove() -> None:
+            with self._lock:
+                self._plan_listeners.remove(listener)
+
+        return remove
+
+    def settle(self) -> None:
+        """Let the peer's executor run one more round.
+
+        An executor drops the tasks it ran (service responses' done callbacks, with the responses) only
+        when it next wakes up; without this the last responses of a burst would look like a leak.
+        """
+        for _ in range(2):
+            self._nudge.trigger()
+            time.sleep(0.02)
+
+    def listen(self, listener: Callable[[Any], None]) -> Callable[[], None]:
+        """Call ``listener((receive_time, status))`` for each /diagnostics status; returns the remover."""
+        with self._lock:
+            self._listeners.append(listener)
+
+        def remove() -> None:
+            with self._lock:
+                self._listeners.remove(listener)
+
+        return remove
+
+    def goal(self, stamp: tuple[int, int] = (0, 0)) -> PoseStamped:
+        """A valid request at the first tree's goal position, stamped ``stamp``."""
+        goal = PoseStamped()
+        goal.header.frame_id = self.frame_id
+        goal.header.stamp.sec, goal.header.stamp.nanosec = stamp
+        x, y, z = (float(v) for v in self.node.sessions[0].goal_position)
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = x, y, z
+        goal.pose.orientation.w = 1.0
+        return goal
+
+    def publish_maps(self, markers: Any, cloud: Any | None, *, timeout: float = 10.0) -> None:
+        """Publish the maps and wait until the node holds a snapshot with them."""
+        version = self.node.snapshot.version
+        want = version + (2 if cloud is not None else 1)
+        if cloud is not None:
+            self.terrain.publish(cloud)
+        self.obstacles.publish(markers)
+        if not wait_for(lambda: self.node.snapshot.version >= want, timeout):
+            raise RuntimeError(f"the node did not take the maps: {self.node.errors[-3:]}")
+
+    def close(self) -> None:
+        """Stop both executors and the context."""
+        self._node_exec.shutdown()
+        self._peer_exec.shutdown()
+        for thread in self._threads:
+            thread.join(timeout=5.0)
+        self.node.destroy_node()
+        self.peer.destroy_node()
+        self.context.try_shutdown()
+
+
+def wait_for(done: Callable[[], bool], timeout: float) -> bool:
+    """Poll ``done`` every millisecond for up to ``timeout`` seconds."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if done():
+            return True
+        time.sleep(0.001)
+    return done()
+
+
+def wait_progress(progress: Callable[[], int], goal: int, *, stall: float, timeout: float) -> None:
+    """Wait until ``progress() >= goal``, ``stall`` seconds pass without progress, or ``timeout``."""
+    end = time.monotonic() + timeout
+    last, since = progress(), time.monotonic()
+    while time.monotonic() < end and last < goal and time.monotonic() - since < stall:
+        time.sleep(0.005)
+        now = progress()
+        if now != last:
+            last, since = now, time.monotonic()
+
+
+def default_maps(harness: Harness, *, world_seed: int, bag: Path | None) -> tuple[Any, Any | None]:
+    """(MarkerArray, PointCloud2 or None): the first maps of ``bag``, else the tree's "wires" world."""
+    if bag is not None and bag.is_file():
+        from drd_msgs_py.bags import open_bag  # rosbags: only needed with a bag
+
+        first: dict[str, Any] = {}
+        for raw in open_bag(bag).messages:
+            name = raw.topic.lstrip("/")
+            if name in ("obstacles", "terrain") and name not in first:
+                cls = MarkerArray if name == "obstacles" else PointCloud2
+                first[name] = deserialize_message(raw.data, cls)
+        if "obstacles" not in first:
+            raise RuntimeError(f"{bag} has no /obstacles message")
+        return first["obstacles"], first.get("terrain")
+    domain: Any = harness.node.sessions[0].domain
+    world = domain.make_world("wires", world_seed)
+    segments = int(domain.spec().get("wire_segments", 8))
+    return helicopter_world_messages(
+        world, wire_segments=segments, frame_id=harness.frame_id, msgs=RclpyMessages()
+    )
+
+
+def memory_row(handled: int, *, collect: bool = False) -> MemoryRow:
+    """The process's memory now (``collect``: after a full garbage collection)."""
+    if collect:
+        gc.collect()
+    tracing = tracemalloc.is_tracing()
+    traced = tracemalloc.get_traced_memory()[0] if tracing else 0
+    own = tracemalloc.get_tracemalloc_memory() if tracing else 0
+    return MemoryRow(handled, rss_bytes() - own, traced, len(gc.get_objects()))
+
+
+def _sample(report: BurstReport, handled: int, every: int) -> None:
+    """Add a memory row for each multiple of ``every`` that ``handled`` reached."""
+    last = report.memory[-1].handled if report.memory else 0
+    if handled // every > last // every or (handled == report.requests and last != handled):
+        report.memory.append(memory_row(handled))
+
+
+def topic_burst(
+    harness: Harness, *, requests: int, every: int = 25, stall: float = 5.0, timeout: float = 300.0
+) -> BurstReport:
+    """Publish ``requests`` goal_pose requests back to back; wait until all are answered or coalesced.
+
+    Waiting ends early when nothing was handled for ``stall`` seconds (requests lost on the way).
+    """
+    report = BurstReport("topic", requests)
+    sent: dict[str, float] = {}
+    lock = threading.Lock()
+
+    def on_status(item: tuple[float, Any]) -> None:
+        now, status = item
+        values = {str(kv.key): str(kv.value) for kv in status.values}
+        if values.get("request") != "goal_pose":
+            return
+        with lock:
+            report.answered += 1
+            report.coalesced += int(values.get("coalesced", "0"))
+            report.results.append(values.get("result", "?"))
+            start = sent.get(values.get("request_stamp", ""))
+            if start is not None:
+                report.latencies_s.append(now - start)
+            report.seconds = now - min(sent.values())
+            _sample(report, report.answered + report.coalesced, every)
+
+    def handled() -> int:
+        with lock:
+            return report.answered + report.coalesced
+
+    report.before = memory_row(0, collect=True)
+    remove = harness.listen(on_status)
+    try:
+        base = time.time_ns()
+        for i in range(requests):  # messages are not kept: the burst itself must not look like a leak
+            stamp_ns = base + i  # a distinct header stamp per request: the summary names the one it served
+            goal = harness.goal((stamp_ns // 10**9, stamp_ns % 10**9))
+            key = f"{goal.header.stamp.sec}.{goal.header.stamp.nanosec:09d}"
+            with lock:
+                sent[key] = time.perf_counter()
+            harness.goals.publish(goal)
+        del goal
+        wait_progress(handled, requests, stall=stall, timeout=timeout)
+        time.sleep(0.2)  # a late summary (more handled than sent would be a bug) shows up in the counts
+    finally:
+        remove()
+    with lock:
+        sent.clear()
+    harness.settle()
+    report.after = memory_row(handled(), collect=True)
+    return report
+
+
+def service_burst(
+    harness: Harness, *, requests: int, every: int = 25, stall: float = 5.0, timeout: float = 300.0
+) -> BurstReport:
+    """Call get_plan ``requests`` times back to back (call_async); wait for every response (or a stall)."""
+    report = BurstReport("service", requests)
+    if not harness.client.wait_for_service(timeout_sec=10.0):
+        raise RuntimeError("get_plan is not offered")
+    lock = threading.Lock()
+    report.before = memory_row(0, collect=True)
+    first = time.perf_counter()
+
+    def on_done(future: Any, start: float) -> None:
+        now = time.perf_counter()
+        with lock:
+            report.answered += 1
+            report.latencies_s.append(now - start)
+            report.seconds = now - first
+            result = future.result()
+            report.results.append(str(len(result.plan.poses)) if result is not None else "none")
+            _sample(report, report.answered, every)
+
+    def handled() -> int:
+        with lock:
+            return report.answered
+
+    for _ in range(requests):  # the futures are not kept: a kept response would look like a leak
+        request = GetPlan.Request()
+        request.goal = harness.goal()
+        start = time.perf_counter()
+        future = harness.client.call_async(request)
+        future.add_done_callback(lambda f, start=start: on_done(f, start))
+    del request, future  # the last future would keep its response alive through the "after" row
+    wait_progress(handled, requests, stall=stall, timeout=timeout)
+    harness.settle()
+    report.after = memory_row(handled(), collect=True)
+    return report
+
+
+def percentiles(values: list[float]) -> dict[str, float]:
+    """mean, p50, p95, max of ``values`` in milliseconds (NaN when empty)."""
+    if not values:
+        return {k: float("nan") for k in ("mean", "p50", "p95", "max")}
+    ms = 1e3 * np.asarray(values)
+    return {
+        "mean": float(ms.mean()),
+        "p50": float(np.percentile(ms, 50)),
+        "p95": float(np.percentile(ms, 95)),
+        "max": float(ms.max()),
+    }
+
+
+def print_report(report: BurstReport, *, note: str = "") -> None:
+    """The memory table, the latencies and the counts of one burst."""
+    traced = "tracemalloc on" if report.after is not None and report.after.traced else "tracemalloc off"
+    print(
+        f"\n== {report.mode} burst: {report.requests} requests ({', '.join(filter(None, (note, traced)))}) =="
+    )
+    print(f"{'':>7} {'handled':>8} {'RSS MiB':>9} {'traced MiB':>11} {'gc objects':>11}")
+    labelled = [("before", report.before), *(("", r) for r in report.memory), ("after", report.after)]
+    for label, row in labelled:
+        if row is not None:
+            print(
+                f"{label:>7} {row.handled:>8} {row.rss / 2**20:>9.1f} {row.traced / 2**20:>11.3f} {row.objects:>11}"
+            )
+    for what, growth in (
+        ("during the burst", memory_growth(report, start=50)),
+        ("before -> after", quiescent_growth(report)),
+    ):
+        if growth is not None:
+            print(
+                f"growth {what} ({growth['from']} -> {growth['to']} handled): RSS {growth['rss'] / 2**20:+.2f} MiB, "
+                f"traced {growth['traced'] / 2**10:+.1f} KiB, gc objects {growth['objects']:+d}"
+            )
+    lat = percentiles(report.latencies_s)
+    print(
+        f"latency of answered requests (ms): mean {lat['mean']:.1f}  p50 {lat['p50']:.1f}  "
+        f"p95 {lat['p95']:.1f}  max {lat['max']:.1f}"
+    )
+    print(
+        f"answered {report.answered}  coalesced {report.coalesced}  lost {report.lost}  "
+        f"in {report.seconds:.2f} s"
+    )
+
+
+def memory_growth(report: BurstReport, *, start: int) -> dict[str, int] | None:
+    """RSS and traced-heap growth (bytes) from the first row at >= ``start`` handled to the last row."""
+    rows = [r for r in report.memory if r.handled >= start]
+    if len(rows) < 2:
+        return None
+    return _difference(rows[0], rows[-1])
+
+
+def _difference(a: MemoryRow, b: MemoryRow) -> dict[str, int]:
+    return {
+        "from": a.handled,
+        "to": b.handled,
+        "rss": b.rss - a.rss,
+        "traced": b.traced - a.traced,
+        "objects": b.objects - a.objects,
+    }
+
+
+def quiescent_growth(report: BurstReport) -> dict[str, int] | None:
+    """Growth from :attr:`BurstReport.before` to :attr:`BurstReport.after` (both with nothing in flight)."""
+    if report.before is None or report.after is None:
+        return None
+    return _difference(report.before, report.after)
+
+
+def warm_up(harness: Harness, *, burst: int = 50, calls: int | None = None) -> None:
+    """Requests before measuring, so that one-time allocations are not counted as growth.
+
+    One topic request (imports, caches, the first scene), as many single service calls as the node
+    keeps served requests in its bounded ``history`` (:data:`drd_planner.ros.node.HISTORY_LENGTH`)
+    plus one (or ``calls``), then a topic burst of ``burst`` requests (first-burst queues and wait
+    sets). A request that is lost here (a node queue shorter than ``burst``) does not stop the warm-up.
+    """
+    if calls is None:
+        calls = int(getattr(node_module, "HISTORY_LENGTH", 16)) + 1
+    for run, count in ((topic_burst, 1), *((service_burst, 1) for _ in range(calls))):
+        warm = run(harness, requests=count, stall=30.0)
+        if warm.answered != count or warm.results[0] in ("none", "0"):
+            raise RuntimeError(
+                f"the warm-up {warm.mode} request was not answered: {harness.node.errors[-3:]}"
+            )
+    topic_burst(harness, requests=burst, stall=2.0)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--requests", type=int, default=200)
+    parser.add_argument("--mode", choices=("both", "topic", "service"), default="both")
+    parser.add_argument("--tree", type=Path, default=DEFAULT_TREE)
+    parser.add_argument("--world-seed", type=int, default=1)
+    parser.add_argument("--bag", type=Path, default=None, help="take the maps from this MCAP bag instead")
+    parser.add_argument("--every", type=int, default=25, help="memory row every N handled requests")
+    parser.add_argument("--domain-id", type=int, default=None, help="ROS domain id (default: ROS_DOMAIN_ID)")
+    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument(
+        "--repeat", type=int, default=2, help="bursts per mode (the first traced one warms up)"
+    )
+    parser.add_argument(
+        "--warm-up-calls",
+        type=int,
+        default=None,
+        help="service calls before measuring (default: history + 1)",
+    )
+    parser.add_argument(
+        "--trace",
+        choices=("topic", "both", "none"),
+        default="topic",
+        help="bursts run under tracemalloc (it slows each plan's message building about fourfold)",
+    )
+    args = parser.parse_args()
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    harness = Harness(tree=args.tree, domain_id=args.domain_id)
+    reports = []
+    try:
+        markers, cloud = default_maps(harness, world_seed=args.world_seed, bag=args.bag)
+        harness.publish_maps(markers, cloud)
+        warm_up(harness, calls=args.warm_up_calls)
+        for mode in ("topic", "service") if args.mode == "both" else (args.mode,):
+            burst = topic_burst if mode == "topic" else service_burst
+            if args.trace in (mode, "both"):
+                tracemalloc.start()
+            for k in range(args.repeat):
+                plans = harness.plans
+                report = burst(harness, requests=args.requests, every=args.every)
+                print_report(report, note=f"burst {k + 1} of {args.repeat}")
+                print(f"Path messages received on plan: {harness.plans - plans}")
+                reports.append(report)
+            tracemalloc.stop()
+    finally:
+        tracemalloc.stop()
+        harness.close()
+    if args.json is not None:
+        out = [asdict(r) | {"lost": r.lost, "latency_ms": percentiles(r.latencies_s)} for r in reports]
+        args.json.write_text(json.dumps(out, indent=2))
+
+
+if __name__ == "__main__":
+    main()
