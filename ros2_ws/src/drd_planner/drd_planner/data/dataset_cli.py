@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from drd_planner.argtypes import bounded_float, bounded_int
 from drd_planner.core.problem import Problem
 from drd_planner.domains.base import DOMAIN_CLASSES
 from drd_planner.exceptions import DatasetError, DrdError
@@ -40,34 +41,9 @@ __all__ = [
 ]
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
-
-
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be non-negative, got {value}")
-    return value
-
-
-def _fraction(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"must lie in [0, 1], got {value}")
-    return value
+_positive_int = bounded_int(at_least=1)
+_non_negative_int = bounded_int(at_least=0)
+_fraction = bounded_float(at_least=0.0, at_most=1.0)
 
 
 def default_workers() -> int:

@@ -52,6 +52,7 @@ from drd_msgs_py.bags import (
 )
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RclpyMessages
+from drd_planner.argtypes import bounded_float
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.shipped import resolve_bag_path
 
@@ -344,24 +345,8 @@ def replay_bag(
 # Command line
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {value}")
-    return value
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected seconds >= 0, got {value}")
-    return value
+_positive = bounded_float(above=0.0)
+_seconds = bounded_float(at_least=0.0)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,33 @@
+"""Bounded-number converters of the command-line tools."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from drd_planner.argtypes import bounded_float, bounded_int
+
+
+@pytest.mark.parametrize(
+    ("parse", "text", "words"),
+    [
+        (bounded_int(at_least=1), "0", "must be at least 1"),
+        (bounded_int(at_least=0), "-1", "must be non-negative"),
+        (bounded_int(at_least=1), "1.5", "is not an integer"),
+        (bounded_float(at_least=0.0, at_most=1.0), "1.5", "must lie in [0, 1]"),
+        (bounded_float(above=0.0), "0", "must be > 0"),
+        (bounded_float(at_least=0.0), "nan", "must be finite"),
+        (bounded_float(at_least=0.0), "x", "is not a number"),
+    ],
+)
+def test_out_of_range_values_are_refused_with_the_bound(parse: object, text: str, words: str) -> None:
+    with pytest.raises(argparse.ArgumentTypeError) as info:
+        parse(text)  # type: ignore[operator]
+    assert words in str(info.value)
+
+
+def test_values_within_the_bounds_are_converted() -> None:
+    assert bounded_int(at_least=1)("3") == 3
+    assert bounded_float(at_least=0.0, at_most=1.0)("1") == 1.0
+    assert bounded_float(above=0.0)("0.25") == 0.25
