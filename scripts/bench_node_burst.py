@@ -2,9 +2,9 @@
 # mypy: allow-untyped-calls
 """Burst benchmark of the planner node: N requests as fast as possible, answered or coalesced, memory.
 
-The real :class:`~drd_planner.ros.node.PlannerNode` runs as ``planner_node`` runs it (a two-thread
-``MultiThreadedExecutor``: maps and requests in one callback group, plans in the other) in a thread of
-this process; a peer node in another thread publishes the maps of the helicopter "wires" world of the
+The real :class:`~drd_planner.ros.node.PlannerNode` runs as ``planner_node`` runs it (a
+``SingleThreadedExecutor`` for maps and requests, the node's own planning thread for plans) in threads
+of this process; a peer node in another thread publishes the maps of the helicopter "wires" world of the
 tree's domain (or the first maps of ``--bag``), then
 
 - ``topic``: N ``goal_pose`` requests back to back. The node plans the newest pending request and
@@ -45,7 +45,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -138,10 +138,6 @@ class Harness:
         frame_id: the planning frame.
         domain_id: ROS domain id (None: ``ROS_DOMAIN_ID``).
         parameters: more node parameters (``replan_on_map_update``, ``seed``, ...).
-        single_threaded: run the node on a SingleThreadedExecutor (every callback in one thread)
-            instead of the two-thread executor ``planner_node`` uses.
-        profiler: a ``cProfile.Profile`` that records the node's executor thread (implies
-            ``single_threaded``, since cProfile sees only the thread it runs in).
     """
 
     def __init__(
@@ -151,8 +147,6 @@ class Harness:
         frame_id: str = "map",
         domain_id: int | None = None,
         parameters: Sequence[Parameter] = (),
-        single_threaded: bool = False,
-        profiler: Any = None,
     ) -> None:
         self.context = rclpy.context.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
@@ -180,17 +174,13 @@ class Harness:
         self.plans = 0  # Path messages received on plan (only counted: a kept message would look like a leak)
         self.peer.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, RECORD)
         self.peer.create_subscription(PathMsg, "plan", self._on_plan, RECORD_LATCHED)
-        if single_threaded or profiler is not None:
-            self._node_exec: Any = SingleThreadedExecutor(context=self.context)
-        else:
-            self._node_exec = MultiThreadedExecutor(num_threads=2, context=self.context)
+        self._node_exec = SingleThreadedExecutor(context=self.context)
         self._node_exec.add_node(self.node)
         self._nudge = self.peer.create_guard_condition(lambda: None)
         self._peer_exec = SingleThreadedExecutor(context=self.context)
         self._peer_exec.add_node(self.peer)
-        spin = self._node_exec.spin if profiler is None else lambda: profiler.runcall(self._node_exec.spin)
         self._threads = [
-            threading.Thread(target=spin, daemon=True),
+            threading.Thread(target=self._node_exec.spin, daemon=True),
             threading.Thread(target=self._peer_exec.spin, daemon=True),
         ]
         for thread in self._threads:
@@ -473,11 +463,18 @@ def print_report(report: BurstReport, *, note: str = "") -> None:
 
 
 def memory_growth(report: BurstReport, *, start: int) -> dict[str, int] | None:
-    """RSS and traced-heap growth (bytes) from the first row at >= ``start`` handled to the last row."""
-    rows = [r for r in report.memory if r.handled >= start]
-    if len(rows) < 2:
+    """RSS and traced-heap growth (bytes) from the row nearest ``start`` handled to the last row.
+
+    The row nearest is the last one at or before ``start``, else the first after it: the rows are
+    taken when summaries arrive, and a well-coalesced burst has only a few (each summary can cover
+    dozens of superseded requests).
+    """
+    rows = report.memory
+    before = [r for r in rows if r.handled <= start]
+    first = before[-1] if before else next((r for r in rows if r.handled > start), None)
+    if first is None or first is rows[-1]:
         return None
-    return _difference(rows[0], rows[-1])
+    return _difference(first, rows[-1])
 
 
 def _difference(a: MemoryRow, b: MemoryRow) -> dict[str, int]:

@@ -156,15 +156,20 @@ def _world(session: PlanningSession, seed: int = 3) -> tuple[Any, Any]:
     )
 
 
+def _publish_world(executor: Any, node: PlannerNode, peer: Peer) -> None:
+    """Publish the wires world of the node's first tree and wait until the node holds it."""
+    markers, cloud = _world(node.sessions[0])
+    peer.terrain.publish(cloud)
+    peer.obstacles.publish(markers)
+    assert spin_until(executor, lambda: node.snapshot.version >= 2)
+
+
 def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> None:
     node = _node(context, ["heli_wires"])  # a shipped tree by name
     peer = Peer(context)
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
-        markers, cloud = _world(session)
-        peer.terrain.publish(cloud)
-        peer.obstacles.publish(markers)
-        assert spin_until(executor, lambda: node.snapshot.version >= 2)
+        _publish_world(executor, node, peer)
         sent = 8
         for k in range(sent):
             goal = _goal(session)
@@ -183,6 +188,38 @@ def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> Non
             summaries
         )  # one check log per served request (plan is latched, depth 1)
         assert peer.plans
+
+
+def test_maps_are_prepared_on_arrival_and_a_bug_in_a_plan_leaves_the_node_planning(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    node = _node(context, [str(TREE)])
+    peer = Peer(context)
+    with active_planner(context, node, peer) as executor:
+        session = node.sessions[0]
+        _publish_world(executor, node, peer)
+        # The map callback built the scene and the checker before the snapshot became current.
+        assert session.checker(node.snapshot) is session.checker(node.snapshot)
+        real_plan = session.plan
+        calls: list[int] = []
+
+        def broken_once(*args: Any, **kwargs: Any) -> Any:
+            calls.append(1)
+            if len(calls) == 1:
+                raise ZeroDivisionError("a bug in the planner")
+            return real_plan(*args, **kwargs)
+
+        monkeypatch.setattr(session, "plan", broken_once)
+        peer.goals.publish(_goal(session))
+        assert spin_until(executor, lambda: any("internal error while planning" in e for e in node.errors))
+        assert "ZeroDivisionError: a bug in the planner" in node.errors[-1]
+        assert not peer.plans
+        peer.goals.publish(_goal(session))  # the planning thread is still there
+        assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()))
+        summary = peer.summaries()[-1]
+        assert summary["result"] == "path_found" and float(summary["prepare_s"]) < 1e-3
+        assert float(summary["plan_messaging_s"]) <= float(summary["messaging_s"])
+        assert float(summary["selection_s"]) <= float(summary["policy_s"])
 
 
 def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
@@ -229,10 +266,7 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
     msgs = RclpyMessages()
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
-        markers, cloud = _world(session)
-        peer.terrain.publish(cloud)
-        peer.obstacles.publish(markers)
-        assert spin_until(executor, lambda: node.snapshot.version >= 2)
+        _publish_world(executor, node, peer)
         peer.goals.publish(_goal(session))
         assert spin_until(executor, lambda: bool(peer.plans))
         first = node.published

@@ -59,6 +59,7 @@ class RclpyMessages:
 
     def __init__(self) -> None:
         self._classes: dict[str, Any] = {}
+        self._fields: dict[str, dict[str, str]] = {}
 
     def message_class(self, type_name: str) -> Any:
         """The rclpy class of ``type_name`` (imported on first use)."""
@@ -75,7 +76,11 @@ class RclpyMessages:
     def __call__(self, type_name: str, /, **fields: Any) -> Any:
         """An rclpy message; numpy arrays become ``array.array``, ints for ``byte`` fields bytes."""
         cls = self.message_class(type_name)
-        types: dict[str, str] = cls.get_fields_and_field_types()
+        if not fields:
+            return cls()
+        types = self._fields.get(type_name)
+        if types is None:
+            types = self._fields[type_name] = dict(cls.get_fields_and_field_types())
         converted: dict[str, Any] = {}
         for key, value in fields.items():
             kind = types.get(key)

@@ -7,7 +7,6 @@ for the helicopter, heading in radians as column 3); joint positions (K, J) radi
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -54,10 +53,6 @@ class CheckRecord:
     cached: bool = False
 
 
-def _yaw_quaternion(msgs: MessageFactory, yaw: float) -> Any:
-    return msgs("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
-
-
 def path_message(
     states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
 ) -> Any:
@@ -66,15 +61,15 @@ def path_message(
     if pts.ndim != 2 or pts.shape[1] < 3:
         raise ValueError(f"path states must be (K, >= 3), got {pts.shape}")
     head = header(msgs, frame_id, stamp)
+    yaw = pts[:, 3] if pts.shape[1] > 3 else np.zeros(len(pts))
+    rows = np.column_stack([pts[:, :3], np.sin(yaw / 2.0), np.cos(yaw / 2.0)]).tolist()
     poses = []
-    for row in pts:
-        yaw = float(row[3]) if pts.shape[1] > 3 else 0.0
-        pose = msgs(
-            "geometry_msgs/msg/Pose",
-            position=msgs("geometry_msgs/msg/Point", x=float(row[0]), y=float(row[1]), z=float(row[2])),
-            orientation=_yaw_quaternion(msgs, yaw),
-        )
-        poses.append(msgs("geometry_msgs/msg/PoseStamped", header=head, pose=pose))
+    for x, y, z, qz, qw in rows:  # fill each new message's own fields: a tenth of the nested constructors
+        stamped = msgs("geometry_msgs/msg/PoseStamped", header=head)
+        position, orientation = stamped.pose.position, stamped.pose.orientation
+        position.x, position.y, position.z = x, y, z
+        orientation.x, orientation.y, orientation.z, orientation.w = 0.0, 0.0, qz, qw
+        poses.append(stamped)
     return msgs("nav_msgs/msg/Path", header=head, poses=poses)
 
 

@@ -72,7 +72,10 @@ class PlanResult:
         path_vertices: its vertex ids (start ... goal).
         states: (K, d) the path's states (trajectory samples; x, y, z metres first, or joint angles).
         checks: every check, in order.
-        seconds: wall times: ``checks`` (in FCL), ``selection`` (policy), ``total``.
+        seconds: wall times in seconds: ``prepare`` (the snapshot's FCL scene and checker, when
+            :meth:`PlanningSession.prepare` had not built them already), ``checks`` (in FCL),
+            ``selection`` (the policy choosing edges), ``policy`` (the policy's whole work in the
+            episode: choosing, and updating its beliefs after each outcome), ``total``.
     """
 
     ok: bool
@@ -162,6 +165,9 @@ class PlanningSession:
         self._trajectories = domain.edge_trajectories()
         self._cache_snapshot: MapSnapshot | None = None
         self._cache: dict[int, bool] = {}
+        # The checker of the latest snapshot asked for, as one (snapshot, checker) pair: replacing the
+        # tuple is atomic, so a map thread preparing the next snapshot never tears a planning thread's.
+        self._prepared: tuple[MapSnapshot, EdgeChecker] | None = None
         root = bundle.tree.bias(0, alpha=bundle.alpha)
         self._context = PolicyContext(
             bundle.problem.library,
@@ -278,10 +284,33 @@ class PlanningSession:
         return np.concatenate([rows[0]] + [r[1:] for r in rows[1:]])
 
     def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot``'s scene (and its ``robot_description`` arm)."""
+        """The domain's edge checker on ``snapshot``'s scene (and its ``robot_description`` arm).
+
+        The checker of the latest snapshot asked for is kept, so :meth:`prepare` on a map update
+        takes the FCL scene and checker build out of the next request.
+        """
+        prepared = self._prepared
+        if prepared is not None and prepared[0] is snapshot:
+            return prepared[1]
+        checker: EdgeChecker
         if isinstance(self._domain, ArmDomain) and snapshot.robot is not None:
-            return self._domain.checker(snapshot.scene, robot=snapshot.robot)
-        return self._domain.checker(snapshot.scene)
+            checker = self._domain.checker(snapshot.scene, robot=snapshot.robot)
+        else:
+            checker = self._domain.checker(snapshot.scene)
+        self._prepared = (snapshot, checker)
+        return checker
+
+    def prepare(self, snapshot: MapSnapshot) -> float:
+        """Build ``snapshot``'s FCL scene and this tree's checker on it now; returns the seconds taken.
+
+        The node calls this when a map arrives, so a request on that map starts checking at once.
+        A snapshot with no maps yet is not prepared (0.0).
+        """
+        if not snapshot.has_maps:
+            return 0.0
+        t0 = time.perf_counter()
+        self.checker(snapshot)
+        return time.perf_counter() - t0
 
     def plan(self, snapshot: MapSnapshot, *, seed: int = 0, checker: EdgeChecker | None = None) -> PlanResult:
         """Serve one request on ``snapshot`` (see the module docstring).
@@ -301,12 +330,14 @@ class PlanningSession:
         if snapshot is not self._cache_snapshot:  # the cache belongs to one snapshot object, not a number
             self._cache_snapshot, self._cache = snapshot, {}
         oracle = _CachingOracle(checker or self.checker(snapshot), self._cache)
+        t_episode = time.perf_counter()
         context = dataclasses.replace(self._context, seed=seed)
         policy = POLICIES["direct_bisect"](context)
         problem = self._bundle.problem
         episode = run_episode(
             problem.library, problem.edge_costs, policy, oracle, max_checks=self._max_checks
         )
+        episode_s = time.perf_counter() - t_episode
         edges = self._domain.graph.edges
         checks = tuple(
             SessionCheck(
@@ -321,9 +352,12 @@ class PlanningSession:
             )
             for c in episode.checks
         )
+        check_s = sum(c.check_ms for c in checks) / 1e3
         seconds = {
-            "checks": sum(c.check_ms for c in checks) / 1e3,
+            "prepare": t_episode - t0,
+            "checks": check_s,
             "selection": sum(c.select_ms for c in checks) / 1e3,
+            "policy": max(episode_s - check_s, 0.0),
         }
         common: dict[str, Any] = {"map_version": snapshot.version, "tree": self._name, "checks": checks}
         if episode.status is not EpisodeStatus.PATH_FOUND or episode.path_edges is None:

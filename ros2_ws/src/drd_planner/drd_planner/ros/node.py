@@ -17,11 +17,13 @@ goal), ``frame_id`` (planning frame), ``seed``, ``max_checks`` (0: no cap), ``go
 (metres), ``joint_tolerance`` (radians), ``autostart`` (``planner_node`` configures and activates
 itself), ``replan_on_map_update``.
 
-Consistency. Maps and requests arrive in one callback group, plans run in another, so a plan runs to
-its end on the map snapshot it started from; a map that arrives meanwhile makes a new snapshot that the
-next plan uses. Topic requests are *coalesced*: while a plan runs, a newer request for the same tree
-supersedes an older one that has not started (the summary's ``coalesced`` value counts them); service
-calls are each answered. After a plan was published, a map update re-checks only the plan's edges the
+Consistency. Maps and requests arrive in executor callbacks; topic requests are planned in the node's
+planning thread (:mod:`drd_planner.ros.plan_worker`), service calls in their callback, one plan at a
+time. A plan runs to its end on the map snapshot it started from; a map that arrives meanwhile makes a
+new snapshot (its FCL scene and checkers built in the map callback) that the next plan uses. Topic
+requests are *coalesced*: while a plan runs, a newer request for the same tree supersedes an older
+one that has not started (the summary's ``coalesced`` value counts them); service calls are each
+answered. After a plan was published, a map update re-checks only the plan's edges the
 update can affect (:mod:`drd_planner.planning.replan`): the plan is kept if they stay free, replanned
 (and the reason put on ``/diagnostics``) if one is blocked, and withdrawn (an empty Path) if no library
 path is free any more. A bad message or request is reported on ``/diagnostics`` and in the log; it
@@ -32,6 +34,7 @@ snapshot it was planned on.
 from __future__ import annotations
 
 import threading
+import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
@@ -42,8 +45,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import try_shutdown
@@ -73,6 +75,7 @@ from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
+from drd_planner.ros.plan_worker import PlanWorker
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
@@ -101,6 +104,7 @@ class _Request:
     source: str
     stamp: str
     coalesced: int = 0
+    received: float = 0.0  # time.perf_counter() when the request was taken
 
 
 @dataclass(frozen=True)
@@ -150,13 +154,12 @@ class PlannerNode(LifecycleNode):
         self._frame = "map"
         self._subs: list[Any] = []
         self._service: Any = None
-        self._intake = MutuallyExclusiveCallbackGroup()  # maps and requests
-        self._work = MutuallyExclusiveCallbackGroup()  # plans, re-checks and the service
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # the pending requests and the map-changed flag
+        self._planning = threading.Lock()  # one plan at a time: the sessions' caches, the published plan
         self._pending: dict[str, _Request] = {}
         self._map_changed = False
         self._published: _Published | None = None
-        self._wake = self.create_guard_condition(self._serve, callback_group=self._work)
+        self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
         self._plan_pub = self.create_publisher(PathMsg, "plan", LATCHED)
         self._trajectory_pub = self.create_publisher(JointTrajectory, "joint_trajectory", LATCHED)
         self._checks_pub = self.create_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
@@ -234,26 +237,16 @@ class PlannerNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Subscribe to the maps and requests and offer ``get_plan``."""
-        group = self._intake
+        """Start the planning thread, subscribe to the maps and requests and offer ``get_plan``."""
+        self._worker.start()
         self._subs = [
-            self.create_subscription(
-                MarkerArray, "obstacles", self._on_obstacles, LATCHED, callback_group=group
-            ),
-            self.create_subscription(PointCloud2, "terrain", self._on_terrain, LATCHED, callback_group=group),
-            self.create_subscription(
-                String, "robot_description", self._on_robot_description, LATCHED, callback_group=group
-            ),
-            self.create_subscription(
-                PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS, callback_group=group
-            ),
-            self.create_subscription(
-                JointState, "goal_joints", self._on_goal_joints, REQUESTS, callback_group=group
-            ),
+            self.create_subscription(MarkerArray, "obstacles", self._on_obstacles, LATCHED),
+            self.create_subscription(PointCloud2, "terrain", self._on_terrain, LATCHED),
+            self.create_subscription(String, "robot_description", self._on_robot_description, LATCHED),
+            self.create_subscription(PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS),
+            self.create_subscription(JointState, "goal_joints", self._on_goal_joints, REQUESTS),
         ]
-        self._service = self.create_service(
-            GetPlan, "get_plan", self._on_get_plan, qos_profile=REQUESTS, callback_group=self._work
-        )
+        self._service = self.create_service(GetPlan, "get_plan", self._on_get_plan, qos_profile=REQUESTS)
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -273,7 +266,14 @@ class PlannerNode(LifecycleNode):
         self._drop_interfaces()
         return TransitionCallbackReturn.SUCCESS
 
+    def destroy_node(self) -> None:
+        """Stop the planning thread (after its running plan), then destroy the node."""
+        self._worker.stop()
+        super().destroy_node()
+
     def _drop_interfaces(self) -> None:
+        if not self._worker.stop():
+            self.get_logger().warning("the planning thread did not end within 30 s")
         for sub in self._subs:
             self.destroy_subscription(sub)
         self._subs = []
@@ -315,11 +315,31 @@ class PlannerNode(LifecycleNode):
         self.get_logger().info(f"robot_description accepted: {robot.chain.robot_name}, {robot.dof} joints")
 
     def _set_snapshot(self, snapshot: MapSnapshot) -> None:
+        self._prepare(snapshot)
         self._snapshot = snapshot
         if self._published is not None and bool(self.get_parameter("replan_on_map_update").value):
             with self._lock:
                 self._map_changed = True
-            self._wake.trigger()
+            self._worker.wake()
+
+    def _prepare(self, snapshot: MapSnapshot) -> None:
+        """Build the new maps' FCL scene and each tree's checker now, not in the next request.
+
+        Runs in the map callback, before the snapshot becomes current: a request served meanwhile plans
+        on the previous snapshot, one served after starts checking at once. A failure here is only
+        logged; the plan on this snapshot meets it again and reports it.
+        """
+        for session in self._sessions:
+            try:
+                seconds = session.prepare(snapshot)
+            except DrdError as exc:
+                self.get_logger().warning(
+                    f"{session.name}: map version {snapshot.version} not prepared: {exc}"
+                )
+                continue
+            self.get_logger().debug(
+                f"{session.name}: map version {snapshot.version} prepared in {1e3 * seconds:.1f} ms"
+            )
 
     # ------------------------------------------------------------------------------------------------
     # Requests
@@ -352,11 +372,17 @@ class PlannerNode(LifecycleNode):
         with self._lock:
             older = self._pending.get(session.name)
             coalesced = older.coalesced + 1 if older is not None else 0
-            self._pending[session.name] = _Request(session, source, stamp_text, coalesced)
-        self._wake.trigger()
+            self._pending[session.name] = _Request(
+                session, source, stamp_text, coalesced, received=time.perf_counter()
+            )
+        self._worker.wake()
 
     def _serve(self) -> None:
         """Plan the newest pending request of each tree, then re-check the published plan if maps changed."""
+        with self._planning:
+            self._serve_pending()
+
+    def _serve_pending(self) -> None:
         with self._lock:
             pending, self._pending = list(self._pending.values()), {}
             map_changed, self._map_changed = self._map_changed, False
@@ -364,6 +390,7 @@ class PlannerNode(LifecycleNode):
             self._plan_and_publish(
                 request.session,
                 {"request": request.source, "request_stamp": request.stamp, "coalesced": request.coalesced},
+                wait_s=time.perf_counter() - request.received,
             )
         published = self._published
         if map_changed and published is not None and published.snapshot is not self._snapshot:
@@ -384,7 +411,11 @@ class PlannerNode(LifecycleNode):
         session = self._session_for(xyz, "request")
         if session is None:
             return None
-        return self._plan_and_publish(session, {"request": "get_plan"})
+        received = time.perf_counter()
+        with self._planning:
+            return self._plan_and_publish(
+                session, {"request": "get_plan"}, wait_s=time.perf_counter() - received
+            )
 
     def _session_for(self, goal: np.ndarray, source: str) -> PlanningSession | None:
         session = next((s for s in self._sessions if s.matches_goal(goal)), None)
@@ -399,14 +430,17 @@ class PlannerNode(LifecycleNode):
             )
         return session
 
-    def _plan_and_publish(self, session: PlanningSession, values: dict[str, Any]) -> Any | None:
+    def _plan_and_publish(
+        self, session: PlanningSession, values: dict[str, Any], *, wait_s: float = 0.0
+    ) -> Any | None:
+        """Plan on the current snapshot and publish; ``wait_s``: how long the request waited to be served."""
         snapshot = self._snapshot
         try:
             result = session.plan(snapshot, seed=int(self.get_parameter("seed").value))
         except DrdError as exc:
             self._report_error(f"{values.get('request', 'request')} refused: {exc}")
             return None
-        return self._publish(session, result, snapshot, values)
+        return self._publish(session, result, snapshot, values, wait_s=wait_s)
 
     # ------------------------------------------------------------------------------------------------
     # Map updates after a published plan
@@ -476,15 +510,33 @@ class PlannerNode(LifecycleNode):
         return int(sec), int(nsec)
 
     def _publish(
-        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, extra: dict[str, Any]
+        self,
+        session: PlanningSession,
+        result: PlanResult,
+        snapshot: MapSnapshot,
+        extra: dict[str, Any],
+        *,
+        wait_s: float = 0.0,
     ) -> Any | None:
+        """Publish a result: ``plan`` (and ``joint_trajectory``) first, then the rest.
+
+        After the plan come the check log, the markers and last the summary. Its timing values
+        (seconds): ``check_s``, ``selection_s``, ``policy_s``, ``prepare_s`` and ``total_s`` of the plan
+        (:class:`PlanResult`), ``wait_s`` (request taken -> served), ``plan_messaging_s`` (building and
+        publishing ``plan``/``joint_trajectory``) and ``messaging_s`` (all messages before the summary).
+        """
+        started = time.perf_counter()
         stamp = self._stamp()
         self._history.append(PlanRecord(session, result, snapshot, dict(extra)))
+        path = self._publish_plan(session, result, snapshot, stamp) if result.ok else None
+        plan_messaging_s = time.perf_counter() - started
         records = [
             CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
             for c in result.checks
         ]
         self._checks_pub.publish(edge_checks_message(records, stamp=stamp, msgs=self._msgs))
+        self._publish_markers(session, result, snapshot, stamp)
+        seconds = result.seconds
         values = {
             "tree": result.tree,
             "map_version": result.map_version,
@@ -493,19 +545,29 @@ class PlannerNode(LifecycleNode):
             "blocked": result.num_blocked,
             "tree_checks": sum(c.stage == "tree" for c in result.checks),
             "bisect_checks": sum(c.stage == "bisect" for c in result.checks),
-            "check_s": f"{result.seconds.get('checks', 0.0):.6f}",
-            "selection_s": f"{result.seconds.get('selection', 0.0):.6f}",
-            "total_s": f"{result.seconds.get('total', 0.0):.6f}",
+            "check_s": f"{seconds.get('checks', 0.0):.6f}",
+            "selection_s": f"{seconds.get('selection', 0.0):.6f}",
+            "policy_s": f"{seconds.get('policy', 0.0):.6f}",
+            "prepare_s": f"{seconds.get('prepare', 0.0):.6f}",
+            "total_s": f"{seconds.get('total', 0.0):.6f}",
+            "wait_s": f"{wait_s:.6f}",
+            "plan_messaging_s": f"{plan_messaging_s:.6f}",
+            "messaging_s": f"{time.perf_counter() - started:.6f}",
             "result": result.status,
             **extra,
         }
         status = summary_status(ok=result.ok, message=result.message, values=values, msgs=self._msgs)
         self._diag_pub.publish(diagnostics_message([status], stamp=stamp, msgs=self._msgs))
-        if not result.ok:
+        if result.ok:
+            self.get_logger().info(f"{result.tree}: {result.message}")
+        else:
             self.get_logger().warning(f"{result.tree}: {result.message}; nothing published on plan")
-            self._publish_markers(session, result, snapshot, stamp)
-            return None
-        positions = session.positions(result.states, snapshot)
+        return path
+
+    def _publish_plan(
+        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> Any:
+        """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); it becomes the published plan."""
         if session.is_arm:
             seconds = float(getattr(session.domain, "resolution", 0.05)) / TRAJECTORY_JOINT_SPEED
             self._trajectory_pub.publish(
@@ -518,14 +580,12 @@ class PlannerNode(LifecycleNode):
                     msgs=self._msgs,
                 )
             )
-            states = positions
+            states = session.positions(result.states, snapshot)
         else:
             states = result.states
         path = path_message(states, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
         self._plan_pub.publish(path)
         self._published = _Published(session, result, snapshot)
-        self.get_logger().info(f"{result.tree}: {result.message}")
-        self._publish_markers(session, result, snapshot, stamp)
         return path
 
     def _publish_markers(
@@ -571,6 +631,9 @@ class PlannerNode(LifecycleNode):
             self._library_markers = {key: marker}  # one tree and arm model at a time is the common case
         return marker
 
+    def _on_worker_error(self, exc: Exception) -> None:
+        self._report_error(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}")
+
     def _report_error(self, text: str) -> None:
         self.get_logger().error(text)
         with self._lock:
@@ -607,12 +670,12 @@ def _joint_goal(msg: Any, joint_names: tuple[str, ...]) -> np.ndarray:
 def main(args: list[str] | None = None) -> None:
     """``planner_node``: run the lifecycle node (``autostart:=true`` configures and activates it).
 
-    Without ``autostart`` the node waits for the lifecycle services (``ros2 lifecycle set``). Two
-    executor threads: maps and requests keep arriving while a plan runs.
+    Without ``autostart`` the node waits for the lifecycle services (``ros2 lifecycle set``). One
+    executor thread takes maps and requests while the node's planning thread plans.
     """
     rclpy.init(args=args)
     node = PlannerNode()
-    executor = MultiThreadedExecutor(num_threads=2)
+    executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
         if bool(node.get_parameter("autostart").value):
