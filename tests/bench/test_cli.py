@@ -23,7 +23,7 @@ from drd_planner.bench.runner import (
 )
 from drd_planner.cli import main
 from drd_planner.data.gccd import load_gccd_folder
-from drd_planner.data.tree_file import load_tree
+from drd_planner.planner import load_tree_bundle
 
 POLICY_KEYS = {"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}
 DOC_KEYS = {"dataset", "test_ids", "oracle_lower_bound", "policies"}
@@ -130,7 +130,7 @@ def test_bench_markdown_and_policy_subset(
 
 
 def test_build_tree_then_plan(d2d1: Path, tree_2d1: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    bundle = load_tree(tree_2d1, expected_domain="gccd")
+    bundle = load_tree_bundle(tree_2d1, expected_domain="gccd")
     assert bundle.problem.num_edges == 923
     assert bundle.problem.num_paths == 500
     assert bundle.provenance["dataset"] == "dataset_2d_1"
@@ -143,7 +143,7 @@ def test_build_tree_then_plan(d2d1: Path, tree_2d1: Path, capsys: pytest.Capture
     assert "[tree]" in out
 
 
-@pytest.mark.parametrize("policy", ["direct_only", "bisect", "bisect_all", "lazysp", "mvoi"])
+@pytest.mark.parametrize("policy", ["bisect", "bisect_all", "lazysp_set", "mvoi"])
 def test_plan_with_other_policies(
     d2d1: Path, tree_2d1: Path, policy: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -168,7 +168,7 @@ def test_bench_with_saved_tree(
     argv = ["bench", "--gccd", str(d2d1), "--tree", str(tree_2d1), "--max-worlds", "3", "--json", str(out)]
     assert main(argv) == 0
     doc = json.loads(out.read_text())
-    bundle = load_tree(tree_2d1)
+    bundle = load_tree_bundle(tree_2d1)
     assert doc["tree"]["nodes"] == bundle.tree.num_nodes
     for stats in doc["policies"].values():
         assert len(stats["checks"]) == 3
@@ -189,12 +189,47 @@ def test_tree_for_another_dataset_is_refused(
     assert "verified" not in captured.out
 
 
-def test_tree_for_same_sized_dataset_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_prior_of_the_same_graph_plans_with_a_note(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # dataset_2d_2 and dataset_2d_3 share their graph: a prior of one plans on the other's worlds (every
+    # check is still made on that world), and says that the prior came from elsewhere.
     d2, d3 = gccd_folder("dataset_2d_2"), gccd_folder("dataset_2d_3")
-    tree = tmp_path / "t2.npz"
-    assert main(["build-tree", "--gccd", str(d2), "--out", str(tree)]) == 0
+    prior = tmp_path / "t2.npz"
+    assert (
+        main(["build-tree", "--gccd", str(d2), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]) == 0
+    )
     capsys.readouterr()
-    assert main(["plan", "--tree", str(tree), "--gccd", str(d3), "--world", "0"]) == 2
+    world = int(load_gccd_folder(d3).require_worlds().test_ids[0])
+    assert main(["plan", "--tree", str(prior), "--gccd", str(d3), "--world", str(world)]) == 0
+    out = capsys.readouterr().out
+    assert "prior was built from dataset_2d_2" in out
+    assert "query tree:dataset_2d_2" in out  # same start and goal: the precomputed tree serves it
+
+
+def test_prior_of_another_graph_is_refused(
+    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    prior = tmp_path / "t2.npz"
+    assert (
+        main(
+            [
+                "build-tree",
+                "--gccd",
+                str(gccd_folder("dataset_2d_2")),
+                "--out",
+                str(prior),
+                "--eta",
+                "0.2",
+                "--kappa",
+                "none",
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["plan", "--tree", str(prior), "--gccd", str(d2d1), "--world", "0"]) == 2
+    assert "another graph" in _one_error_line(capsys.readouterr().err)
 
 
 def test_missing_folder_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -462,7 +497,7 @@ def test_build_dataset_then_bench_and_plan_on_it(tmp_path: Path, capsys: pytest.
     doc = json.loads(out.read_text())
     assert doc["dataset"] == "pl"
     assert len(doc["test_ids"]) == 4
-    assert doc["tree"]["nodes"] == load_tree(tree).tree.num_nodes
+    assert doc["tree"]["nodes"] == load_tree_bundle(tree).tree.num_nodes
     assert doc["policies"]["bisect"]["relative"]["unfiltered"]["n"] == 4
     capsys.readouterr()
     assert main(

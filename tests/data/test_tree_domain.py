@@ -7,8 +7,8 @@ import pytest
 from conftest import SHARED_DATA
 
 from drd_planner.cli import main
-from drd_planner.data.tree_file import load_tree
 from drd_planner.domains.base import domain_from_spec
+from drd_planner.planner import load_tree_bundle
 
 
 def test_tree_from_dataset_rebuilds_its_domain_and_checker(tmp_path: Path) -> None:
@@ -19,7 +19,7 @@ def test_tree_from_dataset_rebuilds_its_domain_and_checker(tmp_path: Path) -> No
     argv += ["--seed", "3", "--out", str(dataset), "--workers", "1", "--domain-spec", spec]
     assert main(argv) == 0
     assert main(["build-tree", "--dataset", str(dataset), "--out", str(tree_path), "--eta", "0.2"]) == 0
-    bundle = load_tree(tree_path, expected_domain="helicopter")
+    bundle = load_tree_bundle(tree_path, expected_domain="helicopter")
     meta = bundle.problem.metadata
     domain = domain_from_spec(meta["domain"], meta["domain_spec"])
     graph = bundle.problem.graph
@@ -43,7 +43,7 @@ def test_shipped_trees_exist() -> None:
 
 @pytest.mark.parametrize("path", _shipped_trees(), ids=lambda p: p.stem)
 def test_shipped_tree_rebuilds_its_graph_from_the_stored_spec(path: Path) -> None:
-    bundle = load_tree(path)
+    bundle = load_tree_bundle(path)
     meta = bundle.problem.metadata
     if meta["domain"] == "arm" and not (SHARED_DATA / "panda").is_dir():
         pytest.skip(f"shared Panda model {SHARED_DATA / 'panda'} not present (set DRD_SHARED_DATA)")

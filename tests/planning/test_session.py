@@ -11,12 +11,13 @@ import pytest
 from drd_planner.cli import main
 from drd_planner.core.episode import run_episode
 from drd_planner.core.policies import POLICIES
-from drd_planner.data.tree_file import TreeBundle, load_tree
+from drd_planner.data.tree_file import TreeBundle
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
 from drd_planner.exceptions import PlanningError, TreeFileError
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planner import load_tree_bundle
 from drd_planner.planning.map_state import MapSnapshot, changed_parts, terrain_collider
 from drd_planner.planning.session import PlanningSession
 
@@ -34,7 +35,7 @@ def bundle(tmp_path_factory: pytest.TempPathFactory) -> TreeBundle:
         main(["build-tree", "--dataset", str(dataset), "--out", str(tree), "--eta", "0.2", "--kappa", "10"])
         == 0
     )
-    return load_tree(tree, expected_domain="helicopter")
+    return load_tree_bundle(tree, expected_domain="helicopter")
 
 
 def _snapshot(session: PlanningSession, seed: int) -> MapSnapshot:
@@ -132,7 +133,7 @@ def test_changed_parts(bundle: TreeBundle) -> None:
 
 
 def test_snapshots_with_the_same_terrain_share_its_collider_and_answer_alike() -> None:
-    bundle = load_tree(Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz")
+    bundle = load_tree_bundle(Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz")
     session = PlanningSession(bundle)
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)

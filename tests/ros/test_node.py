@@ -118,7 +118,7 @@ def test_bad_tree_file_fails_configure_and_the_node_stays_up(context: Any, tmp_p
     node = _node(context, [str(bad)])
     try:
         assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
-        assert any("not a readable tree file" in e for e in node.errors)
+        assert any("not a readable prior or tree file" in e for e in node.errors)
         assert node._state_machine.current_state[1] == "unconfigured"
         node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS

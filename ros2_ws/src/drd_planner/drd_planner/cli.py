@@ -112,32 +112,10 @@ def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, float
 
 
 def cmd_build_tree(args: argparse.Namespace) -> int:
-    """``drd build-tree``: build a DiRECt tree from a dataset's training worlds and save it."""
-    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
-    from drd_planner.data.tree_file import TreeBundle, save_tree
+    """``drd build-tree``: write a world prior with the dataset's DiRECt tree and any ``--query`` trees."""
+    from drd_planner.planner.commands import cmd_build_tree as build
 
-    problem = load_problem_from_args(args)
-    tree = _build_tree_from_args(problem, args)
-    eta, kappa, eta_note = _tree_leaf(problem, args)
-    bundle = TreeBundle(
-        problem=dataclasses.replace(problem, worlds=None),
-        tree=tree,
-        eta=eta,
-        pseudo_count=kappa,
-        domain=problem_domain(problem),
-        provenance={
-            "command": " ".join(sys.argv),
-            "dataset": problem.name,
-            "software": __version__,
-            "eta": eta_note,
-        },
-    )
-    out = save_tree(args.out, bundle)
-    print(
-        f"wrote {out}: {tree.num_nodes} nodes, depth {tree.depth()}, built in {tree.info['build_seconds']:.2f} s; "
-        f"{eta_note}"
-    )
-    return 0
+    return build(args, tree_options=_tree_kwargs(args), leaf=_tree_leaf)
 
 
 def _sizes(text: str) -> tuple[int, ...]:
@@ -182,8 +160,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
         suite_markdown,
     )
     from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
-    from drd_planner.data.tree_file import check_bundle_fits, load_tree
+    from drd_planner.data.tree_file import check_bundle_fits
+    from drd_planner.planner.prior_file import load_tree_bundle
 
+    if args.queries is not None:
+        from drd_planner.bench.query_cli import cmd_bench_queries
+
+        return cmd_bench_queries(args, leaf=_tree_leaf, tree_options=_tree_kwargs(args))
     options = _suite_options(args)
     check_policy_names(options.policies)
     for name, value in (("--max-worlds", args.max_worlds), ("--max-checks", args.max_checks)):
@@ -199,7 +182,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         problem = load_problem_from_args(args)
         tree = None
         if args.tree:
-            bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
+            bundle = load_tree_bundle(args.tree, expected_domain=problem_domain(problem))
             check_bundle_fits(bundle, problem)
             tree = bundle.tree
             if options.eta is None:  # the settings stored with the tree, unless --eta/--kappa say otherwise
@@ -232,35 +215,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    """``drd plan``: one offline plan with a saved tree on one world of a dataset, or at a bag's request (no ROS)."""
-    from drd_planner.bench.runner import run_world, train_bias
-    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
-    from drd_planner.data.tree_file import check_bundle_fits, load_tree
+    """``drd plan``: one offline plan through the Planner on one dataset world, or at a bag's request (no ROS)."""
+    from drd_planner.planner.commands import cmd_plan as plan
 
     if args.bag:
         return _plan_bag(args)
-    if args.world is None:
-        raise DrdError("--world is required with --gccd / --dataset")
-    problem = load_problem_from_args(args)
-    bundle = load_tree(args.tree, expected_domain=problem_domain(problem))
-    check_bundle_fits(bundle, problem)
-    worlds = problem.require_worlds()
-    if not 0 <= args.world < worlds.num_worlds:
-        raise DrdError(f"--world must lie in [0, {worlds.num_worlds})")
-    theta = train_bias(problem, alpha=bundle.alpha)
-    result = run_world(
-        problem,
-        args.policy,
-        args.world,
-        theta=theta,
-        tree=bundle.tree,
-        seed=args.seed,
-        eta=bundle.eta,
-        alpha=bundle.alpha,
-        pseudo_count=bundle.pseudo_count,
-    )
-    _print_episode(problem, result)
-    return 0 if result.success else 1
+    return plan(args)
 
 
 def _print_check(number: int, edge: int, ends: tuple[int, int] | None, free: bool, stage: str) -> None:
@@ -289,8 +249,8 @@ def _plan_bag(args: argparse.Namespace) -> int:
     """``drd plan --bag``: plan on the maps in force at a bag's K-th request, as the node would."""
     from drd_msgs_py.bags import bag_frame, maps_at_request, read_bag, request_goal
     from drd_msgs_py.exceptions import MessageError
-    from drd_planner.data.tree_file import load_tree
     from drd_planner.domains.arm import ArmDomain
+    from drd_planner.planner.prior_file import load_tree_bundle
     from drd_planner.planning.session import PlanningSession
     from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
 
@@ -299,7 +259,7 @@ def _plan_bag(args: argparse.Namespace) -> int:
     if args.world is not None:
         raise DrdError("--world selects a dataset world; with --bag use --request")
     tree_path = resolve_tree_path(args.tree)
-    session = PlanningSession(load_tree(tree_path), name=tree_path.stem)
+    session = PlanningSession(load_tree_bundle(tree_path), name=tree_path.stem)
     domain = session.domain
     try:
         messages = read_bag(resolve_bag_path(args.bag))
@@ -405,17 +365,32 @@ def _kappas(args: argparse.Namespace) -> tuple[float | None, ...]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``drd``."""
-    from drd_planner.core.policies import POLICIES
-    from drd_planner.data.dataset_cli import add_build_dataset_parser, add_problem_source_arguments
+    from drd_planner.data.dataset_cli import add_build_dataset_parser
+    from drd_planner.planner.commands import query_arg
+    from drd_planner.planner.planner import PLAN_POLICIES
 
     parser = argparse.ArgumentParser(prog="drd", description="DiRECt + BiSECt active edge evaluation.")
     parser.add_argument("--version", action="version", version=f"drd_planner {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     add_build_dataset_parser(sub)
 
-    p = sub.add_parser("build-tree", help="build a DiRECt decision tree file from a dataset")
-    add_problem_source_arguments(p)
-    p.add_argument("--out", required=True, help="tree file to write (.npz)")
+    p = sub.add_parser(
+        "build-tree", help="write a world prior (any query) with the dataset's DiRECt tree and --query trees"
+    )
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
+    source.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
+    source.add_argument("--prior", metavar="FILE", help="add --query trees to this prior file")
+    p.add_argument("--out", required=True, help="prior file to write (.npz)")
+    p.add_argument(
+        "--query",
+        type=query_arg,
+        action="append",
+        default=None,
+        metavar="START,GOAL",
+        help="also precompute a tree for this query: vertex ids, or states as space-separated numbers "
+        "(repeatable)",
+    )
     p.add_argument(
         "--eta",
         type=_eta_arg,
@@ -462,13 +437,22 @@ def build_parser() -> argparse.ArgumentParser:
         help="training sizes of the checks-vs-training-size figure ('' for none)",
     )
     p.add_argument("--figure-world", type=int, default=0, help="test-list position drawn in Fig. 3")
+    p.add_argument(
+        "--queries",
+        type=int,
+        default=None,
+        metavar="N",
+        help="N random (start, goal) queries (the dataset's own first) against test worlds, through the "
+        "Planner (online library and DiRECt, graph fallback); policies default to "
+        "direct_bisect,bisect,lazysp_set,lazysp,check_all",
+    )
     _tree_options(p)
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser(
         "plan", help="plan once offline with a tree file on one dataset world, or at a request of a bag"
     )
-    p.add_argument("--tree", required=True, help="tree file (or a shipped tree's name with --bag)")
+    p.add_argument("--tree", required=True, help="prior or tree file (or a shipped tree's name with --bag)")
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
     where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
@@ -481,7 +465,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--request", type=int, default=0, help="0-based request of the --bag (default 0)")
     p.add_argument("--frame", default=None, help="planning frame for --bag (default: the maps' frame)")
     p.add_argument(
-        "--policy", default="direct_bisect", choices=sorted(POLICIES), help="any registered policy"
+        "--query",
+        type=query_arg,
+        default=None,
+        metavar="START,GOAL",
+        help="plan this query (vertex ids or states) instead of the dataset's own (--gccd / --dataset)",
+    )
+    p.add_argument("--max-checks", type=int, default=None, help="end the plan after this many checks")
+    p.add_argument(
+        "--policy", default="direct_bisect", choices=PLAN_POLICIES, help="the library stage's policy"
     )
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_plan)

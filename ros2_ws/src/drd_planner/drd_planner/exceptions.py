@@ -37,3 +37,7 @@ class GeometryError(DrdError):
 
 class PlanningError(DrdError):
     """A planning request cannot be served: no maps yet, a goal no loaded tree serves, a wrong frame."""
+
+
+class PriorFileError(TreeFileError):
+    """A world-prior file is missing, corrupt, of another format version, or built for another domain."""

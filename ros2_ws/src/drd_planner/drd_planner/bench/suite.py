@@ -154,7 +154,7 @@ def run_dataset(
     """
     t0 = time.perf_counter()
     check_policy_names(options.policies)
-    eta, kappa, eta_choice = _resolve_leaf(problem, options)
+    eta, kappa, eta_choice = resolve_leaf(problem, options)
     options = dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,))
     if tree is None and _needs_tree(options):
         tree = build_tree(problem, progress=False, **dict(options.tree_options))
@@ -189,7 +189,7 @@ def run_dataset(
     return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0)
 
 
-def _resolve_leaf(
+def resolve_leaf(
     problem: Problem, options: SuiteOptions
 ) -> tuple[float, float | None, SwitchThresholdChoice | None]:
     """A concrete eta and kappa: validated unless both are fixed or no tree is used."""
@@ -213,12 +213,12 @@ def _resolve_leaf(
 
 
 def _eta(options: SuiteOptions) -> float:
-    """``options.eta`` after :func:`_resolve_leaf` (never None there)."""
+    """``options.eta`` after :func:`resolve_leaf` (never None there)."""
     return DEFAULT_ETA if options.eta is None else options.eta
 
 
 def _kappa(options: SuiteOptions) -> float | None:
-    """The leaf's kappa after :func:`_resolve_leaf` (one candidate left)."""
+    """The leaf's kappa after :func:`resolve_leaf` (one candidate left)."""
     return options.pseudo_counts[0] if options.pseudo_counts else None
 
 

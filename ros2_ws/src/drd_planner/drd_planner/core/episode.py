@@ -8,7 +8,7 @@ of its edges was checked free in this episode: that is the planner's safety inva
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
 from typing import Protocol, runtime_checkable
@@ -104,6 +104,7 @@ class EpisodeStatus(str, Enum):
     NO_FREE_PATH = "no_free_path"
     POLICY_GAVE_UP = "policy_gave_up"
     MAX_CHECKS = "max_checks"
+    TIME_BUDGET = "time_budget"
 
 
 @dataclass(frozen=True)
@@ -186,40 +187,62 @@ class _LibraryProgress:
 
 
 def run_episode(
-    library: PathLibrary,
+    library: PathLibrary | None,
     edge_costs: npt.ArrayLike,
     policy: Policy,
     oracle: EdgeOracle,
     *,
     max_checks: int | None = None,
+    deadline: float | None = None,
+    known: Mapping[int, bool] | None = None,
 ) -> EpisodeResult:
     """Drive ``policy`` against ``oracle`` until a library path is proven free or none can be.
 
     The episode ends when (1) some library path has every edge checked free (PATH_FOUND), (2) every
     library path has a checked blocked edge (NO_FREE_PATH), (3) the policy has nothing left to ask
-    (POLICY_GAVE_UP), or (4) ``max_checks`` checks were made (MAX_CHECKS).
+    (POLICY_GAVE_UP), (4) ``max_checks`` checks were made (MAX_CHECKS), or (5) ``time.perf_counter()``
+    passed ``deadline`` before a selection (TIME_BUDGET).
 
     A :class:`GraphPathPolicy` is instead stopped by its own path: before each selection, PATH_FOUND
     (``path_index`` None) when every edge of ``proposed_path()`` was checked free, NO_FREE_PATH (no
     ``blocked_evidence``) when it is None. Rules (1) and (2) then apply only if the policy's
     ``stops_on_library_path`` says so, and its ``max_checks`` caps the episode too.
 
+    ``library`` may be None only for a :class:`GraphPathPolicy` that does not stop on library paths.
+
+    ``known`` holds outcomes checked earlier in the same plan (by an earlier stage, on the same maps):
+    they count as checked for the proof of a path and may not be chosen again; the policy must
+    already know them. They are not in this episode's log and do not count against ``max_checks``.
+
     Raises:
         PolicyError: the policy chose an edge outside the graph or one already checked.
         UnverifiedPathError: never, unless the bookkeeping itself is broken (a last safety net).
     """
     costs = np.asarray(edge_costs, dtype=np.float64)
-    progress = _LibraryProgress(library)
     graph_policy = policy if isinstance(policy, GraphPathPolicy) else None
     library_stops = graph_policy is None or graph_policy.stops_on_library_path
+    if library is None and library_stops:
+        raise PolicyError(f"policy {policy.name} stops on library paths, so its episode needs a library")
+    num_edges = costs.size if library is None else library.num_edges
+    progress = _LibraryProgress(library) if library is not None else None
     limit = max_checks
     if graph_policy is not None and graph_policy.max_checks is not None:
         limit = graph_policy.max_checks if limit is None else min(limit, graph_policy.max_checks)
     outcome: dict[int, bool] = {}
+    for edge, free in (known or {}).items():
+        outcome[int(edge)] = bool(free)
+        if progress is not None:
+            progress.record(int(edge), bool(free))
     log: list[CheckRecord] = []
     own_path: IntArray | None = None
     status = EpisodeStatus.POLICY_GAVE_UP
-    while True:
+    settled = False
+    if progress is not None and library_stops and outcome:  # earlier checks may settle the library
+        if progress.proven_path(costs) is not None:
+            status, settled = EpisodeStatus.PATH_FOUND, True
+        elif progress.all_blocked():
+            status, settled = EpisodeStatus.NO_FREE_PATH, True
+    while not settled:
         t0 = time.perf_counter()  # a graph policy's re-planning in proposed_path() is selection time
         if graph_policy is not None:
             proposed = graph_policy.proposed_path()
@@ -233,24 +256,29 @@ def run_episode(
         if limit is not None and len(log) >= limit:
             status = EpisodeStatus.MAX_CHECKS
             break
+        if deadline is not None and t0 >= deadline:
+            status = EpisodeStatus.TIME_BUDGET
+            break
         choice = policy.select()
         t1 = time.perf_counter()
         if choice is None:
             status = EpisodeStatus.POLICY_GAVE_UP
             break
         edge = int(choice)
-        if not 0 <= edge < library.num_edges:
-            raise PolicyError(f"policy {policy.name} chose edge {edge}, outside [0, {library.num_edges})")
+        if not 0 <= edge < num_edges:
+            raise PolicyError(f"policy {policy.name} chose edge {edge}, outside [0, {num_edges})")
         if edge in outcome:
             raise PolicyError(f"policy {policy.name} chose edge {edge} a second time")
         free = bool(oracle.check(edge))
         t2 = time.perf_counter()
         outcome[edge] = free
         log.append(CheckRecord(len(log), edge, free, policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
-        progress.record(edge, free)
         policy.observe(edge, free)
-        if not library_stops:
+        if progress is None or not library_stops:
+            if progress is not None:
+                progress.record(edge, free)
             continue
+        progress.record(edge, free)
         if free and progress.proven_path(costs) is not None:
             status = EpisodeStatus.PATH_FOUND
             break
@@ -261,14 +289,19 @@ def run_episode(
     path_edges: IntArray | None = None
     if own_path is not None:
         path_edges = own_path
-    elif status is EpisodeStatus.PATH_FOUND:
+    elif status is EpisodeStatus.PATH_FOUND and progress is not None and library is not None:
         path_index = progress.proven_path(costs)
         if path_index is not None:
             path_edges = library.path_edges[path_index]
     if path_edges is not None:
         verify_path(path_edges, outcome)
     evidence = None
-    if status is EpisodeStatus.NO_FREE_PATH and library_stops and progress.all_blocked():
+    if (
+        status is EpisodeStatus.NO_FREE_PATH
+        and progress is not None
+        and library_stops
+        and progress.all_blocked()
+    ):
         evidence = progress.blocker.copy()
     return EpisodeResult(tuple(log), status, path_index, path_edges, evidence)
 

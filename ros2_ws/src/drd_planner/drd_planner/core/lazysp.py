@@ -18,6 +18,7 @@ that lies most often on shortest paths of sampled graphs; ties to the later edge
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Final
 
 import numpy as np
@@ -145,6 +146,11 @@ class LazySP:
         nsamps: sampled graphs per selection (``weightsamp`` only).
         seed: seed of the sampler (``weightsamp`` only; the other selectors are deterministic).
         name: registry name (default ``lazysp`` or ``lazysp_<selector>``).
+        edge_weights: (E,) finite non-negative weights of the edges in the shortest-path search
+            (default: the graph's lengths). Checked-free edges keep them, blocked ones are deleted.
+        observations: outcomes already known (edge -> free), e.g. from an earlier stage of the same
+            plan; they are never selected again.
+        stage: the label of this policy's checks in the log (``lazysp``).
     """
 
     def __init__(
@@ -158,6 +164,9 @@ class LazySP:
         nsamps: int = DEFAULT_WEIGHTSAMP_NSAMPS,
         seed: int = 0,
         name: str | None = None,
+        edge_weights: npt.ArrayLike | None = None,
+        observations: Mapping[int, bool] | None = None,
+        stage: str = "lazysp",
     ) -> None:
         if selector not in SELECTORS:
             raise ProblemError(f"unknown LazySP selector {selector!r}; known: {', '.join(SELECTORS)}")
@@ -168,6 +177,12 @@ class LazySP:
             raise ProblemError("LazySP weightsamp needs nsamps >= 1")
         self._arcs = GraphArcs(graph)
         self._lengths = np.asarray(graph.lengths, dtype=np.float64)
+        if edge_weights is not None:
+            weights = np.asarray(edge_weights, dtype=np.float64)
+            if weights.shape != self._lengths.shape or not np.all(np.isfinite(weights) & (weights >= 0)):
+                raise ProblemError(f"LazySP edge weights must be ({graph.num_edges},) finite and >= 0")
+            self._lengths = weights.copy()
+        self._stage = stage
         self._start = int(start)
         self._goal = int(goal)
         self._selector = selector
@@ -181,6 +196,8 @@ class LazySP:
         self._stale = True
         self._forward_next = True
         self._batch: tuple[int, IntArray, IntArray] | None = None  # WeightSamp's block-graph structure
+        for edge, free in (observations or {}).items():
+            self.observe(int(edge), bool(free))
 
     @property
     def name(self) -> str:
@@ -189,8 +206,8 @@ class LazySP:
 
     @property
     def stage(self) -> str:
-        """Always ``lazysp``."""
-        return "lazysp"
+        """The label given at construction (``lazysp`` by default)."""
+        return self._stage
 
     @property
     def stops_on_library_path(self) -> bool:

@@ -20,7 +20,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, LazySP, lazysp_name
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import ConsistentWorldsBias
-from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree
+from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree, TreeNodes
 from drd_planner.exceptions import PolicyError, ProblemError
 
 FloatArray = npt.NDArray[np.float64]
@@ -68,9 +68,9 @@ class BisectPolicy:
 
 
 class TreeWalker:
-    """Follows a decision tree one outcome at a time."""
+    """Follows a decision tree (offline or grown online) one outcome at a time."""
 
-    def __init__(self, tree: DecisionTree) -> None:
+    def __init__(self, tree: TreeNodes) -> None:
         self._tree = tree
         self._node = 0
 
@@ -81,12 +81,12 @@ class TreeWalker:
 
     def edge(self) -> int | None:
         """The edge the current node asks for, or None at a leaf."""
-        e = int(self._tree.edge[self._node])
+        e = self._tree.node_edge(self._node)
         return None if e == NO_EDGE else e
 
     def advance(self, free: bool) -> bool:
         """Move to the child for ``free``; False (and stay) when that child does not exist."""
-        child = int(self._tree.children[self._node, int(free)])
+        child = self._tree.node_child(self._node, free)
         if child == NO_CHILD:
             return False
         self._node = child
@@ -106,7 +106,7 @@ class DirectBisectPolicy:
 
     def __init__(
         self,
-        tree: DecisionTree,
+        tree: TreeNodes,
         library: PathLibrary,
         edge_costs: npt.ArrayLike,
         *,
@@ -116,7 +116,7 @@ class DirectBisectPolicy:
         name: str = "direct_bisect",
     ) -> None:
         _check_tree_fits(tree, library)
-        if pseudo_count is not None and tree.world_free is None:
+        if pseudo_count is not None and tree.training_outcomes is None:
             raise ProblemError(
                 "the posterior-updating leaf needs the training worlds in the tree "
                 "(rebuild the tree; tree files of format version 1 do not carry them)"
@@ -152,7 +152,8 @@ class DirectBisectPolicy:
         return self._switch_node
 
     def _should_switch(self, node: int) -> bool:
-        return bool(self._tree.edge[node] == NO_EDGE or self._tree.active_fraction[node] <= self._eta)
+        # The fraction first: a tree grown online then never computes an edge it will not use.
+        return self._tree.node_fraction(node) <= self._eta or self._tree.node_edge(node) == NO_EDGE
 
     @property
     def pseudo_count(self) -> float | None:
@@ -276,7 +277,7 @@ class DirectOnlyPolicy:
             self._failed = True
 
 
-def _check_tree_fits(tree: DecisionTree, library: PathLibrary) -> None:
+def _check_tree_fits(tree: TreeNodes, library: PathLibrary) -> None:
     if tree.num_edges != library.num_edges or tree.num_paths != library.num_paths:
         raise ProblemError(
             f"tree was built for {tree.num_edges} edges / {tree.num_paths} paths, but the problem has "
@@ -296,7 +297,7 @@ class PolicyContext:
     library: PathLibrary
     edge_costs: FloatArray
     train_theta: FloatArray
-    tree: DecisionTree | None
+    tree: TreeNodes | None
     seed: int
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
@@ -309,9 +310,15 @@ class PolicyContext:
 PolicyFactory = Callable[[PolicyContext], Policy]
 
 
-def _need_tree(ctx: PolicyContext) -> DecisionTree:
+def _need_tree(ctx: PolicyContext) -> TreeNodes:
     if ctx.tree is None:
         raise ProblemError("this policy needs a decision tree")
+    return ctx.tree
+
+
+def _need_offline_tree(ctx: PolicyContext) -> DecisionTree:
+    if not isinstance(ctx.tree, DecisionTree):
+        raise ProblemError("direct_only needs a decision tree built offline (drd build-tree)")
     return ctx.tree
 
 
@@ -350,7 +357,7 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "direct_bisect_fixed": lambda c: DirectBisectPolicy(
         _need_tree(c), c.library, c.edge_costs, eta=DEFAULT_ETA, alpha=c.alpha, name="direct_bisect_fixed"
     ),
-    "direct_only": lambda c: DirectOnlyPolicy(_need_tree(c), c.library, seed=c.seed),
+    "direct_only": lambda c: DirectOnlyPolicy(_need_offline_tree(c), c.library, seed=c.seed),
     "bisect": lambda c: BisectPolicy(c.library, c.train_theta, c.edge_costs, max_prob_region=True),
     "bisect_posterior": lambda c: DirectBisectPolicy(
         _need_tree(c),

@@ -14,13 +14,14 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
 from drd_planner.core.direct import DirectSelector
+from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import ProblemError
@@ -95,9 +96,67 @@ class DecisionTree:
 
         Edges outside the library never matter to BiSECt and get 0.5.
         """
-        theta = np.full(self.num_edges, 0.5)
-        theta[self.library_edges] = alpha * self.free_fraction[node].astype(np.float64) + (1 - alpha) * 0.5
-        return theta
+        return leaf_bias(self.num_edges, self.library_edges, self.free_fraction[node], alpha=alpha)
+
+    def node_edge(self, node: int) -> int:
+        """The edge ``node`` asks for, NO_EDGE at a leaf (:class:`TreeNodes`)."""
+        return int(self.edge[node])
+
+    def node_child(self, node: int, free: bool) -> int:
+        """The child of ``node`` for the outcome ``free``, NO_CHILD when absent (:class:`TreeNodes`)."""
+        return int(self.children[node, int(free)])
+
+    def node_fraction(self, node: int) -> float:
+        """Prior mass of the node's consistent worlds over the whole training mass (:class:`TreeNodes`)."""
+        return float(self.active_fraction[node])
+
+
+class TreeNodes(Protocol):
+    """What a policy walking a DiRECt tree reads.
+
+    The offline :class:`DecisionTree`, or the tree grown online along the branch taken
+    (:class:`drd_planner.core.online_tree.LazyDirectTree`). Node 0 is the root; node ids are stable once handed out.
+    """
+
+    @property
+    def num_edges(self) -> int:
+        """E of the graph."""
+        ...
+
+    @property
+    def num_paths(self) -> int:
+        """M of the library."""
+        ...
+
+    @property
+    def training_outcomes(self) -> TrainingOutcomes | None:
+        """The training worlds for the posterior leaf, or None when the tree does not carry them."""
+        ...
+
+    def node_edge(self, node: int) -> int:
+        """The edge to check at ``node``, or NO_EDGE at a leaf."""
+        ...
+
+    def node_child(self, node: int, free: bool) -> int:
+        """The child for the outcome, or NO_CHILD."""
+        ...
+
+    def node_fraction(self, node: int) -> float:
+        """The node's consistent prior mass as a fraction of the training mass."""
+        ...
+
+    def bias(self, node: int, *, alpha: float = 0.99) -> FloatArray:
+        """(E,) BiSECt's bias at ``node``."""
+        ...
+
+
+def leaf_bias(
+    num_edges: int, library_edges: IntArray, free_fraction: npt.NDArray[np.float32], *, alpha: float
+) -> FloatArray:
+    """(E,) theta = alpha * free fraction + (1 - alpha) / 2 on the library edges, 0.5 elsewhere."""
+    theta = np.full(num_edges, 0.5)
+    theta[library_edges] = alpha * free_fraction.astype(np.float64) + (1 - alpha) * 0.5
+    return theta
 
 
 def build_tree(
@@ -168,15 +227,9 @@ def build_tree(
     def choose(node: int) -> int | None:
         active = actives[node]
         if top_regions is None:
-            candidates = None
-            if max_prob_region:
-                support = weights[active] @ r_float[active]
-                if support.max() > 0:
-                    candidates = problem.library.path_edges[int(np.argmax(support))]
-            choice = selector.select(active, candidates=candidates)
-            if choice is None and candidates is not None:
-                choice = selector.select(active)
-            return None if choice is None else choice.edge
+            return direct_node_edge(
+                selector, active, weights, r_float, problem.library, max_prob_region=max_prob_region
+            )
         latch = latched[node]
         if latch < 0:
             subset = subsets[node]
@@ -219,7 +272,7 @@ def build_tree(
                 child_active = active[outcome == bool(x)]
                 child = add_node(child_active, node, subsets[node], latched[node] if x else -1)
                 children[node][x] = child
-                if weights[child_active].sum() / total >= expand_threshold:
+                if float(weights[child_active].sum()) / total >= expand_threshold:
                     queue.append(child)
     build_s = time.perf_counter() - t0
 
@@ -229,13 +282,10 @@ def build_tree(
     free_fraction = np.full((n_nodes, lib_edges.size), 0.5, dtype=np.float32)
     best_path = np.full(n_nodes, -1, dtype=np.int32)
     for node, active in enumerate(actives):
-        if active.size == 0:
-            continue
-        w = weights[active]
-        free_fraction[node] = (w @ x_lib[active]) / w.sum()
-        support = w @ r_float[active]
-        if support.max() > 0:
-            best_path[node] = int(np.argmax(support))
+        if active.size:
+            free_fraction[node], best_path[node] = node_summary(
+                weights[active], x_lib[active], r_float[active]
+            )
     info = {
         "expand_threshold": expand_threshold,
         "colouring": colouring,
@@ -262,6 +312,59 @@ def build_tree(
         world_free=np.ascontiguousarray(X[:, lib_edges], dtype=bool),
         world_weights=None if prior is None else np.asarray(prior, dtype=np.float64),
     )
+
+
+def direct_node_edge(
+    selector: DirectSelector,
+    active: IntArray,
+    weights: FloatArray,
+    r_float: FloatArray,
+    library: PathLibrary,
+    *,
+    max_prob_region: bool,
+) -> int | None:
+    """The DiRECt edge of a tree node whose consistent training worlds are ``active`` (or None: a leaf).
+
+    The one node rule shared by the offline tree (:func:`build_tree`) and the tree grown online
+    (:class:`drd_planner.core.online_tree.LazyDirectTree`), so both ask for the same edges.
+
+    Args:
+        selector: DiRECt over the training worlds.
+        active: (k,) int64 row ids of the consistent training worlds.
+        weights: (n,) prior weights of all training worlds.
+        r_float: (n, m) float64 path validity of all training worlds.
+        library: the m paths.
+        max_prob_region: restrict the tests to the edges of the best-supported path (falling back to
+            every test when none of them splits the worlds).
+    """
+    candidates = None
+    if max_prob_region:
+        support = weights[active] @ r_float[active]
+        if support.max() > 0:
+            candidates = library.path_edges[int(np.argmax(support))]
+    choice = selector.select(active, candidates=candidates)
+    if choice is None and candidates is not None:
+        choice = selector.select(active)
+    return None if choice is None else choice.edge
+
+
+def node_summary(
+    weights: FloatArray, x_lib: npt.NDArray[np.floating], r_float: FloatArray
+) -> tuple[npt.NDArray[np.float32], int]:
+    """A non-empty node's leaf bias data and DiRECt-only guess.
+
+    Args:
+        weights: (k,) prior weights of the node's worlds (positive sum).
+        x_lib: (k, K) outcomes of the library edges in those worlds.
+        r_float: (k, m) path validity in those worlds.
+
+    Returns:
+        ``(free_fraction, best_path)``: (K,) float32 weighted free fraction of each library edge, and
+        the path valid in the most weight (-1 when none is valid in any of them).
+    """
+    free = np.asarray((weights @ x_lib) / weights.sum(), dtype=np.float32)
+    support = weights @ r_float
+    return free, int(np.argmax(support)) if support.max() > 0 else -1
 
 
 def greedy_cover_regions(R: npt.ArrayLike, weights: npt.ArrayLike, k: int) -> IntArray:

@@ -69,8 +69,8 @@ from drd_msgs_py.plans import (
     summary_status,
 )
 from drd_msgs_py.terrain import heightfield_from_cloud
-from drd_planner.data.tree_file import load_tree
 from drd_planner.exceptions import DrdError
+from drd_planner.planner.prior_file import load_tree_bundle
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
@@ -216,7 +216,7 @@ class PlannerNode(LifecycleNode):
                 path = resolve_tree_path(name)
                 sessions.append(
                     PlanningSession(
-                        load_tree(path),
+                        load_tree_bundle(path),
                         name=path.stem,
                         max_checks=max_checks if max_checks > 0 else None,
                         goal_tolerance=tolerance,

@@ -1,0 +1,81 @@
+"""``drd bench --queries N``: the random-query benchmark from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drd_planner.bench.queries import (
+    DEFAULT_QUERY_POLICIES,
+    draw_queries,
+    query_markdown,
+    run_query_benchmark,
+)
+from drd_planner.bench.runner import json_safe
+from drd_planner.core.problem import Problem
+from drd_planner.core.tree import build_tree
+from drd_planner.exceptions import DrdError
+from drd_planner.planner.planner import Planner
+from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
+from drd_planner.planner.prior_file import load_prior
+
+Leaf = Callable[[Problem, argparse.Namespace], tuple[float, float | None, str]]
+
+
+def benchmark_prior(
+    problem: Problem, args: argparse.Namespace, *, leaf: Leaf, tree_options: dict[str, Any]
+) -> tuple[WorldPrior, str]:
+    """The prior the query benchmark plans with: ``--tree``'s, or one built from the training worlds."""
+    from drd_planner.data.dataset_cli import problem_domain
+
+    domain = problem_domain(problem)
+    if args.tree:
+        prior = load_prior(args.tree, expected_domain=domain)
+        if problem.graph is None or not np.array_equal(prior.graph.edges, problem.graph.edges):
+            raise DrdError(f"{args.tree} was built for another graph than {problem.name!r}")
+        return prior, f"prior {args.tree} (eta {prior.eta:g}, kappa {prior.pseudo_count})"
+    eta, kappa, note = leaf(problem, args)
+    tree = build_tree(problem, progress=False, **tree_options)
+    assert problem.start is not None and problem.goal is not None
+    own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
+    prior = prior_from_problem(
+        problem, domain=domain, trees=(own,), eta=eta, pseudo_count=kappa, library_seed=args.seed
+    )
+    return prior, note
+
+
+def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dict[str, Any]) -> int:
+    """Run the query benchmark on ``--gccd`` or ``--dataset`` and print (and write) its table."""
+    from drd_planner.data.dataset_cli import load_problem_from_args
+
+    if args.all:
+        raise DrdError("--queries runs on one dataset (--gccd DIR or --dataset FILE), not --all")
+    if args.queries < 1:
+        raise DrdError(f"--queries must be at least 1, got {args.queries}")
+    if args.max_checks is not None and args.max_checks < 1:
+        raise DrdError(f"--max-checks must be at least 1, got {args.max_checks}")
+    problem = load_problem_from_args(args)
+    prior, note = benchmark_prior(problem, args, leaf=leaf, tree_options=tree_options)
+    planner = Planner(prior)
+    queries = draw_queries(problem, args.queries, seed=args.seed)
+    policies = tuple(args.policies) if args.policies else DEFAULT_QUERY_POLICIES
+    doc = run_query_benchmark(
+        problem, planner, queries, policies=policies, seed=args.seed, max_checks=args.max_checks
+    )
+    doc["settings"]["leaf"] = note
+    doc["memory_bytes"] = planner.memory_bytes()
+    report = query_markdown(doc)
+    print(report, end="")
+    if args.json:
+        Path(args.json).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
+        print(f"wrote {args.json}")
+    if args.markdown:
+        Path(args.markdown).write_text(report)
+        print(f"wrote {args.markdown}")
+    print(f"total wall time {doc['seconds']:.1f} s")
+    return 0

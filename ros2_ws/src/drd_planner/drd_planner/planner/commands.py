@@ -1,0 +1,220 @@
+"""``drd build-tree`` (write a world prior with its trees) and ``drd plan`` (one plan through :class:`Planner`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drd_planner import __version__
+from drd_planner.core.problem import Problem
+from drd_planner.core.tree import build_tree
+from drd_planner.core.worlds import WorldDatabase
+from drd_planner.exceptions import DrdError
+from drd_planner.planner.endpoints import EndpointResolver
+from drd_planner.planner.planner import Planner
+from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
+from drd_planner.planner.prior_file import load_prior, save_prior
+from drd_planner.planner.query_library import query_library
+from drd_planner.planner.result import PlanResult
+
+QueryText = tuple[str, str]
+
+
+def query_arg(text: str) -> QueryText:
+    """``--query START,GOAL``: each a vertex id, or a state as numbers separated by spaces or ';'.
+
+    Examples: ``0,730`` (vertex ids), ``"0 0 65 0,700 0 65 0"`` (helicopter states).
+    """
+    parts = text.split(",")
+    if len(parts) != 2 or not all(p.strip() for p in parts):
+        raise argparse.ArgumentTypeError(
+            f"expected START,GOAL (vertex ids, or states as space-separated numbers), got {text!r}"
+        )
+    return parts[0].strip(), parts[1].strip()
+
+
+def endpoint_value(text: str) -> int | np.ndarray:
+    """A vertex id (one integer) or a state (several numbers) from its command-line text."""
+    fields = text.replace(";", " ").split()
+    try:
+        if len(fields) == 1 and fields[0].lstrip("-").isdigit():
+            return int(fields[0])
+        return np.array([float(f) for f in fields], dtype=np.float64)
+    except ValueError:
+        raise DrdError(f"{text!r} is neither a vertex id nor a state of numbers") from None
+
+
+def resolve_query(prior: WorldPrior, query: QueryText) -> tuple[int, int]:
+    """Vertex ids of a ``--query`` on the prior's graph (states snap to their nearest vertex)."""
+    resolver = EndpointResolver(prior.graph)
+    return resolver.resolve(endpoint_value(query[0]), "start"), resolver.resolve(
+        endpoint_value(query[1]), "goal"
+    )
+
+
+def query_tree(
+    prior: WorldPrior, start: int, goal: int, *, tree_options: dict[str, Any], name: str | None = None
+) -> QueryTree:
+    """An offline DiRECt tree for another query of ``prior``, on the library the planner would build online."""
+    if prior.worlds is None:
+        raise DrdError("this prior has no training worlds over every edge; rebuild it from its dataset")
+    from drd_planner.core.lazysp import GraphArcs
+
+    library = query_library(
+        GraphArcs(prior.graph),
+        prior.graph.edges,
+        prior.graph.lengths,
+        prior.worlds,
+        start,
+        goal,
+        max_paths=prior.max_paths,
+        seed=prior.library_seed,
+    )
+    if library is None:
+        raise DrdError(
+            f"no training world has a free path from {start} to {goal}: nothing to build a tree on"
+        )
+    n = prior.num_worlds
+    problem = Problem(
+        name=name or f"{start}-{goal}",
+        library=library,
+        edge_costs=prior.edge_costs,
+        graph=prior.graph,
+        start=start,
+        goal=goal,
+        worlds=WorldDatabase(
+            prior.worlds,
+            library.valid_paths(prior.worlds),
+            np.arange(n),
+            np.zeros(0, dtype=np.int64),
+            prior.world_weights,
+        ),
+    )
+    tree = build_tree(problem, **tree_options)
+    return QueryTree(problem.name, start, goal, library, tree)
+
+
+def build_prior(
+    args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any
+) -> tuple[WorldPrior, list[str]]:
+    """The prior ``drd build-tree`` writes, and one line per tree built (see :func:`cmd_build_tree`)."""
+    import dataclasses
+
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
+
+    lines: list[str] = []
+    if getattr(args, "prior", None):
+        prior = load_prior(args.prior)
+        if not args.query:
+            raise DrdError("--prior adds trees: give at least one --query START,GOAL")
+    else:
+        problem = load_problem_from_args(args)
+        eta, kappa, note = leaf(problem, args)
+        tree = build_tree(problem, **tree_options)
+        assert problem.start is not None and problem.goal is not None
+        own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
+        lines.append(
+            f"tree {own.name} ({own.start} -> {own.goal}): {tree.num_nodes} nodes, depth {tree.depth()}; {note}"
+        )
+        prior = prior_from_problem(
+            problem,
+            domain=problem_domain(problem),
+            trees=(own,),
+            eta=eta,
+            pseudo_count=kappa,
+            library_seed=args.seed,
+            provenance={
+                "command": " ".join(sys.argv),
+                "dataset": problem.name,
+                "software": __version__,
+                "eta": note,
+            },
+        )
+    trees = list(prior.trees)
+    for query in args.query or ():
+        start, goal = resolve_query(prior, query)
+        if prior.tree_for(start, goal) is not None:
+            raise DrdError(f"the prior already has a tree for {start} -> {goal}")
+        qt = query_tree(prior, start, goal, tree_options=tree_options)
+        trees.append(qt)
+        lines.append(
+            f"tree {qt.name}: {qt.tree.num_nodes} nodes, depth {qt.tree.depth()}, {qt.library.num_paths} paths"
+        )
+        prior = dataclasses.replace(prior, trees=tuple(trees))
+    return prior, lines
+
+
+def cmd_build_tree(args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any) -> int:
+    """``drd build-tree``: write a world prior (training worlds over every edge) with its DiRECt trees."""
+    prior, lines = build_prior(args, tree_options=tree_options, leaf=leaf)
+    out = save_prior(args.out, prior)
+    for line in lines:
+        print(line)
+    size = Path(out).stat().st_size / 1024
+    print(
+        f"wrote {out} ({size:.0f} KiB): world prior of {prior.num_worlds} training worlds x "
+        f"{prior.graph.num_edges} edges, {len(prior.trees)} precomputed tree(s)"
+    )
+    return 0
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    """``drd plan``: one plan through :class:`Planner` against one dataset world (a table oracle)."""
+    from drd_planner.core.episode import TableOracle
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
+
+    if args.world is None:
+        raise DrdError("--world is required with --gccd / --dataset")
+    problem = load_problem_from_args(args)
+    planner = Planner.from_file(args.tree, expected_domain=problem_domain(problem))
+    graph = problem.graph
+    if graph is None or not np.array_equal(planner.prior.graph.edges, graph.edges):
+        raise DrdError(f"{args.tree} was built for another graph than {problem.name!r}")
+    worlds = problem.require_worlds()
+    if not 0 <= args.world < worlds.num_worlds:
+        raise DrdError(f"--world must lie in [0, {worlds.num_worlds})")
+    if planner.prior.name != problem.name:
+        print(f"note: the prior was built from {planner.prior.name}; planning on a world of {problem.name}")
+    if args.world in set(worlds.train_ids.tolist()):
+        print(
+            f"note: world {args.world} is a training world (the prior has seen it); test worlds: "
+            f"{', '.join(str(w) for w in worlds.test_ids[:8].tolist())}, ..."
+        )
+    start, goal = (
+        (problem.start, problem.goal)
+        if args.query is None
+        else (
+            endpoint_value(args.query[0]),
+            endpoint_value(args.query[1]),
+        )
+    )
+    assert start is not None and goal is not None
+    result = planner.plan(
+        start,
+        goal,
+        TableOracle(worlds.X[args.world]),
+        seed=args.seed,
+        max_checks=args.max_checks,
+        policy=args.policy,
+    )
+    print_plan(planner, result)
+    return 0 if result.found else 1
+
+
+def print_plan(planner: Planner, result: PlanResult) -> None:
+    """The check log and the outcome of one plan, one line each."""
+    edges = planner.prior.graph.edges
+    for k, rec in enumerate(result.checks):
+        u, v = (int(x) for x in edges[rec.edge])
+        state = "free   " if rec.free else "BLOCKED"
+        print(f"  check {k + 1:3d}: edge {rec.edge:5d} ({u}->{v}){'':4s} {state} [{rec.stage}]")
+    t = result.timings
+    print(
+        f"  -> {result.status.value}: {result.reason} [query {result.query or '-'}, "
+        f"stage {result.stage.value if result.stage else '-'}; library {t.library_s * 1e3:.1f} ms, "
+        f"selection {t.selection_s * 1e3:.1f} ms, checks {t.checks_s * 1e3:.1f} ms]"
+    )

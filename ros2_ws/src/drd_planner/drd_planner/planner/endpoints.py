@@ -1,0 +1,86 @@
+"""A query's start and goal: vertex ids, or states snapped to the nearest graph vertex.
+
+A state is a (d,) vector in the graph's vertex-state space (helicopter: x, y, z in metres and heading
+in radians; arm: joint angles in radians; planar: x, y). It resolves to the nearest vertex by
+Euclidean distance in that space when the distance is within the snap tolerance; anything else is
+refused with the distance and the tolerance named.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import numpy.typing as npt
+from scipy.spatial import cKDTree
+
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.exceptions import PlanningError
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Default snap tolerance as a fraction of the median edge length.
+SNAP_FRACTION_OF_EDGE = 0.25
+
+Endpoint = int | npt.ArrayLike
+
+
+class QueryError(PlanningError):
+    """A start or goal that cannot be served (malformed, outside the graph, or out of reach)."""
+
+
+class EndpointResolver:
+    """Turns vertex ids and states into vertex ids of one graph.
+
+    Args:
+        graph: the graph (its ``vertex_states`` are needed for states).
+        snap_tolerance: the farthest a state may be from its vertex, in state units; None uses
+            :data:`SNAP_FRACTION_OF_EDGE` x the median edge length.
+    """
+
+    def __init__(self, graph: ExplicitGraph, *, snap_tolerance: float | None = None) -> None:
+        self._graph = graph
+        states = graph.vertex_states
+        self._kdtree = None if states is None else cKDTree(states)
+        if snap_tolerance is None:
+            median = float(np.median(graph.lengths)) if graph.num_edges else 0.0
+            snap_tolerance = SNAP_FRACTION_OF_EDGE * median
+        if not (np.isfinite(snap_tolerance) and snap_tolerance >= 0):
+            raise QueryError(f"the snap tolerance must be finite and >= 0, got {snap_tolerance}")
+        self.snap_tolerance = float(snap_tolerance)
+
+    def resolve(self, value: Endpoint, label: str) -> int:
+        """The vertex id of ``value`` (a vertex id or a state).
+
+        Raises:
+            QueryError: not an id in range, not a finite state of the right length, or farther
+                than the snap tolerance from every vertex.
+        """
+        n = self._graph.num_vertices
+        if isinstance(value, bool):
+            raise QueryError(f"{label} must be a vertex id or a state, not a boolean")
+        if isinstance(value, numbers.Integral):
+            vertex = int(value)
+            if not 0 <= vertex < n:
+                raise QueryError(f"{label} vertex {vertex} outside the graph's vertices [0, {n})")
+            return vertex
+        try:
+            state = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise QueryError(f"{label} must be a vertex id or a state vector ({exc})") from None
+        if state.ndim == 0:
+            raise QueryError(f"{label} must be an integer vertex id or a state vector, got {value!r}")
+        if self._kdtree is None:
+            raise QueryError(f"this graph has no vertex states; give the {label} as a vertex id")
+        dim = int(self._kdtree.m)
+        if state.shape != (dim,):
+            raise QueryError(f"{label} state must have {dim} values, got shape {state.shape}")
+        if not np.all(np.isfinite(state)):
+            raise QueryError(f"{label} state has a NaN or infinite value: {state.tolist()}")
+        distance, vertex = self._kdtree.query(state)
+        if distance > self.snap_tolerance:
+            raise QueryError(
+                f"{label} state is {distance:.4g} from the nearest graph vertex ({int(vertex)}), farther "
+                f"than the snap tolerance {self.snap_tolerance:.4g}: outside the graph's reach"
+            )
+        return int(vertex)

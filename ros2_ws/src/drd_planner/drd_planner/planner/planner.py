@@ -1,0 +1,412 @@
+"""One planning API, ROS-free: any (start, goal) of a prior's graph, checked against any edge oracle.
+
+A plan runs in up to two stages, all checks going through the one episode runner
+(:func:`~drd_planner.core.episode.run_episode`), which returns a path only when every edge of it was
+checked free in this plan:
+
+1. **the library stage**: the query's path library with a policy (default ``direct_bisect``: the
+   DiRECt tree, then BiSECt). A query with a precomputed tree uses that tree and its library unchanged;
+   any other query gets a library built online from the prior's training worlds
+   (:mod:`~drd_planner.planner.query_library`) and a DiRECt tree grown along the branch taken
+   (:class:`~drd_planner.core.online_tree.LazyDirectTree`). Both are cached per query (LRU).
+2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
+   prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
+
+So the planner says "no path" only when the graph has none given the checks made; a check or time
+budget ends a plan with its own status.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
+from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
+from drd_planner.core.library import PathLibrary
+from drd_planner.core.online_tree import LazyDirectTree
+from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
+from drd_planner.core.tree import TreeNodes
+from drd_planner.exceptions import ProblemError
+from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
+from drd_planner.planner.graph_fallback import (
+    DEFAULT_FALLBACK_KAPPA,
+    fallback_edge_weights,
+    posterior_free_probability,
+)
+from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.query_library import query_library, vertex_sequence
+from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Queries whose library and tree are kept (least recently used dropped first).
+DEFAULT_CACHE_SIZE = 16
+#: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
+#: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
+PLAN_POLICIES = tuple(sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS)}))
+
+
+@dataclass(frozen=True)
+class QueryModel:
+    """What one query needs before its first check (cached per query).
+
+    Attributes:
+        start: start vertex id.
+        goal: goal vertex id.
+        library: its path library, or None when no training world has a free path (then the graph
+            stage starts at once).
+        tree: the precomputed tree, or one grown online; None without a library.
+        theta: (E,) BiSECt's training bias.
+        label: ``tree:<name>`` or ``online``.
+        build_s: seconds it took to build.
+    """
+
+    start: int
+    goal: int
+    library: PathLibrary | None
+    tree: TreeNodes | None
+    theta: FloatArray
+    label: str
+    build_s: float
+
+
+class Planner:
+    """Plans any query of one :class:`WorldPrior` against an edge oracle.
+
+    Args:
+        prior: the graph, its training worlds and precomputed trees.
+        cache_size: queries whose library and tree are kept.
+        snap_tolerance: how far a state may lie from its vertex (state units); None: a quarter of the
+            median edge length.
+        expand_threshold: online trees expand a node only while its fraction is at least this.
+    """
+
+    def __init__(
+        self,
+        prior: WorldPrior,
+        *,
+        cache_size: int = DEFAULT_CACHE_SIZE,
+        snap_tolerance: float | None = None,
+        expand_threshold: float = 0.05,
+    ) -> None:
+        if cache_size < 1:
+            raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
+        self.prior = prior
+        self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance)
+        self._arcs = GraphArcs(prior.graph)
+        self._cache: OrderedDict[tuple[int, int], QueryModel] = OrderedDict()
+        self._cache_size = cache_size
+        self._expand = expand_threshold
+
+    @classmethod
+    def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: float) -> Planner:
+        """A planner over the prior (or tree) file at ``path`` (see :func:`drd_planner.planner.load_prior`)."""
+        from drd_planner.planner.prior_file import load_prior
+
+        return cls(load_prior(path, expected_domain=expected_domain), **options)  # type: ignore[arg-type]
+
+    @property
+    def snap_tolerance(self) -> float:
+        """How far a state may lie from the vertex it snaps to, in state units."""
+        return self._endpoints.snap_tolerance
+
+    def resolve(self, start: Endpoint, goal: Endpoint) -> tuple[int, int]:
+        """Vertex ids of a start and goal given as ids or states.
+
+        Raises:
+            QueryError: either is malformed or out of reach.
+        """
+        return self._endpoints.resolve(start, "start"), self._endpoints.resolve(goal, "goal")
+
+    def cached_queries(self) -> list[tuple[int, int]]:
+        """The (start, goal) pairs in the cache, least recently used first."""
+        return list(self._cache)
+
+    def memory_bytes(self) -> dict[str, int]:
+        """Approximate memory of the prior's arrays and of the cached query libraries, in bytes."""
+        prior = self.prior
+        worlds = 0 if prior.worlds is None else int(prior.worlds.nbytes)
+        graph = int(prior.graph.edges.nbytes + prior.graph.lengths.nbytes)
+        trees = sum(int(qt.tree.free_fraction.nbytes + qt.tree.edge.nbytes * 6) for qt in prior.trees)
+        libraries = 0
+        for model in self._cache.values():
+            if model.library is not None:
+                libraries += sum(int(p.nbytes) * 2 for p in model.library.path_edges)
+                libraries += int(model.library.incidence.data.nbytes) * 3
+            if isinstance(model.tree, LazyDirectTree):
+                libraries += model.tree.num_worlds * (model.library.num_paths if model.library else 0) * 8
+        return {"worlds": worlds, "graph": graph, "trees": trees, "query_cache": libraries}
+
+    def query_model(self, start: int, goal: int) -> QueryModel:
+        """The library and tree of the query (from the cache, a precomputed tree, or built now).
+
+        Raises:
+            QueryError: the prior holds training worlds only for its precomputed queries.
+        """
+        key = (start, goal)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        model = self._build_model(start, goal)
+        self._cache[key] = model
+        while len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+        return model
+
+    def _build_model(self, start: int, goal: int) -> QueryModel:
+        t0 = time.perf_counter()
+        prior = self.prior
+        qt = prior.tree_for(start, goal)
+        if qt is not None:
+            theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
+            return QueryModel(
+                start, goal, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0
+            )
+        if prior.worlds is None:
+            served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
+            raise QueryError(
+                f"this prior came from a tree file that holds training worlds only for its own query "
+                f"({served}); to plan {start} -> {goal}, rebuild it as a world prior with "
+                "`drd build-tree --dataset DATASET.npz --out PRIOR.npz`"
+            )
+        library = query_library(
+            self._arcs,
+            prior.graph.edges,
+            prior.graph.lengths,
+            prior.worlds,
+            start,
+            goal,
+            max_paths=prior.max_paths,
+            seed=prior.library_seed,
+        )
+        tree = None
+        if library is not None:
+            tree = LazyDirectTree(
+                prior.worlds,
+                library,
+                prior.edge_costs,
+                weights=prior.world_weights,
+                expand_threshold=self._expand,
+            )
+        return QueryModel(start, goal, library, tree, prior.edge_marginal, "online", time.perf_counter() - t0)
+
+    def plan(
+        self,
+        start: Endpoint,
+        goal: Endpoint,
+        oracle: EdgeOracle,
+        *,
+        seed: int = 0,
+        max_checks: int | None = None,
+        time_budget_s: float | None = None,
+        policy: str = "direct_bisect",
+    ) -> PlanResult:
+        """Find a path from ``start`` to ``goal`` whose every edge ``oracle`` says is free.
+
+        Args:
+            start: a vertex id, or a (d,) state that snaps to the nearest vertex.
+            goal: likewise.
+            oracle: answers ``check(edge) -> bool`` (a row of X in benchmarks, FCL in the node).
+            seed: seed of the policy's random choices (same seed, same checks).
+            max_checks: the most checks this plan may make (None: no limit).
+            time_budget_s: the most seconds of this plan (None: no limit); checked before each selection.
+            policy: the library stage's policy (:data:`PLAN_POLICIES`).
+
+        Returns:
+            The result; REFUSED (never an exception) for a malformed or unreachable start or goal.
+
+        Raises:
+            ProblemError: an unknown policy, or a budget that is not positive.
+        """
+        t_begin = time.perf_counter()
+        if policy not in PLAN_POLICIES:
+            raise ProblemError(f"unknown planning policy {policy!r}; known: {', '.join(PLAN_POLICIES)}")
+        if max_checks is not None and max_checks < 1:
+            raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
+        if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
+            raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")
+        deadline = None if time_budget_s is None else t_begin + float(time_budget_s)
+        try:
+            s, g = self.resolve(start, goal)
+            if s == g:
+                return self._trivial(s, t_begin)
+            model = self.query_model(s, g)
+        except QueryError as exc:
+            return PlanResult(PlanStatus.REFUSED, str(exc), timings=_timings((), 0.0, t_begin))
+        t_model = time.perf_counter() - t_begin
+        checks: list[CheckRecord] = []
+        known: dict[int, bool] = {}
+        episode: EpisodeResult | None = None
+        if model.library is not None:
+            lib_policy = POLICIES[policy](self._context(model, policy, seed))
+            episode = run_episode(
+                model.library,
+                self.prior.edge_costs,
+                lib_policy,
+                oracle,
+                max_checks=max_checks,
+                deadline=deadline,
+            )
+            checks.extend(episode.checks)
+            known.update({c.edge: c.free for c in episode.checks})
+            if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
+                return self._found(
+                    model, episode.path_edges, checks, _library_stage(checks), t_model, t_begin
+                )
+            if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
+                return self._exhausted(model, episode.status, checks, t_model, t_begin)
+        budget = None if max_checks is None else max_checks - len(checks)
+        if budget is not None and budget <= 0:
+            return self._exhausted(model, EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin)
+        graph_episode = self._graph_stage(model, oracle, known, budget, deadline)
+        offset = len(checks)
+        checks.extend(dataclasses.replace(c, step=c.step + offset) for c in graph_episode.checks)
+        if graph_episode.status is EpisodeStatus.PATH_FOUND and graph_episode.path_edges is not None:
+            return self._found(model, graph_episode.path_edges, checks, PlanStage.GRAPH, t_model, t_begin)
+        if graph_episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
+            return self._exhausted(model, graph_episode.status, checks, t_model, t_begin)
+        blocked = sum(not c.free for c in checks)
+        return PlanResult(
+            PlanStatus.NO_PATH,
+            f"no free path from {model.start} to {model.goal} in the graph: {blocked} blocked edges "
+            f"disconnect them ({len(checks)} checks)",
+            model.start,
+            model.goal,
+            checks=tuple(checks),
+            query=model.label,
+            library_size=0 if model.library is None else model.library.num_paths,
+            timings=_timings(checks, t_model, t_begin),
+        )
+
+    def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
+        assert model.library is not None
+        prior = self.prior
+        return PolicyContext(
+            library=model.library,
+            edge_costs=prior.edge_costs,
+            train_theta=model.theta,
+            tree=model.tree if policy in TREE_POLICIES else None,
+            seed=seed,
+            eta=prior.eta,
+            alpha=prior.alpha,
+            pseudo_count=prior.pseudo_count,
+            graph=prior.graph,
+            start=model.start,
+            goal=model.goal,
+        )
+
+    def _graph_stage(
+        self,
+        model: QueryModel,
+        oracle: EdgeOracle,
+        known: dict[int, bool],
+        budget: int | None,
+        deadline: float | None,
+    ) -> EpisodeResult:
+        prior = self.prior
+        theta = posterior_free_probability(
+            prior.worlds,
+            prior.world_weights,
+            known,
+            num_edges=prior.graph.num_edges,
+            alpha=prior.alpha,
+            pseudo_count=prior.pseudo_count or DEFAULT_FALLBACK_KAPPA,
+        )
+        search = LazySP(
+            prior.graph,
+            model.start,
+            model.goal,
+            max_checks=None,
+            edge_weights=fallback_edge_weights(prior.graph, theta),
+            observations=known,
+            stage="graph",
+            name="graph_fallback",
+        )
+        return run_episode(
+            None, prior.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
+        )
+
+    def _trivial(self, vertex: int, t_begin: float) -> PlanResult:
+        return PlanResult(
+            PlanStatus.FOUND,
+            "start and goal are the same vertex: the empty path",
+            vertex,
+            vertex,
+            vertices=np.array([vertex], dtype=np.int64),
+            stage=PlanStage.TRIVIAL,
+            timings=_timings((), 0.0, t_begin),
+        )
+
+    def _found(
+        self,
+        model: QueryModel,
+        path_edges: IntArray,
+        checks: list[CheckRecord],
+        stage: PlanStage,
+        t_model: float,
+        t_begin: float,
+    ) -> PlanResult:
+        edges = np.asarray(path_edges, dtype=np.int64)
+        cost = float(self.prior.graph.lengths[edges].sum())
+        return PlanResult(
+            PlanStatus.FOUND,
+            f"path of {edges.size} edges (cost {cost:.4g}) verified free after {len(checks)} checks",
+            model.start,
+            model.goal,
+            vertices=vertex_sequence(self.prior.graph.edges, model.start, edges),
+            edges=edges,
+            checks=tuple(checks),
+            cost=cost,
+            stage=stage,
+            query=model.label,
+            library_size=0 if model.library is None else model.library.num_paths,
+            timings=_timings(checks, t_model, t_begin),
+        )
+
+    def _exhausted(
+        self,
+        model: QueryModel,
+        status: EpisodeStatus,
+        checks: list[CheckRecord],
+        t_model: float,
+        t_begin: float,
+    ) -> PlanResult:
+        what = "check budget" if status is EpisodeStatus.MAX_CHECKS else "time budget"
+        return PlanResult(
+            PlanStatus.BUDGET_EXHAUSTED,
+            f"the {what} ran out after {len(checks)} checks before a path was verified",
+            model.start,
+            model.goal,
+            checks=tuple(checks),
+            query=model.label,
+            library_size=0 if model.library is None else model.library.num_paths,
+            timings=_timings(checks, t_model, t_begin),
+        )
+
+
+def _library_stage(checks: list[CheckRecord]) -> PlanStage:
+    last = checks[-1].stage if checks else ""
+    if last == "tree":
+        return PlanStage.TREE
+    if last == "bisect":
+        return PlanStage.BISECT
+    return PlanStage.LIBRARY
+
+
+def _timings(
+    checks: list[CheckRecord] | tuple[CheckRecord, ...], library_s: float, t_begin: float
+) -> PlanTimings:
+    return PlanTimings(
+        library_s=library_s,
+        selection_s=sum(c.select_ms for c in checks) / 1e3,
+        checks_s=sum(c.check_ms for c in checks) / 1e3,
+        total_s=time.perf_counter() - t_begin,
+    )

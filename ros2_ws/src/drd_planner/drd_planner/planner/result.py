@@ -1,0 +1,117 @@
+"""What :meth:`drd_planner.planner.Planner.plan` returns: status, verified path, check log, timings."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.episode import CheckRecord
+from drd_planner.exceptions import PlanningError
+
+IntArray = npt.NDArray[np.int64]
+
+
+class PlanStatus(str, Enum):
+    """How a plan ended."""
+
+    #: A path was found and every edge of it was checked free in this plan.
+    FOUND = "found"
+    #: The graph has no free start-goal path given the checks made (every candidate is blocked).
+    NO_PATH = "no_path"
+    #: ``max_checks`` or ``time_budget_s`` ran out first: nothing is known to be free yet.
+    BUDGET_EXHAUSTED = "budget_exhausted"
+    #: The query cannot be served (a malformed or unreachable start or goal); no check was made.
+    REFUSED = "refused"
+
+
+class PlanStage(str, Enum):
+    """Which stage proved the path."""
+
+    #: The DiRECt tree (precomputed, or grown online for a new query).
+    TREE = "tree"
+    #: BiSECt on the query's path library (after the tree).
+    BISECT = "bisect"
+    #: Another library policy (a baseline chosen with ``policy=``).
+    LIBRARY = "library"
+    #: The search over the whole graph once every library path was blocked.
+    GRAPH = "graph"
+    #: Start and goal are the same vertex: the empty path, nothing to check.
+    TRIVIAL = "trivial"
+
+
+@dataclass(frozen=True)
+class PlanTimings:
+    """Where a plan's time went, in seconds.
+
+    Attributes:
+        library_s: finding or building the query's library (and its DiRECt tree) for this query.
+        selection_s: choosing edges (the policy's selection, updates between checks not included).
+        checks_s: inside the oracle's ``check``.
+        total_s: the whole call.
+    """
+
+    library_s: float = 0.0
+    selection_s: float = 0.0
+    checks_s: float = 0.0
+    total_s: float = 0.0
+
+    @property
+    def other_s(self) -> float:
+        """Everything else: the policies' updates after each outcome and bookkeeping."""
+        return max(self.total_s - self.library_s - self.selection_s - self.checks_s, 0.0)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """The outcome of one plan.
+
+    Attributes:
+        status: how it ended.
+        reason: one human-readable line (why it was refused, what ran out, what was found).
+        start: the start vertex id (None when refused before it was resolved).
+        goal: the goal vertex id (None when refused before it was resolved).
+        vertices: (L + 1,) int64 vertex ids of the path, start first (empty unless FOUND).
+        edges: (L,) int64 edge ids of the path in traversal order (empty unless FOUND).
+        checks: every check in order (edge, outcome, stage, selection and check time).
+        cost: the path's length in the domain's unit (0 unless FOUND).
+        stage: which stage proved the path (None unless FOUND).
+        query: ``tree:<name>`` for a precomputed tree, ``online`` for a library built for this query.
+        library_size: m of the query's library (0 when it had none).
+        timings: where the time went.
+    """
+
+    status: PlanStatus
+    reason: str
+    start: int | None = None
+    goal: int | None = None
+    vertices: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    edges: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    checks: tuple[CheckRecord, ...] = ()
+    cost: float = 0.0
+    stage: PlanStage | None = None
+    query: str = ""
+    library_size: int = 0
+    timings: PlanTimings = field(default_factory=PlanTimings)
+
+    @property
+    def found(self) -> bool:
+        """True when a verified path was found."""
+        return self.status is PlanStatus.FOUND
+
+    @property
+    def num_checks(self) -> int:
+        """How many edges were checked."""
+        return len(self.checks)
+
+    def outcomes(self) -> dict[int, bool]:
+        """Every checked edge and its outcome."""
+        return {c.edge: c.free for c in self.checks}
+
+    def raise_for_status(self) -> PlanResult:
+        """Return ``self`` when FOUND, else raise :class:`PlanningError` with the reason."""
+        if not self.found:
+            raise PlanningError(f"{self.status.value}: {self.reason}")
+        return self

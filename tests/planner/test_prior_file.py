@@ -1,0 +1,132 @@
+"""The world-prior file: round trip, safe refusals, and tree files loading as one-tree priors."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drd_planner.core.tree import build_tree
+from drd_planner.data.tree_file import TreeBundle, save_tree
+from drd_planner.domains.planar import make_planar_problem
+from drd_planner.exceptions import PriorFileError, TreeFileError
+from drd_planner.planner import (
+    QueryTree,
+    WorldPrior,
+    load_prior,
+    load_tree_bundle,
+    prior_from_problem,
+    save_prior,
+)
+from drd_planner.planner.commands import query_tree
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def prior() -> WorldPrior:
+    problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
+    tree = build_tree(problem, progress=False)
+    assert problem.start is not None and problem.goal is not None
+    own = QueryTree("own", problem.start, problem.goal, problem.library, tree)
+    base = prior_from_problem(problem, domain="planar", trees=(own,), eta=0.4, pseudo_count=5.0)
+    other = query_tree(base, 3, 20, tree_options={})
+    return WorldPrior(**{**base.__dict__, "trees": (own, other)})
+
+
+def test_round_trip_keeps_everything(prior: WorldPrior, tmp_path: Path) -> None:
+    path = save_prior(tmp_path / "p.npz", prior)
+    back = load_prior(path, expected_domain="planar")
+    assert back.worlds is not None and prior.worlds is not None
+    np.testing.assert_array_equal(back.worlds, prior.worlds)
+    np.testing.assert_array_equal(back.graph.edges, prior.graph.edges)
+    np.testing.assert_array_equal(back.graph.vertex_states, prior.graph.vertex_states)  # type: ignore[arg-type]
+    assert (back.eta, back.alpha, back.pseudo_count, back.domain) == (0.4, prior.alpha, 5.0, "planar")
+    assert [(t.start, t.goal, t.name) for t in back.trees] == [(t.start, t.goal, t.name) for t in prior.trees]
+    for a, b in zip(back.trees, prior.trees, strict=True):
+        np.testing.assert_array_equal(a.tree.edge, b.tree.edge)
+        np.testing.assert_array_equal(a.tree.free_fraction, b.tree.free_fraction)
+        assert all(
+            np.array_equal(x, y) for x, y in zip(a.library.path_edges, b.library.path_edges, strict=True)
+        )
+        assert a.tree.world_free is not None
+    # Saving twice gives the same bytes (reproducible files).
+    assert save_prior(tmp_path / "q.npz", back).read_bytes() == path.read_bytes()
+
+
+def test_tree_bundle_of_a_prior(prior: WorldPrior, tmp_path: Path) -> None:
+    path = save_prior(tmp_path / "p.npz", prior)
+    bundle = load_tree_bundle(path, index=1)
+    assert (bundle.problem.start, bundle.problem.goal) == (3, 20)
+    with pytest.raises(PriorFileError, match="tree 5 does not exist"):
+        load_tree_bundle(path, index=5)
+
+
+def test_a_tree_file_loads_as_a_prior_with_one_tree(prior: WorldPrior, tmp_path: Path) -> None:
+    own = prior.trees[0]
+    problem = prior.query_problem(own)
+    path = save_tree(tmp_path / "t.npz", TreeBundle(problem, own.tree, "planar", eta=0.3))
+    loaded = load_prior(path)
+    assert loaded.worlds is None and not loaded.serves_any_query
+    assert len(loaded.trees) == 1 and loaded.trees[0].start == own.start
+    assert loaded.eta == 0.3
+    with pytest.raises(PriorFileError, match="'planar', not 'arm'"):
+        load_prior(path, expected_domain="arm")
+
+
+def test_the_shipped_trees_load_as_priors() -> None:
+    for name in ("heli_wires", "arm_table_clutter"):
+        loaded = load_prior(REPO / "trees" / f"{name}.npz")
+        assert len(loaded.trees) == 1
+
+
+def test_refusals_name_the_problem(prior: WorldPrior, tmp_path: Path) -> None:
+    path = save_prior(tmp_path / "p.npz", prior)
+    with pytest.raises(PriorFileError, match="not found"):
+        load_prior(tmp_path / "none.npz")
+    with pytest.raises(PriorFileError, match="directory"):
+        load_prior(tmp_path)
+    with pytest.raises(PriorFileError, match="domain 'planar', not 'helicopter'"):
+        load_prior(path, expected_domain="helicopter")
+    text = tmp_path / "text.npz"
+    text.write_text("not a prior")
+    with pytest.raises(PriorFileError, match="not a readable prior or tree file"):
+        load_prior(text)
+    assert isinstance(PriorFileError("x"), TreeFileError)  # the node's existing catch still applies
+
+
+def _rewrite(src: Path, dst: Path, edit: object) -> None:
+    """Copy a prior with its header edited by ``edit(header) -> header`` (digests left stale)."""
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "header.npy":
+                import io
+
+                arr = np.load(io.BytesIO(data), allow_pickle=False)
+                header = edit(json.loads(arr.tobytes().decode()))  # type: ignore[operator]
+                buf = io.BytesIO()
+                np.save(buf, np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), allow_pickle=False)
+                data = buf.getvalue()
+            zout.writestr(item, data)
+
+
+def test_another_version_and_tampering_are_refused(prior: WorldPrior, tmp_path: Path) -> None:
+    path = save_prior(tmp_path / "p.npz", prior)
+    newer = tmp_path / "v2.npz"
+    _rewrite(path, newer, lambda h: {**h, "format_version": 2})
+    with pytest.raises(PriorFileError, match="version 2"):
+        load_prior(newer)
+    tampered = tmp_path / "t.npz"
+    _rewrite(path, tampered, lambda h: {**h, "eta": 0.9})
+    with pytest.raises(PriorFileError, match="checksum"):
+        load_prior(tampered)
+
+
+def test_a_prior_without_worlds_cannot_be_saved(prior: WorldPrior, tmp_path: Path) -> None:
+    legacy = WorldPrior(**{**prior.__dict__, "worlds": None})
+    with pytest.raises(PriorFileError, match="without training worlds"):
+        save_prior(tmp_path / "x.npz", legacy)
