@@ -154,7 +154,8 @@ class DirectSelector:
             self._candidates = np.arange(self._X.shape[1], dtype=np.int64)
         else:
             self._candidates = np.unique(np.asarray(candidate_edges, dtype=np.int64))
-        self._Xc = self._X[:, self._candidates]
+        # Every edge a candidate: a view, not a copy (online trees share the prior's X across queries).
+        self._Xc = self._X if candidate_edges is None else self._X[:, self._candidates]
         # Atoms: worlds with identical region-membership rows.
         atoms, self._atom_of = np.unique(self._R, axis=0, return_inverse=True)
         self._atom_of = self._atom_of.ravel().astype(np.int64)
@@ -236,15 +237,17 @@ class DirectSelector:
         ):
             return None
         # Informative tests: the active worlds disagree.
-        x_act = self._Xc[act]
-        free_count = x_act.sum(axis=0)
-        split = (free_count > 0) & (free_count < act.size)
+        # Only the candidate columns are gathered (a node's candidates are one path's edges, X has all).
+        cand_cols = None
         if candidates is not None:
-            split &= np.isin(self._candidates, np.asarray(candidates, dtype=np.int64))
-        informative = np.flatnonzero(split)
+            cand_cols = np.flatnonzero(np.isin(self._candidates, np.asarray(candidates, dtype=np.int64)))
+        x_act = self._Xc[act] if cand_cols is None else self._Xc[np.ix_(act, cand_cols)]
+        free_count = x_act.sum(axis=0)
+        split_cols = np.flatnonzero((free_count > 0) & (free_count < act.size))
+        informative = split_cols if cand_cols is None else cand_cols[split_cols]
         if informative.size == 0:
             return None
-        xi = x_act[:, informative].astype(self._dtype)
+        xi = x_act[:, split_cols].astype(self._dtype)
         onehot = sp.csr_array(
             (weights.astype(self._dtype), (local, np.arange(act.size))), shape=(num_atoms, act.size)
         )

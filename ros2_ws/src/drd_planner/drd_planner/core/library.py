@@ -94,7 +94,8 @@ class PathLibrary:
     def valid_paths(self, x: npt.ArrayLike) -> BoolArray:
         """R for worlds ``x`` (n, E) or (E,) bool: (n, m) or (m,) bool, path valid iff all its edges are."""
         xb = np.asarray(x, dtype=bool)
-        blocked = (~xb).astype(np.float64)
-        counts = self._csr @ blocked.T
+        lib = self.library_edges  # only the library's own columns matter (X may span a large graph)
+        blocked = (~xb[..., lib]).astype(np.float32)
+        counts = self._csr[:, lib] @ blocked.T
         valid: BoolArray = np.asarray(counts == 0, dtype=bool).T
         return valid
