@@ -33,11 +33,15 @@ DEFAULT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "gccd
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--gccd", type=Path, default=DEFAULT)
     parser.add_argument("--queries", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--eta", type=float, default=0.2, help="switch threshold (below 1: DiRECt at the root)")
+    parser.add_argument(
+        "--eta", type=float, default=0.2, help="switch threshold (below 1: DiRECt at the root)"
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
 
@@ -74,8 +78,14 @@ def main() -> None:
 
     def row(name: str, values: list[float], target: float) -> dict[str, float]:
         arr = np.asarray(values)
-        out = {"median_ms": float(np.median(arr)), "p90_ms": float(np.percentile(arr, 90)), "target_ms": target}
-        print(f"{name:22s} median {out['median_ms']:8.3f} ms   p90 {out['p90_ms']:8.3f} ms   target {target:g} ms")
+        out = {
+            "median_ms": float(np.median(arr)),
+            "p90_ms": float(np.percentile(arr, 90)),
+            "target_ms": target,
+        }
+        print(
+            f"{name:22s} median {out['median_ms']:8.3f} ms   p90 {out['p90_ms']:8.3f} ms   target {target:g} ms"
+        )
         return out
 
     print(

@@ -37,6 +37,7 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.graph_fallback import (
     DEFAULT_FALLBACK_KAPPA,
+    FALLBACK_SELECTOR,
     fallback_edge_weights,
     posterior_free_probability,
 )
@@ -324,6 +325,7 @@ class Planner:
             prior.graph,
             model.start,
             model.goal,
+            selector=FALLBACK_SELECTOR,
             max_checks=None,
             edge_weights=fallback_edge_weights(prior.graph, theta),
             observations=known,
