@@ -444,6 +444,16 @@ class ArmEdgeChecker:
 
     # ----------------------------------------------------------------------------------------------
 
+    def check_motion(self, states: npt.ArrayLike) -> bool:
+        """True when a joint-space motion off the roadmap ((K, D) configurations, radians) is free.
+
+        The samples must be as dense as the roadmap's check resolution (the planner's connector uses it).
+        """
+        q = np.asarray(states, dtype=np.float64)
+        if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != self._states.shape[1] or not np.all(np.isfinite(q)):
+            raise ProblemError(f"a motion must be a finite (K, {self._states.shape[1]}) array, got {q.shape}")
+        return self._base_is_free() and not bool(self._blocked_configs(q).any())
+
     def check(self, edge: int) -> bool:
         """True when ``edge`` is free: end vertices first, then interior samples in bisection order."""
         e = int(self._edge_ids([edge])[0])

@@ -196,6 +196,13 @@ class HelicopterChecker:
         a, b = int(self._offsets[e]), int(self._offsets[e + 1])
         return bool(self._scene.sphere_sweep_free(self._xyz[a:b], self._radius))
 
+    def check_motion(self, states: npt.ArrayLike) -> bool:
+        """True when a motion off the lattice ((K, >= 3) samples, x, y, z metres first) is free."""
+        xyz = np.asarray(states, dtype=np.float64)
+        if xyz.ndim != 2 or xyz.shape[0] < 1 or xyz.shape[1] < 3 or not np.all(np.isfinite(xyz[:, :3])):
+            raise ProblemError(f"a motion must be a finite (K, >= 3) array of samples, got shape {xyz.shape}")
+        return bool(self._scene.sphere_sweep_free(np.ascontiguousarray(xyz[:, :3]), self._radius))
+
     def check_many(self, edges: npt.ArrayLike) -> BoolArray:
         """(K,) bool, True where each of the (K,) edge ids is free; same answers as :meth:`check`."""
         ids = self._edge_ids(edges)

@@ -271,6 +271,15 @@ class PlanarChecker:
         """True when edge ``edge`` is collision-free."""
         return bool(self.check_many(np.array([edge]))[0])
 
+    def check_motion(self, states: npt.ArrayLike) -> bool:
+        """True when the polyline through the (K, 2) states (a motion off the graph) meets no box."""
+        pts = np.asarray(states, dtype=np.float64).reshape(-1, 2)
+        if self._boxes.shape[0] == 0:
+            return True
+        if pts.shape[0] == 1:
+            pts = np.vstack([pts, pts])
+        return not bool(segments_hit_boxes(pts[:-1], pts[1:], self._boxes).any())
+
     def check_many(self, edges: npt.ArrayLike) -> BoolArray:
         """(K,) bool, True where each of the (K,) edge ids is collision-free."""
         ids = validate_edge_ids(edges, self._num_edges)

@@ -50,11 +50,26 @@ class EndpointResolver:
         self.snap_tolerance = float(snap_tolerance)
 
     def resolve(self, value: Endpoint, label: str) -> int:
-        """The vertex id of ``value`` (a vertex id or a state).
+        """The vertex id of ``value`` (a vertex id, or a state within the snap tolerance of one).
 
         Raises:
             QueryError: not an id in range, not a finite state of the right length, or farther
                 than the snap tolerance from every vertex.
+        """
+        resolved = self.snap(value, label)
+        if isinstance(resolved, int):
+            return resolved
+        distance, vertex = self._kdtree.query(resolved)  # type: ignore[union-attr]
+        raise QueryError(
+            f"{label} state is {distance:.4g} from the nearest graph vertex ({int(vertex)}), farther "
+            f"than the snap tolerance {self.snap_tolerance:.4g}: outside the graph's reach"
+        )
+
+    def snap(self, value: Endpoint, label: str) -> int | FloatArray:
+        """A vertex id, or the validated (d,) state when it lies farther than the snap tolerance.
+
+        Raises:
+            QueryError: not an id in range, or not a finite state of the right length.
         """
         n = self._graph.num_vertices
         if isinstance(value, bool):
@@ -79,8 +94,11 @@ class EndpointResolver:
             raise QueryError(f"{label} state has a NaN or infinite value: {state.tolist()}")
         distance, vertex = self._kdtree.query(state)
         if distance > self.snap_tolerance:
-            raise QueryError(
-                f"{label} state is {distance:.4g} from the nearest graph vertex ({int(vertex)}), farther "
-                f"than the snap tolerance {self.snap_tolerance:.4g}: outside the graph's reach"
-            )
+            return state
         return int(vertex)
+
+    def nearest(self, state: FloatArray) -> tuple[float, int]:
+        """(distance, vertex) of the vertex nearest to a validated state."""
+        assert self._kdtree is not None
+        distance, vertex = self._kdtree.query(state)
+        return float(distance), int(vertex)

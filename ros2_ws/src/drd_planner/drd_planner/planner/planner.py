@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
 from drd_planner.core.library import PathLibrary
@@ -34,6 +35,7 @@ from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.tree import TreeNodes
 from drd_planner.exceptions import ProblemError
+from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.graph_fallback import (
     DEFAULT_FALLBACK_KAPPA,
@@ -42,6 +44,7 @@ from drd_planner.planner.graph_fallback import (
     posterior_free_probability,
 )
 from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_library import query_library, vertex_sequence
 from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
 
@@ -60,8 +63,7 @@ class QueryModel:
     """What one query needs before its first check (cached per query).
 
     Attributes:
-        start: start vertex id.
-        goal: goal vertex id.
+        query: the graph, worlds and costs it plans over (the prior's, or with motions to off-graph states).
         library: its path library, or None when no training world has a free path (then the graph
             stage starts at once).
         tree: the precomputed tree, or one grown online; None without a library.
@@ -70,13 +72,22 @@ class QueryModel:
         build_s: seconds it took to build.
     """
 
-    start: int
-    goal: int
+    query: QueryGraph
     library: PathLibrary | None
     tree: TreeNodes | None
     theta: FloatArray
     label: str
     build_s: float
+
+    @property
+    def start(self) -> int:
+        """Start vertex id (in the query graph)."""
+        return self.query.start
+
+    @property
+    def goal(self) -> int:
+        """Goal vertex id (in the query graph)."""
+        return self.query.goal
 
 
 class Planner:
@@ -97,15 +108,19 @@ class Planner:
         cache_size: int = DEFAULT_CACHE_SIZE,
         snap_tolerance: float | None = None,
         expand_threshold: float = 0.05,
+        connector: QueryConnector | None = None,
+        connect_states: bool = True,
     ) -> None:
         if cache_size < 1:
             raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
         self.prior = prior
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance)
         self._arcs = GraphArcs(prior.graph)
-        self._cache: OrderedDict[tuple[int, int], QueryModel] = OrderedDict()
+        self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
         self._cache_size = cache_size
         self._expand = expand_threshold
+        self._connector = (connector or connector_for(prior)) if connect_states else None
+        self._sample_index: EdgeSampleIndex | None = None
 
     @classmethod
     def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: float) -> Planner:
@@ -119,15 +134,20 @@ class Planner:
         """How far a state may lie from the vertex it snaps to, in state units."""
         return self._endpoints.snap_tolerance
 
+    @property
+    def connector(self) -> QueryConnector | None:
+        """What joins off-graph states to the graph (None: such states are refused)."""
+        return self._connector
+
     def resolve(self, start: Endpoint, goal: Endpoint) -> tuple[int, int]:
-        """Vertex ids of a start and goal given as ids or states.
+        """Vertex ids of a start and goal given as ids or states within the snap tolerance.
 
         Raises:
-            QueryError: either is malformed or out of reach.
+            QueryError: either is malformed or farther than the snap tolerance.
         """
         return self._endpoints.resolve(start, "start"), self._endpoints.resolve(goal, "goal")
 
-    def cached_queries(self) -> list[tuple[int, int]]:
+    def cached_queries(self) -> list[tuple[object, object]]:
         """The (start, goal) pairs in the cache, least recently used first."""
         return list(self._cache)
 
@@ -146,13 +166,16 @@ class Planner:
                 libraries += model.tree.num_worlds * (model.library.num_paths if model.library else 0) * 8
         return {"worlds": worlds, "graph": graph, "trees": trees, "query_cache": libraries}
 
-    def query_model(self, start: int, goal: int) -> QueryModel:
+    def query_model(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
         """The library and tree of the query (from the cache, a precomputed tree, or built now).
 
+        ``start`` and ``goal`` are vertex ids, or validated states off the graph (joined by motions).
+
         Raises:
-            QueryError: the prior holds training worlds only for its precomputed queries.
+            QueryError: the prior holds training worlds only for its precomputed queries, or a state
+                has no vertex within the connector's reach.
         """
-        key = (start, goal)
+        key = (_cache_key(start), _cache_key(goal))
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
@@ -162,42 +185,67 @@ class Planner:
             self._cache.popitem(last=False)
         return model
 
-    def _build_model(self, start: int, goal: int) -> QueryModel:
+    def _build_model(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
         t0 = time.perf_counter()
         prior = self.prior
-        qt = prior.tree_for(start, goal)
+        qt = prior.tree_for(start, goal) if isinstance(start, int) and isinstance(goal, int) else None
         if qt is not None:
             theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
-            return QueryModel(
-                start, goal, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0
-            )
+            query = prior_query(prior, qt.start, qt.goal)
+            return QueryModel(query, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0)
         if prior.worlds is None:
             served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
             raise QueryError(
                 f"this prior came from a tree file that holds training worlds only for its own query "
-                f"({served}); to plan {start} -> {goal}, rebuild it as a world prior with "
+                f"({served}); to plan another query, rebuild it as a world prior with "
                 "`drd build-tree --dataset DATASET.npz --out PRIOR.npz`"
             )
+        if isinstance(start, int) and isinstance(goal, int):
+            query, arcs, theta = prior_query(prior, start, goal), self._arcs, prior.edge_marginal
+        else:
+            query = connected_query(prior, start, goal, self._require_connector(), self._index())
+            assert query.worlds is not None
+            arcs = GraphArcs(query.graph)
+            theta = bias_from_worlds(query.worlds, prior.world_weights, alpha=prior.alpha)
+        assert query.worlds is not None
         library = query_library(
-            self._arcs,
-            prior.graph.edges,
-            prior.graph.lengths,
-            prior.worlds,
-            start,
-            goal,
+            arcs,
+            query.graph.edges,
+            query.graph.lengths,
+            query.worlds,
+            query.start,
+            query.goal,
             max_paths=prior.max_paths,
             seed=prior.library_seed,
         )
         tree = None
         if library is not None:
             tree = LazyDirectTree(
-                prior.worlds,
+                query.worlds,
                 library,
-                prior.edge_costs,
+                query.edge_costs,
                 weights=prior.world_weights,
                 expand_threshold=self._expand,
             )
-        return QueryModel(start, goal, library, tree, prior.edge_marginal, "online", time.perf_counter() - t0)
+        label = "connected" if query.connected else "online"
+        return QueryModel(query, library, tree, theta, label, time.perf_counter() - t0)
+
+    def _require_connector(self) -> QueryConnector:
+        if self._connector is None:
+            raise QueryError(
+                f"a state farther than the snap tolerance {self.snap_tolerance:.4g} from every vertex needs a "
+                f"connector, and domain {self.prior.domain!r} has none: give vertex ids or nearer states"
+            )
+        return self._connector
+
+    def _index(self) -> EdgeSampleIndex:
+        if self._sample_index is None:
+            self._sample_index = EdgeSampleIndex(
+                self.prior.graph,
+                self.prior.edge_trajectories,
+                position_dims=self._require_connector().position_dims,
+            )
+        return self._sample_index
 
     def plan(
         self,
@@ -236,12 +284,23 @@ class Planner:
             raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")
         deadline = None if time_budget_s is None else t_begin + float(time_budget_s)
         try:
-            s, g = self.resolve(start, goal)
-            if s == g:
+            s = self._endpoints.snap(start, "start")
+            g = self._endpoints.snap(goal, "goal")
+            if isinstance(s, int) and isinstance(g, int) and s == g:
                 return self._trivial(s, t_begin)
+            if not (isinstance(s, int) and isinstance(g, int)):
+                self._require_connector()
+                if not isinstance(oracle, MotionOracle):
+                    raise QueryError(
+                        "an off-graph start or goal is joined by new motions, and this oracle cannot check "
+                        "them (it needs check_motion(states)); give vertex ids or states within the snap "
+                        f"tolerance {self.snap_tolerance:.4g}"
+                    )
             model = self.query_model(s, g)
         except QueryError as exc:
             return PlanResult(PlanStatus.REFUSED, str(exc), timings=_timings((), 0.0, t_begin))
+        if model.query.connected:
+            oracle = MotionDispatch(oracle, model.query.motions)  # type: ignore[arg-type]
         t_model = time.perf_counter() - t_begin
         checks: list[CheckRecord] = []
         known: dict[int, bool] = {}
@@ -250,7 +309,7 @@ class Planner:
             lib_policy = POLICIES[policy](self._context(model, policy, seed))
             episode = run_episode(
                 model.library,
-                self.prior.edge_costs,
+                model.query.edge_costs,
                 lib_policy,
                 oracle,
                 max_checks=max_checks,
@@ -292,14 +351,14 @@ class Planner:
         prior = self.prior
         return PolicyContext(
             library=model.library,
-            edge_costs=prior.edge_costs,
+            edge_costs=model.query.edge_costs,
             train_theta=model.theta,
             tree=model.tree if policy in TREE_POLICIES else None,
             seed=seed,
             eta=prior.eta,
             alpha=prior.alpha,
             pseudo_count=prior.pseudo_count,
-            graph=prior.graph,
+            graph=model.query.graph,
             start=model.start,
             goal=model.goal,
         )
@@ -312,28 +371,28 @@ class Planner:
         budget: int | None,
         deadline: float | None,
     ) -> EpisodeResult:
-        prior = self.prior
+        prior, query = self.prior, model.query
         theta = posterior_free_probability(
-            prior.worlds,
+            query.worlds,
             prior.world_weights,
             known,
-            num_edges=prior.graph.num_edges,
+            num_edges=query.graph.num_edges,
             alpha=prior.alpha,
             pseudo_count=prior.pseudo_count or DEFAULT_FALLBACK_KAPPA,
         )
         search = LazySP(
-            prior.graph,
+            query.graph,
             model.start,
             model.goal,
             selector=FALLBACK_SELECTOR,
             max_checks=None,
-            edge_weights=fallback_edge_weights(prior.graph, theta),
+            edge_weights=fallback_edge_weights(query.graph, theta),
             observations=known,
             stage="graph",
             name="graph_fallback",
         )
         return run_episode(
-            None, prior.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
+            None, query.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
         )
 
     def _trivial(self, vertex: int, t_begin: float) -> PlanResult:
@@ -357,13 +416,14 @@ class Planner:
         t_begin: float,
     ) -> PlanResult:
         edges = np.asarray(path_edges, dtype=np.int64)
-        cost = float(self.prior.graph.lengths[edges].sum())
+        graph = model.query.graph
+        cost = float(graph.lengths[edges].sum())
         return PlanResult(
             PlanStatus.FOUND,
             f"path of {edges.size} edges (cost {cost:.4g}) verified free after {len(checks)} checks",
             model.start,
             model.goal,
-            vertices=vertex_sequence(self.prior.graph.edges, model.start, edges),
+            vertices=vertex_sequence(graph.edges, model.start, edges),
             edges=edges,
             checks=tuple(checks),
             cost=cost,
@@ -371,6 +431,8 @@ class Planner:
             query=model.label,
             library_size=0 if model.library is None else model.library.num_paths,
             timings=_timings(checks, t_model, t_begin),
+            new_states=model.query.new_states,
+            motions={e: m for e, m in model.query.motions.items() if e in set(edges.tolist())},
         )
 
     def _exhausted(
@@ -392,6 +454,11 @@ class Planner:
             library_size=0 if model.library is None else model.library.num_paths,
             timings=_timings(checks, t_model, t_begin),
         )
+
+
+def _cache_key(endpoint: int | FloatArray) -> object:
+    """A hashable key of a vertex id or a state (its exact float64 bytes)."""
+    return endpoint if isinstance(endpoint, int) else np.asarray(endpoint, dtype=np.float64).tobytes()
 
 
 def _library_stage(checks: list[CheckRecord]) -> PlanStage:

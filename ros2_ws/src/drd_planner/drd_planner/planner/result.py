@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -12,6 +13,7 @@ from drd_planner.core.episode import CheckRecord
 from drd_planner.exceptions import PlanningError
 
 IntArray = npt.NDArray[np.int64]
+FloatArray = npt.NDArray[np.float64]
 
 
 class PlanStatus(str, Enum):
@@ -81,6 +83,8 @@ class PlanResult:
         query: ``tree:<name>`` for a precomputed tree, ``online`` for a library built for this query.
         library_size: m of the query's library (0 when it had none).
         timings: where the time went.
+        new_states: for an off-graph start or goal, its new vertex id -> (D,) state (ids from V on).
+        motions: the new edges joining them, edge id -> (K, D) states along it, tail first (ids from E on).
     """
 
     status: PlanStatus
@@ -95,6 +99,8 @@ class PlanResult:
     query: str = ""
     library_size: int = 0
     timings: PlanTimings = field(default_factory=PlanTimings)
+    new_states: Mapping[int, FloatArray] = field(default_factory=dict)
+    motions: Mapping[int, FloatArray] = field(default_factory=dict)
 
     @property
     def found(self) -> bool:

@@ -1,0 +1,127 @@
+"""The graph one query plans over: the prior's own, or the prior's plus new motions to off-graph states."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.planner.connect import (
+    EdgeSampleIndex,
+    Motion,
+    MotionOracle,
+    QueryConnector,
+    imputed_outcomes,
+)
+from drd_planner.planner.endpoints import QueryError
+from drd_planner.planner.prior import WorldPrior
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+
+@dataclass(frozen=True)
+class QueryGraph:
+    """Graph, training worlds and check costs of one query.
+
+    Attributes:
+        graph: the prior's graph, plus a new vertex per off-graph state (ids from V on) and its motions
+            (edge ids from E on).
+        worlds: (n, E') training outcomes, the new edges' imputed (:func:`imputed_outcomes`); None for a
+            prior without worlds over every edge.
+        edge_costs: (E',) check costs (a new edge costs the median of the graph's).
+        start: start vertex id.
+        goal: goal vertex id.
+        motions: new edge id -> (K, D) states along it, tail first.
+        new_states: new vertex id -> its (D,) state.
+    """
+
+    graph: ExplicitGraph
+    worlds: BoolArray | None
+    edge_costs: FloatArray
+    start: int
+    goal: int
+    motions: Mapping[int, FloatArray] = field(default_factory=dict)
+    new_states: Mapping[int, FloatArray] = field(default_factory=dict)
+
+    @property
+    def connected(self) -> bool:
+        """True when the query added vertices and motions to the prior's graph."""
+        return bool(self.motions)
+
+
+def prior_query(prior: WorldPrior, start: int, goal: int) -> QueryGraph:
+    """A query between two graph vertices: the prior's own graph and worlds (no copy)."""
+    return QueryGraph(prior.graph, prior.worlds, prior.edge_costs, start, goal)
+
+
+def connected_query(
+    prior: WorldPrior,
+    start: int | FloatArray,
+    goal: int | FloatArray,
+    connector: QueryConnector,
+    index: EdgeSampleIndex,
+) -> QueryGraph:
+    """Join the off-graph start and/or goal state to the graph with the connector's motions.
+
+    Raises:
+        QueryError: no vertex within the connector's reach of a state.
+    """
+    graph = prior.graph
+    states = graph.vertex_states
+    assert states is not None
+    new_edges: list[tuple[int, int]] = []
+    motions: list[Motion] = []
+    new_states: dict[int, FloatArray] = {}
+    ends: dict[str, int] = {}
+    next_vertex = graph.num_vertices
+    for label, value in (("start", start), ("goal", goal)):
+        if isinstance(value, int):
+            ends[label] = value
+            continue
+        found = connector.connect(value, graph, outgoing=label == "start")
+        if not found:
+            raise QueryError(
+                f"{label} state {np.round(value, 4).tolist()} has no graph vertex within the connection reach "
+                f"{connector.reach:.4g} that a motion can join: outside the graph's reach"
+            )
+        vertex = next_vertex
+        next_vertex += 1
+        new_states[vertex] = np.asarray(value, dtype=np.float64)
+        ends[label] = vertex
+        for m in found:
+            new_edges.append((vertex, m.vertex) if label == "start" else (m.vertex, vertex))
+            motions.append(m)
+    num_edges = graph.num_edges
+    edges = np.vstack([graph.edges, np.array(new_edges, dtype=np.int64).reshape(-1, 2)])
+    lengths = np.concatenate([graph.lengths, [m.length for m in motions]])
+    extra = np.array([new_states[v] for v in sorted(new_states)], dtype=np.float64).reshape(
+        -1, states.shape[1]
+    )
+    query_graph = ExplicitGraph(edges, lengths, next_vertex, graph.directed, np.vstack([states, extra]))
+    worlds = None
+    if prior.worlds is not None:
+        imputed = np.column_stack([imputed_outcomes(index, prior.worlds, m.states) for m in motions])
+        worlds = np.concatenate([prior.worlds, imputed], axis=1)
+    cost = float(np.median(prior.edge_costs))
+    costs = np.concatenate([prior.edge_costs, np.full(len(motions), cost)])
+    by_edge = {num_edges + i: m.states for i, m in enumerate(motions)}
+    return QueryGraph(query_graph, worlds, costs, ends["start"], ends["goal"], by_edge, new_states)
+
+
+class MotionDispatch:
+    """The edge oracle of a connected query: graph edges to ``check``, new motions to ``check_motion``."""
+
+    def __init__(self, oracle: MotionOracle, motions: Mapping[int, FloatArray]) -> None:
+        self._oracle = oracle
+        self._motions = motions
+
+    def check(self, edge: int) -> bool:
+        """True when ``edge`` (a graph edge or a new motion) is free."""
+        states = self._motions.get(int(edge))
+        if states is None:
+            return bool(self._oracle.check(edge))
+        return bool(self._oracle.check_motion(states))
