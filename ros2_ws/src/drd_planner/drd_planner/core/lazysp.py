@@ -97,9 +97,13 @@ class GraphArcs:
         dist, pred = dijkstra(csr, directed=True, indices=start, return_predecessors=True)
         if not np.isfinite(dist[goal]):
             return None
+        return self.walk_back(pred, start, goal)
+
+    def walk_back(self, predecessors: npt.NDArray[np.int32], start: int, goal: int) -> IntArray:
+        """Edge ids (start to goal) of the path in a Dijkstra predecessor array (goal reached)."""
         vertices = [goal]
         while vertices[-1] != start:
-            vertices.append(int(pred[vertices[-1]]))
+            vertices.append(int(predecessors[vertices[-1]]))
         seq = np.asarray(vertices[::-1], dtype=np.int64)
         return self.edge_of(seq[:-1], seq[1:])
 

@@ -30,7 +30,6 @@ inconsistent (shapes, R not equal to "all path edges free" in X, ids out of rang
 from __future__ import annotations
 
 import hashlib
-import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,6 +43,7 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
+from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.exceptions import DatasetError, DrdError
 
 __all__ = [
@@ -233,22 +233,6 @@ class Dataset:
         )
 
 
-def _concat(seqs: tuple[npt.NDArray[Any], ...], dtype: type[np.generic]) -> tuple[npt.NDArray[Any], IntArray]:
-    offsets = np.concatenate([[0], np.cumsum([len(s) for s in seqs])]).astype(np.int64)
-    return np.concatenate(seqs).astype(dtype), offsets
-
-
-def _split(flat: npt.NDArray[Any], offsets: IntArray, count: int, what: str) -> tuple[npt.NDArray[Any], ...]:
-    if (
-        offsets.shape != (count + 1,)
-        or offsets[0] != 0
-        or offsets[-1] != flat.shape[0]
-        or np.any(np.diff(offsets) < 0)
-    ):
-        raise DatasetError(f"{what} offsets do not partition the concatenated array into {count} parts")
-    return tuple(flat[a:b] for a, b in itertools.pairwise(offsets.tolist()))
-
-
 def save_dataset(path: str | Path, dataset: Dataset) -> Path:
     """Write ``dataset`` to ``path`` (compressed ``.npz``; byte-identical for equal datasets).
 
@@ -269,13 +253,13 @@ def save_dataset(path: str | Path, dataset: Dataset) -> Path:
         "test_ids": ds.test_ids,
         "world_seeds": ds.world_seeds,
     }
-    arrays["path_edges"], arrays["path_offsets"] = _concat(ds.library.path_edges, np.int64)
+    arrays["path_edges"], arrays["path_offsets"] = pack_ragged(ds.library.path_edges, np.int64)
     if ds.graph.vertex_states is not None:
         arrays["vertex_states"] = ds.graph.vertex_states
     if ds.library.vertex_paths is not None:
-        arrays["vertex_paths"], arrays["vertex_offsets"] = _concat(ds.library.vertex_paths, np.int64)
+        arrays["vertex_paths"], arrays["vertex_offsets"] = pack_ragged(ds.library.vertex_paths, np.int64)
     if ds.edge_trajectories is not None:
-        arrays["traj_states"], arrays["traj_offsets"] = _concat(ds.edge_trajectories, np.float64)
+        arrays["traj_states"], arrays["traj_offsets"] = pack_ragged(ds.edge_trajectories, np.float64)
     dtypes = {**_REQUIRED, **_OPTIONAL}
     arrays = {k: np.ascontiguousarray(v, dtype=dtypes[k]) for k, v in arrays.items()}
     header = {
@@ -371,15 +355,19 @@ def _dataset_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Dat
         bool(header["directed"]),
         c.get("vertex_states"),
     )
-    path_edges = _split(c["path_edges"], c["path_offsets"], m, "library path")
+    path_edges = unpack_ragged(c["path_edges"], c["path_offsets"], m, "library path", DatasetError)
     vertex_paths = None
     if "vertex_paths" in c:
-        vertex_paths = _split(c["vertex_paths"], c["vertex_offsets"], m, "library vertex path")
+        vertex_paths = unpack_ragged(
+            c["vertex_paths"], c["vertex_offsets"], m, "library vertex path", DatasetError
+        )
     trajectories = None
     if "traj_states" in c:
         if c["traj_states"].ndim != 2:
             raise DatasetError(f"traj_states must be (K, D), got shape {c['traj_states'].shape}")
-        trajectories = _split(c["traj_states"], c["traj_offsets"], num_edges, "edge trajectory")
+        trajectories = unpack_ragged(
+            c["traj_states"], c["traj_offsets"], num_edges, "edge trajectory", DatasetError
+        )
     return Dataset(
         graph=graph,
         start=_int(header, "start"),

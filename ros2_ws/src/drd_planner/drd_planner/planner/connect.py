@@ -110,7 +110,7 @@ class StraightConnector:
         self._k = int(neighbours)
         self._reach = float(reach)
         self._resolution = float(resolution)
-        self._index: tuple[ExplicitGraph, cKDTree] | None = None
+        self._nearest = _NearestVertices()
 
     @property
     def reach(self) -> float:
@@ -125,15 +125,8 @@ class StraightConnector:
     def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
         """Segments to (or from) the nearest vertices within reach."""
         states = _vertex_states(graph)
-        if self._index is None or self._index[0] is not graph:
-            self._index = (graph, cKDTree(states))
-        tree = self._index[1]
-        k = min(self._k, graph.num_vertices)
-        dist, idx = tree.query(state, k=k, distance_upper_bound=self._reach)
         out = []
-        for d, v in zip(np.atleast_1d(dist).tolist(), np.atleast_1d(idx).tolist(), strict=True):
-            if not np.isfinite(d):
-                continue
+        for d, v in self._nearest.query(graph, state, self._k, self._reach):
             n = max(2, math.ceil(d / self._resolution) + 1)
             line = np.linspace(state, states[v], n)
             out.append(Motion(int(v), line if outgoing else line[::-1].copy(), float(d)))
@@ -167,7 +160,7 @@ class DubinsConnector:
         self._reach = float(reach)
         self._spacing = float(spacing)
         self._climb = float(max_climb_gradient)
-        self._index: tuple[ExplicitGraph, cKDTree] | None = None
+        self._nearest = _NearestVertices(dims=3)
 
     @property
     def reach(self) -> float:
@@ -186,15 +179,11 @@ class DubinsConnector:
         states = _vertex_states(graph)
         if states.shape[1] != 4 or state.shape != (4,):
             raise ProblemError("helicopter states are (x, y, z, heading)")
-        if self._index is None or self._index[0] is not graph:
-            self._index = (graph, cKDTree(states[:, :3]))
-        tree = self._index[1]
-        k = min(self._k * 3, graph.num_vertices)  # vertices differ by heading at one position: look further
-        dist, idx = tree.query(state[:3], k=k, distance_upper_bound=self._reach)
         out: list[Motion] = []
-        for d, v in zip(np.atleast_1d(dist).tolist(), np.atleast_1d(idx).tolist(), strict=True):
-            if not np.isfinite(d) or len(out) >= self._k:
-                continue
+        # Vertices differ by heading at one position: look at more of them than will be joined.
+        for _, v in self._nearest.query(graph, state[:3], self._k * 3, self._reach):
+            if len(out) >= self._k:
+                break
             tail, head = (state, states[v]) if outgoing else (states[v], state)
             path = dubins_path((tail[0], tail[1], tail[3]), (head[0], head[1], head[3]), radius=self._radius)
             horizontal = path.length
@@ -207,6 +196,24 @@ class DubinsConnector:
             samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + dz * s / horizontal, pose[:, 2]])
             out.append(Motion(int(v), samples, math.hypot(horizontal, dz)))
         return out
+
+
+class _NearestVertices:
+    """A KD-tree over a graph's vertex states (their first ``dims`` columns), rebuilt for another graph."""
+
+    def __init__(self, dims: int | None = None) -> None:
+        self._dims = dims
+        self._built: tuple[ExplicitGraph, cKDTree] | None = None
+
+    def query(self, graph: ExplicitGraph, point: FloatArray, k: int, reach: float) -> list[tuple[float, int]]:
+        """Up to ``k`` (distance, vertex) pairs within ``reach`` of ``point``, nearest first."""
+        if self._built is None or self._built[0] is not graph:
+            states = _vertex_states(graph)
+            self._built = (graph, cKDTree(states if self._dims is None else states[:, : self._dims]))
+        k = min(k, graph.num_vertices)
+        dist, idx = self._built[1].query(point, k=k, distance_upper_bound=reach)
+        pairs = zip(np.atleast_1d(dist).tolist(), np.atleast_1d(idx).tolist(), strict=True)
+        return [(float(d), int(v)) for d, v in pairs if np.isfinite(d)]
 
 
 def _vertex_states(graph: ExplicitGraph) -> FloatArray:

@@ -23,6 +23,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -123,11 +124,14 @@ class Planner:
         self._sample_index: EdgeSampleIndex | None = None
 
     @classmethod
-    def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: float) -> Planner:
-        """A planner over the prior (or tree) file at ``path`` (see :func:`drd_planner.planner.load_prior`)."""
+    def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: Any) -> Planner:
+        """A planner over the prior (or tree) file at ``path`` (see :func:`drd_planner.planner.load_prior`).
+
+        ``options`` are the constructor's keyword arguments.
+        """
         from drd_planner.planner.prior_file import load_prior
 
-        return cls(load_prior(path, expected_domain=expected_domain), **options)  # type: ignore[arg-type]
+        return cls(load_prior(path, expected_domain=expected_domain), **options)
 
     @property
     def snap_tolerance(self) -> float:
@@ -334,17 +338,11 @@ class Planner:
         if graph_episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
             return self._exhausted(model, graph_episode.status, checks, t_model, t_begin)
         blocked = sum(not c.free for c in checks)
-        return PlanResult(
-            PlanStatus.NO_PATH,
+        reason = (
             f"no free path from {model.start} to {model.goal} in the graph: {blocked} blocked edges "
-            f"disconnect them ({len(checks)} checks)",
-            model.start,
-            model.goal,
-            checks=tuple(checks),
-            query=model.label,
-            library_size=0 if model.library is None else model.library.num_paths,
-            timings=_timings(checks, t_model, t_begin),
+            f"disconnect them ({len(checks)} checks)"
         )
+        return _unproven(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin)
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None
@@ -432,7 +430,7 @@ class Planner:
             library_size=0 if model.library is None else model.library.num_paths,
             timings=_timings(checks, t_model, t_begin),
             new_states=model.query.new_states,
-            motions={e: m for e, m in model.query.motions.items() if e in set(edges.tolist())},
+            motions={e: model.query.motions[e] for e in edges.tolist() if e in model.query.motions},
         )
 
     def _exhausted(
@@ -444,16 +442,29 @@ class Planner:
         t_begin: float,
     ) -> PlanResult:
         what = "check budget" if status is EpisodeStatus.MAX_CHECKS else "time budget"
-        return PlanResult(
-            PlanStatus.BUDGET_EXHAUSTED,
-            f"the {what} ran out after {len(checks)} checks before a path was verified",
-            model.start,
-            model.goal,
-            checks=tuple(checks),
-            query=model.label,
-            library_size=0 if model.library is None else model.library.num_paths,
-            timings=_timings(checks, t_model, t_begin),
-        )
+        reason = f"the {what} ran out after {len(checks)} checks before a path was verified"
+        return _unproven(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin)
+
+
+def _unproven(
+    model: QueryModel,
+    status: PlanStatus,
+    reason: str,
+    checks: list[CheckRecord],
+    t_model: float,
+    t_begin: float,
+) -> PlanResult:
+    """A result without a path (no path in the graph, or a budget ran out), with its check log."""
+    return PlanResult(
+        status,
+        reason,
+        model.start,
+        model.goal,
+        checks=tuple(checks),
+        query=model.label,
+        library_size=0 if model.library is None else model.library.num_paths,
+        timings=_timings(checks, t_model, t_begin),
+    )
 
 
 def _cache_key(endpoint: int | FloatArray) -> object:

@@ -29,7 +29,6 @@ other query is refused with the command that rebuilds them.
 
 from __future__ import annotations
 
-import itertools
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -42,6 +41,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import DecisionTree
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
+from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.tree_file import FORMAT_NAME as TREE_FORMAT_NAME
 from drd_planner.data.tree_file import TreeBundle, load_tree
 from drd_planner.exceptions import DrdError, PriorFileError
@@ -63,25 +63,6 @@ _NODE_ARRAYS: dict[str, npt.DTypeLike] = {
     "path_edges": np.int64,
     "path_offsets": np.int64,
 }
-
-
-def _concat(seqs: tuple[npt.NDArray[np.int64], ...]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    offsets = np.concatenate([[0], np.cumsum([s.size for s in seqs])]).astype(np.int64)
-    return np.concatenate(seqs).astype(np.int64), offsets
-
-
-def _split(
-    flat: npt.NDArray[Any], offsets: npt.NDArray[np.int64], count: int, what: str
-) -> tuple[npt.NDArray[Any], ...]:
-    if (
-        offsets.ndim != 1
-        or offsets.size != count + 1
-        or offsets[0] != 0
-        or offsets[-1] != flat.shape[0]
-        or np.any(np.diff(offsets) < 0)
-    ):
-        raise PriorFileError(f"{what} offsets do not partition the concatenated rows")
-    return tuple(flat[a:b] for a, b in itertools.pairwise(offsets.tolist()))
 
 
 def save_prior(path: str | Path, prior: WorldPrior) -> Path:
@@ -106,10 +87,7 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
     if graph.vertex_states is not None:
         arrays["vertex_states"] = graph.vertex_states.astype(np.float64)
     if prior.edge_trajectories is not None:
-        arrays["traj_states"] = np.concatenate(prior.edge_trajectories).astype(np.float64)
-        arrays["traj_offsets"] = np.concatenate(
-            [[0], np.cumsum([t.shape[0] for t in prior.edge_trajectories])]
-        ).astype(np.int64)
+        arrays["traj_states"], arrays["traj_offsets"] = pack_ragged(prior.edge_trajectories, np.float64)
     trees = []
     for i, qt in enumerate(prior.trees):
         t = qt.tree
@@ -122,11 +100,13 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
             "library_edges": t.library_edges,
             "free_fraction": t.free_fraction,
         }
-        node["path_edges"], node["path_offsets"] = _concat(qt.library.path_edges)
+        node["path_edges"], node["path_offsets"] = pack_ragged(qt.library.path_edges, np.int64)
         for name, arr in node.items():
             arrays[f"t{i}_{name}"] = np.ascontiguousarray(arr, dtype=_NODE_ARRAYS[name])
         if qt.library.vertex_paths is not None:
-            arrays[f"t{i}_vertex_paths"], arrays[f"t{i}_vertex_offsets"] = _concat(qt.library.vertex_paths)
+            arrays[f"t{i}_vertex_paths"], arrays[f"t{i}_vertex_offsets"] = pack_ragged(
+                qt.library.vertex_paths, np.int64
+            )
         trees.append({"name": qt.name, "start": qt.start, "goal": qt.goal, "info": t.info})
     header = {
         "software_version": __version__,
@@ -233,11 +213,12 @@ def _prior_from(header: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> 
     weights = _array(arrays, "world_weights", np.float64) if "world_weights" in arrays else None
     trajectories = None
     if "traj_states" in arrays:
-        trajectories = _split(
+        trajectories = unpack_ragged(
             _array(arrays, "traj_states", np.float64),
             _array(arrays, "traj_offsets", np.int64),
             num_edges,
             "edge trajectory",
+            PriorFileError,
         )
     trees = tuple(
         _tree_from(arrays, i, entry, graph, worlds, weights) for i, entry in enumerate(header["trees"])
@@ -274,14 +255,15 @@ def _tree_from(
     a = {name: _array(arrays, f"t{i}_{name}", dtype) for name, dtype in _NODE_ARRAYS.items()}
     offsets = a["path_offsets"]
     m = offsets.size - 1
-    path_edges = _split(a["path_edges"], offsets, m, f"tree {i} path")
+    path_edges = unpack_ragged(a["path_edges"], offsets, m, f"tree {i} path", PriorFileError)
     vertex_paths = None
     if f"t{i}_vertex_paths" in arrays:
-        vertex_paths = _split(
+        vertex_paths = unpack_ragged(
             _array(arrays, f"t{i}_vertex_paths", np.int64),
             _array(arrays, f"t{i}_vertex_offsets", np.int64),
             m,
             f"tree {i} vertex path",
+            PriorFileError,
         )
     library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
     n_nodes = a["node_edge"].shape[0]

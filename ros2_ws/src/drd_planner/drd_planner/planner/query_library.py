@@ -77,11 +77,7 @@ class ShortestPaths:
         dist, pred = dijkstra(self._csr, directed=True, indices=start, return_predecessors=True, limit=limit)
         if not np.isfinite(dist[goal]):
             return None
-        vertices = [goal]
-        while vertices[-1] != start:
-            vertices.append(int(pred[vertices[-1]]))
-        seq = np.asarray(vertices[::-1], dtype=np.int64)
-        return arcs.edge_of(seq[:-1], seq[1:])
+        return arcs.walk_back(pred, start, goal)
 
 
 def build_query_library(
