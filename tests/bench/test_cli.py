@@ -510,3 +510,33 @@ def test_build_dataset_then_bench_and_plan_on_it(tmp_path: Path, capsys: pytest.
         == 2
     )
     _one_error_line(capsys.readouterr().err)
+
+
+def test_build_tree_query_adds_trees_and_plan_uses_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from drd_planner.planner import load_prior
+
+    d1 = gccd_folder("dataset_2d_1")
+    prior = tmp_path / "p.npz"
+    argv = ["build-tree", "--gccd", str(d1), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]
+    assert main([*argv, "--query", "3,40"]) == 0
+    assert [(t.start, t.goal) for t in load_prior(prior).trees][1:] == [(3, 40)]
+    states = load_prior(prior).graph.vertex_states
+    assert states is not None
+    text = f"{' '.join(str(v) for v in states[7])},{' '.join(str(v) for v in states[60])}"  # states snap
+    assert main(["build-tree", "--prior", str(prior), "--query", text, "--out", str(prior)]) == 0
+    assert [(t.start, t.goal) for t in load_prior(prior).trees][1:] == [(3, 40), (7, 60)]
+    capsys.readouterr()
+    assert main(["build-tree", "--prior", str(prior), "--query", "3,40", "--out", str(prior)]) == 2
+    assert "already has a tree" in _one_error_line(capsys.readouterr().err)
+    world = int(load_gccd_folder(d1).require_worlds().test_ids[0])
+    assert main(
+        ["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "7,60"]
+    ) in (0, 1)
+    assert "query tree:7-60" in capsys.readouterr().out
+    assert (
+        main(["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "5,5000"])
+        == 1
+    )
+    assert "refused" in capsys.readouterr().out
