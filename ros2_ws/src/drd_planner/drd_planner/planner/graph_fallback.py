@@ -62,14 +62,17 @@ def posterior_free_probability(
     """
     theta = np.full(num_edges, 0.5)
     if worlds is not None:
-        w = np.ones(worlds.shape[0]) if weights is None else weights
-        w = w / w.mean()
-        marginal = (w @ worlds) / w.sum()
         consistent = np.ones(worlds.shape[0], dtype=bool)
         for edge, free in outcomes.items():
             consistent &= worlds[:, edge] == free
-        wc = w[consistent]
-        data = (wc @ worlds[consistent] + pseudo_count * marginal) / (wc.sum() + pseudo_count)
+        if weights is None:  # counts: no (n, E) float copy of the worlds
+            mass, free_mass = float(consistent.sum()), worlds[consistent].sum(axis=0, dtype=np.float64)
+            marginal = worlds.mean(axis=0, dtype=np.float64)
+        else:
+            w = weights / weights.mean()
+            mass, free_mass = float(w[consistent].sum()), w[consistent] @ worlds[consistent]
+            marginal = (w @ worlds) / w.sum()
+        data = (free_mass + pseudo_count * marginal) / (mass + pseudo_count)
         theta = alpha * data + (1.0 - alpha) * 0.5
     for edge, free in outcomes.items():
         theta[edge] = 1.0 if free else 0.0
