@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 from conftest import gccd_folder
 
-from drd_planner.bench.queries import draw_queries, reachable_fraction
 from drd_planner.cli import main
 from drd_planner.data.gccd import load_gccd_folder
+from drd_planner.planner.query_sampling import draw_queries, reachable_fraction
 
 POLICY_KEYS = {"checks", "failures", "false_no_path", "mean_overhead_ms", "path_cost_ratio", "mean_checks"}
 

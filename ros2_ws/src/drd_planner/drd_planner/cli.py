@@ -90,32 +90,18 @@ def _kappa_arg(text: str) -> tuple[float | None, ...]:
     return (value,)
 
 
-def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, float | None, str]:
-    """The switch threshold and leaf pseudo-count stored in a tree file, and a note on their origin."""
-    from drd_planner.core.switch_threshold import select_switch_threshold
+def _prior_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, float | None, str]:
+    """A prior's eta and kappa: as given, or validated on random queries (``planner.leaf_validation``)."""
+    from drd_planner.planner.leaf_validation import leaf_from_options
 
-    kappas = _kappas(args)
-    if args.eta is not None and len(kappas) == 1:
-        kappa = kappas[0]
-        return float(args.eta), kappa, f"eta {args.eta:g}, kappa {kappa} (given)"
-    options = _tree_kwargs(args)
-    expand = float(options.pop("expand_threshold", 0.05))
-    choice = select_switch_threshold(
-        problem,
-        candidates=None if args.eta is None else (args.eta,),
-        pseudo_counts=kappas,
-        seed=args.seed,
-        expand_threshold=expand,
-        tree_options=options,
-    )
-    return choice.eta, choice.pseudo_count, choice.describe()
+    return leaf_from_options(problem, eta=args.eta, pseudo_counts=_kappas(args), seed=args.seed)
 
 
 def cmd_build_tree(args: argparse.Namespace) -> int:
     """``drd build-tree``: write a world prior with the dataset's DiRECt tree and any ``--query`` trees."""
     from drd_planner.planner.commands import cmd_build_tree as build
 
-    return build(args, tree_options=_tree_kwargs(args), leaf=_tree_leaf)
+    return build(args, tree_options=_tree_kwargs(args), leaf=_prior_leaf)
 
 
 def _sizes(text: str) -> tuple[int, ...]:
@@ -166,7 +152,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.queries is not None:
         from drd_planner.bench.query_cli import cmd_bench_queries
 
-        return cmd_bench_queries(args, leaf=_tree_leaf, tree_options=_tree_kwargs(args))
+        return cmd_bench_queries(args, leaf=_prior_leaf, tree_options=_tree_kwargs(args))
     options = _suite_options(args)
     check_policy_names(options.policies)
     for name, value in (("--max-worlds", args.max_worlds), ("--max-checks", args.max_checks)):

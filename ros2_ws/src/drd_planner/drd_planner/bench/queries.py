@@ -28,8 +28,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order
 from tqdm import tqdm
 
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
@@ -48,8 +46,6 @@ GRAPH_BASELINES = tuple(lazysp_name(s) for s in SELECTORS)
 #: Policies of the query benchmark besides the library policies.
 QUERY_ONLY_POLICIES = ("check_all",)
 DEFAULT_QUERY_POLICIES = ("direct_bisect", "bisect", "lazysp_set", "lazysp", "check_all")
-#: Training worlds sampled to judge whether a start reaches a goal "in most worlds".
-REACH_SAMPLE = 200
 
 
 @dataclass
@@ -79,48 +75,6 @@ class QueryPolicyStats:
             "path_cost_ratio": float(ratios.mean()) if ratios.size else None,
             "stages": self.stages,
         }
-
-
-def reachable_fraction(graph: ExplicitGraph, worlds: BoolArray, start: int) -> npt.NDArray[np.float64]:
-    """(V,) fraction of ``worlds`` (n, E) in which each vertex is reachable from ``start`` over free edges."""
-    arcs = GraphArcs(graph)
-    n = graph.num_vertices
-    counts = np.zeros(n)
-    for row in worlds:
-        keep = row[arcs.edge]
-        adj = sp.csr_array((np.ones(int(keep.sum())), (arcs.u[keep], arcs.v[keep])), shape=(n, n))
-        counts[breadth_first_order(adj, start, directed=True, return_predecessors=False)] += 1
-    return counts / max(len(worlds), 1)
-
-
-def draw_queries(
-    problem: Problem, count: int, *, seed: int, min_fraction: float = 0.5
-) -> list[tuple[int, int]]:
-    """``count`` (start, goal) pairs: the problem's own query first, then seeded random connected pairs."""
-    graph = problem.graph
-    worlds = problem.require_worlds()
-    if graph is None:
-        raise DrdError(f"{problem.name}: --queries needs the dataset's graph")
-    rng = np.random.default_rng(seed)
-    train = worlds.X[worlds.train_ids]
-    sample = train[np.sort(rng.choice(train.shape[0], size=min(REACH_SAMPLE, train.shape[0]), replace=False))]
-    queries: list[tuple[int, int]] = []
-    if problem.start is not None and problem.goal is not None:
-        queries.append((int(problem.start), int(problem.goal)))
-    attempts = 0
-    while len(queries) < count:
-        attempts += 1
-        if attempts > 50 * count:
-            raise DrdError(
-                f"{problem.name}: could not draw {count} queries connected in most training worlds"
-            )
-        start = int(rng.integers(graph.num_vertices))
-        fraction = reachable_fraction(graph, sample, start)
-        fraction[start] = 0.0
-        goals = np.flatnonzero(fraction >= min_fraction)
-        if goals.size:
-            queries.append((start, int(rng.choice(goals))))
-    return queries[:count]
 
 
 def check_all_episode(

@@ -12,7 +12,6 @@ import numpy as np
 
 from drd_planner.bench.queries import (
     DEFAULT_QUERY_POLICIES,
-    draw_queries,
     query_markdown,
     run_query_benchmark,
 )
@@ -23,6 +22,7 @@ from drd_planner.exceptions import DrdError
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
 from drd_planner.planner.prior_file import load_prior
+from drd_planner.planner.query_sampling import draw_queries
 
 Leaf = Callable[[Problem, argparse.Namespace], tuple[float, float | None, str]]
 

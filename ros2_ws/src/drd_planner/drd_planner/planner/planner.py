@@ -138,6 +138,14 @@ class Planner:
         """How far a state may lie from the vertex it snaps to, in state units."""
         return self._endpoints.snap_tolerance
 
+    def set_leaf(self, eta: float, pseudo_count: float | None) -> None:
+        """Use another switch threshold and leaf pseudo-count from the next plan on (the cache stays valid).
+
+        Raises:
+            ProblemError: eta outside (0, 1] or a pseudo-count that is not positive.
+        """
+        self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count)
+
     @property
     def connector(self) -> QueryConnector | None:
         """What joins off-graph states to the graph (None: such states are refused)."""

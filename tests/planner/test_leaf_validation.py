@@ -1,0 +1,30 @@
+"""eta and kappa validated on random queries over held-out training worlds."""
+
+from __future__ import annotations
+
+import pytest
+
+from drd_planner.domains.planar import make_planar_problem
+from drd_planner.exceptions import ProblemError
+from drd_planner.planner.leaf_validation import leaf_from_options, validate_query_leaf
+
+
+def test_validation_is_seeded_and_uses_training_worlds_only() -> None:
+    problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
+    worlds = problem.require_worlds()
+    kwargs = {"domain": "planar", "etas": (0.2, 1.0), "pseudo_counts": (None, 20.0), "queries": 4, "seed": 3}
+    a = validate_query_leaf(problem, **kwargs)  # type: ignore[arg-type]
+    b = validate_query_leaf(problem, **kwargs)  # type: ignore[arg-type]
+    assert a == b
+    assert set(a.mean_checks) == {(0.2, None), (0.2, 20.0), (1.0, None), (1.0, 20.0)}
+    assert a.mean_checks[(a.eta, a.pseudo_count)] == min(a.mean_checks.values())
+    assert set(a.validation_ids) <= set(worlds.train_ids.tolist())
+
+
+def test_given_settings_skip_validation_and_bad_input_is_refused() -> None:
+    problem = make_planar_problem(model="one_wall", num_worlds=60, seed=0)
+    assert leaf_from_options(problem, eta=0.4, pseudo_counts=(5.0,), seed=0)[:2] == (0.4, 5.0)
+    eta, kappa, note = leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0)
+    assert kappa is None and 0 < eta <= 1 and "random queries" in note
+    with pytest.raises(ProblemError, match="candidate"):
+        validate_query_leaf(problem, domain="planar", etas=())
