@@ -47,9 +47,22 @@ def d2d1() -> Path:
 
 @pytest.fixture(scope="module")
 def tree_2d1(d2d1: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    # The paper's setting, so that the tree is walked (a validated eta may switch at the root).
     out = tmp_path_factory.mktemp("trees") / "t.npz"
-    assert main(["build-tree", "--gccd", str(d2d1), "--out", str(out)]) == 0
+    assert (
+        main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--eta", "0.2", "--kappa", "none"]) == 0
+    )
     return out
+
+
+def test_build_tree_validates_eta_and_kappa_on_random_queries(
+    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "v.npz"
+    assert main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--kappa", "none"]) == 0
+    assert "random queries" in capsys.readouterr().out
+    prior = load_tree_bundle(out)
+    assert "random queries" in prior.provenance["eta"] and prior.pseudo_count is None
 
 
 def _one_error_line(err: str) -> str:

@@ -75,7 +75,7 @@ def test_selector_check_orders_on_the_grid(selector: str, expected: list[int]) -
 
 
 def test_free_world_checks_exactly_the_shortest_path() -> None:
-    for selector in ("forward", "reverse", "alternate", "bisection", "weightsamp"):
+    for selector in ("forward", "reverse", "alternate", "bisection", "weightsamp", "balanced"):
         result = run(LazySP(grid(), 0, 8, selector=selector, seed=1), world())
         assert sorted(c.edge for c in result.checks) == sorted(PATH_A)
         np.testing.assert_array_equal(result.path_edges, PATH_A)
@@ -264,3 +264,15 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
             assert problem.graph.lengths[path].sum() == pytest.approx(
                 shortest_feasible_length(problem.graph, x, problem.start, problem.goal)
             )
+
+
+def test_balanced_checks_from_the_walled_in_end() -> None:
+    # Nothing checked: both known-free regions are one vertex, so it starts forward (e0 of path A). Then
+    # the start's region has grown and the goal's has not: it checks from the goal's end.
+    policy = LazySP(grid(), 0, 8, selector="balanced")
+    assert policy.select() == 0
+    policy.observe(0, True)
+    assert policy.known_free_reach() == (2, 1)
+    assert policy.select() == 11
+    result = run(LazySP(grid(), 0, 8, selector="balanced"), world(0, 6))
+    assert result.status is EpisodeStatus.NO_FREE_PATH

@@ -14,6 +14,12 @@ Selectors on the current path e_1..e_k: ``forward`` (first unchecked), ``reverse
 ``alternate`` (forward, reverse, forward, ...: one toggle per selection), ``bisection`` (first edge
 farthest, in edges, from any checked edge or a path end) and ``weightsamp`` (the unchecked path edge
 that lies most often on shortest paths of sampled graphs; ties to the later edge).
+
+``balanced`` (ours, not in LEMUR) checks from the end whose *known-free region* is smaller: forward when
+no more vertices are reachable from the start over checked-free edges than reach the goal that way,
+reverse otherwise. When one end is walled in, its region stays small, so the checks go to the wall
+around it instead of exploring the other end's large region: it is the graph stage of
+:class:`drd_planner.planner.Planner` (see :mod:`drd_planner.planner.graph_fallback` for measurements).
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import breadth_first_order, dijkstra
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
@@ -34,7 +40,7 @@ IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
 
 #: The selectors, in the order of the registry names ``lazysp``, ``lazysp_reverse``, ...
-SELECTORS: Final = ("forward", "reverse", "alternate", "bisection", "weightsamp")
+SELECTORS: Final = ("forward", "reverse", "alternate", "bisection", "weightsamp", "balanced")
 #: The authors' LazySP benchmark gives up after this many checks (``policyLazySPOrig.m``).
 DEFAULT_MAX_CHECKS: Final = 1000
 #: Sampled graphs per WeightSamp selection. LEMUR uses 1000; 100 keeps a selection near 10 ms on the
@@ -260,8 +266,23 @@ class LazySP:
             return int(open_pos[0] if forward else open_pos[-1])
         if self._selector == "bisection":
             return bisection_position(checked)
+        if self._selector == "balanced":
+            from_start, into_goal = self.known_free_reach()
+            return int(open_pos[0] if from_start <= into_goal else open_pos[-1])
         counts = self.shortest_path_counts()[path[open_pos]]
         return int(open_pos[open_pos.size - 1 - int(np.argmax(counts[::-1]))])  # last maximum
+
+    def known_free_reach(self) -> tuple[int, int]:
+        """(vertices reachable from the start, vertices that reach the goal) over checked-free edges."""
+        arcs = self._arcs
+        n = arcs.num_vertices
+        free = self._outcome[arcs.edge] == _FREE
+        adjacency = sp.csr_array((np.ones(int(free.sum())), (arcs.u[free], arcs.v[free])), shape=(n, n))
+        ahead = breadth_first_order(adjacency, self._start, directed=True, return_predecessors=False)
+        behind = breadth_first_order(
+            adjacency.T.tocsr(), self._goal, directed=True, return_predecessors=False
+        )
+        return int(ahead.size), int(behind.size)
 
     def shortest_path_counts(self) -> IntArray:
         """WeightSamp: how often each edge lies on the shortest path of ``nsamps`` sampled graphs.

@@ -2,11 +2,14 @@
 
 A path library is a small subset of the graph's paths; in a world unlike the training worlds every one
 of them can be blocked while the graph still has a free path. The planner then goes on with LazySP over
-the whole graph, starting from every outcome already checked in the plan. Its selector alternates
-between the first and the last unchecked edge of the lazy path: when start or goal is walled in, the
-checks close in on the wall from both ends. Measured on the random queries of the 2D Forest and MovingWall
-sets (60 each), the checks per episode in worlds without a free path: forward 363 / 206, alternate 78 /
-55, fail-fast (least likely free edge first) 92 / 74; in worlds with one all three need about the same.
+the whole graph, starting from every outcome already checked in the plan. Its selector checks from the
+end of the lazy path whose known-free region (vertices reached over checked-free edges) is smaller
+(``balanced`` in :mod:`drd_planner.core.lazysp`): when start or goal is walled in, the checks go to that
+wall. Measured on the random queries of the 2D Forest and MovingWall sets (60 each), the checks per
+episode in worlds without a free path: forward 363 / 206, alternate 78 / 55, fail-fast (least likely free
+edge first) 92 / 74; in worlds with one all three need about the same. On all 100 queries, balanced against
+alternate in worlds without a free path: Maze 209 / 266, Forest 38 / 53, MovingWall 28 / 46, SE(2) Baffle
+51 / 57, OneWall 34 / 50; with a free path within 0.6 checks of each other.
 Its lazy edge weights come from the prior:
 
     w_e = -log theta_e + lambda * length_e / mean length,
@@ -34,7 +37,7 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
 #: LazySP selector of the graph stage (see the module doc for the measurement behind it).
-FALLBACK_SELECTOR = "alternate"
+FALLBACK_SELECTOR = "balanced"
 #: lambda: the weight of the (normalised) edge length against -log theta.
 LENGTH_WEIGHT = 0.1
 #: kappa of the fallback's posterior when the prior gives none, in worlds.
