@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from drd_planner.domains.planar import make_planar_problem
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.leaf_validation import BISECT_LEAF, MARGIN, leaf_from_options, validate_query_leaf
+from drd_planner.planner.leaf_validation import (
+    BISECT_LEAF,
+    leaf_from_options,
+    significantly_fewer,
+    validate_query_leaf,
+)
 
 
 def test_validation_is_seeded_and_uses_training_worlds_only() -> None:
@@ -18,11 +24,18 @@ def test_validation_is_seeded_and_uses_training_worlds_only() -> None:
     assert a == b
     assert set(a.mean_checks) == {(0.2, None), (0.2, 20.0), (1.0, None), (1.0, 20.0)}
     best = min(a.mean_checks.values())
-    if (a.eta, a.pseudo_count) == BISECT_LEAF:  # kept unless another setting beats it by the margin
-        assert best > (1.0 - MARGIN) * a.mean_checks[BISECT_LEAF]
-    else:
-        assert a.mean_checks[(a.eta, a.pseudo_count)] == best <= (1.0 - MARGIN) * a.mean_checks[BISECT_LEAF]
+    if (a.eta, a.pseudo_count) != BISECT_LEAF:  # only a significantly better winner replaces BiSECt
+        assert a.mean_checks[(a.eta, a.pseudo_count)] == best < a.mean_checks[BISECT_LEAF]
     assert set(a.validation_ids) <= set(worlds.train_ids.tolist())
+
+
+def test_the_paired_test() -> None:
+    base = np.array([10, 12, 9, 15, 11, 10, 13, 12], dtype=float)
+    assert significantly_fewer(base - 3, base)
+    assert not significantly_fewer(base, base)
+    noisy = base + np.array([-6, 5, -6, 6, -5, 4, -6, 3])
+    assert noisy.mean() < base.mean() and not significantly_fewer(noisy, base)
+    assert not significantly_fewer(base[:1] - 5, base[:1])
 
 
 def test_given_settings_skip_validation_and_bad_input_is_refused() -> None:
