@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import gccd_folder
 
@@ -72,3 +73,17 @@ def test_unknown_query_policy_and_all_are_refused(capsys: pytest.CaptureFixture[
     assert main(["bench", "--all", str(folder.parent), "--queries", "2"]) == 2
     assert "--queries" in capsys.readouterr().err
     assert main(["bench", "--gccd", str(folder), "--queries", "0"]) == 2
+
+
+def test_certificate_size_is_the_fewest_checks() -> None:
+    from drd_planner.bench.queries import certificate_size
+    from drd_planner.core.graph import ExplicitGraph
+
+    # Square 0-1-2-3-0 plus the diagonal 0-2.
+    graph = ExplicitGraph(np.array([[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]]), np.ones(5), 4)
+    free = np.ones(5, dtype=bool)
+    assert certificate_size(graph, free, 0, 2) == 1  # the diagonal
+    free[4] = False
+    assert certificate_size(graph, free, 0, 2) == 2  # two edges around the square
+    free[[0, 3]] = False
+    assert certificate_size(graph, free, 0, 2) == 3  # no path: every edge at vertex 0 is a blocked cut

@@ -12,7 +12,8 @@ Policies:
 - ``lazysp`` (and its selectors) on the whole graph, with the authors' 1000-check cap;
 - ``check_all``: check every edge, then Dijkstra (its checks are E in every episode).
 
-Per policy: checks in episode order, failures (no verified path although the world has a free one,
+Per episode the fewest checks any planner needs knowing the world (:func:`certificate_size`); their mean is
+``certificate_lower_bound``. Per policy: checks in episode order, failures (no verified path although the world has a free one,
 or a budget ran out), ``false_no_path`` ("no path" although the world's graph has a free path: a
 correctness error), mean overhead (library + selection) per episode, and the path cost over the
 cheapest free graph path of that world. Every returned path is re-verified against the episode's own
@@ -28,6 +29,8 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+import scipy.sparse as sp
+from scipy.sparse.csgraph import maximum_flow, shortest_path
 from tqdm import tqdm
 
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
@@ -75,6 +78,26 @@ class QueryPolicyStats:
             "path_cost_ratio": float(ratios.mean()) if ratios.size else None,
             "stages": self.stages,
         }
+
+
+def certificate_size(graph: ExplicitGraph, outcomes: BoolArray, start: int, goal: int) -> int:
+    """The fewest checks any planner needs on this episode, knowing the world in advance.
+
+    With a free path, every edge of the returned path must be checked: the fewest edges of a free path.
+    Without one, "no path" needs checked blocked edges that cut start from goal: the minimum cut where
+    blocked edges cost 1 and free ones cannot be cut (a max flow).
+    """
+    arcs = GraphArcs(graph)
+    n = graph.num_vertices
+    free = outcomes[arcs.edge]
+    hops = sp.csr_array((np.ones(int(free.sum())), (arcs.u[free], arcs.v[free])), shape=(n, n))
+    distance = shortest_path(hops, directed=True, unweighted=True, indices=start)[goal]
+    if np.isfinite(distance):
+        return int(distance)
+    capacity = np.where(free, graph.num_edges + 1, 1).astype(np.int32)
+    network = sp.csr_matrix((capacity, (arcs.u, arcs.v)), shape=(n, n))
+    network.sum_duplicates()
+    return int(maximum_flow(network, start, goal).flow_value)
 
 
 def check_all_episode(
@@ -127,6 +150,7 @@ def run_query_benchmark(
                 "goal": goal,
                 "free_path": best is not None,
                 "shortest_cost": best_cost,
+                "certificate_checks": certificate_size(graph, outcomes, start, goal),
             }
         )
         for name in policies:
@@ -158,6 +182,7 @@ def run_query_benchmark(
             "max_checks": max_checks,
         },
         "episodes": episodes,
+        "certificate_lower_bound": float(np.mean([e["certificate_checks"] for e in episodes])),
         "policies": {p: stats[p].as_json() for p in policies},
         "seconds": time.perf_counter() - t0,
     }
