@@ -64,6 +64,8 @@ _OPTIONAL = {
     "world_free_bits": np.uint8,
     "world_weights": np.float64,
 }
+#: dtype of every array a tree file may hold (the prior file stores each of its trees with the same dtypes).
+ARRAY_DTYPES: dict[str, npt.DTypeLike] = {**_REQUIRED, **_OPTIONAL}
 
 
 @dataclass(frozen=True)

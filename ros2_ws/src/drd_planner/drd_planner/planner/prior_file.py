@@ -42,6 +42,7 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import DecisionTree
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
+from drd_planner.data.tree_file import ARRAY_DTYPES as TREE_DTYPES
 from drd_planner.data.tree_file import FORMAT_NAME as TREE_FORMAT_NAME
 from drd_planner.data.tree_file import TreeBundle, load_tree
 from drd_planner.exceptions import DrdError, PriorFileError
@@ -52,16 +53,20 @@ __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "load_prior", "load_tree_bundle", "s
 FORMAT_NAME = "drd_planner.prior"
 FORMAT_VERSION = 1
 
+#: The arrays of one tree (library and nodes) and their dtypes, as in a tree file.
 _NODE_ARRAYS: dict[str, npt.DTypeLike] = {
-    "node_edge": np.int32,
-    "node_children": np.int32,
-    "node_num_active": np.int32,
-    "node_active_fraction": np.float64,
-    "node_best_path": np.int32,
-    "library_edges": np.int64,
-    "free_fraction": np.float32,
-    "path_edges": np.int64,
-    "path_offsets": np.int64,
+    name: TREE_DTYPES[name]
+    for name in (
+        "node_edge",
+        "node_children",
+        "node_num_active",
+        "node_active_fraction",
+        "node_best_path",
+        "library_edges",
+        "free_fraction",
+        "path_edges",
+        "path_offsets",
+    )
 }
 
 
