@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 from collections.abc import Sequence
@@ -135,7 +134,7 @@ def _suite_options(args: argparse.Namespace) -> SuiteOptions:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     """``drd bench``: every policy on every test world of one dataset (``--gccd``/``--dataset``) or all (``--all``)."""
-    from drd_planner.bench.runner import check_policy_names, json_safe
+    from drd_planner.bench.runner import check_policy_names, write_bench_files
     from drd_planner.bench.suite import (
         SuiteResult,
         costs_figure,
@@ -187,12 +186,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     for run in suite.runs:
         for note in run.notes:
             print(f"note: {note}")
-    if args.json:
-        Path(args.json).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
-        print(f"wrote {args.json}")
-    if args.markdown:
-        Path(args.markdown).write_text(report)
-        print(f"wrote {args.markdown}")
+    write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
     if options.figures is not None:
         count = sum(len(r.figures) for r in suite.runs) + len(figures)
         print(f"wrote {count} figure files under {options.figures}")

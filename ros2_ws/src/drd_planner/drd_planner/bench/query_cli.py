@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -15,7 +13,7 @@ from drd_planner.bench.queries import (
     query_markdown,
     run_query_benchmark,
 )
-from drd_planner.bench.runner import json_safe
+from drd_planner.bench.runner import write_bench_files
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
@@ -71,11 +69,6 @@ def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dic
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     print(report, end="")
-    if args.json:
-        Path(args.json).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
-        print(f"wrote {args.json}")
-    if args.markdown:
-        Path(args.markdown).write_text(report)
-        print(f"wrote {args.markdown}")
+    write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
     print(f"total wall time {doc['seconds']:.1f} s")
     return 0

@@ -11,10 +11,12 @@ reference was not run), ``oracle_lower_bound.relative`` and a ``relative_protoco
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -392,6 +394,18 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [json_safe(v) for v in value]
     return value
+
+
+def write_bench_files(
+    doc: dict[str, Any], report: str, *, json_path: str | None, markdown_path: str | None
+) -> None:
+    """Write a benchmark's JSON document and markdown report where asked, saying so on stdout."""
+    if json_path:
+        Path(json_path).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
+        print(f"wrote {json_path}")
+    if markdown_path:
+        Path(markdown_path).write_text(report)
+        print(f"wrote {markdown_path}")
 
 
 def nanmean_or_nan(values: np.ndarray) -> float:
