@@ -53,7 +53,7 @@ def test_launch_file_names_the_package_executable_node_and_config_that_exist() -
     consts = _constants()
     assert f"<name>{consts['PACKAGE']}</name>" in (PACKAGE_DIR / "package.xml").read_text()
     setup = (PACKAGE_DIR / "setup.py").read_text()
-    assert f'"{consts["EXECUTABLE"]} = drd_planner.ros.node:main"' in setup
+    assert f'"{consts["EXECUTABLE"]} = drd_planner.ros.planner_node:main"' in setup
     assert (PACKAGE_DIR / "config" / consts["DEFAULT_CONFIG"]).is_file()
     (node,) = _calls("LifecycleNode")
     keywords = {k.arg: k.value for k in node.keywords}

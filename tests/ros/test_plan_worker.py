@@ -117,3 +117,52 @@ def test_stop_lets_the_running_work_finish_and_can_restart() -> None:
     finally:
         assert worker.stop()
     assert worker.stop()  # stopping a stopped worker is fine
+
+
+def test_a_start_after_a_stop_that_timed_out_keeps_the_thread_serving() -> None:
+    """Deactivate while a plan runs past the stop timeout, then activate: later wakes are still served."""
+    started, release = threading.Event(), threading.Event()
+    runs: list[int] = []
+
+    def work() -> None:
+        runs.append(len(runs))
+        if len(runs) == 1:
+            started.set()
+            release.wait(5.0)
+
+    worker = PlanWorker(work, on_error=lambda exc: None)
+    worker.start()
+    try:
+        worker.wake()
+        assert started.wait(5.0)
+        assert not worker.stop(timeout=0.05)  # the long plan outlives the stop
+        worker.start()  # re-activation while that plan still runs
+        release.set()
+        time.sleep(0.05)
+        worker.wake()
+        assert _wait(lambda: len(runs) == 2), "the planning thread ended: the wake was never served"
+        assert worker.running
+    finally:
+        release.set()
+        assert worker.stop()
+
+
+def test_an_error_in_the_error_reporter_does_not_end_the_thread() -> None:
+    runs: list[int] = []
+
+    def work() -> None:
+        runs.append(1)
+        raise RuntimeError("a bug in a plan")
+
+    def report(exc: Exception) -> None:
+        raise MemoryError("no memory left to report it")
+
+    worker = PlanWorker(work, on_error=report)
+    worker.start()
+    try:
+        worker.wake()
+        assert _wait(lambda: len(runs) == 1)
+        worker.wake()
+        assert _wait(lambda: len(runs) == 2)
+    finally:
+        assert worker.stop()

@@ -194,3 +194,17 @@ def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, capsys: pytest.Captu
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("drd_replay: error:") and text in err[0], err
+
+
+def test_cli_without_a_running_planner_exits_2_and_writes_no_bag(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bag = BAGS / "heli_wires.mcap"
+    if not bag.is_file():
+        pytest.skip(f"{bag} not generated")
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(200 + os.getpid() % 30))  # a domain no planner is on
+    out = tmp_path / "out.mcap"
+    assert main([str(bag), "--record", str(out), "--wait", "0.5", "--rate", "10"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no node subscribes to any of the bag's topics" in err[0], err
+    assert not out.exists()

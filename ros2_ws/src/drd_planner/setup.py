@@ -54,7 +54,7 @@ setup(
     entry_points={
         "console_scripts": [
             "drd = drd_planner.cli:main",
-            "planner_node = drd_planner.ros.node:main",
+            "planner_node = drd_planner.ros.planner_node:main",
             "drd_replay = drd_planner.ros.replay:main",
             "planner_demo = drd_planner.ros.demo:main",
         ],

@@ -11,24 +11,53 @@ graph takes over when every library path is blocked. The entry point is :class:`
 See ``core`` for the ROS-free algorithms, ``data`` for file formats and ``bench`` for the benchmark.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
 
-from drd_planner.core.episode import CheckRecord, EdgeOracle, TableOracle
-from drd_planner.exceptions import DrdError, PlanningError, PriorFileError
-from drd_planner.planner import (
-    PLAN_POLICIES,
-    Planner,
-    PlanResult,
-    PlanStage,
-    PlanStatus,
-    PlanTimings,
-    QueryError,
-    QueryTree,
-    WorldPrior,
-    load_prior,
-    prior_from_problem,
-    save_prior,
-)
+if TYPE_CHECKING:  # the names below load on first use (``planner_node`` installs its signal handlers first)
+    from drd_planner.core.episode import CheckRecord, EdgeOracle, TableOracle
+    from drd_planner.exceptions import DrdError, PlanningError, PriorFileError
+    from drd_planner.planner import (
+        PLAN_POLICIES,
+        Planner,
+        PlanResult,
+        PlanStage,
+        PlanStatus,
+        PlanTimings,
+        QueryError,
+        QueryTree,
+        WorldPrior,
+        load_prior,
+        prior_from_problem,
+        save_prior,
+    )
+
+#: Exported name -> the module that defines it (imported on first access, PEP 562).
+_EXPORTS: dict[str, str] = {
+    **dict.fromkeys(("CheckRecord", "EdgeOracle", "TableOracle"), "drd_planner.core.episode"),
+    **dict.fromkeys(("DrdError", "PlanningError", "PriorFileError"), "drd_planner.exceptions"),
+    **dict.fromkeys(
+        (
+            "PLAN_POLICIES",
+            "Planner",
+            "PlanResult",
+            "PlanStage",
+            "PlanStatus",
+            "PlanTimings",
+            "QueryError",
+            "QueryTree",
+            "WorldPrior",
+            "load_prior",
+            "prior_from_problem",
+            "save_prior",
+        ),
+        "drd_planner.planner",
+    ),
+}
 
 __all__ = [
     "PLAN_POLICIES",
@@ -51,3 +80,16 @@ __all__ = [
     "prior_from_problem",
     "save_prior",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'drd_planner' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

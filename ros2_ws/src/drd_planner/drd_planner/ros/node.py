@@ -33,6 +33,7 @@ snapshot it was planned on.
 
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from collections import deque
@@ -45,8 +46,11 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
@@ -75,6 +79,8 @@ from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
+from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.parameters import PARAMETERS, declare_parameters, parameter_problems
 from drd_planner.ros.plan_worker import PlanWorker
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
@@ -92,6 +98,8 @@ CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 HISTORY_LENGTH = 16
 #: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
 LIBRARY_EDGE_SEGMENTS = 4
+#: Longest executor wait (seconds) of ``planner_node``'s spin loop.
+SPIN_TIMEOUT_S = 0.25
 #: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
 TRAJECTORY_JOINT_SPEED = 0.5
 
@@ -139,14 +147,7 @@ class PlannerNode(LifecycleNode):
 
     def __init__(self, *, node_name: str = "drd_planner", **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self.declare_parameter("tree_paths", [""])
-        self.declare_parameter("frame_id", "map")
-        self.declare_parameter("seed", 0)
-        self.declare_parameter("max_checks", 0)
-        self.declare_parameter("goal_tolerance", 1.0)
-        self.declare_parameter("joint_tolerance", 0.05)
-        self.declare_parameter("autostart", False)
-        self.declare_parameter("replan_on_map_update", True)
+        declare_parameters(self)
         self._msgs = RclpyMessages()
         self._sessions: list[PlanningSession] = []
         self._obstacles: dict[str, Any] = {}
@@ -157,7 +158,6 @@ class PlannerNode(LifecycleNode):
         self._lock = threading.Lock()  # the pending requests and the map-changed flag
         self._planning = threading.Lock()  # one plan at a time: the sessions' caches, the published plan
         self._pending: dict[str, _Request] = {}
-        self._map_changed = False
         self._published: _Published | None = None
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
         self._plan_pub = self.create_publisher(PathMsg, "plan", LATCHED)
@@ -168,6 +168,8 @@ class PlannerNode(LifecycleNode):
         self._errors: list[str] = []
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
         self._library_markers: dict[tuple[str, Any], Any] = {}
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        guard_change_state(self, report=self._report_error)
 
     # ------------------------------------------------------------------------------------------------
     # Introspection (tests, diagnostics)
@@ -202,6 +204,10 @@ class PlannerNode(LifecycleNode):
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Load the trees named in ``tree_paths``; any bad file fails the transition with its reason."""
+        problems = parameter_problems({spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS})
+        if problems:
+            self._report_error(f"configure: invalid parameters: {'; '.join(problems)}")
+            return TransitionCallbackReturn.FAILURE
         names = [p for p in self.get_parameter("tree_paths").value if p]
         self._frame = str(self.get_parameter("frame_id").value)
         max_checks = int(self.get_parameter("max_checks").value)
@@ -239,14 +245,24 @@ class PlannerNode(LifecycleNode):
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start the planning thread, subscribe to the maps and requests and offer ``get_plan``."""
         self._worker.start()
-        self._subs = [
-            self.create_subscription(MarkerArray, "obstacles", self._on_obstacles, LATCHED),
-            self.create_subscription(PointCloud2, "terrain", self._on_terrain, LATCHED),
-            self.create_subscription(String, "robot_description", self._on_robot_description, LATCHED),
-            self.create_subscription(PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS),
-            self.create_subscription(JointState, "goal_joints", self._on_goal_joints, REQUESTS),
+        report = self._report_error
+        topics = [
+            (MarkerArray, "obstacles", self._on_obstacles, LATCHED),
+            (PointCloud2, "terrain", self._on_terrain, LATCHED),
+            (String, "robot_description", self._on_robot_description, LATCHED),
+            (PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS),
+            (JointState, "goal_joints", self._on_goal_joints, REQUESTS),
         ]
-        self._service = self.create_service(GetPlan, "get_plan", self._on_get_plan, qos_profile=REQUESTS)
+        self._subs = [
+            self.create_subscription(kind, name, guard_callback(callback, name=name, report=report), qos)
+            for kind, name, callback, qos in topics
+        ]
+        self._service = self.create_service(
+            GetPlan,
+            "get_plan",
+            guard_service(self._on_get_plan, name="get_plan", report=report),
+            qos_profile=REQUESTS,
+        )
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -315,12 +331,14 @@ class PlannerNode(LifecycleNode):
         self.get_logger().info(f"robot_description accepted: {robot.chain.robot_name}, {robot.dof} joints")
 
     def _set_snapshot(self, snapshot: MapSnapshot) -> None:
+        """Make ``snapshot`` current; the planning thread then re-checks the published plan against it.
+
+        The wake-up is unconditional: a plan being made on an older snapshot right now is published
+        after this, and must be re-checked against this map as well.
+        """
         self._prepare(snapshot)
         self._snapshot = snapshot
-        if self._published is not None and bool(self.get_parameter("replan_on_map_update").value):
-            with self._lock:
-                self._map_changed = True
-            self._worker.wake()
+        self._worker.wake()
 
     def _prepare(self, snapshot: MapSnapshot) -> None:
         """Build the new maps' FCL scene and each tree's checker now, not in the next request.
@@ -332,9 +350,9 @@ class PlannerNode(LifecycleNode):
         for session in self._sessions:
             try:
                 seconds = session.prepare(snapshot)
-            except DrdError as exc:
+            except Exception as exc:  # the plan on this snapshot meets it again
                 self.get_logger().warning(
-                    f"{session.name}: map version {snapshot.version} not prepared: {exc}"
+                    shorten(f"{session.name}: map version {snapshot.version} not prepared: {exc}")
                 )
                 continue
             self.get_logger().debug(
@@ -385,7 +403,6 @@ class PlannerNode(LifecycleNode):
     def _serve_pending(self) -> None:
         with self._lock:
             pending, self._pending = list(self._pending.values()), {}
-            map_changed, self._map_changed = self._map_changed, False
         for request in pending:
             self._plan_and_publish(
                 request.session,
@@ -393,8 +410,12 @@ class PlannerNode(LifecycleNode):
                 wait_s=time.perf_counter() - request.received,
             )
         published = self._published
-        if map_changed and published is not None and published.snapshot is not self._snapshot:
-            self._recheck(published)
+        if published is not None and published.snapshot is not self._snapshot:
+            try:
+                self._recheck(published)  # every map that arrived before the plan was published, or since
+            except Exception:
+                self._withdraw(published.session, self._snapshot, why="its re-check failed")
+                raise
 
     def _on_get_plan(self, request: Any, response: Any) -> Any:
         result = self.plan_for(request.goal)
@@ -413,9 +434,11 @@ class PlannerNode(LifecycleNode):
             return None
         received = time.perf_counter()
         with self._planning:
-            return self._plan_and_publish(
+            path = self._plan_and_publish(
                 session, {"request": "get_plan"}, wait_s=time.perf_counter() - received
             )
+        self._worker.wake()  # re-check it if a map arrived while it was planned
+        return path
 
     def _session_for(self, goal: np.ndarray, source: str) -> PlanningSession | None:
         session = next((s for s in self._sessions if s.matches_goal(goal)), None)
@@ -476,10 +499,12 @@ class PlannerNode(LifecycleNode):
                 return
             reason = outcome.reason
             self.get_logger().warning(reason)
-        if self._plan_and_publish(session, {"request": "map_update", "replan_reason": reason}) is None:
-            self._withdraw(session, snapshot)
+        if not bool(self.get_parameter("replan_on_map_update").value):
+            self._withdraw(session, snapshot, why=f"{reason}; replan_on_map_update is false")
+        elif self._plan_and_publish(session, {"request": "map_update", "replan_reason": reason}) is None:
+            self._withdraw(session, snapshot, why="no replacement was found")
 
-    def _withdraw(self, session: PlanningSession, snapshot: MapSnapshot) -> None:
+    def _withdraw(self, session: PlanningSession, snapshot: MapSnapshot, *, why: str) -> None:
         """Take the published plan back: it is no longer known free on the current maps."""
         if self._published is None:
             return
@@ -498,8 +523,8 @@ class PlannerNode(LifecycleNode):
                 )
             )
         self._report_error(
-            f"{session.name}: the published plan is blocked on map version {snapshot.version} and no "
-            "replacement was found; published an empty plan"
+            f"{session.name}: the published plan is blocked on map version {snapshot.version} ({why}); "
+            "published an empty plan"
         )
 
     # ------------------------------------------------------------------------------------------------
@@ -634,7 +659,18 @@ class PlannerNode(LifecycleNode):
     def _on_worker_error(self, exc: Exception) -> None:
         self._report_error(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}")
 
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Refuse a runtime parameter change that fails its check (the old value stays), with the reason."""
+        problems = parameter_problems({p.name: p.value for p in parameters})
+        if problems:
+            reason = shorten("; ".join(problems))
+            self.get_logger().warning(f"parameter change refused: {reason}")
+            return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
     def _report_error(self, text: str) -> None:
+        """Log ``text`` (cut to :data:`~drd_planner.ros.guard.MAX_ERROR_CHARS`), keep it, put it on ``/diagnostics``."""
+        text = shorten(text)
         self.get_logger().error(text)
         with self._lock:
             self._errors = [*self._errors[-99:], text]
@@ -667,14 +703,22 @@ def _joint_goal(msg: Any, joint_names: tuple[str, ...]) -> np.ndarray:
     return q
 
 
-def main(args: list[str] | None = None) -> None:
-    """``planner_node``: run the lifecycle node (``autostart:=true`` configures and activates it).
+def main(args: list[str] | None = None) -> int:
+    """Run the lifecycle node until SIGINT / SIGTERM (``autostart:=true`` configures and activates it).
 
-    Without ``autostart`` the node waits for the lifecycle services (``ros2 lifecycle set``). One
-    executor thread takes maps and requests while the node's planning thread plans.
+    The ``planner_node`` console script (:mod:`drd_planner.ros.planner_node`) installs the signal
+    handlers and parses ``--help`` before it imports this module. Without ``autostart`` the node waits
+    for the lifecycle services (``ros2 lifecycle set``). One executor thread takes maps and requests
+    while the node's planning thread plans. Returns the exit status: 0, or 2 when the parameters given
+    on the command line are refused.
     """
     rclpy.init(args=args)
-    node = PlannerNode()
+    try:
+        node = PlannerNode()
+    except (ParameterException, ValueError, TypeError) as exc:  # an override outside its range or type
+        print(f"planner_node: error: {shorten(str(exc))}", file=sys.stderr)
+        try_shutdown()
+        return 2
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
@@ -683,10 +727,13 @@ def main(args: list[str] | None = None) -> None:
                 node.trigger_activate()
             else:
                 node.get_logger().error("autostart: configure failed; the node waits unconfigured")
-        executor.spin()
+        context = node.context
+        while context.ok():  # short waits: a signal that only Python saw still ends the loop soon
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
         executor.shutdown()
         node.destroy_node()
         try_shutdown()
+    return 0

@@ -40,6 +40,7 @@ class PlanWorker:
         self._condition = threading.Condition()
         self._woken = False
         self._stopping = False
+        self._looping = False  # a thread is in its loop (set and cleared under the condition)
         self._thread: threading.Thread | None = None
 
     @property
@@ -48,11 +49,17 @@ class PlanWorker:
         return self._thread is not None and self._thread.is_alive()
 
     def start(self) -> None:
-        """Start the thread (nothing if it runs already); a wake before the start is served at once."""
-        if self.running:
-            return
+        """Start the thread; a wake before the start is served at once.
+
+        If a thread is still in its loop (running, or finishing a long ``work`` after a :meth:`stop`
+        that timed out), it is kept and goes on serving: it is not told to stop any more.
+        """
         with self._condition:
             self._stopping = False
+            if self._looping:
+                self._condition.notify()
+                return
+            self._looping = True
         self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
         self._thread.start()
 
@@ -82,9 +89,13 @@ class PlanWorker:
                 while not (self._woken or self._stopping):
                     self._condition.wait()
                 if self._stopping:
+                    self._looping = False
                     return
                 self._woken = False
             try:
                 self._work()
             except Exception as exc:  # a bug in one plan must not end the planning thread
-                self._on_error(exc)
+                try:
+                    self._on_error(exc)
+                except Exception:  # the reporter failed too: keep the thread alive
+                    pass

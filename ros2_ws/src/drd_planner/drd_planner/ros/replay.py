@@ -20,7 +20,8 @@ Command line (replays into an already running node; the node must be active)::
 
     python -m drd_planner.ros.replay BAG [--record OUT.mcap] [--rate R] [--settle S] [--wait S]
 
-A missing or corrupt bag exits with status 2 and one line ``drd_replay: error: ...``.
+A missing or corrupt bag, or no node subscribed to any of its topics after ``--wait`` seconds, exits
+with status 2 and one line ``drd_replay: error: ...`` (no output bag is written).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ from drd_planner.argtypes import bounded_float
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.shipped import resolve_bag_path
 
-__all__ = ["OUTPUT_TOPICS", "Published", "ReplaySummary", "main", "rclpy_qos", "replay_bag"]
+__all__ = ["OUTPUT_TOPICS", "Published", "ReplayError", "ReplaySummary", "main", "rclpy_qos", "replay_bag"]
 
 #: What the planner publishes (names relative to its namespace, as in DESIGN.md section 6) -> type.
 OUTPUT_TOPICS: dict[str, str] = {
@@ -71,6 +72,10 @@ LATCHED_OUTPUTS = ("plan", "joint_trajectory")
 #: Depth of the recording subscriptions (volatile: a plan latched before the replay is not recorded).
 RECORD_DEPTH = 100
 _SPIN_S = 0.02
+
+
+class ReplayError(DrdError):
+    """The replay cannot do its job: nobody listens to the bag's topics."""
 
 
 @dataclass(frozen=True)
@@ -211,6 +216,7 @@ def replay_bag(
     wait: float = 5.0,
     namespace: str | None = None,
     log: Callable[[str], None] | None = None,
+    require_listener: bool = False,
 ) -> ReplaySummary:
     """Publish a bag with its timing while spinning ``nodes``, record the planner's outputs (module docstring).
 
@@ -227,8 +233,11 @@ def replay_bag(
         namespace: publish the bag's topics and record the outputs under this namespace (the
             planner's); None: the topic names as stored, outputs at the root.
         log: called with one progress line at a time (None: silent).
+        require_listener: refuse to replay (and to write ``record``) when after ``wait`` seconds no
+            bag topic has a subscriber: no planner is running there.
 
     Raises:
+        ReplayError: ``require_listener`` and nobody subscribes to any of the bag's topics.
         BagError: an unreadable bag, or ``record`` exists and ``overwrite`` is False.
         ValueError: ``rate``, ``settle`` or ``wait`` out of range.
     """
@@ -294,6 +303,12 @@ def replay_bag(
                 if (not unmatched and not silent) or time.monotonic() >= deadline:
                     break
                 executor.spin_once(timeout_sec=_SPIN_S)
+            if require_listener and publishers and len(unmatched) == len(publishers):
+                raise ReplayError(
+                    f"no node subscribes to any of the bag's topics ({', '.join(sorted(unmatched))}) after "
+                    f"{wait:g} s: start the planner first (planner_node --ros-args -p autostart:=true ...) "
+                    "or check --namespace and ROS_DOMAIN_ID"
+                )
             for topic in unmatched:
                 say(f"  no subscriber on {topic} after {wait:g} s; publishing anyway")
             t0 = timeline.start()
@@ -393,8 +408,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             wait=args.wait,
             namespace=args.namespace,
             log=lambda line: print(line, flush=True),
+            require_listener=True,
         )
-    except MessageError as exc:
+    except (MessageError, DrdError) as exc:
         print(f"drd_replay: error: {exc}", file=sys.stderr)
         return 2
     finally:

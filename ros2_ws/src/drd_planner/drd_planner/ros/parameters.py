@@ -1,0 +1,163 @@
+"""The node's parameters: one table with defaults, descriptions, ranges, and the checks a value must pass.
+
+:func:`declare_parameters` declares them with ``ParameterDescriptor`` s (description, range, read-only),
+:func:`parameter_problems` checks a set of values; the node runs it at ``configure`` (over the values
+it starts from, overrides included) and on every runtime change (a bad change is refused with its
+reason, the old value stays). Parameters read at ``configure`` (trees, frame, tolerances, check cap)
+take effect at the next ``configure``; ``seed`` and ``replan_on_map_update`` at the next plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+
+__all__ = ["PARAMETERS", "ParameterSpec", "declare_parameters", "parameter_problems"]
+
+#: Largest goal tolerance (metres) a goal may be off the tree's goal; beyond it a request would match
+#: goals the tree does not plan to.
+MAX_GOAL_TOLERANCE_M = 100.0
+#: Largest joint tolerance (radians).
+MAX_JOINT_TOLERANCE_RAD = math.pi
+
+
+def _positive_at_most(limit: float, unit: str) -> Callable[[Any], str | None]:
+    def check(value: Any) -> str | None:
+        v = float(value)
+        if not (math.isfinite(v) and 0.0 < v <= limit):
+            return f"must be finite, > 0 and <= {limit:g} {unit}, got {v}"
+        return None
+
+    return check
+
+
+def _non_negative(value: Any) -> str | None:
+    return None if int(value) >= 0 else f"must be >= 0, got {int(value)}"
+
+
+def _frame(value: Any) -> str | None:
+    text = str(value)
+    if not text or len(text) > 256 or not text.isprintable() or " " in text:
+        return "must be a non-empty frame name of at most 256 printable characters without spaces"
+    return None
+
+
+def _tree_paths(value: Any) -> str | None:
+    names = [str(v) for v in value]
+    if len(names) > 64 or any(len(n) > 4096 for n in names):
+        return "names at most 64 tree files of at most 4096 characters each"
+    return None
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One parameter.
+
+    Attributes:
+        name: the parameter's name.
+        default: its value when not overridden (its type is the parameter's type).
+        description: what it means, with its unit.
+        check: returns why a value is refused, or None.
+        read_only: changing it after the node started is refused (it shapes what was loaded).
+        float_range: ``(low, high)`` advertised in the descriptor (metres or radians), or None.
+        int_range: ``(low, high)`` advertised in the descriptor, or None.
+    """
+
+    name: str
+    default: Any
+    description: str
+    check: Callable[[Any], str | None] | None = None
+    read_only: bool = False
+    float_range: tuple[float, float] | None = None
+    int_range: tuple[int, int] | None = None
+
+    def descriptor(self) -> ParameterDescriptor:
+        """The rclpy descriptor (shown by ``ros2 param describe``)."""
+        descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        if self.float_range is not None:
+            descriptor.floating_point_range = [
+                FloatingPointRange(from_value=self.float_range[0], to_value=self.float_range[1], step=0.0)
+            ]
+        if self.int_range is not None:
+            descriptor.integer_range = [
+                IntegerRange(from_value=self.int_range[0], to_value=self.int_range[1], step=0)
+            ]
+        return descriptor
+
+
+INT64_MAX = 2**63 - 1
+
+#: Every parameter of the node.
+PARAMETERS: tuple[ParameterSpec, ...] = (
+    ParameterSpec(
+        "tree_paths",
+        [""],
+        "Tree or prior files, or shipped tree names such as heli_wires; read at configure.",
+        _tree_paths,
+    ),
+    ParameterSpec(
+        "frame_id", "map", "The planning frame: maps and goals must be in it; read at configure.", _frame
+    ),
+    ParameterSpec(
+        "seed", 0, "Seed of every random choice of a plan (same seed, same checks).", _non_negative
+    ),
+    ParameterSpec(
+        "max_checks",
+        0,
+        "Most edge checks per plan (0: no cap); read at configure.",
+        _non_negative,
+        int_range=(0, INT64_MAX),
+    ),
+    ParameterSpec(
+        "goal_tolerance",
+        1.0,
+        "Metres per axis within which a goal position matches a tree's goal; read at configure.",
+        _positive_at_most(MAX_GOAL_TOLERANCE_M, "m"),
+        float_range=(0.0, MAX_GOAL_TOLERANCE_M),
+    ),
+    ParameterSpec(
+        "joint_tolerance",
+        0.05,
+        "Radians per joint within which an arm goal matches a tree's goal; read at configure.",
+        _positive_at_most(MAX_JOINT_TOLERANCE_RAD, "rad"),
+        float_range=(0.0, MAX_JOINT_TOLERANCE_RAD),
+    ),
+    ParameterSpec(
+        "autostart", False, "planner_node configures and activates itself at start.", read_only=True
+    ),
+    ParameterSpec(
+        "replan_on_map_update",
+        True,
+        "Re-check the published plan on every map update and replan (or withdraw it) when it is blocked.",
+    ),
+)
+
+
+def declare_parameters(node: Any) -> None:
+    """Declare every parameter of :data:`PARAMETERS` on ``node`` with its descriptor."""
+    for spec in PARAMETERS:
+        node.declare_parameter(spec.name, spec.default, spec.descriptor())
+
+
+def parameter_problems(values: Mapping[str, Any]) -> list[str]:
+    """Why each of ``values`` (name -> value) is refused: ``"name: reason"`` lines; empty if all pass.
+
+    Names not in :data:`PARAMETERS` are not this function's business (rclpy refuses undeclared ones).
+    """
+    specs = {spec.name: spec for spec in PARAMETERS}
+    problems = []
+    for name, value in values.items():
+        spec = specs.get(name)
+        if spec is None or spec.check is None:
+            continue
+        try:
+            reason = spec.check(value)
+        except (TypeError, ValueError, OverflowError) as exc:
+            reason = f"has the wrong type ({type(exc).__name__})"
+        if reason is not None:
+            problems.append(f"{name} {reason}")
+    return problems

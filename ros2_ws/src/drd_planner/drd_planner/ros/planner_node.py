@@ -1,0 +1,72 @@
+"""The ``planner_node`` console script: signals and ``--help`` first, then the (heavy) node.
+
+A node started in the background from a shell script inherits SIGINT *ignored*; until rclpy installs
+its handlers (after about a second of imports) such a signal was lost and the node ran on. Here
+SIGINT and SIGTERM are made to interrupt before anything heavy is imported, so a signal at any moment
+of the start ends the process (status 130 before the node runs, 0 once it spins).
+
+Usage::
+
+    planner_node [--help] [--ros-args -p tree_paths:=[heli_wires] -p autostart:=true ...]
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Sequence
+from types import FrameType
+
+__all__ = ["main", "usage"]
+
+USAGE = """usage: planner_node [-h] [--ros-args -p NAME:=VALUE ...]
+
+The drd_planner lifecycle node: maps (obstacles, terrain, robot_description) in, lazily checked plans
+out. Without autostart it waits for `ros2 lifecycle set <node> configure` and `activate`.
+
+options:
+  -h, --help    print this help and exit
+
+parameters (--ros-args -p NAME:=VALUE, or a YAML file with --params-file):
+"""
+
+
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def usage() -> str:
+    """The help text, with every parameter's default and description."""
+    from drd_planner.ros.parameters import PARAMETERS
+
+    lines = [USAGE]
+    for spec in PARAMETERS:
+        lines.append(f"  {spec.name} (default {spec.default!r}){' [read-only]' if spec.read_only else ''}")
+        lines.append(f"      {spec.description}")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``planner_node``; ``argv`` as in ``sys.argv`` (program name first). Returns the exit status."""
+    signal.signal(signal.SIGINT, _interrupt)
+    signal.signal(signal.SIGTERM, _interrupt)
+    args = list(sys.argv if argv is None else argv)
+    try:
+        ours = args[1 : args.index("--ros-args")] if "--ros-args" in args else args[1:]
+        if any(a in ("-h", "--help") for a in ours):
+            print(usage(), end="")
+            return 0
+        if ours:
+            print(
+                f"{usage()}\nplanner_node: error: unrecognised arguments: {' '.join(ours)}", file=sys.stderr
+            )
+            return 2
+        from drd_planner.ros.node import main as run_node
+
+        return run_node(args)
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,274 @@
+"""The node against hostile but valid input (issue 19): nothing on a topic, service, parameter or signal ends it.
+
+Real rclpy throughout: a peer node talks to the planner over DDS, lifecycle requests go through the
+node's own ``change_state`` service, and the console script runs as a process.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
+
+from geometry_msgs.msg import PoseStamped  # noqa: E402
+from harness import Peer, active_planner, private_context, spin_for, spin_until, use_domain  # noqa: E402
+from lifecycle_msgs.msg import State, Transition  # noqa: E402
+from lifecycle_msgs.srv import ChangeState  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
+
+import drd_planner.ros.node as node_module  # noqa: E402
+from drd_msgs_py.factory import RclpyMessages  # noqa: E402
+from drd_msgs_py.obstacles import markers_from_obstacles  # noqa: E402
+from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
+from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
+from drd_planner.geometry.pose import Pose  # noqa: E402
+from drd_planner.geometry.shapes import Box  # noqa: E402
+from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.ros.guard import MAX_ERROR_CHARS  # noqa: E402
+from drd_planner.ros.node import PlannerNode  # noqa: E402
+
+TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
+use_domain(120)
+
+
+@pytest.fixture
+def context() -> Iterator[Any]:
+    with private_context() as ctx:
+        yield ctx
+
+
+def _node(ctx: Any, **overrides: Any) -> PlannerNode:
+    params = [Parameter("tree_paths", value=[str(TREE)])]
+    params += [Parameter(k, value=v) for k, v in overrides.items()]
+    return PlannerNode(context=ctx, parameter_overrides=params)
+
+
+def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
+    goal = PoseStamped()
+    goal.header.frame_id = frame
+    x, y, z = (float(v) for v in session.goal_state[:3])
+    goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = x, y, z
+    return goal
+
+
+def _publish_world(executor: Any, node: PlannerNode, peer: Peer) -> None:
+    domain = node.sessions[0].domain
+    assert isinstance(domain, HelicopterDomain)
+    markers, cloud = helicopter_world_messages(
+        domain.make_world("wires", 3), wire_segments=8, frame_id="map", msgs=RclpyMessages()
+    )
+    peer.terrain.publish(cloud)
+    peer.obstacles.publish(markers)
+    assert spin_until(executor, lambda: node.snapshot.version >= 2)
+
+
+def _plans_again(executor: Any, node: PlannerNode, peer: Peer) -> None:
+    """The node still serves a valid request after whatever came before."""
+    before = len(peer.plans)
+    peer.goals.publish(_goal(node.sessions[0]))
+    assert spin_until(executor, lambda: len(peer.plans) > before), node.errors[-3:]
+
+
+def _tiny_cell_cloud() -> PointCloud2:
+    """A 2 x 2 organized terrain cloud with 1e-5 m cells (valid; it once made the checker allocate 14 TiB)."""
+    xyz = np.array(
+        [[[0.0, 0.0, 10.0], [1e-5, 0.0, 10.0]], [[0.0, 1e-5, 10.0], [1e-5, 1e-5, 10.0]]], dtype="<f4"
+    )
+    cloud = PointCloud2()
+    cloud.header.frame_id = "map"
+    cloud.height, cloud.width = 2, 2
+    cloud.fields = [
+        PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1) for k, n in enumerate("xyz")
+    ]
+    cloud.point_step, cloud.row_step = 12, 24
+    cloud.data = xyz.tobytes()
+    return cloud
+
+
+def test_an_unexpected_exception_in_a_map_callback_does_not_end_the_node(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    node, peer = _node(context), Peer(context)
+    with active_planner(context, node, peer) as executor:
+        _publish_world(executor, node, peer)
+        good = node.snapshot
+        peer.terrain.publish(_tiny_cell_cloud())  # accepted or refused: either way the node stays up
+        spin_for(executor, 1.0)
+
+        def out_of_memory(*args: Any, **kwargs: Any) -> Any:
+            raise MemoryError("cannot allocate 14.3 TiB")
+
+        monkeypatch.setattr(node_module, "heightfield_from_cloud", out_of_memory)
+        peer.terrain.publish(_tiny_cell_cloud())
+        assert spin_until(executor, lambda: any("MemoryError" in e for e in node.errors))
+        assert "terrain: internal error, input dropped" in node.errors[-1]
+        monkeypatch.undo()
+        if node.snapshot is not good:  # the tiny cloud was accepted: put the real terrain back
+            _publish_world(executor, node, peer)
+        _plans_again(executor, node, peer)
+
+
+def test_an_unavailable_transition_id_is_refused_and_the_node_stays_active(context: Any) -> None:
+    node, peer = _node(context), Peer(context)
+    client = peer.node.create_client(ChangeState, "/drd_planner/change_state")
+    with active_planner(context, node, peer) as executor:
+        assert spin_until(executor, client.service_is_ready)
+        _publish_world(executor, node, peer)
+        for transition in (Transition.TRANSITION_ACTIVATE, Transition.TRANSITION_CONFIGURE, 250):
+            request = ChangeState.Request()
+            request.transition.id = transition
+            future = client.call_async(request)
+            assert spin_until(executor, future.done)  # before the guard the executor raised here
+            assert future.result() is not None and not future.result().success
+            assert "is not available in state 'active'" in node.errors[-1]
+        assert node._state_machine.current_state[0] == State.PRIMARY_STATE_ACTIVE
+        by_label = ChangeState.Request()
+        by_label.transition.label = "deactivate"
+        future = client.call_async(by_label)
+        assert spin_until(executor, future.done) and future.result().success
+        request = ChangeState.Request()
+        request.transition.id = Transition.TRANSITION_ACTIVATE  # available now
+        future = client.call_async(request)
+        assert spin_until(executor, future.done) and future.result().success
+        _plans_again(executor, node, peer)
+
+
+def test_a_map_that_arrives_while_the_first_plan_is_made_is_checked_before_it_stays_published(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The first plan is made on map v2; a box on its path arrives (v3) before it is published."""
+    node, peer = _node(context), Peer(context)
+    with active_planner(context, node, peer) as executor:
+        _publish_world(executor, node, peer)
+        session = node.sessions[0]
+        real_plan = session.plan
+        made: list[Any] = []
+        release = threading.Event()
+
+        def plan_then_wait(*args: Any, **kwargs: Any) -> Any:
+            result = real_plan(*args, **kwargs)
+            if not made:
+                made.append(result)
+                release.wait(20.0)  # the map update lands now, before this plan is published
+            return result
+
+        monkeypatch.setattr(session, "plan", plan_then_wait)
+        peer.goals.publish(_goal(session))
+        assert spin_until(executor, lambda: bool(made))
+        first = made[0]
+        assert first.ok and node.published is None
+        edge = first.path_edges[len(first.path_edges) // 2]
+        states = session.edge_states(edge)
+        middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
+        version = node.snapshot.version
+        peer.obstacles.publish(
+            markers_from_obstacles(
+                [("extra/1", Box((30.0, 30.0, 30.0)), middle)],
+                frame_id="map",
+                msgs=RclpyMessages(),
+                delete_all_first=False,
+            )
+        )
+        assert spin_until(executor, lambda: node.snapshot.version > version)
+        release.set()
+
+        def safe() -> bool:
+            published = node.published
+            return published is not first and (published is None or edge not in published.path_edges)
+
+        assert spin_until(executor, safe), "the blocked plan stayed published"
+        assert spin_until(executor, lambda: len(peer.plans) >= 2)  # the replacement (or an empty plan)
+        last = peer.plans[-1]
+        assert node.published is None or len(last.poses) > 0
+
+
+def test_error_texts_are_bounded_whatever_the_input_quotes(context: Any) -> None:
+    node, peer = _node(context), Peer(context)
+    with active_planner(context, node, peer) as executor:
+        goal = _goal(node.sessions[0], frame="f" * 2_000_000)
+        for _ in range(3):
+            peer.goals.publish(goal)
+        assert spin_until(executor, lambda: len(node.errors) >= 3)
+        spin_for(executor, 0.3)
+        assert all(len(e) <= MAX_ERROR_CHARS for e in node.errors)
+        assert "characters]" in node.errors[-1]
+        reports = [s for array in peer.diagnostics for s in array.status if s.level == b"\x02"]
+        assert reports and all(len(s.message) <= MAX_ERROR_CHARS for s in reports)
+
+
+@pytest.mark.parametrize("value", [math.inf, math.nan, -1.0, 0.0])
+def test_a_bad_goal_tolerance_is_refused_at_runtime_and_at_configure(context: Any, value: float) -> None:
+    node = _node(context)
+    try:
+        (result,) = node.set_parameters([Parameter("goal_tolerance", value=value)])
+        assert not result.successful and "goal_tolerance" in result.reason
+        assert node.get_parameter("goal_tolerance").value == 1.0
+    finally:
+        node.destroy_node()
+    try:  # as a start-up override the descriptor's range refuses it before the node exists
+        bad = _node(context, goal_tolerance=value)
+    except rclpy.exceptions.ParameterException:
+        return
+    try:  # a value the range lets through (0.0) is refused at configure, with the reason
+        assert bad.trigger_configure() != rclpy.lifecycle.TransitionCallbackReturn.SUCCESS
+        assert "goal_tolerance must be finite, > 0" in bad.errors[-1]
+    finally:
+        bad.destroy_node()
+
+
+def _planner_node() -> str:
+    beside = Path(sys.executable).parent / "planner_node"
+    assert beside.is_file(), "the planner_node console script is not installed next to the interpreter"
+    return str(beside)
+
+
+def test_planner_node_help_prints_usage_and_unknown_arguments_are_refused() -> None:
+    done = subprocess.run([_planner_node(), "--help"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and "usage: planner_node" in done.stdout and "goal_tolerance" in done.stdout
+    done = subprocess.run([_planner_node(), "--bogus"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "unrecognised arguments: --bogus" in done.stderr
+
+
+def test_planner_node_rejects_an_out_of_range_override_with_one_line() -> None:
+    args = [_planner_node(), "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "goal_tolerance:=-1.0"]
+    env = {**os.environ, "ROS_DOMAIN_ID": str(120 + os.getpid() % 20)}
+    done = subprocess.run(args, capture_output=True, text=True, timeout=60, env=env)
+    assert done.returncode == 2 and "planner_node: error:" in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize("delay", [0.2, 0.6, 1.5, 4.0])
+def test_sigint_ends_a_background_started_node_at_any_moment_of_its_start(delay: float) -> None:
+    """A shell script's background job inherits SIGINT ignored; the node must stop on it regardless."""
+    args = [_planner_node(), "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    env = {**os.environ, "ROS_DOMAIN_ID": str(140 + os.getpid() % 20)}
+    process = subprocess.Popen(
+        args,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),  # what `cmd &` in a script does
+    )
+    time.sleep(delay)
+    process.send_signal(signal.SIGINT)
+    try:
+        output, _ = process.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        output, _ = process.communicate()
+        pytest.fail(f"SIGINT {delay} s after start was ignored:\n{output[-2000:]}")
+    assert process.returncode in (0, 130), output[-2000:]
+    assert "Traceback" not in output
