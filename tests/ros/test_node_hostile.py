@@ -272,3 +272,16 @@ def test_sigint_ends_a_background_started_node_at_any_moment_of_its_start(delay:
         pytest.fail(f"SIGINT {delay} s after start was ignored:\n{output[-2000:]}")
     assert process.returncode in (0, 130), output[-2000:]
     assert "Traceback" not in output
+
+
+def test_only_the_newest_served_requests_keep_their_map_snapshots(context: Any) -> None:
+    node, peer = _node(context), Peer(context)
+    with active_planner(context, node, peer) as executor:
+        _publish_world(executor, node, peer)
+        goal = _goal(node.sessions[0])
+        for _ in range(node_module.SNAPSHOTS_KEPT + 3):
+            assert node.plan_for(goal) is not None
+        history = node.history
+        assert len(history) == node_module.SNAPSHOTS_KEPT + 3
+        kept = [record.snapshot is not None for record in history]
+        assert kept == [False] * 3 + [True] * node_module.SNAPSHOTS_KEPT

@@ -126,6 +126,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             from drd_planner.planning.picture import plan_picture
 
             for k, served in enumerate(history):
+                if served.snapshot is None:  # an old record: its maps are no longer kept
+                    continue
                 files = plan_picture(
                     served.session, served.snapshot, served.result, args.out / f"plan_{k}.png"
                 )

@@ -33,6 +33,7 @@ snapshot it was planned on.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import threading
 import time
@@ -94,8 +95,11 @@ REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 #: The per-check log.
 CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
-#: Served requests kept in :attr:`PlannerNode.history` (each holds its map snapshot).
+#: Served requests kept in :attr:`PlannerNode.history`.
 HISTORY_LENGTH = 16
+#: The newest records of the history that keep their map snapshot (older ones drop it: a snapshot
+#: holds the FCL scene of its maps).
+SNAPSHOTS_KEPT = 4
 #: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
 LIBRARY_EDGE_SEGMENTS = 4
 #: Longest executor wait (seconds) of ``planner_node``'s spin loop.
@@ -122,14 +126,14 @@ class PlanRecord:
     Attributes:
         session: the tree that planned it.
         result: the plan (or why there is none) with its check log.
-        snapshot: the maps it was planned on.
+        snapshot: the maps it was planned on (None once :data:`SNAPSHOTS_KEPT` newer records exist).
         request: where it came from (``goal_pose``, ``goal_joints``, ``get_plan``, ``map_update``) and the
             other summary values of the request.
     """
 
     session: PlanningSession
     result: PlanResult
-    snapshot: MapSnapshot
+    snapshot: MapSnapshot | None
     request: dict[str, Any]
 
 
@@ -552,7 +556,7 @@ class PlannerNode(LifecycleNode):
         """
         started = time.perf_counter()
         stamp = self._stamp()
-        self._history.append(PlanRecord(session, result, snapshot, dict(extra)))
+        self._remember(PlanRecord(session, result, snapshot, dict(extra)))
         path = self._publish_plan(session, result, snapshot, stamp) if result.ok else None
         plan_messaging_s = time.perf_counter() - started
         records = [
@@ -588,6 +592,14 @@ class PlannerNode(LifecycleNode):
         else:
             self.get_logger().warning(f"{result.tree}: {result.message}; nothing published on plan")
         return path
+
+    def _remember(self, record: PlanRecord) -> None:
+        """Add ``record`` to the history; the record :data:`SNAPSHOTS_KEPT` back lets go of its snapshot."""
+        self._history.append(record)
+        if len(self._history) > SNAPSHOTS_KEPT:
+            old = self._history[-SNAPSHOTS_KEPT - 1]
+            if old.snapshot is not None:
+                self._history[-SNAPSHOTS_KEPT - 1] = dataclasses.replace(old, snapshot=None)
 
     def _publish_plan(
         self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
