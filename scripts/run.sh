@@ -37,6 +37,7 @@ py="$venv/bin/python"
 case "$job" in
   demo)
     "$venv/bin/planner_demo" "${@:2}"
+    echo "drd, planner_node, drd_replay and planner_demo are in $venv/bin; to run them by name: . $venv/bin/activate" >&2
     ;;
   test)
     "$venv/bin/ruff" check .

@@ -136,8 +136,23 @@ def test_shipped_trees_are_installed_for_bare_tree_names(install: Path) -> None:
     assert sorted(p.name for p in installed.glob("*.npz")) == trees
 
 
+def test_license_is_installed_with_the_manifest(install: Path) -> None:
+    installed = install / "drd_planner" / "share" / "drd_planner" / "LICENSE"
+    assert installed.read_text() == (REPO / "LICENSE").read_text()
+
+
 # ------------------------------------------------------------------------------------------------------
 # The manifests (no colcon needed)
+
+
+def test_license_file_matches_the_manifests() -> None:
+    text = (REPO / "LICENSE").read_text()
+    assert text.startswith("BSD 3-Clause License\n\nCopyright (c) 2026, The drd_planner authors\n")
+    assert "Neither the name of the copyright holder nor the names of its" in text
+    for package in PACKAGES:
+        assert "<license>BSD-3-Clause</license>" in (SRC / package / "package.xml").read_text()
+        assert 'license="BSD-3-Clause"' in (SRC / package / "setup.py").read_text()
+
 
 #: Import name -> rosdep key of the Python libraries the manifests declare.
 ROSDEP_KEY = {

@@ -91,3 +91,34 @@ def test_bad_candidates_are_refused(problem, cands) -> None:  # type: ignore[no-
 def test_bad_pseudo_counts_are_refused(problem, kappas) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ProblemError, match="pseudo-counts"):
         select_switch_threshold(problem, candidates=(0.2,), pseudo_counts=kappas)
+
+
+def test_max_worlds_limits_the_validation_worlds(problem) -> None:  # type: ignore[no-untyped-def]
+    full = select_switch_threshold(problem, candidates=(0.2, 1.0), pseudo_counts=(None,), seed=1)
+    quick = select_switch_threshold(
+        problem, candidates=(0.2, 1.0), pseudo_counts=(None,), seed=1, max_worlds=3
+    )
+    assert len(full.validation_ids) > 3
+    assert len(quick.validation_ids) == 3
+    assert set(quick.validation_ids) <= set(problem.worlds.train_ids.tolist())
+    assert quick.seconds > 0 and quick.as_json()["num_validation_worlds"] == 3
+    with pytest.raises(ProblemError, match="max_worlds"):
+        select_switch_threshold(problem, candidates=(0.2,), pseudo_counts=(None,), max_worlds=0)
+
+
+def test_summary_is_a_few_short_lines() -> None:
+    from drd_planner.core.switch_threshold import SwitchThresholdChoice
+
+    means = {
+        (e, k): 10.0 + e + (k or 0) for e in (0.05, 0.1, 0.2, 0.4, 0.6, 1.0) for k in (None, 5.0, 20.0, 50.0)
+    }
+    choice = SwitchThresholdChoice(0.2, 5.0, means, tuple(range(90)), seconds=9.54)
+    lines = choice.summary_lines()
+    assert lines[0] == "eta 0.2, kappa 5: validated in 9.5 s on 90 held-out training worlds"
+    assert lines[1].split() == ["mean", "checks", "fixed", "kappa", "5", "kappa", "20", "kappa", "50"]
+    assert len(lines) == 2 + 6 and max(len(line) for line in lines) <= 100
+    assert lines[4].split() == ["eta", "0.2", "10.20", "15.20*", "30.20", "60.20"]
+    # Columns line up: every number ends under the end of its header (a "*" may follow it).
+    for head in ("fixed", "kappa 5", "kappa 20", "kappa 50"):
+        end = lines[1].index(head) + len(head)
+        assert lines[3][end - 1].isdigit() and lines[3][end : end + 1] in (" ", "*", ""), head

@@ -11,6 +11,8 @@ PACKAGE = "drd_planner"
 SHIPPED = {
     kind: sorted(glob(f"../../../{kind}/*.{ext}")) for kind, ext in (("trees", "npz"), ("bags", "mcap"))
 }
+# The repository's LICENSE (BSD-3-Clause, as package.xml says), installed with package.xml where present.
+LICENSE = [relpath(f) for f in glob("../../../LICENSE")]
 
 setup(
     name=PACKAGE,
@@ -19,7 +21,7 @@ setup(
     package_data={PACKAGE: ["py.typed"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
-        (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}", ["package.xml", *LICENSE]),
         (f"share/{PACKAGE}/launch", glob("launch/*.py")),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
         *(

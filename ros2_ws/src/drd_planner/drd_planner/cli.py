@@ -93,7 +93,9 @@ def _prior_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, floa
     """A prior's eta and kappa: as given, or validated on random queries (``planner.leaf_validation``)."""
     from drd_planner.planner.leaf_validation import leaf_from_options
 
-    return leaf_from_options(problem, eta=args.eta, pseudo_counts=_kappas(args), seed=args.seed)
+    return leaf_from_options(
+        problem, eta=args.eta, pseudo_counts=_kappas(args), seed=args.seed, progress=None
+    )
 
 
 def cmd_build_tree(args: argparse.Namespace) -> int:
@@ -139,6 +141,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         SuiteResult,
         costs_figure,
         dataset_json,
+        leaf_lines,
         run_dataset,
         run_suite,
         suite_json,
@@ -186,11 +189,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
     for run in suite.runs:
         for note in run.notes:
             print(f"note: {note}")
+    for line in leaf_lines(suite.runs):
+        print(line)
     write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
     if options.figures is not None:
         count = sum(len(r.figures) for r in suite.runs) + len(figures)
         print(f"wrote {count} figure files under {options.figures}")
-    print(f"total wall time {suite.seconds:.1f} s")
+    validation = sum(run.leaf.seconds for run in suite.runs if run.leaf is not None)
+    print(f"total wall time {suite.seconds:.1f} s (eta and kappa validation {validation:.1f} s of it)")
     return 0
 
 
@@ -403,7 +409,12 @@ def build_parser() -> argparse.ArgumentParser:
         "held-out training worlds",
     )
     _kappa_option(p)
-    p.add_argument("--max-worlds", type=int, default=None, help="only the first K test worlds")
+    p.add_argument(
+        "--max-worlds",
+        type=int,
+        default=None,
+        help="only the first K test worlds, and at most K held-out training worlds to validate eta and kappa",
+    )
     p.add_argument("--max-checks", type=int, default=None, help="cap on checks per episode (failure)")
     p.add_argument("--reference", default="direct_bisect", help="policy the relative costs are over")
     p.add_argument(

@@ -31,7 +31,6 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import maximum_flow, shortest_path
-from tqdm import tqdm
 
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
 from drd_planner.core.graph import ExplicitGraph
@@ -41,6 +40,7 @@ from drd_planner.exceptions import DrdError
 from drd_planner.planner.planner import PLAN_POLICIES, Planner
 from drd_planner.planner.query_library import ShortestPaths
 from drd_planner.planner.result import PlanStage, PlanStatus
+from drd_planner.progress import Progress
 
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
@@ -132,12 +132,7 @@ def run_query_benchmark(
     episodes: list[dict[str, Any]] = []
     stats = {p: QueryPolicyStats() for p in policies}
     t0 = time.perf_counter()
-    bar = tqdm(
-        total=len(queries) * len(policies),
-        desc=f"{problem.name} queries",
-        unit="episode",
-        disable=None if progress is None else not progress,
-    )
+    bar = Progress(len(queries) * len(policies), f"{problem.name} queries", unit="episode", enabled=progress)
     for i, (start, goal) in enumerate(queries):
         world = int(worlds.test_ids[i % worlds.test_ids.size])
         outcomes = worlds.X[world]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -13,7 +14,7 @@ from drd_planner.bench.queries import (
     query_markdown,
     run_query_benchmark,
 )
-from drd_planner.bench.runner import write_bench_files
+from drd_planner.bench.runner import require_test_worlds, write_bench_files
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
@@ -57,8 +58,11 @@ def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dic
         raise DrdError(f"--queries must be at least 1, got {args.queries}")
     if args.max_checks is not None and args.max_checks < 1:
         raise DrdError(f"--max-checks must be at least 1, got {args.max_checks}")
+    t0 = time.perf_counter()
     problem = load_problem_from_args(args)
+    require_test_worlds(problem)
     prior, note = benchmark_prior(problem, args, leaf=leaf, tree_options=tree_options)
+    prepare_s = time.perf_counter() - t0
     planner = Planner(prior)
     queries = draw_queries(problem, args.queries, seed=args.seed)
     policies = tuple(args.policies) if args.policies else DEFAULT_QUERY_POLICIES
@@ -69,6 +73,10 @@ def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dic
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     print(report, end="")
+    print(f"eta and kappa: {note}")
     write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
-    print(f"total wall time {doc['seconds']:.1f} s")
+    print(
+        f"total wall time {time.perf_counter() - t0:.1f} s (loading, eta and kappa and the tree "
+        f"{prepare_s:.1f} s, episodes {doc['seconds']:.1f} s)"
+    )
     return 0

@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from tqdm import tqdm
 
 from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1, table1_stats
 from drd_planner.core.bisect import bias_from_worlds
@@ -31,6 +30,7 @@ from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, POLICIES, TREE
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import DrdError
+from drd_planner.progress import Progress
 
 #: The policies of the paper's Table 1 (and ours), in table order.
 TABLE1_POLICIES = (
@@ -195,6 +195,17 @@ def run_world(
     return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
 
 
+def require_test_worlds(problem: Problem) -> None:
+    """Raise DrdError, with what to do, when ``problem`` has no test worlds to benchmark on."""
+    worlds = problem.require_worlds()
+    if worlds.test_ids.size == 0:
+        raise DrdError(
+            f"{problem.name} has no test worlds ({worlds.num_worlds} worlds, all for training): the "
+            "benchmark runs on test worlds; a dataset from drd build-dataset needs a --test-fraction above 0 "
+            "and enough --worlds to hold out at least one"
+        )
+
+
 def run_benchmark(
     problem: Problem,
     *,
@@ -220,7 +231,11 @@ def run_benchmark(
         pseudo_count: kappa of ``direct_bisect``'s posterior leaf; None keeps the leaf bias fixed.
         max_worlds: only the first ``max_worlds`` test worlds (smoke runs).
         max_checks: cap on the checks of one episode (None: no cap); capped episodes are failures.
-        progress: show progress bars (None: only on a terminal).
+        progress: report the episodes (policies x worlds) on stderr (a bar on a terminal, plain lines
+            otherwise; False: silent).
+
+    Raises:
+        DrdError: an unknown policy, a limit below 1, or no test worlds.
     """
     check_policy_names(policies)
     if max_worlds is not None and max_worlds < 1:
@@ -228,6 +243,7 @@ def run_benchmark(
     if max_checks is not None and max_checks < 1:
         raise DrdError(f"max_checks must be at least 1, got {max_checks}")
     worlds = problem.require_worlds()
+    require_test_worlds(problem)
     test_ids = worlds.test_ids if max_worlds is None else worlds.test_ids[:max_worlds]
     tree_info: dict[str, Any] = {}
     if tree is None and any(p in TREE_POLICIES for p in policies):
@@ -238,34 +254,41 @@ def run_benchmark(
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
-    for name in policies:
-        if name in PEER_POLICIES:
-            peer = _run_peer(problem, test_ids, seed=seed)
-            if peer is not None:
-                results[name] = peer
-            continue
-        checks: list[int] = []
-        select_ms: list[float] = []
-        failed: list[int] = []
-        t0 = time.perf_counter()
-        for k, world in enumerate(tqdm(test_ids, desc=name, unit="world", disable=_disable(progress))):
-            result = run_world(
-                problem,
-                name,
-                int(world),
-                theta=theta,
-                tree=tree,
-                seed=seed + k,
-                eta=eta,
-                alpha=alpha,
-                pseudo_count=pseudo_count,
-                max_checks=max_checks,
-            )
-            checks.append(result.num_checks)
-            select_ms.extend(c.select_ms for c in result.checks)
-            if not result.success:
-                failed.append(k)
-        results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
+    bar = Progress(
+        len(policies) * len(test_ids), f"{problem.name} episodes", unit="episode", enabled=progress
+    )
+    with bar:
+        for name in policies:
+            bar.set_postfix_str(name)
+            if name in PEER_POLICIES:
+                peer = _run_peer(problem, test_ids, seed=seed)
+                if peer is not None:
+                    results[name] = peer
+                bar.update(len(test_ids))
+                continue
+            checks: list[int] = []
+            select_ms: list[float] = []
+            failed: list[int] = []
+            t0 = time.perf_counter()
+            for k, world in enumerate(test_ids):
+                result = run_world(
+                    problem,
+                    name,
+                    int(world),
+                    theta=theta,
+                    tree=tree,
+                    seed=seed + k,
+                    eta=eta,
+                    alpha=alpha,
+                    pseudo_count=pseudo_count,
+                    max_checks=max_checks,
+                )
+                checks.append(result.num_checks)
+                select_ms.extend(c.select_ms for c in result.checks)
+                if not result.success:
+                    failed.append(k)
+                bar.update(1)
+            results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
     settings = {
         "seed": seed,
         "eta": eta,
@@ -298,10 +321,6 @@ def _run_peer(problem: Problem, test_ids: npt.NDArray[np.int64], *, seed: int) -
     per_check = [1e3 * float(w["wall_s"]) / max(int(w["checks"]), 1) for w in out["worlds"]]
     select_ms = [ms for ms, c in zip(per_check, checks, strict=True) for _ in range(max(c, 1))]
     return PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
-
-
-def _disable(progress: bool | None) -> bool | None:
-    return None if progress is None else not progress
 
 
 def result_table1(
@@ -399,13 +418,25 @@ def json_safe(value: Any) -> Any:
 def write_bench_files(
     doc: dict[str, Any], report: str, *, json_path: str | None, markdown_path: str | None
 ) -> None:
-    """Write a benchmark's JSON document and markdown report where asked, saying so on stdout."""
+    """Write a benchmark's JSON document and markdown report where asked (folders made), saying so on stdout.
+
+    Raises:
+        DrdError: a file cannot be written.
+    """
     if json_path:
-        Path(json_path).write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False))
-        print(f"wrote {json_path}")
+        _write_text(json_path, json.dumps(json_safe(doc), indent=1, allow_nan=False))
     if markdown_path:
-        Path(markdown_path).write_text(report)
-        print(f"wrote {markdown_path}")
+        _write_text(markdown_path, report)
+
+
+def _write_text(path: str, text: str) -> None:
+    target = Path(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(text)
+    except OSError as exc:
+        raise DrdError(f"cannot write {target}: {exc.strerror or exc}") from exc
+    print(f"wrote {path}")
 
 
 def nanmean_or_nan(values: np.ndarray) -> float:

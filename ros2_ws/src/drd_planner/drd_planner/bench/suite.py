@@ -14,8 +14,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tqdm import tqdm
-
 from drd_planner import __version__
 from drd_planner.bench.learning_curve import DEFAULT_SIZES, TrainingCurve, training_size_curve
 from drd_planner.bench.plots import (
@@ -32,6 +30,7 @@ from drd_planner.bench.runner import (
     available_policies,
     benchmark_json,
     check_policy_names,
+    require_test_worlds,
     result_table1,
     run_benchmark,
     run_world,
@@ -48,6 +47,7 @@ from drd_planner.core.switch_threshold import (
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.gccd import REQUIRED_FILES, load_gccd_folder
 from drd_planner.exceptions import DrdError
+from drd_planner.progress import Progress
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,10 @@ class SuiteOptions:
 
 @dataclass(frozen=True)
 class DatasetRun:
-    """One dataset's benchmark, statistics, figures and notes."""
+    """One dataset's benchmark, statistics, figures and notes; ``leaf``: the eta/kappa validation, if run.
+
+    ``seconds`` is the whole run's wall time, the validation's (``leaf.seconds``) included.
+    """
 
     result: BenchmarkResult
     table: Table1 | None
@@ -97,6 +100,7 @@ class DatasetRun:
     notes: list[str]
     curve: TrainingCurve | None
     seconds: float
+    leaf: SwitchThresholdChoice | None = None
 
 
 @dataclass(frozen=True)
@@ -150,11 +154,16 @@ def run_dataset(
         problem: a problem with a world database.
         options: the run settings.
         tree: a prebuilt tree (built from ``options.tree_options`` when needed and not given).
-        progress: per-policy progress bars (None: only on a terminal).
+        progress: progress of the validation and of each policy on stderr (a bar on a terminal, plain
+            lines otherwise; False: silent).
+
+    Raises:
+        DrdError: the problem has no test worlds, or a setting is invalid.
     """
     t0 = time.perf_counter()
     check_policy_names(options.policies)
-    eta, kappa, eta_choice = resolve_leaf(problem, options)
+    require_test_worlds(problem)
+    eta, kappa, eta_choice = resolve_leaf(problem, options, progress=progress)
     options = dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,))
     if tree is None and _needs_tree(options):
         tree = build_tree(problem, progress=False, **dict(options.tree_options))
@@ -186,13 +195,17 @@ def run_dataset(
         assert tree is not None
         figures += _checked_edges_figure(problem, result, tree, options, notes)
         curve = _training_figure(problem, options, figures, notes)
-    return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0)
+    return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0, eta_choice)
 
 
 def resolve_leaf(
-    problem: Problem, options: SuiteOptions
+    problem: Problem, options: SuiteOptions, *, progress: bool | None = False
 ) -> tuple[float, float | None, SwitchThresholdChoice | None]:
-    """A concrete eta and kappa: validated unless both are fixed or no tree is used."""
+    """A concrete eta and kappa: validated unless both are fixed or no tree is used.
+
+    The validation holds out at most ``options.max_worlds`` training worlds (a quick run stays quick);
+    ``progress`` reports its episodes on stderr.
+    """
     if not options.pseudo_counts:
         raise DrdError("pseudo_counts needs at least one candidate (None for the fixed leaf bias)")
     fixed_kappa = len(options.pseudo_counts) == 1
@@ -208,6 +221,8 @@ def resolve_leaf(
         alpha=options.alpha,
         expand_threshold=expand,
         tree_options=options.tree_options,
+        max_worlds=options.max_worlds,
+        progress=progress,
     )
     return choice.eta, choice.pseudo_count, choice
 
@@ -295,21 +310,38 @@ def costs_figure(runs: Sequence[DatasetRun], options: SuiteOptions) -> list[Path
 
 
 def run_suite(root: str | Path, options: SuiteOptions, *, progress: bool | None = None) -> SuiteResult:
-    """Run :func:`run_dataset` on every dataset folder under ``root`` (sorted) with a progress bar.
+    """Run :func:`run_dataset` on every dataset folder under ``root`` (sorted), reporting progress on stderr.
 
-    Folders without the required files are skipped (listed in the result with the reason); a folder
-    that has them but is malformed raises its DatasetError.
+    Folders without the required files, or without test worlds, are skipped (listed in the result with
+    the reason); a folder that has the files but is malformed raises its DatasetError.
     """
     t0 = time.perf_counter()
     check_policy_names(options.policies)
     folders, skipped = discover_datasets(root)
     runs: list[DatasetRun] = []
-    bar = tqdm(folders, desc="datasets", unit="dataset", disable=None if progress is None else not progress)
-    for folder in bar:
-        bar.set_postfix_str(folder.name)
-        runs.append(run_dataset(load_gccd_folder(folder), options, progress=False))
-    bar.close()
+    with Progress(len(folders), "datasets", unit="dataset", enabled=progress, announce=True) as bar:
+        for folder in folders:
+            bar.set_postfix_str(folder.name)
+            problem = load_gccd_folder(folder)
+            if problem.require_worlds().test_ids.size == 0:
+                skipped.append((folder.name, "no test worlds"))
+            else:
+                runs.append(run_dataset(problem, options, progress=False))
+            bar.update(1)
     return SuiteResult(runs, skipped, time.perf_counter() - t0)
+
+
+def leaf_lines(runs: Sequence[DatasetRun]) -> list[str]:
+    """How each run's eta and kappa were validated: with the table for one dataset, one line each for many."""
+    lines: list[str] = []
+    for run in runs:
+        if run.leaf is None:
+            continue
+        summary = run.leaf.summary_lines()
+        lines.append(f"{run.result.dataset}: {summary[0]} (--eta/--kappa fix them)")
+        if len(runs) == 1:
+            lines += summary[1:]
+    return lines
 
 
 def dataset_json(run: DatasetRun, options: SuiteOptions) -> dict[str, Any]:

@@ -20,8 +20,9 @@ bias, and it wins ties, as does the larger eta and then the larger kappa.
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -31,6 +32,7 @@ from drd_planner.core.policies import DEFAULT_ALPHA, DirectBisectPolicy
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import ProblemError
+from drd_planner.progress import Progress
 
 #: Candidate thresholds; 1.0 means "switch at the root" (BiSECt with the training bias).
 DEFAULT_ETA_CANDIDATES: tuple[float, ...] = (0.05, 0.1, 0.2, 0.4, 0.6, 1.0)
@@ -49,12 +51,16 @@ class SwitchThresholdChoice:
         pseudo_count: the chosen posterior pseudo-count, None for the fixed leaf bias.
         mean_checks: (eta, pseudo_count) candidate -> mean checks on the validation worlds.
         validation_ids: (k,) world rows held out (0-based rows of the problem's world database).
+        seconds: wall time of the validation (not compared: equal choices may take different times).
+        basis: what every candidate was run on, for reports (default: "K held-out training worlds").
     """
 
     eta: float
     pseudo_count: float | None
     mean_checks: dict[tuple[float, float | None], float]
     validation_ids: tuple[int, ...]
+    seconds: float = field(default=0.0, compare=False)
+    basis: str = ""
 
     def as_json(self) -> dict[str, object]:
         """A JSON-able summary (for benchmark files and tree provenance)."""
@@ -63,15 +69,39 @@ class SwitchThresholdChoice:
             "pseudo_count": self.pseudo_count,
             "mean_checks": {_label(*k): v for k, v in sorted(self.mean_checks.items(), key=_order)},
             "num_validation_worlds": len(self.validation_ids),
+            "seconds": self.seconds,
         }
 
     def describe(self) -> str:
-        """One line for logs: the choice and every candidate's mean."""
+        """One line for logs and provenance: the choice and every candidate's mean."""
         means = ", ".join(f"{_label(*k)}: {v:.2f}" for k, v in sorted(self.mean_checks.items(), key=_order))
-        return (
-            f"{_label(self.eta, self.pseudo_count)} (validated on {len(self.validation_ids)} held-out "
-            f"training worlds; mean checks {means})"
-        )
+        return f"{_label(self.eta, self.pseudo_count)} (validated on {self._basis()}; mean checks {means})"
+
+    def summary_lines(self) -> list[str]:
+        """A short report for people: the choice and the time taken, then mean checks per candidate.
+
+        One row per eta and one column per kappa ("fixed" is the fixed leaf bias); ``*`` marks the choice.
+        """
+        etas = sorted({e for e, _ in self.mean_checks})
+        kappas = sorted({k for _, k in self.mean_checks}, key=lambda k: -1.0 if k is None else k)
+        heads = ["fixed" if k is None else f"kappa {k:g}" for k in kappas]
+        width = max(9, *(len(h) for h in heads))
+        leaf = "fixed leaf" if self.pseudo_count is None else f"kappa {self.pseudo_count:g}"
+        lines = [
+            f"eta {self.eta:g}, {leaf}: validated in {self.seconds:.1f} s on {self._basis()}",
+            "  mean checks " + "".join(f"{h:>{width - 1}} " for h in heads).rstrip(),
+        ]
+        for eta in etas:
+            row = f"  eta {eta:<8g}"
+            for kappa in kappas:
+                value = self.mean_checks.get((eta, kappa))
+                mark = "*" if (eta, kappa) == (self.eta, self.pseudo_count) else " "
+                row += f"{'-' if value is None else f'{value:.2f}':>{width - 1}}{mark}"
+            lines.append(row.rstrip())
+        return lines
+
+    def _basis(self) -> str:
+        return self.basis or f"{len(self.validation_ids)} held-out training worlds"
 
 
 def _label(eta: float, pseudo_count: float | None) -> str:
@@ -93,6 +123,8 @@ def select_switch_threshold(
     expand_threshold: float = 0.05,
     tree_options: Mapping[str, Any] | None = None,
     pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS,
+    max_worlds: int | None = None,
+    progress: bool | None = False,
 ) -> SwitchThresholdChoice:
     """Pick eta and the leaf pseudo-count by validation on held-out feasible training worlds (see the module docstring).
 
@@ -107,11 +139,14 @@ def select_switch_threshold(
             (candidates, IncDRD, colouring), the same as for the final tree, so the validation
             tree is built the way the tree that will use eta is.
         pseudo_counts: leaf posterior pseudo-counts to try (None: the fixed leaf bias).
+        max_worlds: hold out at most this many worlds (a quick run; None: the validation fraction).
+        progress: report the episodes on stderr (:class:`drd_planner.progress.Progress`; False: silent).
 
     Raises:
         ProblemError: no candidates, a candidate outside (0, 1], a pseudo-count that is not
-            positive, or no feasible training world.
+            positive, ``max_worlds`` below 1, or no feasible training world.
     """
+    t0 = time.perf_counter()
     if candidates is None:
         candidates = DEFAULT_ETA_CANDIDATES
     cands = sorted({float(c) for c in candidates})
@@ -129,7 +164,9 @@ def select_switch_threshold(
     feasible = train[worlds.R[train].any(axis=1)]
     if feasible.size < 2:
         raise ProblemError("need at least two feasible training worlds to validate eta")
-    k = min(feasible.size - 1, max(1, round(validation_fraction * train.size)))
+    if max_worlds is not None and max_worlds < 1:
+        raise ProblemError(f"max_worlds must be at least 1, got {max_worlds}")
+    k = min(feasible.size - 1, max(1, round(validation_fraction * train.size)), max_worlds or feasible.size)
     rng = np.random.default_rng(seed)
     held_out = np.sort(rng.choice(feasible, size=k, replace=False))
     fit = np.setdiff1d(train, held_out)
@@ -138,17 +175,24 @@ def select_switch_threshold(
     tree = build_tree(sub, expand_threshold=expand_threshold, progress=False, **options)
     costs = problem.edge_costs
     means: dict[tuple[float, float | None], float] = {}
-    for eta in cands:
-        for kappa in kappas:
-            total = 0
-            for world in held_out:
-                policy = DirectBisectPolicy(
-                    tree, problem.library, costs, eta=eta, alpha=alpha, pseudo_count=kappa
-                )
-                result = run_episode(problem.library, costs, policy, TableOracle(worlds.X[world]))
-                total += result.num_checks
-            means[(eta, kappa)] = total / held_out.size
+    total_episodes = len(cands) * len(kappas) * held_out.size
+    with Progress(
+        total_episodes, "validating eta x kappa", unit="episode", enabled=progress, announce=True
+    ) as bar:
+        for eta in cands:
+            for kappa in kappas:
+                total = 0
+                for world in held_out:
+                    policy = DirectBisectPolicy(
+                        tree, problem.library, costs, eta=eta, alpha=alpha, pseudo_count=kappa
+                    )
+                    result = run_episode(problem.library, costs, policy, TableOracle(worlds.X[world]))
+                    total += result.num_checks
+                    bar.update(1)
+                means[(eta, kappa)] = total / held_out.size
     best = min(means.values())
     tied = [k for k, v in means.items() if v <= best + 1e-12]
     eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
-    return SwitchThresholdChoice(eta, kappa, means, tuple(int(h) for h in held_out))
+    return SwitchThresholdChoice(
+        eta, kappa, means, tuple(int(h) for h in held_out), seconds=time.perf_counter() - t0
+    )

@@ -55,7 +55,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from tqdm import tqdm
 
 from drd_planner import __version__
 from drd_planner.core.graph import ExplicitGraph
@@ -65,6 +64,7 @@ from drd_planner.data.library_builder import k_shortest_paths_union, split_world
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
 from drd_planner.domains.base import DOMAIN_CLASSES, Domain, domain_from_spec
 from drd_planner.exceptions import DatasetError, DrdError
+from drd_planner.progress import Progress
 
 __all__ = [
     "BuildReport",
@@ -659,9 +659,8 @@ def _evaluate(
         stream = _run_pool(pending, workers, method)
     else:
         stream = _run_inline(pending)
-    disable = None if progress is None else not progress
     total, done = len(plan.tasks), len(results)
-    bar = tqdm(total=total, initial=done, desc="edge checks", unit="chunk", disable=disable)
+    bar = Progress(total, "edge checks", unit="chunk", enabled=progress, initial=done)
     with closing(stream), bar:
         for result in stream:
             if result.graph_sha256 != plan.graph_sha256:
@@ -823,7 +822,7 @@ def build_dataset(
         include_trajectories: store the domain's edge trajectories in the file.
         max_chunks: evaluate at most this many missing chunks, then stop without writing ``out``.
         keep_parts: keep the chunk files after writing ``out`` (by default they are deleted).
-        progress: tqdm bar over chunks (None: only on a terminal).
+        progress: progress over chunks on stderr (a bar on a terminal, plain lines otherwise; False: none).
         command: a command line that recreates the dataset, recorded in the provenance.
         start_method: multiprocessing start method of local workers (None: see :func:`choose_start_method`).
 

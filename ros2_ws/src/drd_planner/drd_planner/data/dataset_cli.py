@@ -163,6 +163,11 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
         f"{report.num_chunks} chunks ({report.resumed_chunks} resumed) checked in "
         f"{report.eval_seconds:.2f} s on {where}, {report.total_seconds:.2f} s total"
     )
+    if ds.test_ids.size == 0:
+        print(
+            f"note: no test worlds (--test-fraction {args.test_fraction:g} of {ds.num_worlds} worlds, or no "
+            "world with a valid library path): drd build-tree can use this file, drd bench cannot"
+        )
     return 0
 
 

@@ -24,10 +24,10 @@ without this rule lost to BiSECt on the test queries of 5 of them, and with a fi
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Sequence
 
 import numpy as np
-from tqdm import tqdm
 
 from drd_planner.core.episode import TableOracle
 from drd_planner.core.problem import Problem
@@ -40,6 +40,7 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import prior_from_problem
 from drd_planner.planner.query_sampling import draw_queries
+from drd_planner.progress import Progress
 
 #: Random queries and held-out worlds per query of one validation (64 episodes per candidate).
 DEFAULT_QUERIES = 16
@@ -63,9 +64,12 @@ def validate_query_leaf(
 ) -> SwitchThresholdChoice:
     """The (eta, kappa) with the fewest mean checks over random queries on held-out training worlds.
 
+    ``progress`` reports the episodes on stderr (:class:`drd_planner.progress.Progress`; False: silent).
+
     Raises:
         ProblemError: fewer than two training worlds, or no candidate.
     """
+    t0 = time.perf_counter()
     worlds = problem.require_worlds()
     train = worlds.train_ids
     if train.size < 2:
@@ -87,22 +91,29 @@ def validate_query_leaf(
     ]
     checks: dict[tuple[float, float | None], np.ndarray] = {}
     grid = [(float(e), None if k is None else float(k)) for e in sorted(set(etas)) for k in pseudo_counts]
-    disable = None if progress is None else not progress
-    for eta, kappa in tqdm(grid, desc="eta x kappa on random queries", disable=disable):
-        planner.set_leaf(eta, kappa)
-        checks[(eta, kappa)] = np.array(
-            [
-                planner.plan(s, g, TableOracle(worlds.X[w]), seed=n).num_checks
-                for n, (s, g, w) in enumerate(episodes)
-            ]
-        )
+    with Progress(
+        len(grid) * len(episodes), "validating eta x kappa", unit="episode", enabled=progress, announce=True
+    ) as bar:
+        for eta, kappa in grid:
+            planner.set_leaf(eta, kappa)
+            counts = []
+            for n, (s, g, w) in enumerate(episodes):
+                counts.append(planner.plan(s, g, TableOracle(worlds.X[w]), seed=n).num_checks)
+                bar.update(1)
+            checks[(eta, kappa)] = np.array(counts)
     means = {k: float(v.mean()) for k, v in checks.items()}
     best = min(means.values())
     tied = [k for k, v in means.items() if v <= best + 1e-12]
     eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
     if BISECT_LEAF in checks and not significantly_fewer(checks[(eta, kappa)], checks[BISECT_LEAF]):
         eta, kappa = BISECT_LEAF
-    return SwitchThresholdChoice(eta, kappa, means, tuple(int(h) for h in held))
+    basis = (
+        f"{len(episodes)} episodes ({len(pairs)} random queries x {worlds_per_query} of {held.size} "
+        "held-out training worlds)"
+    )
+    return SwitchThresholdChoice(
+        eta, kappa, means, tuple(int(h) for h in held), seconds=time.perf_counter() - t0, basis=basis
+    )
 
 
 def significantly_fewer(candidate: np.ndarray, baseline: np.ndarray, *, z: float = Z) -> bool:
@@ -117,22 +128,31 @@ def significantly_fewer(candidate: np.ndarray, baseline: np.ndarray, *, z: float
 
 
 def leaf_from_options(
-    problem: Problem, *, eta: float | None, pseudo_counts: Sequence[float | None], seed: int
+    problem: Problem,
+    *,
+    eta: float | None,
+    pseudo_counts: Sequence[float | None],
+    seed: int,
+    progress: bool | None = False,
 ) -> tuple[float, float | None, str]:
     """``(eta, kappa, note)`` for a prior: as given when both are fixed, else :func:`validate_query_leaf`.
 
     ``eta`` None validates it among :data:`DEFAULT_ETA_CANDIDATES`; several ``pseudo_counts`` are validated.
+    ``note`` is a short report on a few lines: the choice, the validation's time and basis, and the mean
+    checks of every candidate (:meth:`SwitchThresholdChoice.summary_lines`). ``progress`` as for
+    :func:`validate_query_leaf`.
     """
     from drd_planner.data.dataset_cli import problem_domain
 
     if eta is not None and len(pseudo_counts) == 1:
-        return float(eta), pseudo_counts[0], f"eta {eta:g}, kappa {pseudo_counts[0]} (given)"
+        kappa = pseudo_counts[0]
+        return float(eta), kappa, f"eta {eta:g}, kappa {'none' if kappa is None else f'{kappa:g}'} (given)"
     choice = validate_query_leaf(
         problem,
         domain=problem_domain(problem),
         etas=DEFAULT_ETA_CANDIDATES if eta is None else (eta,),
         pseudo_counts=pseudo_counts,
         seed=seed,
+        progress=progress,
     )
-    note = choice.describe().replace("held-out training worlds", "held-out training worlds x random queries")
-    return choice.eta, choice.pseudo_count, note
+    return choice.eta, choice.pseudo_count, "\n".join(choice.summary_lines())
