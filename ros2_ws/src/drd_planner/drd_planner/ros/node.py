@@ -3,7 +3,8 @@
 Interface (DESIGN.md section 6; names relative to the node namespace):
 
 - subscriptions (after ``activate``): ``obstacles`` (MarkerArray), ``terrain`` (PointCloud2) and
-  ``robot_description`` (String, arm), all reliable + transient_local depth 1; requests ``goal_pose``
+  ``robot_description`` (String, arm), reliable depth 1, transient_local (``map_subscribe_transient_local``
+  true, the default) or volatile (false: hears volatile publishers too), with QoS override parameters; requests ``goal_pose``
   (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and ``goal_joints``
   (JointState, arm), reliable depth 10;
 - service ``get_plan`` (``nav_msgs/srv/GetPlan``): the same answer as a ``goal_pose`` request;
@@ -15,7 +16,8 @@ Interface (DESIGN.md section 6; names relative to the node namespace):
 Parameters: ``tree_paths`` (tree files or shipped tree names such as ``heli_wires``; one tree per
 goal), ``frame_id`` (planning frame), ``seed``, ``max_checks`` (0: no cap), ``goal_tolerance``
 (metres), ``joint_tolerance`` (radians), ``autostart`` (``planner_node`` configures and activates
-itself), ``replan_on_map_update``.
+itself), ``replan_on_map_update``, ``map_subscribe_transient_local``; each with its description and
+range (:mod:`drd_planner.ros.parameters`; ``planner_node --help`` lists them).
 
 Consistency. Maps and requests arrive in executor callbacks; topic requests are planned in the node's
 planning thread (:mod:`drd_planner.ros.plan_worker`), service calls in their callback, one plan at a
@@ -53,6 +55,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
@@ -88,6 +91,10 @@ __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+#: Map subscriptions with ``map_subscribe_transient_local`` false: hears volatile and latched publishers.
+VOLATILE_MAPS = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
 )
 #: Requests (topics and the service): reliable and deep enough that a burst reaches the node, which then
 #: coalesces it (with KEEP_LAST 10 the middleware would drop all but the last 10 unseen).
@@ -250,15 +257,22 @@ class PlannerNode(LifecycleNode):
         """Start the planning thread, subscribe to the maps and requests and offer ``get_plan``."""
         self._worker.start()
         report = self._report_error
+        maps = LATCHED if bool(self.get_parameter("map_subscribe_transient_local").value) else VOLATILE_MAPS
         topics = [
-            (MarkerArray, "obstacles", self._on_obstacles, LATCHED),
-            (PointCloud2, "terrain", self._on_terrain, LATCHED),
-            (String, "robot_description", self._on_robot_description, LATCHED),
+            (MarkerArray, "obstacles", self._on_obstacles, maps),
+            (PointCloud2, "terrain", self._on_terrain, maps),
+            (String, "robot_description", self._on_robot_description, maps),
             (PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS),
             (JointState, "goal_joints", self._on_goal_joints, REQUESTS),
         ]
         self._subs = [
-            self.create_subscription(kind, name, guard_callback(callback, name=name, report=report), qos)
+            self.create_subscription(
+                kind,
+                name,
+                guard_callback(callback, name=name, report=report),
+                qos,
+                qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+            )
             for kind, name, callback, qos in topics
         ]
         self._service = self.create_service(
@@ -266,6 +280,11 @@ class PlannerNode(LifecycleNode):
             "get_plan",
             guard_service(self._on_get_plan, name="get_plan", report=report),
             qos_profile=REQUESTS,
+        )
+        durability = "transient_local" if maps is LATCHED else "volatile"
+        self.get_logger().info(
+            f"active: maps on {', '.join(sub.topic_name for sub in self._subs[:3])} ({durability}); "
+            f"requests on {', '.join(sub.topic_name for sub in self._subs[3:])} and {self._service.srv_name}"
         )
         return TransitionCallbackReturn.SUCCESS
 

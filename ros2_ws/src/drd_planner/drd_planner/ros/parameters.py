@@ -130,6 +130,14 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         "autostart", False, "planner_node configures and activates itself at start.", read_only=True
     ),
     ParameterSpec(
+        "map_subscribe_transient_local",
+        True,
+        "Map subscriptions (obstacles, terrain, robot_description) ask for transient_local durability, so "
+        "they get a latched map published before the node started; false: volatile, which also hears "
+        "volatile publishers (most perception nodes, RViz tools) but no history. Read at activate; "
+        "qos_overrides.<topic>.subscription.* parameters tune depth, reliability and history.",
+    ),
+    ParameterSpec(
         "replan_on_map_update",
         True,
         "Re-check the published plan on every map update and replan (or withdraw it) when it is blocked.",
