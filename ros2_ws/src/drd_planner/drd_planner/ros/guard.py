@@ -49,18 +49,18 @@ def _report_safely(report: Report, text: str) -> None:
             pass
 
 
-def guard_callback(callback: Callable[[Any], None], *, name: str, report: Report) -> Callable[[Any], None]:
+def guard_callback(callback: Callable[..., None], *, name: str, report: Report) -> Callable[..., None]:
     """``callback`` (a subscription or timer callback) that reports any exception instead of raising it.
 
     Args:
-        callback: takes the message (or nothing for a timer: pass a one-argument wrapper).
+        callback: takes the message (a timer's: nothing); its arguments are passed through.
         name: the topic or timer, quoted in the report.
         report: the node's error reporter (log, ``/diagnostics``, history).
     """
 
-    def guarded(msg: Any) -> None:
+    def guarded(*args: Any) -> None:
         try:
-            callback(msg)
+            callback(*args)
         except Exception as exc:
             _report_safely(
                 report, f"{name}: internal error, input dropped (the node goes on): {_describe(exc)}"

@@ -40,6 +40,7 @@ import sys
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -86,6 +87,7 @@ from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
 from drd_planner.ros.parameters import PARAMETERS, declare_parameters, parameter_problems
 from drd_planner.ros.plan_worker import PlanWorker
+from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values, status_name
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
@@ -179,8 +181,13 @@ class PlannerNode(LifecycleNode):
         self._errors: list[str] = []
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
         self._library_markers: dict[tuple[str, Any], Any] = {}
+        self._last_plan: LastPlan | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        guard_change_state(self, report=self._report_error)
+        guard_change_state(self, report=self._reporter("node"))
+        self._heartbeat = self.create_timer(
+            HEARTBEAT_PERIOD_S,
+            guard_callback(self._on_heartbeat, name="heartbeat", report=self._reporter("node")),
+        )
 
     # ------------------------------------------------------------------------------------------------
     # Introspection (tests, diagnostics)
@@ -217,7 +224,7 @@ class PlannerNode(LifecycleNode):
         """Load the trees named in ``tree_paths``; any bad file fails the transition with its reason."""
         problems = parameter_problems({spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS})
         if problems:
-            self._report_error(f"configure: invalid parameters: {'; '.join(problems)}")
+            self._report_error(f"configure: invalid parameters: {'; '.join(problems)}", topic="node")
             return TransitionCallbackReturn.FAILURE
         names = [p for p in self.get_parameter("tree_paths").value if p]
         self._frame = str(self.get_parameter("frame_id").value)
@@ -225,7 +232,7 @@ class PlannerNode(LifecycleNode):
         tolerance = float(self.get_parameter("goal_tolerance").value)
         joint_tolerance = float(self.get_parameter("joint_tolerance").value)
         if not names:
-            self._report_error("configure: parameter tree_paths names no tree file")
+            self._report_error("configure: parameter tree_paths names no tree file", topic="node")
             return TransitionCallbackReturn.FAILURE
         sessions = []
         for name in names:
@@ -241,11 +248,13 @@ class PlannerNode(LifecycleNode):
                     )
                 )
             except DrdError as exc:
-                self._report_error(f"configure: {exc}")
+                self._report_error(f"configure: {exc}", topic="node")
                 return TransitionCallbackReturn.FAILURE
         margins = {s.margin for s in sessions}
         if len(margins) != 1:
-            self._report_error(f"configure: the trees use different collision margins {sorted(margins)}")
+            self._report_error(
+                f"configure: the trees use different collision margins {sorted(margins)}", topic="node"
+            )
             return TransitionCallbackReturn.FAILURE
         self._sessions = sessions
         self._obstacles, self._published, self._pending = {}, None, {}
@@ -256,24 +265,24 @@ class PlannerNode(LifecycleNode):
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start the planning thread, subscribe to the maps and requests and offer ``get_plan``."""
         self._worker.start()
-        report = self._report_error
+        report = self._reporter("plan")
         maps = LATCHED if bool(self.get_parameter("map_subscribe_transient_local").value) else VOLATILE_MAPS
         topics = [
-            (MarkerArray, "obstacles", self._on_obstacles, maps),
-            (PointCloud2, "terrain", self._on_terrain, maps),
-            (String, "robot_description", self._on_robot_description, maps),
-            (PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS),
-            (JointState, "goal_joints", self._on_goal_joints, REQUESTS),
+            (MarkerArray, "obstacles", self._on_obstacles, maps, "maps"),
+            (PointCloud2, "terrain", self._on_terrain, maps, "maps"),
+            (String, "robot_description", self._on_robot_description, maps, "maps"),
+            (PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS, "plan"),
+            (JointState, "goal_joints", self._on_goal_joints, REQUESTS, "plan"),
         ]
         self._subs = [
             self.create_subscription(
                 kind,
                 name,
-                guard_callback(callback, name=name, report=report),
+                guard_callback(callback, name=name, report=self._reporter(topic)),
                 qos,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             )
-            for kind, name, callback, qos in topics
+            for kind, name, callback, qos, topic in topics
         ]
         self._service = self.create_service(
             GetPlan,
@@ -327,18 +336,20 @@ class PlannerNode(LifecycleNode):
         try:
             update = obstacle_update(msg, frame_id=self._frame)
         except MessageError as exc:
-            self._report_error(f"obstacles refused, map unchanged: {exc}")
+            self._report_error(f"obstacles refused, map unchanged: {exc}", topic="maps")
             return
         self._obstacles = update.apply(self._obstacles)
-        self._set_snapshot(self._snapshot.with_obstacles({k: o.parts for k, o in self._obstacles.items()}))
+        self._set_snapshot(
+            self._snapshot.with_obstacles({k: o.parts for k, o in self._obstacles.items()}), "obstacles"
+        )
 
     def _on_terrain(self, msg: PointCloud2) -> None:
         try:
             terrain = heightfield_from_cloud(msg, frame_id=self._frame)
         except MessageError as exc:
-            self._report_error(f"terrain refused, map unchanged: {exc}")
+            self._report_error(f"terrain refused, map unchanged: {exc}", topic="maps")
             return
-        self._set_snapshot(self._snapshot.with_terrain(terrain))
+        self._set_snapshot(self._snapshot.with_terrain(terrain), "terrain")
 
     def _on_robot_description(self, msg: String) -> None:
         arms = [s for s in self._sessions if s.is_arm]
@@ -348,13 +359,12 @@ class PlannerNode(LifecycleNode):
         try:
             robot = arms[0].domain.robot_from_description(str(msg.data))  # type: ignore[attr-defined]
         except DrdError as exc:
-            self._report_error(f"robot_description refused, the arm model is unchanged: {exc}")
+            self._report_error(f"robot_description refused, the arm model is unchanged: {exc}", topic="maps")
             return
-        self._set_snapshot(self._snapshot.with_robot(robot))
-        self.get_logger().info(f"robot_description accepted: {robot.chain.robot_name}, {robot.dof} joints")
+        self._set_snapshot(self._snapshot.with_robot(robot), "robot_description")
 
-    def _set_snapshot(self, snapshot: MapSnapshot) -> None:
-        """Make ``snapshot`` current; the planning thread then re-checks the published plan against it.
+    def _set_snapshot(self, snapshot: MapSnapshot, source: str) -> None:
+        """Make ``snapshot`` (from a ``source`` message) current, log and report it; then re-check the plan.
 
         The wake-up is unconditional: a plan being made on an older snapshot right now is published
         after this, and must be re-checked against this map as well.
@@ -362,6 +372,21 @@ class PlannerNode(LifecycleNode):
         self._prepare(snapshot)
         self._snapshot = snapshot
         self._worker.wake()
+        values = map_values(snapshot)
+        self.get_logger().info(
+            f"{source} accepted: map version {snapshot.version} ("
+            + ", ".join(f"{k} {v}" for k, v in values.items() if k != "map_version")
+            + ")"
+        )
+        status = summary_status(
+            ok=True,
+            message=f"{source} accepted",
+            values={"source": source, **values},
+            name=status_name(self.get_name(), "maps"),
+            hardware_id=self.get_name(),
+            msgs=self._msgs,
+        )
+        self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
 
     def _prepare(self, snapshot: MapSnapshot) -> None:
         """Build the new maps' FCL scene and each tree's checker now, not in the next request.
@@ -514,7 +539,8 @@ class PlannerNode(LifecycleNode):
                         "selection_s": f"{outcome.select_ms / 1e3:.6f}",
                         "result": "plan_kept",
                     },
-                    name="drd_planner: map update",
+                    name=status_name(self.get_name(), "map update"),
+                    hardware_id=self.get_name(),
                     msgs=self._msgs,
                 )
                 self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
@@ -598,13 +624,22 @@ class PlannerNode(LifecycleNode):
             "policy_s": f"{seconds.get('policy', 0.0):.6f}",
             "prepare_s": f"{seconds.get('prepare', 0.0):.6f}",
             "total_s": f"{seconds.get('total', 0.0):.6f}",
+            "planning_time": f"{seconds.get('total', 0.0):.6f}",
             "wait_s": f"{wait_s:.6f}",
             "plan_messaging_s": f"{plan_messaging_s:.6f}",
             "messaging_s": f"{time.perf_counter() - started:.6f}",
             "result": result.status,
             **extra,
         }
-        status = summary_status(ok=result.ok, message=result.message, values=values, msgs=self._msgs)
+        status = summary_status(
+            ok=result.ok,
+            message=result.message,
+            values=values,
+            name=status_name(self.get_name(), "plan"),
+            hardware_id=self.get_name(),
+            msgs=self._msgs,
+        )
+        self._last_plan = LastPlan(str(result.status), str(extra.get("request", "request")), time.monotonic())
         self._diag_pub.publish(diagnostics_message([status], stamp=stamp, msgs=self._msgs))
         if result.ok:
             self.get_logger().info(f"{result.tree}: {result.message}")
@@ -690,6 +725,34 @@ class PlannerNode(LifecycleNode):
     def _on_worker_error(self, exc: Exception) -> None:
         self._report_error(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}")
 
+    def _reporter(self, topic: str) -> Callable[[str], None]:
+        """:meth:`_report_error` under the status ``topic``."""
+        return lambda text: self._report_error(text, topic)
+
+    def _on_heartbeat(self) -> None:
+        with self._lock:
+            pending = len(self._pending)
+            errors = len(self._errors)
+        values = heartbeat_values(
+            state=str(self._state_machine.current_state[1]),
+            snapshot=self._snapshot,
+            trees=len(self._sessions),
+            published=self._published is not None,
+            pending=pending,
+            errors=errors,
+            last=self._last_plan,
+            now=time.monotonic(),
+        )
+        status = summary_status(
+            ok=True,
+            message=f"{values['state']}, maps {'known' if values['maps_known'] else 'not received yet'}",
+            values=values,
+            name=status_name(self.get_name(), "heartbeat"),
+            hardware_id=self.get_name(),
+            msgs=self._msgs,
+        )
+        self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
+
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Refuse a runtime parameter change that fails its check (the old value stays), with the reason."""
         problems = parameter_problems({p.name: p.value for p in parameters})
@@ -699,13 +762,24 @@ class PlannerNode(LifecycleNode):
             return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
-    def _report_error(self, text: str) -> None:
-        """Log ``text`` (cut to :data:`~drd_planner.ros.guard.MAX_ERROR_CHARS`), keep it, put it on ``/diagnostics``."""
+    def _report_error(self, text: str, topic: str = "plan") -> None:
+        """Log ``text`` (cut to :data:`~drd_planner.ros.guard.MAX_ERROR_CHARS`), keep it, put it on ``/diagnostics``.
+
+        ``topic`` names the status (:func:`~drd_planner.ros.status.status_name`): ``plan`` for requests,
+        ``maps`` for map messages, ``node`` for configuration, lifecycle and internal errors.
+        """
         text = shorten(text)
         self.get_logger().error(text)
         with self._lock:
             self._errors = [*self._errors[-99:], text]
-        status = summary_status(ok=False, message=text, values={}, msgs=self._msgs)
+        status = summary_status(
+            ok=False,
+            message=text,
+            values={},
+            name=status_name(self.get_name(), topic),
+            hardware_id=self.get_name(),
+            msgs=self._msgs,
+        )
         self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
 
 
