@@ -454,3 +454,30 @@ def test_pseudo_count_without_training_worlds_is_refused(tmp_path: Path, bundle:
     )
     with pytest.raises(TreeFileError, match="training worlds"):
         save_tree(tmp_path / "bare.npz", bare)
+
+
+def test_brackets_inside_header_strings_are_not_nesting(tmp_path: Path, bundle: TreeBundle) -> None:
+    """The JSON depth limit counts arrays and objects, not brackets quoted in strings."""
+    text = '[{"quoted \\" [[[' + "[" * 500
+    provenance = {"note": text, "nested": [[[[[[1]]]]]], "seed": 2**63 - 1}
+    loaded = load_tree(save_tree(tmp_path / "t.npz", dataclasses.replace(bundle, provenance=provenance)))
+    assert loaded.provenance == provenance
+
+
+def test_library_paths_must_walk_from_start_to_goal(saved: Path) -> None:
+    """Issue 19 item 8: paths cut down to single edges (checksums recomputed) are refused."""
+    arrays = _read_npz(saved)
+    offsets = arrays["path_offsets"]
+    arrays["path_edges"] = arrays["path_edges"][offsets[1:] - 1].copy()  # each path's last edge only
+    arrays["path_offsets"] = np.arange(offsets.size, dtype=np.int64)
+    for name in ("vertex_paths", "vertex_offsets"):
+        arrays.pop(name, None)
+    lib = np.unique(arrays["path_edges"])
+    cols = np.searchsorted(arrays["library_edges"], lib)
+    free = np.unpackbits(arrays["world_free_bits"], axis=1, count=arrays["library_edges"].size)
+    arrays["world_free_bits"] = np.packbits(free[:, cols], axis=1)
+    arrays["library_edges"] = lib
+    arrays["free_fraction"] = arrays["free_fraction"][:, cols].copy()
+    _rechecksum(arrays)
+    _write_npz(saved, arrays)
+    _refused(saved, "inconsistent", "not a walk from the start vertex")

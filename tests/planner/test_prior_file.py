@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -93,8 +94,12 @@ def test_refusals_name_the_problem(prior: WorldPrior, tmp_path: Path) -> None:
         load_prior(path, expected_domain="helicopter")
     text = tmp_path / "text.npz"
     text.write_text("not a prior")
-    with pytest.raises(PriorFileError, match="not a readable prior or tree file"):
+    with pytest.raises(PriorFileError, match="not a readable prior or tree file") as info:
         load_prior(text)
+    assert "holds text starting 'not a prior'" in str(info.value)  # what was found instead of an .npz
+    assert "pickle" not in str(info.value)  # never numpy's advice to load pickles
+    with pytest.raises(PriorFileError, match="is a directory"):
+        load_tree_bundle(tmp_path)
     assert isinstance(PriorFileError("x"), TreeFileError)  # the node's existing catch still applies
 
 
@@ -130,3 +135,34 @@ def test_a_prior_without_worlds_cannot_be_saved(prior: WorldPrior, tmp_path: Pat
     legacy = WorldPrior(**{**prior.__dict__, "worlds": None})
     with pytest.raises(PriorFileError, match="without training worlds"):
         save_prior(tmp_path / "x.npz", legacy)
+
+
+def test_every_tree_of_a_prior_is_checked_as_a_walk(prior: WorldPrior, tmp_path: Path) -> None:
+    """A prior whose second tree's paths do not reach that tree's goal is refused, naming the tree."""
+    from drd_planner.data.npz_format import payload_digest
+
+    def moved_goal(header: dict[str, Any]) -> dict[str, Any]:
+        trees = [header["trees"][0], {**header["trees"][1], "goal": header["trees"][1]["goal"] + 1}]
+        edited = {**header, "trees": trees}
+        edited["payload_sha256"] = payload_digest(edited["array_sha256"], edited)  # as an attacker would
+        return edited
+
+    path = save_prior(tmp_path / "p.npz", prior)
+    bad = tmp_path / "bad.npz"
+    _rewrite(path, bad, moved_goal)
+    with pytest.raises(PriorFileError, match=r"tree 1: library path 0 is not a walk from the start vertex 3"):
+        load_prior(bad)
+
+
+def test_the_shipped_files_fit_the_read_limits_with_room() -> None:
+    """The size limits are generous: every shipped tree and dataset is far below each of them."""
+    from drd_planner.data import safe_npz
+
+    for path in sorted((REPO / "trees").glob("*.npz")) + sorted((REPO / "datasets").glob("*.npz")):
+        with zipfile.ZipFile(path) as zf:
+            infos = zf.infolist()
+        assert path.stat().st_size * 10 < safe_npz.MAX_FILE_BYTES
+        assert sum(i.file_size for i in infos) * 10 < safe_npz.MAX_TOTAL_BYTES
+        assert max(i.file_size for i in infos) * 10 < safe_npz.MAX_MEMBER_BYTES
+        assert max(i.file_size / i.compress_size for i in infos) * 5 < safe_npz.MAX_COMPRESSION_RATIO
+        assert len(infos) * 10 < safe_npz.MAX_MEMBERS

@@ -39,3 +39,15 @@ def test_unknown_names_say_where_they_were_looked_for(tmp_path: Path) -> None:
         resolve_tree_path(str(tmp_path / "sub" / "missing.npz"))
     with pytest.raises(DrdError, match=r"nothing\.mcap"):
         resolve_bag_path("nothing")
+
+
+def test_a_directory_is_not_reported_missing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 19 item 14: a directory given as a tree is called a directory, not "does not exist"."""
+    folder = tmp_path / "sub"
+    folder.mkdir()
+    with pytest.raises(TreeFileError, match="is a directory, not a tree file") as info:
+        resolve_tree_path(str(folder))
+    assert "does not exist" not in str(info.value)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TreeFileError, match="sub is a directory"):
+        resolve_tree_path("sub")

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import signal
 import subprocess
 import sys
 import time
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -120,6 +122,67 @@ def test_bad_tree_file_fails_configure_and_the_node_stays_up(context: Any, tmp_p
         assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
         assert any("not a readable prior or tree file" in e for e in node.errors)
         assert node._state_machine.current_state[1] == "unconfigured"
+        node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+    finally:
+        node.destroy_node()
+
+
+def _crafted_trees(folder: Path) -> dict[str, Path]:
+    """Hostile variants of the shipped tree (issue 19 item 7), checksums recomputed where they matter."""
+    from drd_planner.data.npz_format import array_digest, payload_digest
+
+    with np.load(TREE, allow_pickle=False) as archive:
+        arrays = {k: archive[k] for k in archive.files}
+    header = json.loads(arrays.pop("header").tobytes().decode())
+    out: dict[str, Path] = {}
+    deep = '{"format": "drd_planner.tree", "x": ' + "[" * 100_000 + "]" * 100_000 + "}"
+    out["nested"] = folder / "deep.npz"
+    np.savez(out["nested"], header=np.frombuffer(deep.encode(), dtype=np.uint8))
+    # Library paths cut to their last edge: each ends at the goal, 650 m from the start.
+    offsets = arrays["path_offsets"]
+    last = arrays["path_edges"][offsets[1:] - 1]
+    lib = np.unique(last)
+    cols = np.searchsorted(arrays["library_edges"], lib)
+    free = np.unpackbits(arrays["world_free_bits"], axis=1, count=arrays["library_edges"].size)
+    cut = {k: v for k, v in arrays.items() if k not in ("vertex_paths", "vertex_offsets")}
+    cut.update(
+        path_edges=last,
+        path_offsets=np.arange(last.size + 1, dtype=np.int64),
+        library_edges=lib,
+        free_fraction=np.ascontiguousarray(arrays["free_fraction"][:, cols]),
+        world_free_bits=np.packbits(free[:, cols], axis=1),
+    )
+    digests = {k: array_digest(k, v) for k, v in cut.items()}
+    fields = {**header, "array_sha256": digests}
+    fields["payload_sha256"] = payload_digest(digests, fields)
+    out["not a walk"] = folder / "single_edges.npz"
+    np.savez(out["not a walk"], header=np.frombuffer(json.dumps(fields).encode(), dtype=np.uint8), **cut)
+    # Every member flagged as encrypted (zipfile would raise RuntimeError).
+    data = bytearray(TREE.read_bytes())
+    with zipfile.ZipFile(TREE) as zf:
+        for info in zf.infolist():
+            data[info.header_offset + 6] |= 1
+    central = data.index(b"PK\x01\x02")
+    while central >= 0:
+        data[central + 8] |= 1
+        central = data.find(b"PK\x01\x02", central + 4)
+    out["encrypted"] = folder / "encrypted.npz"
+    out["encrypted"].write_bytes(bytes(data))
+    out["is a directory"] = folder / "a_folder"
+    out["is a directory"].mkdir()
+    return out
+
+
+def test_crafted_tree_files_fail_configure_with_their_reason(context: Any, tmp_path: Path) -> None:
+    """Issue 19 item 7: a hostile tree never escapes configure as a traceback; its reason is logged."""
+    node = _node(context, [str(TREE)])
+    try:
+        for reason, path in _crafted_trees(tmp_path).items():
+            node.set_parameters([Parameter("tree_paths", value=[str(path)])])
+            assert node.trigger_configure() == TransitionCallbackReturn.FAILURE, reason
+            assert reason in node.errors[-1] and path.name in node.errors[-1], node.errors[-1]
+            assert node._state_machine.current_state[1] == "unconfigured"
         node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
     finally:

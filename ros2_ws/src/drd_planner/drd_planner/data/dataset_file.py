@@ -1,6 +1,6 @@
 """The dataset file: a database of sampled worlds for one domain, and how it was made (DESIGN.md section 4).
 
-Format: a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`; read with ``allow_pickle=False``)
+Format: a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`; read by :mod:`drd_planner.data.safe_npz`)
 with a JSON header (format name and version, software version, domain name and spec, world model and
 its parameters, base seed, how edges were checked, provenance, sizes, checksums) and these arrays:
 
@@ -44,6 +44,7 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
+from drd_planner.data.safe_npz import refusing
 from drd_planner.exceptions import DatasetError, DrdError
 
 __all__ = [
@@ -312,12 +313,13 @@ def load_dataset(path: str | Path) -> Dataset:
     for a, b in _PAIRS:
         if (a in arrays) != (b in arrays):
             raise DatasetError(f"{src}: arrays {a!r} and {b!r} must be stored together")
-    try:
-        return _dataset_from(arrays, header)
-    except DatasetError as exc:
-        raise DatasetError(f"{src} is inconsistent: {exc}") from exc
-    except (DrdError, KeyError, TypeError, ValueError, IndexError) as exc:
-        raise DatasetError(f"{src} is inconsistent: {type(exc).__name__}: {exc}") from exc
+    with refusing(DatasetError, src, "dataset file"):  # the last line of defence: nothing else escapes
+        try:
+            return _dataset_from(arrays, header)
+        except DatasetError as exc:
+            raise DatasetError(f"{src} is inconsistent: {exc}") from exc
+        except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+            raise DatasetError(f"{src} is inconsistent: {type(exc).__name__}: {exc}") from exc
 
 
 def _unpack(packed: npt.NDArray[np.uint8], rows: int, cols: int, what: str) -> BoolArray:

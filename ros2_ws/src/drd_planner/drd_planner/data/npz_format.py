@@ -3,7 +3,8 @@
 The layout follows the tree file (:mod:`drd_planner.data.tree_file`): a zip of ``.npy`` members, one of
 them ``header``, a uint8 array of UTF-8 JSON holding the format name and version, free header fields, a
 SHA-256 per array (``array_sha256``) and a SHA-256 over all array digests and header fields
-(``payload_sha256``). Reading uses ``numpy.load(..., allow_pickle=False)``, so it never executes code.
+(``payload_sha256``). Reading goes through :mod:`drd_planner.data.safe_npz` (never a pickle, every size checked before it
+is allocated), so a crafted file is refused with one clear error and never executes code.
 
 Two extras over ``numpy.savez_compressed``: members carry a fixed timestamp and are written in sorted
 order, so equal contents give byte-identical files; and files are written to a temporary name and
@@ -15,9 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import struct
 import zipfile
-import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -25,29 +24,20 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.data.safe_npz import (
+    DEFAULT_LIMITS,
+    NpzLimits,
+    parse_json_header,
+    read_npz_arrays,
+    refusing,
+    short,
+)
 from drd_planner.exceptions import DrdError
 
 __all__ = ["array_digest", "payload_digest", "read_checked_npz", "write_checked_npz"]
 
 _ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
 _DIGEST_FIELDS = ("array_sha256", "payload_sha256")
-#: What a damaged zip or npy member can raise inside ``numpy.load`` and ``zipfile``.
-_READ_ERRORS = (
-    OSError,
-    ValueError,
-    TypeError,
-    SyntaxError,
-    EOFError,
-    KeyError,
-    IndexError,
-    MemoryError,
-    OverflowError,
-    NotImplementedError,
-    RuntimeError,
-    struct.error,
-    zipfile.BadZipFile,
-    zlib.error,
-)
 
 
 def array_digest(name: str, arr: npt.NDArray[Any]) -> str:
@@ -132,54 +122,53 @@ def read_checked_npz(
     path: str | Path,
     *,
     format_name: str,
-    format_version: int,
+    format_version: int | tuple[int, ...],
     error: type[DrdError],
     what: str,
+    limits: NpzLimits = DEFAULT_LIMITS,
 ) -> tuple[dict[str, Any], dict[str, npt.NDArray[Any]]]:
-    """Read and verify a file written by :func:`write_checked_npz`.
+    """Read and verify a file written by :func:`write_checked_npz` (or a tree file, same layout).
+
+    Reading goes through :mod:`drd_planner.data.safe_npz`: sizes, shapes and dtypes are checked before
+    anything is inflated or allocated, and the JSON header is parsed within limits.
 
     Args:
         path: the file.
         format_name: the expected ``header["format"]``.
-        format_version: the only ``header["format_version"]`` accepted.
+        format_version: the ``header["format_version"]`` accepted, or a tuple of them.
         error: exception class raised on any refusal.
         what: the file kind for messages ("dataset file", ...).
+        limits: the size limits (the module constants of :mod:`~drd_planner.data.safe_npz` by default).
 
     Returns:
         ``(header, arrays)``: the header dict (digests included) and every array but the header.
 
     Raises:
-        error: missing, unreadable, not this format, another version, or a checksum mismatch (the
-            message says which).
+        error: missing, a directory, unreadable, beyond the limits, not this format, another version,
+            or a checksum mismatch (the message names the file and says which); never anything else.
     """
+    versions = (format_version,) if isinstance(format_version, int) else format_version
+    contents = read_npz_arrays(path, error=error, what=what, limits=limits)
     src = Path(path)
-    if not src.is_file():
-        raise error(f"{what} not found: {src}")
-    try:
-        with np.load(src, allow_pickle=False) as archive:
-            contents = {k: archive[k] for k in archive.files}
-    except _READ_ERRORS as exc:
-        raise error(f"{src} is not a readable {what} (corrupt or truncated: {exc})") from exc
-    if "header" not in contents:
-        raise error(f"{src} has no header: not a drd_planner {what}")
-    raw = contents.pop("header")
-    try:
-        if raw.dtype != np.uint8 or raw.ndim != 1:
-            raise ValueError("header is not a byte string")
-        header = json.loads(raw.tobytes().decode())
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise error(f"{src}: the header is corrupt ({exc})") from exc
-    if not isinstance(header, dict) or header.get("format") != format_name:
-        raise error(f"{src} is not a drd_planner {what} (format {format_name!r} expected)")
-    version = header.get("format_version")
-    if version != format_version:
-        raise error(f"{src} has {what} format version {version}; this build reads version {format_version}")
-    digests = header.get("array_sha256")
-    if not isinstance(digests, dict) or set(digests) != set(contents):
-        raise error(f"{src} is corrupt: its arrays do not match the header's list")
-    for name, arr in contents.items():
-        if array_digest(name, arr) != digests[name]:
-            raise error(f"{src} is corrupt: checksum mismatch in array {name!r}")
-    if payload_digest(digests, header) != header.get("payload_sha256"):
-        raise error(f"{src} is corrupt: payload checksum mismatch (header fields were changed)")
+    with refusing(error, src, what):
+        if "header" not in contents:
+            raise error(f"{src} has no header: not a drd_planner {what}")
+        header = parse_json_header(contents.pop("header"), error=error, src=src, limits=limits)
+        if not isinstance(header, dict) or header.get("format") != format_name:
+            raise error(f"{src} is not a drd_planner {what} (format {format_name!r} expected)")
+        version = header.get("format_version")
+        if type(version) is not int or version not in versions:
+            readable = ", ".join(str(v) for v in versions)
+            raise error(
+                f"{src} has {what} format version {short(version, 40)}; this build reads "
+                f"{'version' if len(versions) == 1 else 'versions'} {readable}"
+            )
+        digests = header.get("array_sha256")
+        if not isinstance(digests, dict) or set(digests) != set(contents):
+            raise error(f"{src} is corrupt: its arrays do not match the header's list")
+        for name, arr in contents.items():
+            if array_digest(name, arr) != digests[name]:
+                raise error(f"{src} is corrupt: checksum mismatch in array {name!r}")
+        if payload_digest(digests, header) != header.get("payload_sha256"):
+            raise error(f"{src} is corrupt: payload checksum mismatch (header fields were changed)")
     return header, contents

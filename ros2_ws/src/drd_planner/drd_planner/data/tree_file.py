@@ -1,10 +1,14 @@
 """The decision-tree file: everything the planner needs online, nothing it must recompute.
 
-Format: a NumPy ``.npz`` archive read with ``allow_pickle=False`` (loading never executes code).
-It holds plain numeric arrays plus ``header``, a uint8 array of UTF-8 JSON with the format name
-and version, the domain, parameters, provenance, and a SHA-256 per array and over the whole
-payload. A file that is corrupt, of another format version, or built for another domain is refused
-with a :class:`TreeFileError` that says which.
+Format: a NumPy ``.npz`` archive read by :mod:`drd_planner.data.safe_npz` (never a pickle; sizes,
+shapes and dtypes checked before anything is unpacked or allocated). It holds plain numeric arrays plus
+``header``, a uint8 array of UTF-8 JSON with the format name and version, the domain, parameters,
+provenance, and a SHA-256 per array and over the whole payload. Since anyone who edits a file can
+recompute those, the contents are validated too (:mod:`drd_planner.data.content_checks`,
+:mod:`drd_planner.data.spec_limits`): finite bounded values, every index in range, library paths that
+walk from the start to the goal, a domain spec that rebuilds within budget. A file that is corrupt,
+crafted, of another format version, or built for another domain is refused with one
+:class:`TreeFileError` that names the file and says what is wrong.
 
 Arrays: graph (``edges`` (E, 2), ``lengths`` (E,), optional ``vertex_states`` (V, d)), edge
 ``costs`` (E,), library (``path_edges`` concatenated with ``path_offsets`` (m + 1,), optional
@@ -21,7 +25,6 @@ from __future__ import annotations
 import io
 import itertools
 import json
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,7 +38,22 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
-from drd_planner.data.npz_format import array_digest, payload_digest
+from drd_planner.data.content_checks import (
+    MAX_VERTICES,
+    MAX_WORLD_OUTCOMES,
+    check_bits,
+    check_graph_arrays,
+    check_tree_arrays,
+    check_walks,
+    header_dict,
+    header_fraction,
+    header_int,
+    header_number,
+    header_text,
+)
+from drd_planner.data.npz_format import array_digest, payload_digest, read_checked_npz
+from drd_planner.data.safe_npz import refusing, short
+from drd_planner.data.spec_limits import check_domain_spec
 from drd_planner.exceptions import DrdError, TreeFileError
 
 FORMAT_NAME = "drd_planner.tree"
@@ -64,6 +82,8 @@ _OPTIONAL = {
     "world_free_bits": np.uint8,
     "world_weights": np.float64,
 }
+#: Largest pseudo count (kappa) of the posterior leaf, in worlds.
+MAX_PSEUDO_COUNT = 1e9
 #: dtype of every array a tree file may hold (the prior file stores each of its trees with the same dtypes).
 ARRAY_DTYPES: dict[str, npt.DTypeLike] = {**_REQUIRED, **_OPTIONAL}
 
@@ -160,54 +180,38 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
 def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBundle:
     """Read and verify a tree file.
 
+    Everything is checked before planning may use it, since a crafted file recomputes its checksums:
+    sizes before reading (:mod:`~drd_planner.data.safe_npz`), header fields, finite bounded values,
+    every index, library paths that walk from the start to the goal, and a sane domain spec
+    (:mod:`~drd_planner.data.content_checks`, :mod:`~drd_planner.data.spec_limits`).
+
     Raises:
-        TreeFileError: missing, unreadable, corrupt (checksum), other format or version, or built
-            for another domain than ``expected_domain``.
+        TreeFileError: missing, a directory, unreadable, beyond the size limits, corrupt (checksum),
+            other format or version, built for another domain than ``expected_domain``, or
+            inconsistent; the message names the file and what is wrong. Nothing else escapes.
     """
     src = Path(path)
-    if not src.is_file():
-        raise TreeFileError(f"tree file not found: {src}")
-    try:
-        with np.load(src, allow_pickle=False) as archive:
-            contents = {k: archive[k] for k in archive.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise TreeFileError(f"{src} is not a readable tree file ({exc})") from exc
-    if "header" not in contents:
-        raise TreeFileError(f"{src} has no header: not a drd_planner tree file")
-    try:
-        header = json.loads(contents.pop("header").tobytes().decode())
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise TreeFileError(f"{src}: the header is corrupt ({exc})") from exc
-    if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
-        raise TreeFileError(f"{src} is not a drd_planner tree file")
-    version = header.get("format_version")
-    if version not in READABLE_VERSIONS:
-        raise TreeFileError(
-            f"{src} has tree format version {version}; this build reads versions "
-            f"{', '.join(str(v) for v in READABLE_VERSIONS)}"
-        )
-    digests = header.get("array_sha256")
-    if not isinstance(digests, dict) or set(digests) != set(contents):
-        raise TreeFileError(f"{src} is corrupt: its arrays do not match the header's list")
-    for name, arr in contents.items():
-        if array_digest(name, arr) != digests[name]:
-            raise TreeFileError(f"{src} is corrupt: checksum mismatch in array {name!r}")
-    if payload_digest(digests, header) != header.get("payload_sha256"):
-        raise TreeFileError(f"{src} is corrupt: payload checksum mismatch")
-    missing = [k for k in _REQUIRED if k not in contents]
-    if missing:
-        raise TreeFileError(f"{src} lacks required arrays: {', '.join(missing)}")
-    for name, arr in contents.items():
-        want = {**_REQUIRED, **_OPTIONAL}.get(name)
-        if want is None or arr.dtype != np.dtype(want):
-            raise TreeFileError(f"{src}: array {name!r} has unexpected dtype {arr.dtype}")
-    domain = str(header.get("domain"))
-    if expected_domain is not None and domain != expected_domain:
-        raise TreeFileError(f"{src} was built for domain {domain!r}, not {expected_domain!r}")
-    try:
-        return _bundle_from(contents, header)
-    except (DrdError, KeyError, TypeError, ValueError, IndexError) as exc:
-        raise TreeFileError(f"{src} is inconsistent: {exc}") from exc
+    header, contents = read_checked_npz(
+        src, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS, error=TreeFileError, what="tree file"
+    )
+    with refusing(TreeFileError, src, "tree file"):
+        missing = [k for k in _REQUIRED if k not in contents]
+        if missing:
+            raise TreeFileError(f"{src} lacks required arrays: {', '.join(missing)}")
+        for name, arr in contents.items():
+            want = ARRAY_DTYPES.get(name)
+            if want is None or arr.dtype != np.dtype(want):
+                raise TreeFileError(f"{src}: array {name!r} has unexpected dtype {arr.dtype}")
+        for a, b in (("vertex_paths", "vertex_offsets"), ("world_weights", "world_free_bits")):
+            if a in contents and b not in contents:
+                raise TreeFileError(f"{src}: array {a!r} needs {b!r}")
+        domain = header.get("domain")
+        if expected_domain is not None and domain != expected_domain:
+            raise TreeFileError(f"{src} was built for domain {short(domain, 60)!r}, not {expected_domain!r}")
+        try:
+            return _bundle_from(contents, header)
+        except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+            raise TreeFileError(f"{src} is inconsistent: {short(exc, 400)}") from exc
 
 
 def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
@@ -234,46 +238,53 @@ def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
 
 
 def _split(flat: npt.NDArray[np.int64], offsets: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
-    if offsets.ndim != 1 or offsets[0] != 0 or offsets[-1] != flat.size or np.any(np.diff(offsets) < 0):
+    if (
+        offsets.ndim != 1
+        or offsets.size < 2
+        or offsets[0] != 0
+        or offsets[-1] != flat.size
+        or np.any(np.diff(offsets) < 0)
+    ):
         raise ValueError("path offsets do not partition the concatenated paths")
-    return tuple(flat[a:b] for a, b in itertools.pairwise(offsets))
+    return tuple(flat[a:b] for a, b in itertools.pairwise(offsets.tolist()))
 
 
 def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> TreeBundle:
-    graph = ExplicitGraph(
-        c["edges"],
-        c["lengths"],
-        int(header["num_vertices"]),
-        bool(header["directed"]),
-        c.get("vertex_states"),
+    num_vertices = header_int(header, "num_vertices", low=1, high=MAX_VERTICES)
+    directed = header.get("directed")
+    if not isinstance(directed, bool):
+        raise ValueError(f"header field 'directed' must be true or false, got {directed!r}")
+    metadata = header_dict(header, "problem_metadata")
+    domain = header_text(header, "domain")
+    check_graph_arrays(c["edges"], c["lengths"], c["costs"], c.get("vertex_states"), num_vertices)
+    check_domain_spec(
+        domain,
+        metadata.get("domain_spec"),
+        num_edges=int(c["edges"].shape[0]),
+        mean_edge_length=float(c["lengths"].mean()),
     )
+    graph = ExplicitGraph(c["edges"], c["lengths"], num_vertices, directed, c.get("vertex_states"))
+    path_edges = _split(c["path_edges"], c["path_offsets"])
     vertex_paths = None
     if "vertex_paths" in c:
         vertex_paths = _split(c["vertex_paths"], c["vertex_offsets"])
-    library = PathLibrary(_split(c["path_edges"], c["path_offsets"]), graph.num_edges, vertex_paths)
+    library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
+    start = header_int(header, "start", low=0, high=num_vertices - 1)
+    goal = header_int(header, "goal", low=0, high=num_vertices - 1)
+    check_walks(graph, library.path_edges, start, goal, vertex_paths)
     problem = Problem(
-        name=str(header["name"]),
+        name=header_text(header, "name"),
         library=library,
         edge_costs=c["costs"],
         graph=graph,
-        start=header["start"],
-        goal=header["goal"],
-        metadata=dict(header.get("problem_metadata") or {}),
+        start=start,
+        goal=goal,
+        metadata=dict(metadata),
     )
-    n_nodes = c["node_edge"].shape[0]
-    children = c["node_children"]
-    if children.shape != (n_nodes, 2) or children.max(initial=-1) >= n_nodes or children.min(initial=-1) < -1:
-        raise ValueError("node children do not index the node table")
-    edge = c["node_edge"]
-    if edge.max(initial=-1) >= graph.num_edges or edge.min(initial=-1) < -1:
-        raise ValueError("node edges do not index the graph")
-    if c["free_fraction"].shape != (n_nodes, c["library_edges"].size):
-        raise ValueError("leaf bias table has the wrong shape")
-    if c["node_best_path"].max(initial=-1) >= library.num_paths:
-        raise ValueError("best paths do not index the library")
+    check_tree_arrays(c, graph.num_edges, library.num_paths, library.library_edges)
     tree = DecisionTree(
-        edge=edge,
-        children=children,
+        edge=c["node_edge"],
+        children=c["node_children"],
         num_active=c["node_num_active"],
         active_fraction=c["node_active_fraction"],
         library_edges=c["library_edges"],
@@ -281,21 +292,21 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
         best_path=c["node_best_path"],
         num_edges=graph.num_edges,
         num_paths=library.num_paths,
-        info=dict(header.get("tree_info") or {}),
+        info=header_dict(header, "tree_info"),
         world_free=_world_free(c, header),
         world_weights=c.get("world_weights"),
     )
-    kappa = header.get("pseudo_count")
-    if kappa is not None and (tree.world_free is None or not float(kappa) > 0):
-        raise ValueError("pseudo_count is set but the file has no training worlds, or it is not positive")
+    kappa = header_number(header, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True)
+    if kappa is not None and tree.world_free is None:
+        raise ValueError("pseudo_count is set but the file has no training worlds")
     return TreeBundle(
         problem=problem,
         tree=tree,
-        domain=str(header["domain"]),
-        eta=float(header["eta"]),
-        alpha=float(header["alpha"]),
-        pseudo_count=None if kappa is None else float(kappa),
-        provenance=dict(header.get("provenance") or {}),
+        domain=domain,
+        eta=header_fraction(header, "eta"),
+        alpha=header_fraction(header, "alpha"),
+        pseudo_count=kappa,
+        provenance=header_dict(header, "provenance"),
     )
 
 
@@ -307,12 +318,11 @@ def _world_free(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> npt.N
         return None
     bits = c["world_free_bits"]
     k = c["library_edges"].size
-    n = header.get("num_train_worlds")
-    if bits.ndim != 2 or not isinstance(n, int) or bits.shape != (n, (k + 7) // 8):
-        raise ValueError("world_free_bits has the wrong shape for the library and num_train_worlds")
+    n = header_int(header, "num_train_worlds", low=1, high=MAX_WORLD_OUTCOMES)
+    check_bits(bits, n, k, "world_free_bits")
     weights = c.get("world_weights")
     if weights is not None and (
-        weights.shape != (n,) or np.any(weights < 0) or not np.all(np.isfinite(weights))
+        weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights < 0)
     ):
         raise ValueError("world_weights must be n finite non-negative values")
-    return np.unpackbits(bits, axis=1, count=k).astype(bool)
+    return np.unpackbits(bits, axis=1, count=k).view(np.bool_)

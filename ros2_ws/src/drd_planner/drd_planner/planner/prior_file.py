@@ -1,7 +1,8 @@
 """The world-prior file: one graph, its training worlds over every edge, and zero or more trees.
 
 Format ``drd_planner.prior`` version 1: a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`;
-read with ``allow_pickle=False``, so loading never executes code) with a JSON header (name, domain
+read by :mod:`drd_planner.data.safe_npz`, so loading never executes code and checks every size before
+it allocates) with a JSON header (name, domain
 and its spec, check metadata, switch threshold eta, alpha, kappa, online-library settings, one entry
 per tree with its name, start, goal and build info, provenance, SHA-256 digests) and these arrays:
 
@@ -25,11 +26,15 @@ t<i>_free_fraction float32  (N, K) leaf bias over ``t<i>_library_edges`` int64 (
 Tree files (``drd_planner.tree``, versions 1 and 2, as ``drd build-tree`` wrote them before) load as
 a prior with one tree and no worlds over the other edges: they plan their own query only, and any
 other query is refused with the command that rebuilds them.
+
+Loading validates what planning needs, not only the checksums a crafted file can recompute: header
+fields in range, finite bounded arrays, every index, each tree's library paths as walks from its start to
+its goal, and a domain spec within budget (:mod:`drd_planner.data.content_checks`,
+:mod:`drd_planner.data.spec_limits`); every refusal is one :class:`PriorFileError`.
 """
 
 from __future__ import annotations
 
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -40,11 +45,34 @@ from drd_planner import __version__
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import DecisionTree
+from drd_planner.data.content_checks import (
+    MAX_COORDINATE_M,
+    MAX_VERTICES,
+    MAX_WORLD_OUTCOMES,
+    check_bits,
+    check_graph_arrays,
+    check_tree_arrays,
+    check_walks,
+    header_dict,
+    header_fraction,
+    header_int,
+    header_number,
+    header_text,
+)
 from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
+from drd_planner.data.safe_npz import (
+    MAX_JSON_INT,
+    check_source,
+    parse_json_header,
+    read_npz_arrays,
+    refusing,
+    short,
+)
+from drd_planner.data.spec_limits import check_domain_spec
 from drd_planner.data.tree_file import ARRAY_DTYPES as TREE_DTYPES
 from drd_planner.data.tree_file import FORMAT_NAME as TREE_FORMAT_NAME
-from drd_planner.data.tree_file import TreeBundle, load_tree
+from drd_planner.data.tree_file import MAX_PSEUDO_COUNT, TreeBundle, load_tree
 from drd_planner.exceptions import DrdError, PriorFileError
 from drd_planner.planner.prior import QueryTree, WorldPrior
 
@@ -52,6 +80,14 @@ __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "load_prior", "load_tree_bundle", "s
 
 FORMAT_NAME = "drd_planner.prior"
 FORMAT_VERSION = 1
+
+MAX_TREES = 1000
+"""Most precomputed trees one prior file may hold (one per query; ``drd build-tree`` adds one at a time)."""
+
+MAX_LIBRARY_PATHS = 1_000_000
+"""Largest ``max_paths`` (m of the libraries built online; the default is 500)."""
+
+_WHAT = "prior or tree file"
 
 #: The arrays of one tree (library and nodes) and their dtypes, as in a tree file.
 _NODE_ARRAYS: dict[str, npt.DTypeLike] = {
@@ -142,15 +178,10 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
 
 def _file_format(src: Path) -> str | None:
     """The ``format`` field of a drd_planner ``.npz`` header, or None when it cannot be read."""
-    import json
-
     try:
-        with np.load(src, allow_pickle=False) as archive:
-            if "header" not in archive.files:
-                return None
-            raw = archive["header"]
-        header = json.loads(raw.tobytes().decode())
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError, UnicodeDecodeError, KeyError):
+        raw = read_npz_arrays(src, error=PriorFileError, what=_WHAT, names=("header",))["header"]
+        header = parse_json_header(raw, error=PriorFileError, src=src)
+    except (DrdError, KeyError):
         return None
     value = header.get("format") if isinstance(header, dict) else None
     return value if isinstance(value, str) else None
@@ -159,35 +190,34 @@ def _file_format(src: Path) -> str | None:
 def load_prior(path: str | Path, *, expected_domain: str | None = None) -> WorldPrior:
     """Read and verify a prior file, or a tree file as a prior with one tree.
 
+    Everything is checked before planning may use it, since a crafted file recomputes its checksums:
+    sizes before reading (:mod:`~drd_planner.data.safe_npz`), header fields, finite bounded values,
+    every index, library paths that walk from each tree's start to its goal, and a sane domain spec.
+
     Raises:
-        PriorFileError: missing, unreadable, corrupt (checksum), another format or version, built for
-            another domain than ``expected_domain``, or internally inconsistent (the message says which).
+        PriorFileError: missing, a directory, not an ``.npz`` file, beyond the size limits, corrupt
+            (checksum), another format or version, built for another domain than ``expected_domain``,
+            or internally inconsistent; the message names the file and says which. Nothing else escapes.
     """
-    src = Path(path)
-    if src.is_dir():
-        raise PriorFileError(f"{src} is a directory, not a prior file")
-    if src.is_file() and _file_format(src) == TREE_FORMAT_NAME:
+    src = check_source(path, error=PriorFileError, what=_WHAT)
+    if _file_format(src) == TREE_FORMAT_NAME:
         try:
             bundle = load_tree(src, expected_domain=expected_domain)
         except DrdError as exc:
             raise PriorFileError(str(exc)) from exc
-        return prior_from_bundle(bundle)
+        with refusing(PriorFileError, src, _WHAT):
+            return prior_from_bundle(bundle)
     header, arrays = read_checked_npz(
-        src,
-        format_name=FORMAT_NAME,
-        format_version=FORMAT_VERSION,
-        error=PriorFileError,
-        what="prior or tree file",
+        src, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, error=PriorFileError, what=_WHAT
     )
-    domain = str(header.get("domain"))
-    if expected_domain is not None and domain != expected_domain:
-        raise PriorFileError(f"{src} was built for domain {domain!r}, not {expected_domain!r}")
-    try:
-        return _prior_from(header, arrays)
-    except PriorFileError as exc:
-        raise PriorFileError(f"{src} is inconsistent: {exc}") from exc
-    except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
-        raise PriorFileError(f"{src} is inconsistent: {exc}") from exc
+    with refusing(PriorFileError, src, _WHAT):
+        domain = header.get("domain")
+        if expected_domain is not None and domain != expected_domain:
+            raise PriorFileError(f"{src} was built for domain {short(domain, 60)!r}, not {expected_domain!r}")
+        try:
+            return _prior_from(header, arrays)
+        except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+            raise PriorFileError(f"{src} is inconsistent: {short(exc, 400)}") from exc
 
 
 def _array(arrays: dict[str, npt.NDArray[Any]], name: str, dtype: npt.DTypeLike) -> npt.NDArray[Any]:
@@ -202,94 +232,95 @@ def _array(arrays: dict[str, npt.NDArray[Any]], name: str, dtype: npt.DTypeLike)
 
 
 def _prior_from(header: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> WorldPrior:
-    graph = ExplicitGraph(
-        _array(arrays, "edges", np.int64),
-        _array(arrays, "lengths", np.float64),
-        int(header["num_vertices"]),
-        bool(header["directed"]),
-        _array(arrays, "vertex_states", np.float64) if "vertex_states" in arrays else None,
-    )
+    num_vertices = header_int(header, "num_vertices", low=1, high=MAX_VERTICES)
+    directed = header.get("directed")
+    if not isinstance(directed, bool):
+        raise PriorFileError(f"header field 'directed' must be true or false, got {short(directed, 40)}")
+    domain = header_text(header, "domain")
+    spec = header_dict(header, "domain_spec")
+    edges = _array(arrays, "edges", np.int64)
+    lengths = _array(arrays, "lengths", np.float64)
+    costs = _array(arrays, "costs", np.float64)
+    states = _array(arrays, "vertex_states", np.float64) if "vertex_states" in arrays else None
+    check_graph_arrays(edges, lengths, costs, states, num_vertices)
+    check_domain_spec(domain, spec, num_edges=int(edges.shape[0]), mean_edge_length=float(lengths.mean()))
+    graph = ExplicitGraph(edges, lengths, num_vertices, directed, states)
     num_edges = graph.num_edges
-    n = int(header["num_worlds"])
+    n = header_int(header, "num_worlds", low=1, high=MAX_WORLD_OUTCOMES)
     bits = _array(arrays, "worlds_bits", np.uint8)
-    if bits.shape != (n, (num_edges + 7) // 8):
-        raise PriorFileError(f"worlds_bits has shape {bits.shape}, expected ({n}, {(num_edges + 7) // 8})")
-    worlds = np.unpackbits(bits, axis=1, count=num_edges).astype(bool)
+    check_bits(bits, n, num_edges, "worlds_bits")
+    worlds = np.unpackbits(bits, axis=1, count=num_edges).view(np.bool_)
     weights = _array(arrays, "world_weights", np.float64) if "world_weights" in arrays else None
     trajectories = None
     if "traj_states" in arrays:
+        traj = _array(arrays, "traj_states", np.float64)
+        if traj.ndim != 2 or not np.all(np.abs(traj) <= MAX_COORDINATE_M):
+            raise PriorFileError(f"traj_states must be (K, D) states within +-{MAX_COORDINATE_M:g}")
         trajectories = unpack_ragged(
-            _array(arrays, "traj_states", np.float64),
-            _array(arrays, "traj_offsets", np.int64),
-            num_edges,
-            "edge trajectory",
-            PriorFileError,
+            traj, _array(arrays, "traj_offsets", np.int64), num_edges, "edge trajectory", PriorFileError
         )
-    trees = tuple(
-        _tree_from(arrays, i, entry, graph, worlds, weights) for i, entry in enumerate(header["trees"])
-    )
-    kappa = header.get("pseudo_count")
+    entries = header.get("trees")
+    if not isinstance(entries, list) or len(entries) > MAX_TREES:
+        raise PriorFileError(f"header field 'trees' must be a list of at most {MAX_TREES} trees")
+    trees = tuple(_tree_from(arrays, i, entry, graph, worlds, weights) for i, entry in enumerate(entries))
     return WorldPrior(
-        name=str(header["name"]),
-        domain=str(header["domain"]),
+        name=header_text(header, "name"),
+        domain=domain,
         graph=graph,
-        edge_costs=_array(arrays, "costs", np.float64),
+        edge_costs=costs,
         worlds=worlds,
         world_weights=weights,
         trees=trees,
-        eta=float(header["eta"]),
-        alpha=float(header["alpha"]),
-        pseudo_count=None if kappa is None else float(kappa),
-        max_paths=int(header["max_paths"]),
-        library_seed=int(header["library_seed"]),
-        domain_spec=dict(header.get("domain_spec") or {}),
-        check_metadata=dict(header.get("check_metadata") or {}),
+        eta=header_fraction(header, "eta"),
+        alpha=header_fraction(header, "alpha"),
+        pseudo_count=header_number(header, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True),
+        max_paths=header_int(header, "max_paths", low=1, high=MAX_LIBRARY_PATHS),
+        library_seed=header_int(header, "library_seed", low=0, high=MAX_JSON_INT),
+        domain_spec=spec,
+        check_metadata=header_dict(header, "check_metadata"),
         edge_trajectories=trajectories,
-        provenance=dict(header.get("provenance") or {}),
+        provenance=header_dict(header, "provenance"),
     )
 
 
 def _tree_from(
     arrays: dict[str, npt.NDArray[Any]],
     i: int,
-    entry: dict[str, Any],
+    entry: Any,
     graph: ExplicitGraph,
     worlds: npt.NDArray[np.bool_],
     weights: npt.NDArray[np.float64] | None,
 ) -> QueryTree:
-    a = {name: _array(arrays, f"t{i}_{name}", dtype) for name, dtype in _NODE_ARRAYS.items()}
-    offsets = a["path_offsets"]
-    m = offsets.size - 1
-    path_edges = unpack_ragged(a["path_edges"], offsets, m, f"tree {i} path", PriorFileError)
-    vertex_paths = None
-    if f"t{i}_vertex_paths" in arrays:
-        vertex_paths = unpack_ragged(
-            _array(arrays, f"t{i}_vertex_paths", np.int64),
-            _array(arrays, f"t{i}_vertex_offsets", np.int64),
-            m,
-            f"tree {i} vertex path",
-            PriorFileError,
-        )
-    library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
-    n_nodes = a["node_edge"].shape[0]
-    children, edge = a["node_children"], a["node_edge"]
-    if children.shape != (n_nodes, 2) or children.max(initial=-1) >= n_nodes or children.min(initial=-1) < -1:
-        raise PriorFileError(f"tree {i}: node children do not index the node table")
-    if edge.max(initial=-1) >= graph.num_edges or edge.min(initial=-1) < -1:
-        raise PriorFileError(f"tree {i}: node edges do not index the graph")
+    if not isinstance(entry, dict):
+        raise PriorFileError(f"tree {i}: its header entry must be an object")
+    try:
+        name = header_text(entry, "name")
+        start = header_int(entry, "start", low=0, high=graph.num_vertices - 1)
+        goal = header_int(entry, "goal", low=0, high=graph.num_vertices - 1)
+        a = {key: _array(arrays, f"t{i}_{key}", dtype) for key, dtype in _NODE_ARRAYS.items()}
+        offsets = a["path_offsets"]
+        m = offsets.size - 1
+        if offsets.ndim != 1 or m < 1:
+            raise PriorFileError("its path offsets must list at least one path")
+        path_edges = unpack_ragged(a["path_edges"], offsets, m, "path", PriorFileError)
+        vertex_paths = None
+        if f"t{i}_vertex_paths" in arrays:
+            vertex_paths = unpack_ragged(
+                _array(arrays, f"t{i}_vertex_paths", np.int64),
+                _array(arrays, f"t{i}_vertex_offsets", np.int64),
+                m,
+                "vertex path",
+                PriorFileError,
+            )
+        library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
+        check_walks(graph, library.path_edges, start, goal, vertex_paths)
+        check_tree_arrays(a, graph.num_edges, m, library.library_edges)
+    except DrdError as exc:
+        raise PriorFileError(f"tree {i}: {exc}") from exc
     lib_edges = a["library_edges"]
-    if not np.array_equal(lib_edges, library.library_edges):
-        raise PriorFileError(f"tree {i}: its library edges do not match its paths")
-    if a["free_fraction"].shape != (n_nodes, lib_edges.size):
-        raise PriorFileError(f"tree {i}: the leaf bias table has the wrong shape")
-    if a["node_best_path"].max(initial=-1) >= m or a["node_best_path"].min(initial=-1) < -1:
-        raise PriorFileError(f"tree {i}: best paths do not index the library")
-    for name in ("node_num_active", "node_active_fraction"):
-        if a[name].shape != (n_nodes,):
-            raise PriorFileError(f"tree {i}: {name} has the wrong shape")
     tree = DecisionTree(
-        edge=edge,
-        children=children,
+        edge=a["node_edge"],
+        children=a["node_children"],
         num_active=a["node_num_active"],
         active_fraction=a["node_active_fraction"],
         library_edges=lib_edges,
@@ -297,11 +328,11 @@ def _tree_from(
         best_path=a["node_best_path"],
         num_edges=graph.num_edges,
         num_paths=m,
-        info=dict(entry.get("info") or {}),
+        info=header_dict(entry, "info"),
         world_free=np.ascontiguousarray(worlds[:, lib_edges]),
         world_weights=weights,
     )
-    return QueryTree(str(entry["name"]), int(entry["start"]), int(entry["goal"]), library, tree)
+    return QueryTree(name, start, goal, library, tree)
 
 
 def prior_from_bundle(bundle: TreeBundle) -> WorldPrior:
@@ -333,6 +364,12 @@ def load_tree_bundle(path: str | Path, *, expected_domain: str | None = None, in
         PriorFileError: as :func:`load_prior`, or the file has no such tree.
     """
     prior = load_prior(path, expected_domain=expected_domain)
+    with refusing(PriorFileError, Path(path), _WHAT):
+        return _bundle_of(prior, path, index)
+
+
+def _bundle_of(prior: WorldPrior, path: str | Path, index: int) -> TreeBundle:
+    """The ``index``-th tree of a loaded prior as a bundle."""
     if not 0 <= index < len(prior.trees):
         raise PriorFileError(
             f"{path} holds {len(prior.trees)} precomputed trees; tree {index} does not exist "

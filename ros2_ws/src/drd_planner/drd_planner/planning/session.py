@@ -148,6 +148,10 @@ class PlanningSession:
             domain = domain_from_spec(str(meta["domain"]), meta["domain_spec"])
         except DrdError as exc:
             raise TreeFileError(f"{name}: its domain spec cannot be rebuilt: {exc}") from exc
+        except Exception as exc:  # a spec the file checks let through must still end in one clear error
+            raise TreeFileError(
+                f"{name}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})"
+            ) from exc
         graph = bundle.problem.graph
         if (
             graph is None

@@ -51,7 +51,13 @@ def _resolve(name: str, kind: str, suffix: str, error: type[DrdError]) -> Path:
             if (folder / file_name).is_file():
                 return folder / file_name
         where = ", ".join(str(d) for d in dirs) or f"no {kind} folder exists"
+        if path.is_dir():
+            raise error(f"{name} is a directory, not a {kind[:-1]} file (and no {file_name} in: {where})")
         raise error(f"{name!r} is neither a file nor {file_name} in: {where}")
+    if path.is_dir():
+        raise error(f"{name} is a directory, not a {kind[:-1]} file")
+    if path.exists():
+        raise error(f"{name} is not a regular file (a device, pipe or socket), not a {kind[:-1]} file")
     raise error(f"{kind[:-1]} file {name} does not exist")
 
 
