@@ -80,3 +80,32 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         beat = peer.summaries("heli_planner: heartbeat")[-1]
         assert beat["maps_known"] == "True" and beat["plan_published"] == "True"
         assert beat["last_plan"] == "path_found (goal_pose)" and float(beat["last_plan_age_s"]) < 5
+
+
+def test_outputs_are_silent_until_activate(context: Any) -> None:
+    """Lifecycle publishers: a plan made while inactive (the service is called directly) is not published."""
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    peer = Peer(context)
+    with active_planner(context, node, peer) as executor:
+        session = node.sessions[0]
+        domain = session.domain
+        assert isinstance(domain, HelicopterDomain)
+        markers, cloud = helicopter_world_messages(
+            domain.make_world("wires", 3), wire_segments=8, frame_id="map", msgs=RclpyMessages()
+        )
+        peer.terrain.publish(cloud)
+        peer.obstacles.publish(markers)
+        assert spin_until(executor, lambda: node.snapshot.version >= 2)
+        assert node.trigger_deactivate().name == "SUCCESS"
+        goal = PoseStamped()
+        goal.header.frame_id = "map"
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
+            float(v) for v in session.goal_state[:3]
+        )
+        node.plan_for(goal)
+        assert node.history and node.history[-1].result.ok  # planned ...
+        spin_for(executor, 0.5)
+        assert not peer.plans and not peer.checks and node.published is None  # ... but nothing went out
+        assert node.trigger_activate().name == "SUCCESS"
+        node.plan_for(goal)
+        assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.checks))

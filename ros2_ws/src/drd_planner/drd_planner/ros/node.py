@@ -10,8 +10,9 @@ Interface (DESIGN.md section 6; names relative to the node namespace):
 - service ``get_plan`` (``nav_msgs/srv/GetPlan``): the same answer as a ``goal_pose`` request;
 - publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
   ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
-  status per check), ``/diagnostics`` (one summary per plan, re-check or error), ``checked_edges``
-  (MarkerArray).
+  status per check) and ``checked_edges`` (MarkerArray) are lifecycle publishers (silent until
+  ``activate``); ``/diagnostics`` in every state: one summary per plan, re-check, accepted map or error
+  (statuses ``<node name>: plan`` / ``map update`` / ``maps`` / ``node``) and a 1 Hz ``<node name>: heartbeat``.
 
 Parameters: ``tree_paths`` (tree files or shipped tree names such as ``heli_wires``; one tree per
 goal), ``frame_id`` (planning frame), ``seed``, ``max_checks`` (0: no cap), ``goal_tolerance``
@@ -173,11 +174,13 @@ class PlannerNode(LifecycleNode):
         self._pending: dict[str, _Request] = {}
         self._published: _Published | None = None
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
-        self._plan_pub = self.create_publisher(PathMsg, "plan", LATCHED)
-        self._trajectory_pub = self.create_publisher(JointTrajectory, "joint_trajectory", LATCHED)
-        self._checks_pub = self.create_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
+        # Lifecycle publishers: silent until activate. /diagnostics is not: errors and the heartbeat
+        # are reported in every state.
+        self._plan_pub = self.create_lifecycle_publisher(PathMsg, "plan", LATCHED)
+        self._trajectory_pub = self.create_lifecycle_publisher(JointTrajectory, "joint_trajectory", LATCHED)
+        self._checks_pub = self.create_lifecycle_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
         self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self._markers_pub = self.create_publisher(MarkerArray, "checked_edges", 10)
+        self._markers_pub = self.create_lifecycle_publisher(MarkerArray, "checked_edges", 10)
         self._errors: list[str] = []
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
         self._library_markers: dict[tuple[str, Any], Any] = {}
@@ -263,7 +266,10 @@ class PlannerNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Start the planning thread, subscribe to the maps and requests and offer ``get_plan``."""
+        """Enable the publishers, start the planning thread, subscribe to maps and requests, offer ``get_plan``."""
+        enabled = super().on_activate(state)
+        if enabled != TransitionCallbackReturn.SUCCESS:
+            return enabled
         self._worker.start()
         report = self._reporter("plan")
         maps = LATCHED if bool(self.get_parameter("map_subscribe_transient_local").value) else VOLATILE_MAPS
@@ -298,9 +304,9 @@ class PlannerNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Stop listening (maps are kept)."""
+        """Stop listening and publishing (maps are kept)."""
         self._drop_interfaces()
-        return TransitionCallbackReturn.SUCCESS
+        return super().on_deactivate(state)
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Forget the trees and the maps."""
@@ -676,7 +682,8 @@ class PlannerNode(LifecycleNode):
             states = result.states
         path = path_message(states, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
         self._plan_pub.publish(path)
-        self._published = _Published(session, result, snapshot)
+        if self._plan_pub.is_activated:  # an inactive node publishes nothing, so it has no plan out there
+            self._published = _Published(session, result, snapshot)
         return path
 
     def _publish_markers(
