@@ -112,6 +112,8 @@ HISTORY_LENGTH = 16
 SNAPSHOTS_KEPT = 4
 #: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
 LIBRARY_EDGE_SEGMENTS = 4
+#: Seconds :meth:`PlannerNode.destroy_node` waits for a running plan.
+SHUTDOWN_WAIT_S = 1.0
 #: Longest executor wait (seconds) of ``planner_node``'s spin loop.
 SPIN_TIMEOUT_S = 0.25
 #: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
@@ -321,8 +323,12 @@ class PlannerNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def destroy_node(self) -> None:
-        """Stop the planning thread (after its running plan), then destroy the node."""
-        self._worker.stop()
+        """Stop the planning thread, then destroy the node.
+
+        A plan still running after :data:`SHUTDOWN_WAIT_S` is abandoned (the thread is a daemon and
+        publishes nothing once the node is gone), so SIGINT / SIGTERM end the process promptly.
+        """
+        self._worker.stop(timeout=SHUTDOWN_WAIT_S)
         super().destroy_node()
 
     def _drop_interfaces(self) -> None:
