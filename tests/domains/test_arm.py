@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -117,6 +118,32 @@ def test_roadmap_rejects_a_self_colliding_start() -> None:
         pytest.skip("shared Panda model not present")
     with pytest.raises(ProblemError, match="start configuration"):
         ArmDomain(start=(0.0, 0.3, 0.0, -3.0, 0.0, 0.3, 0.0), num_samples=20, k=4)
+
+
+@pytest.mark.parametrize(
+    ("spec", "says"),
+    [
+        (
+            {"start": (0.0, 0.3, 0.0, -3.0, 0.0, 0.3, 0.0)},
+            r"^start .*: self-colliding \(panda_link\d touches panda_link\d\)",
+        ),
+        (
+            {"goal": (9.0, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785)},
+            r"^goal .*: outside the joint limits \(panda_joint1 = 9\.000 not in \[",
+        ),
+        (
+            {"floor_z": 0.3},
+            r"^start .*: below the floor \(panda_link\d reaches down to z = 0\.\d+ m.*lower floor_z",
+        ),
+    ],
+)
+def test_an_invalid_start_or_goal_says_which_check_failed(spec: dict[str, object], says: str) -> None:
+    if not PANDA.is_dir():
+        pytest.skip("shared Panda model not present")
+    with pytest.raises(ProblemError) as info:
+        ArmDomain(num_samples=20, k=4, **spec)  # type: ignore[arg-type]
+    assert re.search(says, str(info.value)), str(info.value)
+    assert "or below the floor" not in str(info.value)  # not the old "limits, self-colliding or floor"
 
 
 # --------------------------------------------------------------------------------------------------

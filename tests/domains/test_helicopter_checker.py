@@ -15,6 +15,8 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Shape
+from drd_planner.geometry.terrain import Heightfield
+from drd_planner.geometry.terrain_collider import window_max
 from drd_planner.geometry.wires import Wire
 
 REACH = 7.0  # vehicle radius 5 m + margin 2 m
@@ -180,3 +182,56 @@ def test_checker_input_errors(domain: HelicopterDomain) -> None:
         HelicopterChecker(Scene(), np.zeros((3, 4)), [0, 3], radius=0.0)
     with pytest.raises(ProblemError):
         helicopter_checker(Scene(), object())
+
+
+# --------------------------------------------------------------------------------------------------
+# Terrain prefilter cost and unknown terrain (issue 19)
+
+
+def test_tiny_terrain_cells_do_not_blow_up_the_prefilter() -> None:
+    # 2 x 2 points 1e-5 m apart under a 6 m reach: the old window padding allocated (2 * 600_001)^2 floats.
+    terrain = Heightfield((0.0, 0.0), 1e-5, [[0.0, 1.0], [2.0, 3.0]])
+    scene = Scene(margin=1.0)
+    scene.add_terrain(terrain)
+    points = np.array([[0.0, 0.0, 100.0], [0.0, 0.0, 50.0], [0.0, 0.0, 8.0], [0.0, 0.0, 5.0]])
+    checker = HelicopterChecker(scene, points, [0, 2, 4], radius=5.0)
+    assert checker.check_many([0, 1]).tolist() == [True, False]  # 3 m top: 8 m centre is 5 m above it
+
+
+def test_window_max_is_the_brute_force_window_maximum() -> None:
+    rng = np.random.default_rng(5)
+    values = rng.random((7, 11))
+    values[2, 3] = -np.inf
+    for half in (0, 1, 3, 12, 10**9):
+        got = window_max(values, half)
+        want = np.array(
+            [
+                [
+                    values[max(0, i - half) : i + half + 1, max(0, j - half) : j + half + 1].max()
+                    for j in range(11)
+                ]
+                for i in range(7)
+            ]
+        )
+        np.testing.assert_array_equal(got, want)
+
+
+def test_a_nan_band_through_a_plateau_blocks_the_edge_across_it() -> None:
+    # Issue 19 item 10: a 200 m plateau 100 m high with a 20 m unknown band across it; a plan flew along the
+    # band at 50 m because unknown cells had no surface.
+    heights = np.full((21, 21), 100.0)
+    heights[:, 9:12] = np.nan
+    ys = np.linspace(-90.0, 90.0, 41)
+    low = np.stack([np.zeros(41), ys, np.full(41, 50.0)], axis=1)
+    scene = Scene(margin=1.0)
+    scene.add_terrain(Heightfield((-100.0, -100.0), 10.0, heights))  # the default: unknown = blocked
+    checker = HelicopterChecker(scene, low, [0, 41], radius=2.0)
+    assert checker.check_many([0]).tolist() == [False]
+    assert checker.check(0) is False
+    high = np.stack([np.zeros(41), ys, np.full(41, 120.0)], axis=1)  # above the plateau
+    for unknown, free_low, free_high in (("blocked", False, False), ("highest_neighbour", False, True)):
+        scene = Scene(margin=1.0)
+        scene.add_terrain(Heightfield((-100.0, -100.0), 10.0, heights, unknown=unknown))  # type: ignore[arg-type]
+        checker = HelicopterChecker(scene, np.concatenate([low, high]), [0, 41, 82], radius=2.0)
+        assert checker.check_many([0, 1]).tolist() == [free_low, free_high]
+        assert [checker.check(0), checker.check(1)] == [free_low, free_high]

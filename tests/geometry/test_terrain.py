@@ -125,12 +125,45 @@ def test_outside_and_unknown_heights_are_nan() -> None:
     got = field.height_at([[-0.1, 0.0], [2.1, 0.5], [0.5, 0.5], [1.5, 0.5], [2.0, 1.0]])
     assert np.isnan(got[:3]).all()
     np.testing.assert_allclose(got[3:], [1.5, 2.0])
-    assert field.below([[0.5, 0.5, -100.0], [1.5, 0.5, 0.0], [1.5, 0.5, 2.0]]).tolist() == [
+    # Outside the grid nothing is below; over the cell with the unknown corner the default "blocked" surface
+    # is a wall at every height.
+    assert field.below([[-0.5, 0.5, -100.0], [0.5, 0.5, 1e5], [1.5, 0.5, 0.0], [1.5, 0.5, 2.0]]).tolist() == [
         False,
+        True,
         True,
         False,
     ]
     assert field.below([[1.5, 0.5, 2.0]], clearance=1.0).tolist() == [True]
+
+
+def test_unknown_heights_options_fill_the_collision_surface() -> None:
+    heights = [[0.0, 1.0, 2.0], [np.nan, 1.0, 2.0]]
+    blocked = Heightfield((0.0, 0.0), 1.0, heights)
+    assert blocked.unknown == "blocked"
+    assert blocked.surface_heights[1, 0] == pytest.approx(2.0 + 1e6)
+    assert math.isnan(blocked.heights[1, 0])  # the measured heights keep their NaN
+    rim = Heightfield((0.0, 0.0), 1.0, heights, unknown="highest_neighbour")
+    assert rim.surface_heights[1, 0] == 1.0  # neighbours 0, 1, 1
+    assert rim.below([[0.5, 0.5, 1.5], [0.5, 0.5, 0.5]]).tolist() == [False, True]  # bilinear 0.75
+    assert blocked.below([[0.5, 0.5, 1.5]]).tolist() == [True]
+    assert rim.crop(x_range=(0.0, 1.0), y_range=(0.0, 1.0)).unknown == "highest_neighbour"
+    assert rim.with_cell_size(2.0).unknown == "highest_neighbour"
+    known = Heightfield((0.0, 0.0), 1.0, np.zeros((2, 2)))
+    assert known.surface_heights is known.heights  # nothing to fill, nothing copied
+    with pytest.raises(GeometryError, match="'blocked', 'highest_neighbour'"):
+        Heightfield((0.0, 0.0), 1.0, heights, unknown="free")  # type: ignore[arg-type]
+
+
+def test_highest_neighbour_fills_each_unknown_region_from_its_own_rim() -> None:
+    heights = np.zeros((6, 8))
+    heights[:, 4:] = 50.0  # a plateau on the east half
+    heights[1:5, 1:3] = np.nan  # a 4 x 2 gap in the low west: its rim is all 0
+    heights[2:4, 5:7] = np.nan  # a 2 x 2 gap inside the plateau: its rim is all 50
+    field = Heightfield((0.0, 0.0), 1.0, heights, unknown="highest_neighbour")
+    surface = field.surface_heights
+    assert (surface[1:5, 1:3] == 0.0).all()
+    assert (surface[2:4, 5:7] == 50.0).all()
+    assert not np.isnan(surface).any()
 
 
 def test_invalid_heightfields_and_queries() -> None:
@@ -221,12 +254,19 @@ def test_collider_rejects_empty_terrain_and_bad_tiles() -> None:
         TerrainCollider(Heightfield((0.0, 0.0), 1.0, [[np.nan, 0.0], [0.0, 0.0]]))
 
 
-def test_unknown_cells_have_no_surface_and_nothing_below() -> None:
+def test_unknown_cells_are_blocked_by_default_or_at_their_highest_neighbour() -> None:
     heights = np.full((5, 5), 10.0)
     heights[2, 2] = np.nan  # the four cells around grid point (20, 20) are unknown
-    scene = Scene()
-    scene.add_terrain(Heightfield((0.0, 0.0), 10.0, heights), tile_cells=2)
-    assert not scene.spheres_collide([[20.0, 20.0, 10.0]], 1.0)
-    assert not scene.spheres_collide([[15.0, 15.0, 0.0]], 1.0)
-    assert scene.spheres_collide([[5.0, 5.0, 0.0]], 1.0)
-    assert scene.spheres_collide([[5.0, 5.0, 10.5]], 1.0)
+    heights[4, 4] = 30.0
+    blocked = Scene()
+    blocked.add_terrain(Heightfield((0.0, 0.0), 10.0, heights), tile_cells=2)
+    assert blocked.spheres_collide([[20.0, 20.0, 10.0]], 1.0)
+    assert blocked.spheres_collide([[15.0, 15.0, 0.0]], 1.0)
+    assert blocked.spheres_collide([[15.0, 15.0, 5000.0]], 1.0)  # a wall at every height
+    assert blocked.spheres_collide([[5.0, 5.0, 0.0]], 1.0)
+    assert not blocked.spheres_collide([[5.0, 5.0, 12.0]], 1.0)  # known cells keep their surface
+    rim = Scene()
+    rim.add_terrain(Heightfield((0.0, 0.0), 10.0, heights, unknown="highest_neighbour"), tile_cells=2)
+    assert rim.spheres_collide([[20.0, 20.0, 10.5]], 1.0)  # the gap is at its neighbours' 10 m
+    assert not rim.spheres_collide([[20.0, 20.0, 11.5]], 1.0)
+    assert not rim.spheres_collide([[15.0, 15.0, 5000.0]], 1.0)

@@ -8,12 +8,14 @@ from typing import Any
 import numpy as np
 import pytest
 
+import drd_msgs_py.obstacles as obstacles_module
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import CUBE, LINE_STRIP, markers_from_obstacles, obstacle_update
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
 from drd_planner.geometry.wires import Wire
+from drd_planner.planning.map_limits import MapLimits
 
 FRAME = "map"
 
@@ -158,3 +160,81 @@ def test_nan_point_and_repeated_points_are_refused(msgs: Any) -> None:
 def test_not_a_marker_array_is_refused(msgs: Any) -> None:
     with pytest.raises(MessageError, match="MarkerArray"):
         obstacle_update(msgs("std_msgs/msg/String", data="x"), frame_id=FRAME)
+
+
+# --------------------------------------------------------------------------------------------------
+# Frames first, and map limits (issue 19)
+
+
+def test_a_lone_deleteall_in_a_foreign_frame_is_refused(msgs: Any) -> None:
+    first = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
+    clear = msgs(
+        "visualization_msgs/msg/Marker", header=msgs("std_msgs/msg/Header", frame_id="odom"), action=3
+    )
+    with pytest.raises(MessageError, match=r"marker 0 .* frame 'odom'; the planner works in 'map'"):
+        obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME)
+    assert len(first) == 5
+
+
+def _cubes(msgs: Any, count: int, *, ns: str = "box") -> Any:
+    return markers_from_obstacles(
+        [(f"{ns}/{k}", Box((1, 1, 1)), Pose((3.0 * k, 0, 0))) for k in range(count)],
+        frame_id=FRAME,
+        msgs=msgs,
+        delete_all_first=False,
+    )
+
+
+def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
+    msgs: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_shapes(*_: Any) -> None:
+        raise AssertionError("a shape was built before the limits were checked")
+
+    monkeypatch.setattr(obstacles_module, "_obstacle", no_shapes)
+    small = MapLimits(max_markers=4, max_line_points=4, max_mesh_triangles=3)
+    with pytest.raises(MessageError) as info:
+        obstacle_update(_cubes(msgs, 5), frame_id=FRAME, limits=small)
+    assert (
+        str(info.value)
+        == "the MarkerArray has 5 markers, over the limit max_markers = 4 (parameter max_markers)"
+    )
+    wire = markers_from_obstacles(
+        [("wire/0", np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]], float), 0.1)],
+        frame_id=FRAME,
+        msgs=msgs,
+    )
+    with pytest.raises(MessageError, match=r"5 LINE_STRIP points, over the limit max_line_points = 4 \("):
+        obstacle_update(wire, frame_id=FRAME, limits=small)
+    rng = np.random.default_rng(1)
+    mesh = TriangleMesh(rng.random((12, 3)), np.arange(12).reshape(4, 3))
+    meshes = markers_from_obstacles([("mesh/0", mesh, Pose())], frame_id=FRAME, msgs=msgs)
+    with pytest.raises(
+        MessageError, match="4 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 3"
+    ):
+        obstacle_update(meshes, frame_id=FRAME, limits=small)
+
+
+def test_a_map_growing_over_a_limit_is_refused_and_kept(msgs: Any) -> None:
+    limits = MapLimits(max_markers=6, max_mesh_triangles=5)
+    current = obstacle_update(_cubes(msgs, 4), frame_id=FRAME, limits=limits).apply({})
+    more = obstacle_update(_cubes(msgs, 3, ns="more"), frame_id=FRAME, limits=limits)
+    with pytest.raises(
+        MessageError, match="the obstacle map would have 7 obstacles, over the limit max_markers = 6"
+    ):
+        more.apply(current)
+    assert len(current) == 4
+    assert len(obstacle_update(_cubes(msgs, 2, ns="more"), frame_id=FRAME, limits=limits).apply(current)) == 6
+    tet = TriangleMesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+    )
+    one = markers_from_obstacles([("mesh/0", tet, Pose())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
+    two = markers_from_obstacles([("mesh/1", tet, Pose())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
+    with_mesh = obstacle_update(one, frame_id=FRAME, limits=limits).apply({})
+    assert with_mesh["mesh/0"].points == 12
+    with pytest.raises(
+        MessageError, match="8 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 5"
+    ):
+        obstacle_update(two, frame_id=FRAME, limits=limits).apply(with_mesh)
+    replaced = obstacle_update(one, frame_id=FRAME, limits=limits).apply(with_mesh)  # same key: still 4
+    assert set(replaced) == {"mesh/0"}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.terrain import cloud_from_heightfield, heightfield_from_cloud
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planning.map_limits import MapLimits
 
 FRAME = "map"
 
@@ -92,3 +94,81 @@ def test_malformed_clouds_are_refused(msgs: Any, fields: dict[str, Any], words: 
 def test_bad_coordinates_are_refused(msgs: Any, edit: Any, words: str) -> None:
     with pytest.raises(MessageError, match=words):
         heightfield_from_cloud(_with(msgs, data=_xyz(msgs, edit)), frame_id=FRAME)
+
+
+# --------------------------------------------------------------------------------------------------
+# Map limits and what planning needs (issue 19)
+
+
+class _Untouchable:
+    """A cloud payload that fails the test if anything decodes or copies it; only its length may be read."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __iter__(self) -> Any:
+        raise AssertionError("the payload was decoded before the limits were checked")
+
+
+def _header_only(msgs: Any, **fields: Any) -> SimpleNamespace:
+    cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)
+    values = {name: getattr(cloud, name) for name in ("header", "fields", "is_bigendian", "point_step")}
+    values |= {"height": 7, "width": 9, "row_step": 108, "data": cloud.data} | fields
+    return SimpleNamespace(**values)
+
+
+def test_a_cloud_over_the_cell_limit_is_refused_from_its_header(msgs: Any) -> None:
+    lying = _header_only(msgs, height=4000, width=4000, row_step=48_000, data=_Untouchable(4000 * 48_000))
+    with pytest.raises(MessageError) as info:
+        heightfield_from_cloud(lying, frame_id=FRAME)
+    assert str(info.value) == (
+        "terrain cloud has 16000000 cells (4000 x 4000), over the limit max_terrain_cells = 250000 "
+        "(parameter max_terrain_cells)"
+    )
+    cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)  # 7 x 9 = 63 cells
+    with pytest.raises(MessageError, match=r"63 cells .* max_terrain_cells = 62 "):
+        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_terrain_cells=62))
+    assert heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_terrain_cells=63)).shape == (
+        7,
+        9,
+    )
+
+
+def test_a_cloud_over_the_byte_limit_is_refused_from_its_length(msgs: Any) -> None:
+    padded = _header_only(msgs, row_step=10**7, data=_Untouchable(7 * 10**7))
+    with pytest.raises(MessageError, match=r"70000000 bytes, over the limit max_message_bytes = 33554432 \("):
+        heightfield_from_cloud(padded, frame_id=FRAME)
+    cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)  # 756 bytes
+    with pytest.raises(MessageError, match="parameter max_message_bytes"):
+        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_message_bytes=755))
+
+
+def test_tiny_cells_huge_coordinates_and_too_few_known_heights_are_refused(msgs: Any) -> None:
+    tiny = Heightfield((0.0, 0.0), 1e-5, [[0.0, 1.0], [2.0, 3.0]])
+    with pytest.raises(
+        MessageError, match=r"cells are 1e-05 m, under the limit min_terrain_cell_size = 0.05 \("
+    ):
+        heightfield_from_cloud(cloud_from_heightfield(tiny, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
+    far = Heightfield((0.0, 0.0), 1.0, [[0.0, 1.0], [2.0, 3e30]])
+    with pytest.raises(MessageError, match=r"z values reach 3e\+30 m .* max_coordinate = 1000000.0"):
+        heightfield_from_cloud(cloud_from_heightfield(far, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
+    east = Heightfield((2e6, 0.0), 1.0, np.zeros((2, 2)))
+    with pytest.raises(MessageError, match=r"x values reach 2e\+06 m"):
+        heightfield_from_cloud(cloud_from_heightfield(east, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
+    # Issue 19 item 8: one NaN in a 2 x 2 cloud left no terrain cell, and every plan then failed.
+    for heights in ([[0.0, 1.0], [2.0, np.nan]], [[0.0] * 3, [0.0, np.nan, 0.0], [0.0] * 3]):
+        cloud = cloud_from_heightfield(Heightfield((0.0, 0.0), 1.0, heights), frame_id=FRAME, msgs=msgs)
+        with pytest.raises(MessageError, match="no cell with four known heights"):
+            heightfield_from_cloud(cloud, frame_id=FRAME)
+
+
+def test_the_unknown_terrain_option_reaches_the_heightfield(msgs: Any) -> None:
+    cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)
+    assert heightfield_from_cloud(cloud, frame_id=FRAME).unknown == "blocked"
+    rim = MapLimits(unknown_terrain="highest_neighbour")
+    terrain = heightfield_from_cloud(cloud, frame_id=FRAME, limits=rim)
+    assert terrain.unknown == "highest_neighbour"
+    assert terrain.surface_heights[2, 3] == np.nanmax(terrain.heights[1:4, 2:5])

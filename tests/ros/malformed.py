@@ -484,10 +484,11 @@ def _cloud_wrong_frame(rng: Rng, base: Any, xyz: np.ndarray) -> tuple[PointCloud
 
 
 def _cloud_some_nan(rng: Rng, base: Any, xyz: np.ndarray) -> tuple[PointCloud2, bool, tuple[str, ...]]:
-    """Valid: NaN heights are unknown cells (some known ones remain)."""
+    """Valid: NaN heights are unknown cells (at least one cell keeps its four corners known)."""
     grid = _sub_grid(rng, xyz)
     mask = rng.random(grid.shape[:2]) < float(rng.uniform(0.01, 0.5))
-    mask.flat[int(rng.integers(mask.size))] = False
+    r, c = int(rng.integers(grid.shape[0] - 1)), int(rng.integers(grid.shape[1] - 1))
+    mask[r : r + 2, c : c + 2] = False
     grid[..., 2][mask] = np.nan
     return _grid_cloud(base, grid), False, ()
 

@@ -123,7 +123,7 @@ class _Peer:
 
     def summaries(self, since: int = 0, request: str | None = None) -> list[Any]:
         """Plan summaries since ``since``; with ``request``, those that answer that request topic."""
-        out = [s for _, s in self.statuses[since:] if not _is_error_report(s)]
+        out = [s for _, s in self.statuses[since:] if "result" in _values(s)]  # not heartbeats or map reports
         if request is not None:
             out = [s for s in out if _values(s).get("request", request) == request]
         return out

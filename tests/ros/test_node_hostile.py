@@ -299,3 +299,24 @@ def test_only_the_newest_served_requests_keep_their_map_snapshots(context: Any) 
         assert len(history) == node_module.SNAPSHOTS_KEPT + 3
         kept = [record.snapshot is not None for record in history]
         assert kept == [False] * 3 + [True] * node_module.SNAPSHOTS_KEPT
+
+
+def test_maps_beyond_the_limit_parameters_are_refused_naming_them_and_the_map_is_kept(context: Any) -> None:
+    node, peer = _node(context), Peer(context)
+    with active_planner(context, node, peer) as executor:
+        _publish_world(executor, node, peer)
+        good = node.snapshot
+        rows, cols = good.terrain.shape  # type: ignore[union-attr]
+        (result,) = node.set_parameters([Parameter("max_terrain_cells", value=rows * cols - 1)])
+        assert result.successful
+        (result,) = node.set_parameters([Parameter("unknown_terrain", value="unknown")])
+        assert not result.successful and "highest_neighbour" in result.reason  # names the valid choices
+        assert node.trigger_deactivate().name == "SUCCESS"
+        assert node.trigger_cleanup().name == "SUCCESS"
+        assert node.trigger_configure().name == "SUCCESS"  # limits are read at configure
+        assert node.trigger_activate().name == "SUCCESS"
+        assert spin_until(executor, lambda: any("max_terrain_cells" in e for e in node.errors))
+        assert "terrain refused, map unchanged" in node.errors[-1]
+        assert "(parameter max_terrain_cells)" in node.errors[-1]
+        assert node.snapshot.terrain is None  # cleanup forgot the maps; the latched terrain was refused
+        assert node.snapshot.obstacles  # the latched obstacle map was taken

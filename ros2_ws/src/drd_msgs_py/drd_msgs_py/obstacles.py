@@ -9,8 +9,11 @@ Marker semantics (DESIGN.md section 6):
 - TRIANGLE_LIST: a triangle mesh, three ``points`` per triangle (a surface, as FCL treats meshes);
 - actions ADD (= MODIFY) replaces the obstacle ``ns/id``, DELETE removes it, DELETEALL removes all.
 
-:func:`obstacle_update` validates a whole array before anything is applied: one bad marker and the
-array is refused with a :class:`MessageError` that names it, so a consumer keeps its previous map.
+:func:`obstacle_update` validates a whole array before anything is applied: one bad marker (a DELETEALL
+in a foreign frame included) and the array is refused with a :class:`MessageError` that names it, so a
+consumer keeps its previous map. Sizes are bounded by a :class:`~drd_planner.planning.map_limits.MapLimits`
+(``max_markers``, ``max_line_points``, ``max_mesh_triangles``), counted from the markers' lengths before
+any shape is built, and again over the whole map in :meth:`ObstacleUpdate.apply`.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Cylinder, Shape, Sphere, TriangleMesh
 from drd_planner.geometry.wires import capsule_between
+from drd_planner.planning.map_limits import MapLimits
 
 __all__ = [
     "CUBE",
@@ -77,11 +81,13 @@ class Obstacle:
         key: ``"<ns>/<id>"`` of the marker.
         parts: (shape, world pose) pairs (several for a LINE_STRIP).
         kind: the marker type name (``CUBE``, ``LINE_STRIP``, ...).
+        points: the marker's point count (LINE_STRIP points, TRIANGLE_LIST vertices; 0 for other types).
     """
 
     key: str
     parts: tuple[tuple[Shape, Pose], ...]
     kind: str
+    points: int = 0
 
 
 @dataclass(frozen=True)
@@ -93,14 +99,21 @@ class ObstacleUpdate:
             its obstacle in ``obstacles``.
         obstacles: key -> the last obstacle added under that key in this update.
         frame_id: the frame every marker was in.
+        limits: the limits the map must stay within after :meth:`apply`.
     """
 
     operations: tuple[tuple[str, str], ...]
     obstacles: dict[str, Obstacle]
     frame_id: str
+    limits: MapLimits = MapLimits.DEFAULT
 
     def apply(self, current: dict[str, Obstacle]) -> dict[str, Obstacle]:
-        """The obstacle map after this update (a new dict; ``current`` is not changed)."""
+        """The obstacle map after this update (a new dict; ``current`` is not changed).
+
+        Raises:
+            MessageError: the map would hold more obstacles, LINE_STRIP points or TRIANGLE_LIST triangles than
+                :attr:`limits` allow (the text names the limit's parameter); ``current`` stays as it was.
+        """
         out = dict(current)
         for op, key in self.operations:
             if op == "clear":
@@ -109,7 +122,21 @@ class ObstacleUpdate:
                 out.pop(key, None)
             else:
                 out[key] = self.obstacles[key]
+        lines = sum(o.points for o in out.values() if o.kind == "LINE_STRIP")
+        triangles = sum(o.points for o in out.values() if o.kind == "TRIANGLE_LIST") // 3
+        _check_counts(self.limits, "the obstacle map would have", len(out), lines, triangles)
         return out
+
+
+def _check_counts(limits: MapLimits, what: str, markers: int, line_points: int, triangles: int) -> None:
+    """MessageError naming the first of ``limits`` that the counts exceed."""
+    for name, count, unit in (
+        ("max_markers", markers, "obstacles"),
+        ("max_line_points", line_points, "LINE_STRIP points"),
+        ("max_mesh_triangles", triangles, "TRIANGLE_LIST triangles"),
+    ):
+        if count > getattr(limits, name):
+            raise MessageError(limits.refusal(name, f"{what} {count} {unit}"))
 
 
 def _finite(values: Sequence[float], what: str) -> tuple[float, ...]:
@@ -197,23 +224,42 @@ def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
             )
     except GeometryError as exc:
         raise MessageError(f"{what}: {exc}") from exc
-    return Obstacle(key, parts, name)
+    return Obstacle(key, parts, name, len(marker.points) if kind in (LINE_STRIP, TRIANGLE_LIST) else 0)
 
 
-def obstacle_update(msg: Any, *, frame_id: str) -> ObstacleUpdate:
+def obstacle_update(msg: Any, *, frame_id: str, limits: MapLimits = MapLimits.DEFAULT) -> ObstacleUpdate:
     """Validate a MarkerArray (rclpy or rosbags) and turn it into an :class:`ObstacleUpdate`.
+
+    Every marker's frame is checked first (a DELETEALL in another frame refuses the array like any other
+    marker), then the array's size against ``limits`` (markers, LINE_STRIP points, TRIANGLE_LIST triangles,
+    counted from the markers' lengths), and only then are shapes built.
 
     Args:
         msg: ``visualization_msgs/MarkerArray``.
         frame_id: the planning frame; every marker must be in it (no TF lookups here).
+        limits: size limits of one array (and, in :meth:`ObstacleUpdate.apply`, of the map).
 
     Raises:
-        MessageError: a marker in another frame, of an unsupported type or action, with NaN or
-            infinite numbers, a non-unit quaternion, a zero or negative size, too few points.
+        MessageError: a marker in another frame, an array over a size limit (the text names the limit's
+            parameter), a marker of an unsupported type or action, with NaN or infinite numbers, a non-unit
+            quaternion, a zero or negative size, too few points.
     """
     markers = getattr(msg, "markers", None)
     if markers is None:
         raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
+    if len(markers) > limits.max_markers:
+        raise MessageError(limits.refusal("max_markers", f"the MarkerArray has {len(markers)} markers"))
+    line_points = triangles = 0
+    for i, marker in enumerate(markers):
+        frame = str(marker.header.frame_id)
+        if frame != frame_id:
+            what = f"marker {i} ({marker.ns}/{int(marker.id)})"
+            raise MessageError(f"{what} is in frame {frame!r}; the planner works in {frame_id!r}")
+        if int(marker.action) == ADD and int(marker.type) == LINE_STRIP:
+            line_points += len(marker.points)
+        elif int(marker.action) == ADD and int(marker.type) == TRIANGLE_LIST:
+            triangles += len(marker.points) // 3
+    _check_counts(limits, "the MarkerArray has", 0, line_points, triangles)
     operations: list[tuple[str, str]] = []
     obstacles: dict[str, Obstacle] = {}
     for i, marker in enumerate(markers):
@@ -222,18 +268,14 @@ def obstacle_update(msg: Any, *, frame_id: str) -> ObstacleUpdate:
         action = int(marker.action)
         if action == DELETEALL:
             operations.append(("clear", ""))
-            continue
-        frame = str(marker.header.frame_id)
-        if frame != frame_id:
-            raise MessageError(f"{what} is in frame {frame!r}; the planner works in {frame_id!r}")
-        if action == DELETE:
+        elif action == DELETE:
             operations.append(("delete", key))
         elif action == ADD:
             obstacles[key] = _obstacle(marker, key, what)
             operations.append(("add", key))
         else:
             raise MessageError(f"{what}: unsupported marker action {action} (ADD=0, DELETE=2, DELETEALL=3)")
-    return ObstacleUpdate(tuple(operations), obstacles, frame_id)
+    return ObstacleUpdate(tuple(operations), obstacles, frame_id, limits)
 
 
 def _pose_msg(msgs: MessageFactory, pose: Pose) -> Any:

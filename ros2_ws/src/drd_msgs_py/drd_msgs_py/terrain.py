@@ -2,8 +2,10 @@
 
 The cloud is a grid: ``height`` rows by ``width`` columns of float32 ``x, y, z`` (metres, other
 fields allowed and ignored). Row i lies at y = y0 + i * cell, column j at x = x0 + j * cell, as in
-the heightfield. A NaN ``z`` is an unknown height; x and y must be finite and on the grid (within
-:data:`GRID_TOL` of a cell). A cloud that is not such a grid is refused with a :class:`MessageError`.
+the heightfield. A NaN ``z`` is an unknown height (counted as the limits' ``unknown_terrain`` says); x and y
+must be finite and on the grid (within :data:`GRID_TOL` of a cell). A cloud that is not such a grid, or one
+beyond a :class:`~drd_planner.planning.map_limits.MapLimits` limit (checked before the payload is decoded), is
+refused with a :class:`MessageError`, so the caller keeps its previous terrain.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planning.map_limits import MapLimits
 
 __all__ = ["GRID_TOL", "cloud_from_heightfield", "heightfield_from_cloud"]
 
@@ -48,13 +51,29 @@ def _field_offsets(msg: Any) -> dict[str, int]:
     return offsets
 
 
-def heightfield_from_cloud(msg: Any, *, frame_id: str) -> Heightfield:
+def _data_size(data: Any) -> int:
+    """Bytes in a cloud's ``data`` without copying it (numpy array, bytes, array.array or list)."""
+    if isinstance(data, np.ndarray):
+        return int(data.nbytes)
+    try:
+        return memoryview(data).nbytes
+    except TypeError:
+        return len(data)
+
+
+def heightfield_from_cloud(msg: Any, *, frame_id: str, limits: MapLimits = MapLimits.DEFAULT) -> Heightfield:
     """The heightfield of an organized terrain cloud (rclpy or rosbags message).
 
+    Size limits (``limits``: cells, payload bytes) are checked from the header and the payload's length before
+    anything is decoded or copied. The heightfield's unknown (NaN) heights count as ``limits.unknown_terrain``
+    says in collision checks.
+
     Raises:
-        MessageError: wrong frame, not organized (height < 2 or width < 2), empty, ragged (data size
-            not rows x row_step), big-endian, fields missing or not float32, x/y not finite or not on
-            a regular square grid, or no known height at all.
+        MessageError: wrong frame, not organized (height < 2 or width < 2), over a size limit (the text names
+            the limit's parameter), empty, ragged (data size not rows x row_step), big-endian, fields missing or
+            not float32, x/y not finite or not on a regular square grid of at least
+            ``limits.min_terrain_cell_size``, a coordinate beyond ``limits.max_coordinate``, or no cell with
+            four known heights.
     """
     frame = str(msg.header.frame_id)
     if frame != frame_id:
@@ -62,6 +81,13 @@ def heightfield_from_cloud(msg: Any, *, frame_id: str) -> Heightfield:
     rows, cols = int(msg.height), int(msg.width)
     if rows < 2 or cols < 2:
         raise MessageError(f"terrain cloud must be organized with >= 2 rows and columns, got {rows} x {cols}")
+    if rows * cols > limits.max_terrain_cells:
+        raise MessageError(
+            limits.refusal("max_terrain_cells", f"terrain cloud has {rows * cols} cells ({rows} x {cols})")
+        )
+    size = _data_size(msg.data)
+    if size > limits.max_message_bytes:
+        raise MessageError(limits.refusal("max_message_bytes", f"terrain cloud data has {size} bytes"))
     if bool(msg.is_bigendian):
         raise MessageError("big-endian terrain clouds are not supported")
     offsets = _field_offsets(msg)
@@ -70,12 +96,11 @@ def heightfield_from_cloud(msg: Any, *, frame_id: str) -> Heightfield:
         raise MessageError(f"PointCloud2 point_step {step} does not hold the x, y, z fields")
     if row_step < cols * step:
         raise MessageError(f"PointCloud2 row_step {row_step} < width x point_step {cols * step}")
-    raw = _as_bytes(msg.data)
-    if raw.size != rows * row_step:
+    if size != rows * row_step:
         raise MessageError(
-            f"PointCloud2 data has {raw.size} bytes, expected height x row_step = {rows * row_step} (ragged cloud)"
+            f"PointCloud2 data has {size} bytes, expected height x row_step = {rows * row_step} (ragged cloud)"
         )
-    grid = raw.reshape(rows, row_step)[:, : cols * step].reshape(rows, cols, step)
+    grid = _as_bytes(msg.data).reshape(rows, row_step)[:, : cols * step].reshape(rows, cols, step)
 
     def column(name: str) -> FloatArray:
         o = offsets[name]
@@ -86,18 +111,34 @@ def heightfield_from_cloud(msg: Any, *, frame_id: str) -> Heightfield:
         raise MessageError("terrain cloud x and y must be finite (only z may be NaN = unknown)")
     if np.any(np.isinf(z)):
         raise MessageError("terrain cloud z must be finite or NaN, not infinite")
+    for name, values in (("x", x), ("y", y), ("z", z)):
+        problem = limits.coordinate_problem(values, f"terrain cloud {name} values")
+        if problem is not None:
+            raise MessageError(problem)
     if np.all(np.isnan(z)):
         raise MessageError("terrain cloud has no known height (every z is NaN)")
     x0, y0 = float(x[0, 0]), float(y[0, 0])
     cell = float(x[0, 1] - x0)
     if not cell > 0:
         raise MessageError("terrain cloud columns must go along +x with a positive spacing")
-    jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
+    if cell < limits.min_terrain_cell_size * (1.0 - GRID_TOL):
+        raise MessageError(
+            limits.refusal("min_terrain_cell_size", f"terrain cloud cells are {cell:.6g} m", side="under")
+        )
     tol = GRID_TOL * cell + 1e-4 * max(1.0, abs(x0), abs(y0))  # float32 coordinates
-    if np.max(np.abs(x - (x0 + jj * cell))) > tol or np.max(np.abs(y - (y0 + ii * cell))) > tol:
+    if (
+        np.max(np.abs(x - (x0 + np.arange(cols) * cell)[None, :])) > tol
+        or np.max(np.abs(y - (y0 + np.arange(rows) * cell)[:, None])) > tol
+    ):
         raise MessageError("terrain cloud is not a regular square grid (rows along +y, columns along +x)")
+    known = ~np.isnan(z)
+    if not (known[:-1, :-1] & known[:-1, 1:] & known[1:, :-1] & known[1:, 1:]).any():
+        raise MessageError(
+            "terrain cloud has no cell with four known heights (a 2 x 2 block of points without NaN z); "
+            "collision checks need at least one"
+        )
     try:
-        return Heightfield((x0, y0), cell, z)
+        return Heightfield((x0, y0), cell, z, unknown=limits.unknown)
     except GeometryError as exc:
         raise MessageError(f"terrain cloud: {exc}") from exc
 

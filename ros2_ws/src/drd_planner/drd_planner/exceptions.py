@@ -41,3 +41,7 @@ class PlanningError(DrdError):
 
 class PriorFileError(TreeFileError):
     """A world-prior file is missing, corrupt, of another format version, or built for another domain."""
+
+
+class ParameterError(DrdError):
+    """A configuration value (a node parameter, a map limit) is out of range or not one of its choices."""

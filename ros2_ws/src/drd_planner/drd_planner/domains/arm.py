@@ -43,6 +43,8 @@ from scipy.spatial import cKDTree
 from scipy.stats import qmc
 
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.domains.arm_description import check_description_size, check_robot_coordinates
+from drd_planner.domains.arm_static import static_problems
 from drd_planner.domains.arm_worlds import (
     WORLD_MODELS,
     ArmWorld,
@@ -54,6 +56,7 @@ from drd_planner.exceptions import GeometryError, ProblemError
 from drd_planner.geometry.ordering import bisection_order
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
+from drd_planner.planning.map_limits import MapLimits
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -278,11 +281,10 @@ def build_roadmap(
         raise ProblemError(f"roadmap needs num_samples >= 1 and k >= 1, got {num_samples}, {k}")
     ends = robot.fk.as_configurations(np.stack([np.asarray(start, float), np.asarray(goal, float)]))
     valid_ends = statically_valid(robot, ends, floor_z=floor_z)
-    for name, ok in zip(("start", "goal"), valid_ends.tolist(), strict=True):
+    for name, end, ok in zip(("start", "goal"), ends, valid_ends.tolist(), strict=True):
         if not ok:
-            raise ProblemError(
-                f"{name} configuration is outside the limits, self-colliding or below the floor"
-            )
+            why = "; ".join(static_problems(robot, end, floor_z=floor_z, name=name))
+            raise ProblemError(f"{name} configuration is not statically valid: {why}")
     unit = qmc.Halton(d=robot.dof, scramble=True, seed=seed).random(num_samples)
     samples = robot.lower + unit * (robot.upper - robot.lower)
     samples = samples[statically_valid(robot, samples, floor_z=floor_z)]
@@ -699,16 +701,20 @@ class ArmDomain:
             self_collision=other,
         )
 
-    def robot_from_description(self, urdf: str) -> RobotModel:
+    def robot_from_description(self, urdf: str, *, limits: MapLimits = MapLimits.DEFAULT) -> RobotModel:
         """The robot of a ``robot_description`` URDF text, checked against this domain's arm.
 
         Kinematics come from ``urdf``. Collision spheres come from ``urdf`` when its collision geometry
         is spheres, else from this domain's spherized model (a description with mesh collisions, as
-        most robot stacks publish). Self-collision exclusions come from this domain's SRDF.
+        most robot stacks publish). Self-collision exclusions come from this domain's SRDF. The text's
+        bytes, links and spheres are checked against ``limits`` before the model is built, its frames and
+        spheres after (finite, within ``limits.max_coordinate``).
 
         Raises:
-            ProblemError: invalid URDF, or a chain whose joints differ from this domain's.
+            ProblemError: invalid URDF, over a limit (the text names its parameter), coordinates not finite
+                or too large, or a chain whose joints differ from this domain's.
         """
+        check_description_size(urdf, limits)
         _, default_spheres, srdf = self._robot_texts
         try:
             robot = _robot_from_text(urdf, None, srdf)
@@ -724,6 +730,7 @@ class ArmDomain:
             raise ProblemError(
                 f"robot_description has chain joints {list(got)}; the tree was built for {list(want)}"
             )
+        check_robot_coordinates(robot, limits)
         return robot
 
     def end_effector_positions(self, q: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:

@@ -10,7 +10,8 @@ sweep (bisection order, early exit). ``check_many(edges)`` gives the same answer
 
 1. the below-terrain test on all samples of all edges at once (numpy);
 2. a conservative numpy prefilter drops samples that cannot touch anything: their sphere is above the
-   highest terrain corner around them (the scene's own terrain rule, with a wider window) and outside
+   highest corner of the terrain's collision surface around them (the scene's own terrain rule, with a
+   wider window; unknown heights filled as the heightfield's ``unknown`` option says) and outside
    every obstacle's margin-inflated bounding box (binned on a 3D grid of :data:`BIN_SIZE` metres); the
    boxes come from the world description (:func:`obstacle_boxes`) - without them every sample is kept;
 3. the remaining samples go to the scene's vectorised sphere query (numpy AABB prefilter, FCL on near
@@ -24,7 +25,6 @@ import math
 
 import numpy as np
 import numpy.typing as npt
-from numpy.lib.stride_tricks import sliding_window_view
 
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.aabb import shape_aabb
@@ -33,6 +33,7 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.geometry.terrain_collider import cell_maxima, window_max
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -66,12 +67,10 @@ class _NearFilter:
         self._reach = reach + 1e-6
         self._terrain = terrain
         if terrain is not None:
-            h = terrain.heights
-            corners = np.stack([h[:-1, :-1], h[:-1, 1:], h[1:, :-1], h[1:, 1:]])
-            cell_max = np.max(np.where(np.isnan(corners), -np.inf, corners), axis=0)
-            m = math.ceil(self._reach / terrain.cell_size) + 1
-            padded = np.pad(cell_max, m, constant_values=-np.inf)
-            self._top = sliding_window_view(padded, (2 * m + 1, 2 * m + 1)).max(axis=(-2, -1))
+            # Highest collision-surface corner within reach of each cell: two 1-D max passes, linear in the
+            # cells whatever reach / cell_size is (window_max clips the window to the grid).
+            m = math.ceil(min(self._reach / terrain.cell_size, float(max(terrain.shape)))) + 1
+            self._top = window_max(cell_maxima(terrain.surface_heights), m)
         self._boxes = boxes
         if boxes is not None:
             lo_pts = points.min(axis=0) - BIN_SIZE

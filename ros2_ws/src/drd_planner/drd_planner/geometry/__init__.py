@@ -7,8 +7,9 @@ Importing this package imports nothing; use the modules:
 - :mod:`~drd_planner.geometry.shapes`: frozen, validated ``Box(size)``, ``Sphere(radius)``,
   ``Cylinder(radius, length)``, ``Capsule(radius, length)`` (both along local +z, centred) and
   ``TriangleMesh(vertices, faces)``; ``Shape`` is their union; ``make_fcl_geometry(shape)``.
-- :mod:`~drd_planner.geometry.terrain`: ``Heightfield(origin, cell_size, heights)`` with bilinear or
-  triangulated ``height_at``, ``below``, ``crop``, ``to_mesh``, ``with_cell_size``; ``read_esri_ascii``.
+- :mod:`~drd_planner.geometry.terrain`: ``Heightfield(origin, cell_size, heights, unknown="blocked")`` with
+  bilinear or triangulated ``height_at``, ``below``, ``crop``, ``to_mesh``, ``with_cell_size``; unknown (NaN)
+  heights count in collisions as ``unknown`` says (``surface_heights``); ``read_esri_ascii``.
 - :mod:`~drd_planner.geometry.wires`: ``Wire(start, end, sag, diameter)``: parabolic sag, ``points(n)``,
   ``capsule_chain(segments)`` (a chain that contains the wire).
 - :mod:`~drd_planner.geometry.scene`: ``Scene(margin=...)`` with named obstacles, one terrain and wires, and the
@@ -18,7 +19,7 @@ Importing this package imports nothing; use the modules:
 - Helpers: :mod:`~drd_planner.geometry.aabb` (world AABBs, the numpy sphere prefilter),
   :mod:`~drd_planner.geometry.fcl_queries` (fresh FCL requests/results, the first-hit broadphase callback),
   :mod:`~drd_planner.geometry.solid` (inside tests for watertight meshes),
-  :mod:`~drd_planner.geometry.terrain_collider` (terrain tiles and grid prefilter),
+  :mod:`~drd_planner.geometry.terrain_collider` (terrain tiles, grid prefilter, linear-time window maxima),
   :mod:`~drd_planner.geometry.ordering` (bisection order of trajectory samples).
 - Robot models (URDF parsing, batched forward kinematics, sphere models) live in the ``urdf_model``,
   ``kinematics`` and ``robot`` modules.

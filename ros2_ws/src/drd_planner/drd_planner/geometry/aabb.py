@@ -19,7 +19,7 @@ IntArray = npt.NDArray[np.int64]
 #: Spheres per chunk in the two-level prefilter of :func:`spheres_overlap_aabbs`.
 SPHERE_CHUNK = 16
 
-__all__ = ["shape_aabb", "spheres_overlap_aabbs"]
+__all__ = ["boxes_overlap_box", "shape_aabb", "spheres_overlap_aabbs"]
 
 
 def shape_aabb(shape: Shape, pose: Pose) -> tuple[FloatArray, FloatArray]:
@@ -102,3 +102,11 @@ def spheres_overlap_aabbs(
 
 
 _EMPTY: IntArray = np.zeros(0, dtype=np.int64)
+
+
+def boxes_overlap_box(lo: FloatArray, hi: FloatArray, los: FloatArray, his: FloatArray) -> IntArray:
+    """Indices of the (N, 3) boxes ``los``-``his`` that overlap the box ``lo``-``hi`` (metres, closed)."""
+    if los.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    overlap = np.all((los <= hi) & (his >= lo), axis=1)
+    return np.nonzero(overlap)[0].astype(np.int64)

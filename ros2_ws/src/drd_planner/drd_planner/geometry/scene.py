@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.aabb import shape_aabb, spheres_overlap_aabbs
+from drd_planner.geometry.aabb import boxes_overlap_box, shape_aabb, spheres_overlap_aabbs
 from drd_planner.geometry.fcl_queries import first_hit, pair_collides, pair_distance
 from drd_planner.geometry.ordering import bisection_rank
 from drd_planner.geometry.pose import FloatArray, Pose, as_points
@@ -62,6 +62,7 @@ class _Entry:
     kind: Literal["shape", "wire", "terrain"]
     parts: list[_Part]
     shape: Shape | None = None
+    shared: bool = False  # its parts (FCL objects) also belong to another scene: never move them in place
 
 
 @dataclass
@@ -90,7 +91,7 @@ class Scene:
         self._entries: dict[str, _Entry] = {}
         self._terrain: TerrainCollider | None = None
         self._terrain_name: str | None = None
-        self._manager = fcl.DynamicAABBTreeCollisionManager()
+        self._manager: fcl.DynamicAABBTreeCollisionManager | None = None  # built by the first collides()
         self._manager_dirty = False
         self._version = 0
         self._packed: _Packed | None = None
@@ -201,6 +202,19 @@ class Scene:
         self._terrain_name = key
         return key
 
+    def copy(self) -> Scene:
+        """A scene with the same margin, obstacles and terrain sharing their FCL objects: a dict copy, no geometry.
+
+        Moving a shared obstacle later in either scene first gives that scene its own object.
+        """
+        new = Scene(margin=self._margin)
+        for entry in self._entries.values():
+            entry.shared = True
+        new._entries = dict(self._entries)
+        new._terrain, new._terrain_name, new._counter = self._terrain, self._terrain_name, self._counter
+        new._packed = self._packed  # read-only arrays; dropped by the copy's first edit
+        return new
+
     def set_pose(self, name: str, pose: Pose) -> None:
         """Move the shape obstacle ``name`` to ``pose`` (FCL's broadphase is updated at once).
 
@@ -210,9 +224,14 @@ class Scene:
         entry = self._entries.get(name)
         if entry is None or entry.kind != "shape" or entry.shape is None:
             raise GeometryError(f"no movable shape obstacle named {name!r} in the scene")
+        if entry.shared:  # another scene holds the same FCL object: this one gets its own
+            self.remove(name)
+            self._insert(name, _Entry("shape", [self._make_part(entry.shape, pose)], shape=entry.shape))
+            return
         part = entry.parts[0]
         part.obj.setTransform(pose.to_fcl())
-        self._manager.update(part.obj)
+        if self._manager is not None:
+            self._manager.update(part.obj)
         fresh = self._make_part(entry.shape, pose, obj=part.obj)
         part.lo, part.hi, part.point, part.solid = fresh.lo, fresh.hi, fresh.point, fresh.solid
         self._changed()
@@ -226,8 +245,9 @@ class Scene:
         entry = self._entries.pop(name, None)
         if entry is None:
             raise GeometryError(f"no obstacle named {name!r} in the scene")
-        for part in entry.parts:
-            self._manager.unregisterObject(part.obj)
+        if self._manager is not None:
+            for part in entry.parts:
+                self._manager.unregisterObject(part.obj)
         if name == self._terrain_name:
             self._terrain = None
             self._terrain_name = None
@@ -239,7 +259,7 @@ class Scene:
         self._entries.clear()
         self._terrain = None
         self._terrain_name = None
-        self._manager = fcl.DynamicAABBTreeCollisionManager()
+        self._manager = None
         self._manager_dirty = False
         self._changed()
 
@@ -262,6 +282,10 @@ class Scene:
         elif margin > 0.0 and isinstance(shape, Capsule):
             query_shape = Capsule(shape.radius + margin, shape.length)
         query = fcl.CollisionObject(make_fcl_geometry(query_shape), pose.to_fcl())
+        if self._manager is None:  # only this query needs the broadphase: built on first use
+            self._manager = fcl.DynamicAABBTreeCollisionManager()
+            self._manager.registerObjects([p.obj for e in self._entries.values() for p in e.parts])
+            self._manager_dirty = True
         if self._manager_dirty:
             self._manager.update()
             self._manager_dirty = False
@@ -269,7 +293,7 @@ class Scene:
             return True
         packed = self._pack()
         lo, hi = shape_aabb(shape, pose)
-        near = _boxes_overlap(lo - margin, hi + margin, packed.lo, packed.hi)
+        near = boxes_overlap_box(lo - margin, hi + margin, packed.lo, packed.hi)
         tiles = self._terrain_tiles(lo - margin, hi + margin)
         if margin > 0.0 and not inflatable:
             for n in np.concatenate([near, tiles]).tolist():
@@ -414,7 +438,7 @@ class Scene:
             return np.zeros(0, dtype=np.int64)
         tile_lo, tile_hi = self._terrain.tile_boxes
         offset = self._pack().lo.shape[0]
-        tiles: IntArray = _boxes_overlap(lo, hi, tile_lo, tile_hi) + offset
+        tiles: IntArray = boxes_overlap_box(lo, hi, tile_lo, tile_hi) + offset
         return tiles
 
     def _pack(self) -> _Packed:
@@ -462,10 +486,10 @@ class Scene:
         return name
 
     def _insert(self, name: str, entry: _Entry) -> None:
-        """Register ``entry``'s objects with the broadphase and record it."""
-        for part in entry.parts:
-            self._manager.registerObject(part.obj)
-        self._manager_dirty = True
+        """Register ``entry``'s objects with the broadphase (once it exists) and record it."""
+        if self._manager is not None:
+            self._manager.registerObjects([part.obj for part in entry.parts])
+            self._manager_dirty = True
         self._entries[name] = entry
         self._changed()
 
@@ -473,11 +497,3 @@ class Scene:
         """Bump the version and drop derived caches."""
         self._version += 1
         self._packed = None
-
-
-def _boxes_overlap(lo: FloatArray, hi: FloatArray, los: FloatArray, his: FloatArray) -> IntArray:
-    """Indices of the (N, 3) boxes ``los``-``his`` that overlap the box ``lo``-``hi`` (metres, closed)."""
-    if los.shape[0] == 0:
-        return np.zeros(0, dtype=np.int64)
-    overlap = np.all((los <= hi) & (his >= lo), axis=1)
-    return np.nonzero(overlap)[0].astype(np.int64)

@@ -4,8 +4,18 @@ Grid convention: ``heights[i, j]`` is the terrain height (metres) at the grid po
 ``(x, y) = (origin_x + j * cell_size, origin_y + i * cell_size)``; row 0 is the southernmost row (smallest y),
 unlike the ESRI file, which lists rows north to south. NaN means unknown. Between grid points the surface is
 either bilinear (``interpolation="bilinear"``, the default) or the two-triangle split of each cell along its
-(i, j)-(i+1, j+1) diagonal (``interpolation="triangles"``), which is exactly the surface of :meth:`to_mesh`
-and what the scene collides against. Points outside the grid have unknown (NaN) height.
+(i, j)-(i+1, j+1) diagonal (``interpolation="triangles"``), which is exactly the surface of :meth:`to_mesh`.
+Points outside the grid have unknown (NaN) height.
+
+Unknown heights in collision checks: the scene collides against :attr:`Heightfield.surface_heights`, the grid
+with every unknown point filled as the heightfield's ``unknown`` option says:
+
+- ``"blocked"`` (the default, the safe choice): an unknown point stands :data:`BLOCKED_HEIGHT` metres above the
+  highest known one, so every cell with an unknown corner is a wall no vehicle passes over;
+- ``"highest_neighbour"``: every 8-connected region of unknown points takes the height of the highest known
+  grid point next to it (a gap in a plateau is plateau, a gap in a valley is at the valley's rim).
+
+Outside the grid there is no terrain (nothing is below it), whatever the option.
 
 The shared elevation model ``data/terrain/srtm_front_range_144.asc`` (144 x 144 points) has a geographic
 header: ``cellsize 0.000833333333`` arc-degrees (3 arc-seconds), i.e. about 92.6 m north-south and about 71 m
@@ -22,6 +32,7 @@ from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
+from scipy import ndimage
 
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import FloatArray, as_points
@@ -30,11 +41,24 @@ from drd_planner.geometry.shapes import TriangleMesh
 BoolArray = npt.NDArray[np.bool_]
 IntArray = npt.NDArray[np.int64]
 Interpolation = Literal["bilinear", "triangles"]
+#: How unknown (NaN) heights count in collision checks (see the module docstring).
+Unknown = Literal["blocked", "highest_neighbour"]
+UNKNOWN_CHOICES: tuple[str, ...] = ("blocked", "highest_neighbour")
 
-__all__ = ["Heightfield", "Interpolation", "arc_degrees_to_metres", "read_esri_ascii"]
+__all__ = [
+    "BLOCKED_HEIGHT",
+    "UNKNOWN_CHOICES",
+    "Heightfield",
+    "Interpolation",
+    "Unknown",
+    "arc_degrees_to_metres",
+    "read_esri_ascii",
+]
 
 #: Metres per degree of latitude (mean; WGS84 varies by < 0.6 %).
 METRES_PER_DEGREE = 111_320.0
+#: Metres above the highest known height at which ``unknown="blocked"`` puts unknown grid points.
+BLOCKED_HEIGHT = 1e6
 
 
 @dataclass(frozen=True, eq=False, init=False, repr=False)
@@ -46,13 +70,22 @@ class Heightfield:
         cell_size: spacing of grid points in metres along x and y (finite, > 0).
         heights: (rows, cols) float64 heights in metres, rows >= 2 and cols >= 2; row i at
             y = origin_y + i * cell_size, column j at x = origin_x + j * cell_size; NaN = unknown.
+        unknown: how unknown heights count in collision checks, ``"blocked"`` (default) or
+            ``"highest_neighbour"`` (see :attr:`surface_heights`).
     """
 
     origin: FloatArray
     cell_size: float
     heights: FloatArray
+    unknown: Unknown
 
-    def __init__(self, origin: npt.ArrayLike, cell_size: float, heights: npt.ArrayLike) -> None:
+    def __init__(
+        self, origin: npt.ArrayLike, cell_size: float, heights: npt.ArrayLike, *, unknown: Unknown = "blocked"
+    ) -> None:
+        if unknown not in UNKNOWN_CHOICES:
+            raise GeometryError(
+                f"unknown terrain must be one of {', '.join(map(repr, UNKNOWN_CHOICES))}, got {unknown!r}"
+            )
         try:
             grid = np.array(heights, dtype=np.float64)
             origin_xy = np.array(origin, dtype=np.float64)
@@ -74,10 +107,27 @@ class Heightfield:
         object.__setattr__(self, "origin", origin_xy)
         object.__setattr__(self, "cell_size", size)
         object.__setattr__(self, "heights", grid)
+        object.__setattr__(self, "unknown", unknown)
+        object.__setattr__(self, "_surface", None)
 
     def __repr__(self) -> str:
         rows, cols = self.heights.shape
         return f"Heightfield({rows}x{cols}, origin={self.origin.tolist()}, cell_size={self.cell_size})"
+
+    @property
+    def surface_heights(self) -> FloatArray:
+        """(rows, cols) float64 heights in metres that collision checks use: :attr:`heights` with unknowns filled.
+
+        ``unknown="blocked"``: an unknown point is :data:`BLOCKED_HEIGHT` above the highest known height;
+        ``"highest_neighbour"``: each 8-connected unknown region is at the highest known height next to it.
+        With no unknown point this is :attr:`heights` itself; with no known point at all it stays NaN.
+        Computed once (linear in the number of grid points).
+        """
+        surface: FloatArray | None = self.__dict__.get("_surface")
+        if surface is None:
+            surface = _fill_unknown(self.heights, self.unknown)
+            object.__setattr__(self, "_surface", surface)
+        return surface
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -100,14 +150,28 @@ class Heightfield:
             origin: (2,) new position of grid point [0, 0] in metres; default (0, 0), since an origin given in
                 degrees means nothing in a metric frame.
         """
-        return Heightfield((0.0, 0.0) if origin is None else origin, cell_size, self.heights)
+        return Heightfield(
+            (0.0, 0.0) if origin is None else origin, cell_size, self.heights, unknown=self.unknown
+        )
 
     def height_at(self, xy: npt.ArrayLike, *, interpolation: Interpolation = "bilinear") -> FloatArray:
         """(K,) terrain heights in metres at (K, 2) points ``xy`` (metres); NaN outside the grid or unknown.
 
         A single (2,) point gives a (1,) array. ``interpolation`` is ``"bilinear"`` or ``"triangles"``
-        (the surface of :meth:`to_mesh`); both agree at grid points.
+        (the surface of :meth:`to_mesh`); both agree at grid points. These are the measured heights; collision
+        checks use :meth:`surface_at` (unknowns filled).
         """
+        return self._interpolate(self.heights, xy, interpolation)
+
+    def surface_at(self, xy: npt.ArrayLike, *, interpolation: Interpolation = "bilinear") -> FloatArray:
+        """(K,) heights in metres of the collision surface (:attr:`surface_heights`) at (K, 2) points ``xy``.
+
+        NaN outside the grid (and nowhere inside unless no height at all is known).
+        """
+        return self._interpolate(self.surface_heights, xy, interpolation)
+
+    def _interpolate(self, grid: FloatArray, xy: npt.ArrayLike, interpolation: Interpolation) -> FloatArray:
+        """(K,) values of the (rows, cols) ``grid`` at (K, 2) points ``xy`` (NaN outside the grid)."""
         points = _as_xy(xy)
         rows, cols = self.shape
         fx = (points[:, 0] - self.origin[0]) / self.cell_size
@@ -117,7 +181,7 @@ class Heightfield:
         i = np.clip(np.floor(fy), 0, rows - 2).astype(np.int64)
         u = fx - j
         v = fy - i
-        h = self.heights
+        h = grid
         h00, h10, h01, h11 = h[i, j], h[i, j + 1], h[i + 1, j], h[i + 1, j + 1]
         if interpolation == "bilinear":
             out = (1 - v) * ((1 - u) * h00 + u * h10) + v * ((1 - u) * h01 + u * h11)
@@ -134,12 +198,14 @@ class Heightfield:
     def below(
         self, points: npt.ArrayLike, clearance: float = 0.0, *, interpolation: Interpolation = "bilinear"
     ) -> BoolArray:
-        """(K,) bool: whether each of the (K, 3) ``points`` has z < terrain height + ``clearance`` (metres).
+        """(K,) bool: whether each of the (K, 3) ``points`` has z < collision surface height + ``clearance`` (m).
 
-        Points over unknown terrain or outside the grid are not below.
+        The collision surface is :attr:`surface_heights` (unknown heights filled as ``unknown`` says, so under
+        the default ``"blocked"`` every point over a cell with an unknown corner is below). Points outside the
+        grid are not below.
         """
         array = as_points(points)
-        height = self.height_at(array[:, :2], interpolation=interpolation)
+        height = self.surface_at(array[:, :2], interpolation=interpolation)
         known = ~np.isnan(height)
         result: BoolArray = known & (array[:, 2] < np.where(known, height, 0.0) + clearance)
         return result
@@ -161,7 +227,7 @@ class Heightfield:
                 f"crop x {x_range}, y {y_range} keeps fewer than 2 x 2 grid points of {self!r}"
             )
         sub = self.heights[ii[0] : ii[-1] + 1, jj[0] : jj[-1] + 1]
-        return Heightfield((xs[jj[0]], ys[ii[0]]), self.cell_size, sub)
+        return Heightfield((xs[jj[0]], ys[ii[0]]), self.cell_size, sub, unknown=self.unknown)
 
     def grid_points(self) -> FloatArray:
         """(rows, cols, 3) world coordinates (metres) of every grid point (z NaN where unknown)."""
@@ -206,6 +272,31 @@ def cell_triangles(heights: FloatArray) -> IntArray:
     upper = np.stack([a, d, c], axis=-1).reshape(-1, 3)[ok]
     faces: IntArray = np.stack([lower, upper], axis=1).reshape(-1, 3)
     return faces
+
+
+def _fill_unknown(heights: FloatArray, unknown: Unknown) -> FloatArray:
+    """(rows, cols) ``heights`` (metres, NaN = unknown) with every unknown point filled as ``unknown`` says.
+
+    Returns ``heights`` itself when nothing is unknown or nothing is known. Linear in the number of points.
+    """
+    missing = np.isnan(heights)
+    if not missing.any() or missing.all():
+        return heights
+    if unknown == "blocked":
+        top = float(np.nanmax(heights)) + BLOCKED_HEIGHT
+        filled: FloatArray = np.where(missing, top, heights)
+    else:
+        eight = np.ones((3, 3), dtype=bool)
+        labels, count = ndimage.label(missing, structure=eight)
+        # Highest known height among each point's 8 neighbours (-inf where none is known).
+        rim = ndimage.maximum_filter(
+            np.where(missing, -np.inf, heights), footprint=eight, mode="constant", cval=-np.inf
+        )
+        region_top = np.asarray(ndimage.maximum(rim, labels, np.arange(1, count + 1)), dtype=np.float64)
+        filled = heights.copy()
+        filled[missing] = region_top[labels[missing] - 1]
+    filled.flags.writeable = False
+    return filled
 
 
 def arc_degrees_to_metres(cell_size_degrees: float, *, latitude_degrees: float) -> tuple[float, float]:

@@ -1,6 +1,7 @@
 """Terrain in the scene: FCL mesh tiles, a grid prefilter for spheres, and the below-terrain test.
 
-The surface is cut into square tiles of ``tile_cells`` x ``tile_cells`` cells, each its own FCL ``BVHModel``,
+The surface is the heightfield's collision surface (:attr:`Heightfield.surface_heights`: unknown heights filled as
+its ``unknown`` option says, so by default a cell with an unknown corner is a wall). It is cut into square tiles of ``tile_cells`` x ``tile_cells`` cells, each its own FCL ``BVHModel``,
 so a query only meets the few tiles under it. Spheres are sorted into three cases with numpy alone:
 
 - *clear*: the sphere's bottom is above the highest grid point of every cell its footprint touches (the
@@ -18,6 +19,7 @@ import fcl
 import numpy as np
 import numpy.typing as npt
 from numpy.lib.stride_tricks import sliding_window_view
+from scipy.ndimage import maximum_filter1d
 
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.pose import FloatArray
@@ -27,7 +29,33 @@ from drd_planner.geometry.terrain import Heightfield, cell_triangles
 BoolArray = npt.NDArray[np.bool_]
 IntArray = npt.NDArray[np.int64]
 
-__all__ = ["TerrainCollider"]
+__all__ = ["TerrainCollider", "cell_maxima", "window_max"]
+
+
+def cell_maxima(surface: FloatArray) -> FloatArray:
+    """(rows - 1, cols - 1) highest of the four corner heights (metres) of each cell of a (rows, cols) grid.
+
+    NaN corners are skipped; a cell with no known corner gets -inf (no surface to touch).
+    """
+    top = np.fmax(np.fmax(surface[:-1, :-1], surface[:-1, 1:]), np.fmax(surface[1:, :-1], surface[1:, 1:]))
+    result: FloatArray = np.where(np.isnan(top), -np.inf, top)
+    return result
+
+
+def window_max(values: FloatArray, half: int) -> FloatArray:
+    """(n, m) max of the (n, m) ``values`` over the (2 * half + 1)-square window centred on each entry.
+
+    Entries outside the array count as -inf. Two separable 1-D passes, so the cost is linear in ``values.size``
+    whatever ``half`` is (a half-width beyond the array's size is clipped: the window already covers it all).
+    """
+    if half < 0:
+        raise GeometryError(f"window half-width must be >= 0, got {half}")
+    out = values
+    for axis in (0, 1):
+        size = 2 * min(int(half), values.shape[axis]) + 1
+        out = maximum_filter1d(out, size=size, axis=axis, mode="constant", cval=-np.inf)
+    result: FloatArray = out
+    return result
 
 
 class TerrainCollider:
@@ -43,11 +71,12 @@ class TerrainCollider:
             raise GeometryError(f"tile_cells must be an integer >= 1, got {tile_cells!r}")
         self._field = heightfield
         self._tile = int(tile_cells)
-        heights = heightfield.heights
-        corners = np.stack([heights[:-1, :-1], heights[:-1, 1:], heights[1:, :-1], heights[1:, 1:]])
-        known = ~np.isnan(corners).any(axis=0)
-        # Highest / lowest corner of each cell; cells with an unknown corner have no surface.
-        self._cell_max = np.where(known, np.where(known, corners, 0.0).max(axis=0), -np.inf)
+        raw = ~np.isnan(heightfield.heights)
+        if not (raw[:-1, :-1] & raw[:-1, 1:] & raw[1:, :-1] & raw[1:, 1:]).any():
+            raise GeometryError(f"{heightfield!r} has no cell with four known corners")
+        heights = heightfield.surface_heights
+        # Highest corner of each cell of the collision surface (no unknown corner is left in it).
+        self._cell_max = cell_maxima(heights)
         self._window_max: dict[int, FloatArray] = {}
         self._objects: list[fcl.CollisionObject] = []
         lo_list: list[FloatArray] = []
@@ -56,7 +85,9 @@ class TerrainCollider:
         n_ti = math.ceil((rows - 1) / self._tile)
         n_tj = math.ceil((cols - 1) / self._tile)
         self._tile_id = np.full((n_ti, n_tj), -1, dtype=np.int64)
-        points = heightfield.grid_points()
+        size = heightfield.cell_size
+        xs = heightfield.origin[0] + size * np.arange(cols)
+        ys = heightfield.origin[1] + size * np.arange(rows)
         for ti in range(n_ti):
             for tj in range(n_tj):
                 i0, j0 = ti * self._tile, tj * self._tile
@@ -65,7 +96,8 @@ class TerrainCollider:
                 faces = cell_triangles(block)
                 if faces.shape[0] == 0:
                     continue
-                verts = np.nan_to_num(points[i0 : i1 + 1, j0 : j1 + 1].reshape(-1, 3), nan=0.0)
+                gx, gy = np.meshgrid(xs[j0 : j1 + 1], ys[i0 : i1 + 1])
+                verts = np.stack([gx.ravel(), gy.ravel(), np.nan_to_num(block, nan=0.0).ravel()], axis=1)
                 used = verts[np.unique(faces)]
                 self._tile_id[ti, tj] = len(self._objects)
                 self._objects.append(fcl.CollisionObject(bvh_model(verts, faces), fcl.Transform()))
@@ -97,7 +129,7 @@ class TerrainCollider:
         return self._lo.min(axis=0), self._hi.max(axis=0)
 
     def below(self, centres: FloatArray) -> BoolArray:
-        """(K,) bool: which of the (K, 3) points lie under the triangulated surface (unknown = not below)."""
+        """(K,) bool: which of the (K, 3) points lie under the triangulated collision surface."""
         return self._field.below(centres, interpolation="triangles")
 
     def classify(self, centres: FloatArray, radii: FloatArray) -> tuple[BoolArray, IntArray, IntArray]:

@@ -42,6 +42,7 @@ __all__ = [
     "CollisionSpheres",
     "KinematicChain",
     "SrdfInfo",
+    "description_summary",
     "joint_motion",
     "parse_collision_spheres",
     "parse_srdf",
@@ -152,6 +153,29 @@ def _parse_xml(text: str, what: str) -> ET.Element:
     if root.tag != "robot":
         raise GeometryError(f"{what} must have a <robot> root element, found <{root.tag}>")
     return root
+
+
+def description_summary(urdf: str) -> tuple[int, int, float]:
+    """(links, collision spheres, largest |number|) of a URDF string, read by the standard XML parser.
+
+    The largest number is over every ``<origin xyz>`` coordinate and ``<sphere radius>`` (metres); inf when one
+    is not finite. Nothing is built, so this is linear in the text and safe before a full parse.
+
+    Raises:
+        GeometryError: empty or malformed XML, or no ``<robot>`` root.
+    """
+    root = _parse_xml(urdf, "URDF")
+    texts = [(e.get("xyz") or "").split() for e in root.iter("origin")]
+    texts.append([e.get("radius") or "" for e in root.iter("sphere")])
+    largest = 0.0
+    for words in texts:
+        for word in words:
+            try:
+                value = abs(float(word))
+            except ValueError:
+                continue  # the full parse says what is wrong with it
+            largest = max(largest, value if math.isfinite(value) else math.inf)
+    return len(root.findall("link")), len(root.findall("link/collision/geometry/sphere")), largest
 
 
 @contextmanager

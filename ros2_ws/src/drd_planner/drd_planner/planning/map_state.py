@@ -2,16 +2,23 @@
 
 Each accepted update makes a new :class:`MapSnapshot` (immutable, with a version number one higher);
 a plan runs on the snapshot it started from, so a map arriving meanwhile never mixes two maps in one
-plan. Snapshots build their :class:`~drd_planner.geometry.scene.Scene` once, lazily.
+plan. A snapshot's :class:`~drd_planner.geometry.scene.Scene` is built on first use, incrementally: it takes
+the FCL objects of every obstacle that is unchanged since a snapshot whose scene is still kept (so a one-marker
+update builds one object) and the terrain tiles of a terrain already built.
+
+Memory stays bounded however many snapshots callers keep (a node's plan history, say): only the scenes of the
+:data:`SCENE_CACHE_SIZE` snapshots asked for last, and the colliders of the :data:`COLLIDER_CACHE_SIZE`
+terrains asked for last, are kept here; an older snapshot that is asked again builds its scene again.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import weakref
+import threading
+from collections import OrderedDict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -25,17 +32,50 @@ from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.terrain_collider import TerrainCollider
 
 FloatArray = npt.NDArray[np.float64]
+K = TypeVar("K")
+V = TypeVar("V")
 
-#: Terrain colliders by heightfield object: snapshots that keep the terrain (an obstacle update) share it.
-_COLLIDERS: weakref.WeakKeyDictionary[Heightfield, TerrainCollider] = weakref.WeakKeyDictionary()
+#: Terrain colliders kept (the latest terrains asked for); each costs about 1.2 KiB per grid point.
+COLLIDER_CACHE_SIZE = 2
+#: Snapshot scenes kept (the latest snapshots asked for): the current map and the one before it.
+SCENE_CACHE_SIZE = 2
+
+_LOCK = threading.Lock()
+#: id(heightfield) -> (heightfield, its collider), least recently used first; the entry holds the heightfield,
+#: so its id cannot be reused while it is cached.
+_COLLIDERS: OrderedDict[int, tuple[Heightfield, TerrainCollider]] = OrderedDict()
+#: id(snapshot) -> (snapshot, its scene), least recently used first.
+_SCENES: OrderedDict[int, tuple[MapSnapshot, Scene]] = OrderedDict()
+
+
+def _cached(cache: OrderedDict[int, tuple[K, V]], key: K) -> V | None:
+    """The value cached for ``key`` (marking it used), or None; call with ``_LOCK`` held."""
+    hit = cache.get(id(key))
+    if hit is None or hit[0] is not key:
+        return None
+    cache.move_to_end(id(key))
+    return hit[1]
+
+
+def _store(cache: OrderedDict[int, tuple[K, V]], key: K, value: V, size: int) -> V:
+    """Cache ``value`` for ``key`` unless another thread did first; returns the cached value."""
+    with _LOCK:
+        found = _cached(cache, key)
+        if found is not None:
+            return found
+        cache[id(key)] = (key, value)
+        while len(cache) > size:
+            cache.popitem(last=False)
+    return value
 
 
 def terrain_collider(terrain: Heightfield) -> TerrainCollider:
-    """The FCL tiles of ``terrain``, built once per heightfield object (most of a scene's build time)."""
-    collider = _COLLIDERS.get(terrain)
-    if collider is None:
-        collider = _COLLIDERS[terrain] = TerrainCollider(terrain)
-    return collider
+    """The FCL tiles of ``terrain``, built once per heightfield object while it is among the latest terrains."""
+    with _LOCK:
+        found = _cached(_COLLIDERS, terrain)
+    if found is not None:
+        return found
+    return _store(_COLLIDERS, terrain, TerrainCollider(terrain), COLLIDER_CACHE_SIZE)
 
 
 Parts = tuple[tuple[Shape, Pose], ...]
@@ -66,16 +106,15 @@ class MapSnapshot:
         """Whether any map (terrain or an obstacle map, even an empty one) has been received."""
         return self.terrain is not None or self.obstacle_map or bool(self.obstacles)
 
-    @cached_property
+    @property
     def scene(self) -> Scene:
-        """The FCL scene of this snapshot (built on first use)."""
-        scene = Scene(margin=self.margin)
-        if self.terrain is not None:
-            scene.add_terrain(self.terrain, collider=terrain_collider(self.terrain))
-        for key in sorted(self.obstacles):
-            for k, (shape, pose) in enumerate(self.obstacles[key]):
-                scene.add(shape, pose, name=f"{key}#{k}")
-        return scene
+        """The FCL scene of this snapshot (built on first use, reusing what a kept scene already built)."""
+        with _LOCK:
+            found = _cached(_SCENES, self)
+            donors = [pair for pair in _SCENES.values() if pair[0].margin == self.margin]
+        if found is not None:
+            return found
+        return _store(_SCENES, self, _build_scene(self, donors[-1] if donors else None), SCENE_CACHE_SIZE)
 
     def with_obstacles(self, obstacles: Mapping[str, Parts]) -> MapSnapshot:
         """The next version with ``obstacles`` replacing the obstacle map."""
@@ -92,6 +131,30 @@ class MapSnapshot:
         return dataclasses.replace(self, version=self.version + 1, robot=robot)
 
 
+def _build_scene(snapshot: MapSnapshot, donor: tuple[MapSnapshot, Scene] | None) -> Scene:
+    """The scene of ``snapshot``: a copy of the ``donor`` snapshot's scene with only what differs rebuilt.
+
+    Obstacles are named ``"<key>#<part>"``; an obstacle whose parts are the same objects (or equal) in both
+    snapshots keeps the donor's FCL objects, so the cost follows what changed (plus a dict copy).
+    """
+    if donor is None or (donor[0].terrain is not None and snapshot.terrain is None):
+        scene = Scene(margin=snapshot.margin)
+        old: Mapping[str, Parts] = {}
+    else:
+        scene, old = donor[1].copy(), donor[0].obstacles
+    if snapshot.terrain is not None and (donor is None or snapshot.terrain is not donor[0].terrain):
+        scene.add_terrain(snapshot.terrain, collider=terrain_collider(snapshot.terrain))
+    new = snapshot.obstacles
+    changed = [key for key in new if key not in old or (new[key] is not old[key] and new[key] != old[key])]
+    for key in [key for key in old if key not in new] + [key for key in changed if key in old]:
+        for k in range(len(old[key])):
+            scene.remove(f"{key}#{k}")
+    for key in sorted(changed):
+        for k, (shape, pose) in enumerate(new[key]):
+            scene.add(shape, pose, name=f"{key}#{k}")
+    return scene
+
+
 def obstacle_boxes(parts: Iterable[tuple[Shape, Pose]]) -> tuple[FloatArray, FloatArray]:
     """(lo, hi) (N, 3) axis-aligned boxes of ``parts`` in metres (N = 0 gives empty arrays)."""
     boxes = [shape_aabb(shape, pose) for shape, pose in parts]
@@ -102,6 +165,8 @@ def obstacle_boxes(parts: Iterable[tuple[Shape, Pose]]) -> tuple[FloatArray, Flo
 
 def changed_parts(old: MapSnapshot, new: MapSnapshot) -> list[tuple[Shape, Pose]] | None:
     """Parts that appeared, changed or disappeared between two snapshots; None if the terrain or robot changed.
+
+    A terrain counts as unchanged when its grid, heights (NaN = NaN) and unknown-height option are equal.
 
     A replan only has to re-check the plan's edges that come near one of these parts (removed ones
     cannot block anything, but they are reported so callers can tell "nothing changed" apart).
@@ -114,6 +179,7 @@ def changed_parts(old: MapSnapshot, new: MapSnapshot) -> list[tuple[Shape, Pose]
             and new.terrain is not None
             and old.terrain.shape == new.terrain.shape
             and old.terrain.cell_size == new.terrain.cell_size
+            and old.terrain.unknown == new.terrain.unknown
             and np.array_equal(old.terrain.origin, new.terrain.origin)
             and np.array_equal(old.terrain.heights, new.terrain.heights, equal_nan=True)
         )

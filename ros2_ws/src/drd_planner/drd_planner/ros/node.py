@@ -81,12 +81,13 @@ from drd_msgs_py.plans import (
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_planner.exceptions import DrdError
 from drd_planner.planner.prior_file import load_tree_bundle
+from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
-from drd_planner.ros.parameters import PARAMETERS, declare_parameters, parameter_problems
+from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
 from drd_planner.ros.plan_worker import PlanWorker
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values, status_name
 
@@ -187,6 +188,7 @@ class PlannerNode(LifecycleNode):
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
         self._library_markers: dict[tuple[str, Any], Any] = {}
         self._last_plan: LastPlan | None = None
+        self._limits = MapLimits.DEFAULT
         self.add_on_set_parameters_callback(self._on_set_parameters)
         guard_change_state(self, report=self._reporter("node"))
         self._heartbeat = self.create_timer(
@@ -231,6 +233,7 @@ class PlannerNode(LifecycleNode):
         if problems:
             self._report_error(f"configure: invalid parameters: {'; '.join(problems)}", topic="node")
             return TransitionCallbackReturn.FAILURE
+        self._limits = map_limits_of({spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS})
         names = [p for p in self.get_parameter("tree_paths").value if p]
         self._frame = str(self.get_parameter("frame_id").value)
         max_checks = int(self.get_parameter("max_checks").value)
@@ -346,18 +349,19 @@ class PlannerNode(LifecycleNode):
 
     def _on_obstacles(self, msg: MarkerArray) -> None:
         try:
-            update = obstacle_update(msg, frame_id=self._frame)
+            update = obstacle_update(msg, frame_id=self._frame, limits=self._limits)
+            obstacles = update.apply(self._obstacles)  # refuses a map that grows beyond a limit
         except MessageError as exc:
             self._report_error(f"obstacles refused, map unchanged: {exc}", topic="maps")
             return
-        self._obstacles = update.apply(self._obstacles)
+        self._obstacles = obstacles
         self._set_snapshot(
             self._snapshot.with_obstacles({k: o.parts for k, o in self._obstacles.items()}), "obstacles"
         )
 
     def _on_terrain(self, msg: PointCloud2) -> None:
         try:
-            terrain = heightfield_from_cloud(msg, frame_id=self._frame)
+            terrain = heightfield_from_cloud(msg, frame_id=self._frame, limits=self._limits)
         except MessageError as exc:
             self._report_error(f"terrain refused, map unchanged: {exc}", topic="maps")
             return
@@ -369,7 +373,9 @@ class PlannerNode(LifecycleNode):
             self.get_logger().info("robot_description ignored: no arm tree is loaded")
             return
         try:
-            robot = arms[0].domain.robot_from_description(str(msg.data))  # type: ignore[attr-defined]
+            robot = arms[0].domain.robot_from_description(  # type: ignore[attr-defined]
+                str(msg.data), limits=self._limits
+            )
         except DrdError as exc:
             self._report_error(f"robot_description refused, the arm model is unchanged: {exc}", topic="maps")
             return

@@ -16,7 +16,16 @@ from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-__all__ = ["PARAMETERS", "ParameterSpec", "declare_parameters", "parameter_problems"]
+from drd_planner.planning.map_limits import MapLimits
+
+__all__ = [
+    "MAP_LIMIT_PARAMETERS",
+    "PARAMETERS",
+    "ParameterSpec",
+    "declare_parameters",
+    "map_limits_of",
+    "parameter_problems",
+]
 
 #: Largest goal tolerance (metres) a goal may be off the tree's goal; beyond it a request would match
 #: goals the tree does not plan to.
@@ -143,6 +152,26 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         "Re-check the published plan on every map update and replan (or withdraw it) when it is blocked.",
     ),
 )
+
+
+def _limit_check(name: str) -> Callable[[Any], str | None]:
+    return lambda value: MapLimits.check_value(name, value)
+
+
+#: The map limits (:class:`~drd_planner.planning.map_limits.MapLimits`), one parameter each: checked
+#: before a map message is decoded; a map beyond one is refused naming it. Read at configure.
+MAP_LIMIT_PARAMETERS: tuple[ParameterSpec, ...] = tuple(
+    ParameterSpec(
+        name, default, f"{MapLimits.descriptions()[name].rstrip('.')}; read at configure.", _limit_check(name)
+    )
+    for name, default in MapLimits.DEFAULT.as_parameters().items()
+)
+PARAMETERS = PARAMETERS + MAP_LIMIT_PARAMETERS
+
+
+def map_limits_of(values: Mapping[str, Any]) -> MapLimits:
+    """The :class:`MapLimits` of the node's parameter values (name -> value; other names are ignored)."""
+    return MapLimits.from_parameters(values)
 
 
 def declare_parameters(node: Any) -> None:

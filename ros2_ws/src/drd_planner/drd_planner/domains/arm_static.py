@@ -1,0 +1,64 @@
+"""Why an arm configuration fails the static test, in words (for errors about a start or goal).
+
+:func:`drd_planner.domains.arm.statically_valid` answers yes or no for many configurations at once;
+:func:`static_problems` says, for one configuration, which of its three checks failed and what to
+change: the joint limits (which joint, its value and range), self-collision (which two links touch) or
+the floor (which link reaches how low, and the ``floor_z`` parameter that sets the floor).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.geometry.robot import RobotModel
+
+__all__ = ["static_problems"]
+
+
+def static_problems(robot: RobotModel, q: npt.ArrayLike, *, floor_z: float | None, name: str) -> list[str]:
+    """The checks the (D,) configuration ``q`` fails, one sentence each; empty when it is statically valid.
+
+    Args:
+        robot: the robot (limits, spheres, self-collision pairs).
+        q: the configuration (rad).
+        floor_z: the floor height of the static test (m); None: no floor.
+        name: what ``q`` is to the user (``"start"``, ``"goal"``), the parameter that changes it.
+    """
+    qa = robot.fk.as_configurations(np.asarray(q, dtype=np.float64).reshape(1, -1))
+    config = qa[0]
+    problems: list[str] = []
+    outside = np.flatnonzero((config < robot.lower) | (config > robot.upper))
+    if outside.size:
+        joints = "; ".join(
+            f"{robot.chain.joint_names[j]} = {config[j]:.3f} not in [{robot.lower[j]:.3f}, {robot.upper[j]:.3f}]"
+            for j in outside.tolist()
+        )
+        problems.append(f"outside the joint limits ({joints}): change {name}")
+    if bool(robot.self_collision(qa)[0]):
+        problems.append(f"self-colliding ({_touching_links(robot, qa)}): change {name}")
+    if floor_z is not None:
+        moving = np.flatnonzero(robot.spheres.frame_index > 0)
+        bottoms = robot.sphere_centres(qa)[0, moving, 2] - robot.spheres.radii[moving]
+        lowest = int(np.argmin(bottoms))
+        if bottoms[lowest] < floor_z:
+            link = robot.chain.link_names[int(robot.spheres.link_index[moving[lowest]])]
+            problems.append(
+                f"below the floor ({link} reaches down to z = {bottoms[lowest]:.3f} m, the floor is at "
+                f"floor_z = {floor_z:g} m): change {name}, or lower floor_z (null: no floor test)"
+            )
+    return problems
+
+
+def _touching_links(robot: RobotModel, qa: npt.NDArray[np.float64]) -> str:
+    """The first checked link pair whose spheres overlap in the (1, D) configuration ``qa``."""
+    centres = robot.sphere_centres(qa)[0]
+    a, b = robot.self_pairs[:, 0], robot.self_pairs[:, 1]
+    gap = np.einsum("ki,ki->k", centres[a] - centres[b], centres[a] - centres[b])
+    hits = np.flatnonzero(gap < (robot.spheres.radii[a] + robot.spheres.radii[b]) ** 2)
+    if hits.size == 0:
+        return "two links touch"
+    names = robot.chain.link_names
+    link_a = names[int(robot.spheres.link_index[a[hits[0]]])]
+    link_b = names[int(robot.spheres.link_index[b[hits[0]]])]
+    return f"{link_a} touches {link_b}"
