@@ -155,3 +155,25 @@ def test_changed_parts_sees_a_new_unknown_terrain_option() -> None:
     other = snapshot.with_terrain(Heightfield((0.0, 0.0), 1.0, heights, unknown="highest_neighbour"))
     assert changed_parts(snapshot, same) == []
     assert changed_parts(snapshot, other) is None
+
+
+def test_a_new_terrain_is_built_after_the_oldest_is_let_go(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Peak memory of a stream of terrain updates: never more than COLLIDER_CACHE_SIZE colliders at once."""
+    import drd_planner.planning.map_state as map_state
+
+    alive: weakref.WeakSet[TerrainCollider] = weakref.WeakSet()
+    at_build: list[int] = []
+
+    def counting(terrain: Heightfield) -> TerrainCollider:
+        gc.collect()
+        at_build.append(len(alive))  # colliders still alive while the next one is being built
+        collider = TerrainCollider(terrain)
+        alive.add(collider)
+        return collider
+
+    monkeypatch.setattr(map_state, "TerrainCollider", counting)
+    snapshot = MapSnapshot(0)
+    for k in range(6):
+        snapshot = snapshot.with_terrain(_terrain(k))  # the node keeps the current snapshot while it builds
+        assert snapshot.scene.spheres_collide([[4.0, 4.0, k - 0.5]], 0.1)
+    assert max(at_build) <= COLLIDER_CACHE_SIZE - 1

@@ -69,10 +69,22 @@ def _store(cache: OrderedDict[int, tuple[K, V]], key: K, value: V, size: int) ->
     return value
 
 
+def _make_room(cache: OrderedDict[int, tuple[K, V]], size: int) -> None:
+    """Drop the least recently used entries until one more fits in ``size``; call with ``_LOCK`` held.
+
+    Called before a new entry is built, so the entry being built and the ones kept never exceed ``size``
+    at once (the peak memory of a map update is that of ``size`` terrains, not one more).
+    """
+    while len(cache) >= size:
+        cache.popitem(last=False)
+
+
 def terrain_collider(terrain: Heightfield) -> TerrainCollider:
     """The FCL tiles of ``terrain``, built once per heightfield object while it is among the latest terrains."""
     with _LOCK:
         found = _cached(_COLLIDERS, terrain)
+        if found is None:
+            _make_room(_COLLIDERS, COLLIDER_CACHE_SIZE)
     if found is not None:
         return found
     return _store(_COLLIDERS, terrain, TerrainCollider(terrain), COLLIDER_CACHE_SIZE)
@@ -111,10 +123,12 @@ class MapSnapshot:
         """The FCL scene of this snapshot (built on first use, reusing what a kept scene already built)."""
         with _LOCK:
             found = _cached(_SCENES, self)
-            donors = [pair for pair in _SCENES.values() if pair[0].margin == self.margin]
+            donor = next((pair for pair in reversed(_SCENES.values()) if pair[0].margin == self.margin), None)
+            if found is None:
+                _make_room(_SCENES, SCENE_CACHE_SIZE)  # the newest scene stays (it is the donor)
         if found is not None:
             return found
-        return _store(_SCENES, self, _build_scene(self, donors[-1] if donors else None), SCENE_CACHE_SIZE)
+        return _store(_SCENES, self, _build_scene(self, donor), SCENE_CACHE_SIZE)
 
     def with_obstacles(self, obstacles: Mapping[str, Parts]) -> MapSnapshot:
         """The next version with ``obstacles`` replacing the obstacle map."""
