@@ -40,6 +40,15 @@ volume of the continuous motion too, not only for the sampled check. Boxes are c
 (without the margin, which is added per query) and computed only for the edges asked; the spheres are
 recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
 ones) count every plan edge as affected.
+
+**Motion edges** (a :class:`~drd_planner.planning.query_session.QuerySession`'s plans from or to a state
+off the graph) have ids from E on that the session maps to the motion's states (``session.motion_states``;
+an id names one motion for the session's lifetime, so the box cache stays valid). Their sweep spheres are
+those of the motion's own samples (helicopter: the vehicle sphere at each; arm: every collision sphere at
+each configuration, grown by half the largest per-joint step between two samples), exactly what the
+checkers' ``check_motion`` tests, and a re-check calls ``check_motion`` on them. An id the session does not
+know (never planned, or forgotten) is refused with a :class:`PlanningError` (the node then replans): a
+motion is never skipped because its geometry is unknown.
 """
 
 from __future__ import annotations
@@ -49,25 +58,59 @@ import weakref
 from collections import Counter
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import EdgeChecker
+from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.exceptions import PlanningError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.shapes import Shape
 from drd_planner.planning.map_state import MapSnapshot, changed_parts, obstacle_boxes
-from drd_planner.planning.session import PlanningSession
 
 FloatArray = npt.NDArray[np.float64]
+
+
+class ReplanSession(Protocol):
+    """What re-checking reads of a session.
+
+    A :class:`~drd_planner.planning.session.PlanningSession` or a
+    :class:`~drd_planner.planning.query_session.QuerySession`; a session with motion edges also has
+    ``motion_states(edge) -> (K, D) states or None``.
+    """
+
+    @property
+    def name(self) -> str:
+        """A label for messages."""
+        ...
+
+    @property
+    def domain(self) -> Domain:
+        """The domain (graph, robot or lattice)."""
+        ...
+
+    @property
+    def margin(self) -> float:
+        """The domain's collision margin, metres."""
+        ...
+
+    def edge_states(self, edge: int) -> FloatArray:
+        """(K, D) states along an edge, tail first."""
+        ...
+
+    def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
+        """The edge checker of a snapshot."""
+        ...
+
 
 __all__ = [
     "BOX_SLACK",
     "RecheckResult",
+    "ReplanSession",
     "affected_edges",
     "cached_sweep_edges",
     "differing_parts",
@@ -80,7 +123,7 @@ BOX_SLACK = 1e-6
 
 #: Per session, per arm model (None: the domain's own): edge id -> (lo, hi), each (3,) metres, without margin.
 _BOXES: weakref.WeakKeyDictionary[
-    PlanningSession, dict[RobotModel | None, dict[int, tuple[FloatArray, FloatArray]]]
+    ReplanSession, dict[RobotModel | None, dict[int, tuple[FloatArray, FloatArray]]]
 ] = weakref.WeakKeyDictionary()
 #: Arm models (``robot_description`` versions) whose boxes one session keeps; the oldest is dropped first.
 MAX_CACHED_ROBOTS = 4
@@ -125,21 +168,31 @@ class RecheckResult:
 # Sweep boxes
 
 
-def _edge_ids(session: PlanningSession, edges: Iterable[int]) -> list[int]:
-    """``edges`` as a list of ints, validated against the session's graph (PlanningError otherwise)."""
+def _motion_states(session: ReplanSession, edge: int) -> FloatArray | None:
+    """(K, D) states of a motion edge the session knows (None: a graph edge, or no such motion)."""
+    if edge < session.domain.graph.num_edges:
+        return None
+    lookup = getattr(session, "motion_states", None)
+    return None if lookup is None else lookup(edge)
+
+
+def _edge_ids(session: ReplanSession, edges: Iterable[int]) -> list[int]:
+    """``edges`` as a list of ints: graph edges or motions the session knows (PlanningError otherwise)."""
     ids = np.asarray(list(edges)).reshape(-1)
     if ids.size and not np.issubdtype(ids.dtype, np.integer):
         raise PlanningError(f"edge ids must be integers, got dtype {ids.dtype}")
     count = session.domain.graph.num_edges
     out = [int(e) for e in ids.tolist()]
-    bad = [e for e in out if not 0 <= e < count]
+    bad = [e for e in out if not (0 <= e < count or (e >= count and _motion_states(session, e) is not None))]
     if bad:
-        raise PlanningError(f"{session.name}: edge ids {bad[:5]} are not in [0, {count})")
+        raise PlanningError(
+            f"{session.name}: edge ids {bad[:5]} are not in [0, {count}) nor motions the session knows"
+        )
     return out
 
 
 def _helicopter_spheres(
-    session: PlanningSession, domain: HelicopterDomain, edges: list[int]
+    session: ReplanSession, domain: HelicopterDomain, edges: list[int]
 ) -> list[tuple[FloatArray, FloatArray]]:
     """Per edge: the (K, 3) trajectory samples and (K,) reach = vehicle radius + half a sample step.
 
@@ -182,14 +235,15 @@ def _arm_rates(robot: RobotModel) -> FloatArray:
 
 
 def _arm_spheres(
-    domain: ArmDomain, edges: list[int], robot: RobotModel | None
+    session: ReplanSession, domain: ArmDomain, edges: list[int], robot: RobotModel | None
 ) -> list[tuple[FloatArray, FloatArray]]:
     """Per edge: (M, 3) centres and (M,) reach of every robot sphere at every checked configuration.
 
     The configurations are those :class:`~drd_planner.domains.arm.ArmEdgeChecker` tests (both end
     vertices and the interior samples of ``domain.samples``; the base spheres are in every one); the
     reach of a sphere is its radius plus half the distance it can move in one sample step
-    (:func:`_arm_rates` times the edge's joint step).
+    (:func:`_arm_rates` times the edge's joint step). A motion edge's configurations are its own samples
+    (what ``check_motion`` tests), its joint step the largest per joint between two of them.
     """
     graph, samples = domain.graph, domain.samples
     robot = robot if robot is not None else domain.robot
@@ -201,6 +255,13 @@ def _arm_spheres(
     blocks: list[FloatArray] = []
     reaches: list[FloatArray] = []
     for e in edges:
+        motion = _motion_states(session, e)
+        if motion is not None:
+            q = np.asarray(motion, dtype=np.float64)
+            step = np.abs(np.diff(q, axis=0)).max(axis=0) if q.shape[0] > 1 else np.zeros(q.shape[1])
+            blocks.append(q)
+            reaches.append(np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, q.shape[0]))
+            continue
         u, v = (int(x) for x in graph.edges[e])
         interior = samples.configurations(graph, e)
         blocks.append(np.concatenate([states[[u, v]], interior]))
@@ -219,7 +280,7 @@ def _arm_spheres(
 
 
 def _sweep_spheres(
-    session: PlanningSession, edges: list[int], robot: RobotModel | None
+    session: ReplanSession, edges: list[int], robot: RobotModel | None
 ) -> list[tuple[FloatArray, FloatArray]]:
     """Per edge ``(centres (M, 3), reach (M,))`` in metres, without the margin (see the module docstring).
 
@@ -232,16 +293,16 @@ def _sweep_spheres(
     if isinstance(domain, HelicopterDomain):
         return _helicopter_spheres(session, domain, edges)
     if isinstance(domain, ArmDomain):
-        return _arm_spheres(domain, edges, robot)
+        return _arm_spheres(session, domain, edges, robot)
     raise PlanningError(f"{session.name}: no sweep model for the {domain.name} domain")
 
 
-def _supports_sweep(session: PlanningSession) -> bool:
+def _supports_sweep(session: ReplanSession) -> bool:
     return isinstance(session.domain, HelicopterDomain | ArmDomain)
 
 
 def edge_sweep_boxes(
-    session: PlanningSession,
+    session: ReplanSession,
     edges: Iterable[int],
     *,
     margin: float | None = None,
@@ -262,7 +323,8 @@ def edge_sweep_boxes(
             own); ignored by the helicopter.
 
     Raises:
-        PlanningError: an edge id outside the graph, a negative margin, or a domain with no sweep model.
+        PlanningError: an edge id neither in the graph nor a motion the session knows, a negative
+            margin, or a domain with no sweep model.
     """
     ids = _edge_ids(session, edges)
     pad = session.margin if margin is None else float(margin)
@@ -284,7 +346,7 @@ def edge_sweep_boxes(
     return lo, hi
 
 
-def cached_sweep_edges(session: PlanningSession, robot: RobotModel | None = None) -> frozenset[int]:
+def cached_sweep_edges(session: ReplanSession, robot: RobotModel | None = None) -> frozenset[int]:
     """Edge ids whose sweep box the session's cache holds for an arm model (for diagnostics and tests)."""
     return frozenset(_BOXES.get(session, {}).get(robot, {}))
 
@@ -343,7 +405,7 @@ def _spheres_touch_boxes(
 
 
 def _affected(
-    session: PlanningSession,
+    session: ReplanSession,
     plan_edges: Sequence[int],
     old: MapSnapshot,
     new: MapSnapshot,
@@ -378,7 +440,7 @@ def _affected(
 
 
 def affected_edges(
-    session: PlanningSession,
+    session: ReplanSession,
     plan_edges: Sequence[int],
     old_snapshot: MapSnapshot,
     new_snapshot: MapSnapshot,
@@ -400,7 +462,7 @@ def affected_edges(
         refine: also test the spheres of the edges whose box overlaps a change (False: the box test only).
 
     Raises:
-        PlanningError: an edge id outside the graph.
+        PlanningError: an edge id neither in the graph nor a motion the session knows.
     """
     return _affected(session, plan_edges, old_snapshot, new_snapshot, refine=refine)[0]
 
@@ -409,8 +471,19 @@ def affected_edges(
 # Re-checking
 
 
+def _recheck_one(session: ReplanSession, checker: EdgeChecker, edge: int) -> bool:
+    """Check one plan edge on the new snapshot: a graph edge by id, a motion through ``check_motion``."""
+    motion = _motion_states(session, edge)
+    if motion is None:
+        return bool(checker.check(edge))
+    check_motion = getattr(checker, "check_motion", None)
+    if check_motion is None:
+        raise PlanningError(f"{session.name}: the checker cannot re-check motion edge {edge}")
+    return bool(check_motion(motion))
+
+
 def recheck_plan(
-    session: PlanningSession,
+    session: ReplanSession,
     plan_edges: Sequence[int],
     old_snapshot: MapSnapshot,
     new_snapshot: MapSnapshot,
@@ -421,14 +494,14 @@ def recheck_plan(
 
     Args:
         session: the session the plan came from.
-        plan_edges: the plan's edge ids, in order.
+        plan_edges: the plan's edge ids, in order (graph edges, and motion ids the session knows).
         old_snapshot: the snapshot the plan was verified on (see the module docstring).
         new_snapshot: the latest snapshot.
         checker: the edge checker of ``new_snapshot`` (default ``session.checker(new_snapshot)``, built
             only when some edge needs a check).
 
     Raises:
-        PlanningError: an edge id outside the graph.
+        PlanningError: an edge id neither in the graph nor a motion the session knows.
     """
     t0 = time.perf_counter()
     affected, everything = _affected(session, plan_edges, old_snapshot, new_snapshot, refine=True)
@@ -440,7 +513,7 @@ def recheck_plan(
         check = checker if checker is not None else session.checker(new_snapshot)
         for e in affected:
             t1 = time.perf_counter()
-            free = bool(check.check(e))
+            free = _recheck_one(session, check, e)
             check_ms.append((time.perf_counter() - t1) * 1e3)
             rechecked.append(e)
             if not free:

@@ -1,0 +1,387 @@
+"""QuerySession: any query of a world prior on real FCL maps, from where the robot is, re-checked after updates.
+
+The priors are built in the test from small generated datasets (a 300 m x 200 m helicopter lattice in Wires
+worlds, a 150-sample Panda roadmap in Table+Clutter worlds), so nothing outside the repository is needed
+but the shared Panda model (the arm tests skip without it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from conftest import SHARED_DATA
+
+from drd_planner.cli import main
+from drd_planner.domains.arm import ArmDomain
+from drd_planner.domains.helicopter import HelicopterDomain
+from drd_planner.domains.helicopter_worlds import world_parts
+from drd_planner.exceptions import PlanningError, PriorFileError, ProblemError, TreeFileError
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Box
+from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planner import WorldPrior, load_prior
+from drd_planner.planning.map_state import MapSnapshot, Parts
+from drd_planner.planning.query_session import QueryPlanResult, QuerySession
+from drd_planner.planning.query_support import MotionRegistry, state_from_pose, yaw_from_quaternion
+from drd_planner.planning.replan import affected_edges, recheck_plan
+
+TREES = Path(__file__).resolve().parents[2] / "trees"
+HELI_SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'
+ARM_SPEC = '{"num_samples": 150, "k": 6, "seed": 3}'
+HELI_GOAL = 16  # (250, 0, 65): not the tree's goal (300, 0, 65)
+ARM_GOALS = (5, 30, 77)  # not the tree's goal (vertex 1)
+
+
+def _build_prior(folder: Path, domain: str, model: str, spec: str) -> WorldPrior:
+    dataset, prior = folder / "data.npz", folder / "prior.npz"
+    argv = ["build-dataset", "--domain", domain, "--world-model", model, "--worlds", "40", "--seed", "3"]
+    argv += ["--out", str(dataset), "--workers", "1", "--domain-spec", spec]
+    assert main(argv) == 0
+    argv = ["build-tree", "--dataset", str(dataset), "--out", str(prior), "--eta", "0.2", "--kappa", "10"]
+    assert main(argv) == 0
+    return load_prior(prior, expected_domain=domain)
+
+
+@pytest.fixture(scope="module")
+def heli_prior(tmp_path_factory: pytest.TempPathFactory) -> WorldPrior:
+    return _build_prior(tmp_path_factory.mktemp("heli"), "helicopter", "wires", HELI_SPEC)
+
+
+def _heli_parts(session: QuerySession, seed: int) -> tuple[dict[str, Parts], Heightfield | None]:
+    domain = session.domain
+    assert isinstance(domain, HelicopterDomain)
+    world = domain.make_world("wires", seed)
+    return {
+        name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)
+    }, world.terrain
+
+
+def _heli_snapshot(session: QuerySession, seed: int) -> MapSnapshot:
+    parts, terrain = _heli_parts(session, seed)
+    return MapSnapshot(1, parts, terrain, session.margin)
+
+
+def _heli_start(session: QuerySession) -> np.ndarray:
+    """30 m behind vertex 0 (the tree's start), same altitude and heading."""
+    return session.vertex_state(0) + np.array([-30.0, 0.0, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def heli_plan(heli_prior: WorldPrior) -> tuple[QuerySession, MapSnapshot, QueryPlanResult]:
+    """The first Wires world (from seed 100) with a free path from the off-graph start to HELI_GOAL."""
+    session = QuerySession(heli_prior, name="heli")
+    for seed in range(100, 130):
+        snapshot = _heli_snapshot(session, seed)
+        result = session.plan(snapshot, _heli_start(session), HELI_GOAL, seed=0)
+        if result.ok:
+            return session, snapshot, result
+    raise AssertionError("no world with a free path")
+
+
+def _independent_checker(session: QuerySession, snapshot: MapSnapshot) -> Any:
+    """A checker on a new scene of the same maps (no cached outcome, no shared scene)."""
+    fresh = MapSnapshot(snapshot.version, dict(snapshot.obstacles), snapshot.terrain, snapshot.margin)
+    return session.domain.checker(fresh.scene)
+
+
+# --------------------------------------------------------------------------------------------------
+# Helicopter
+
+
+def test_off_graph_start_to_another_goal_on_a_real_map(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
+) -> None:
+    session, snapshot, result = heli_plan
+    prior, start = session.prior, _heli_start(session)
+    num_edges = prior.graph.num_edges
+    assert HELI_GOAL != prior.trees[0].goal
+    assert np.linalg.norm(start - session.vertex_state(0)) == pytest.approx(30.0)
+    assert result.ok and result.status == "path_found" and result.query == "connected"
+    assert result.stage in ("tree", "bisect", "graph") and result.stage in result.message
+    # The path starts at the robot's state and ends at the goal vertex.
+    np.testing.assert_allclose(result.states[0], start)
+    np.testing.assert_allclose(result.states[-1], session.vertex_state(HELI_GOAL))
+    assert result.path_vertices[0] == prior.graph.num_vertices and result.path_vertices[-1] == HELI_GOAL
+    motions = [e for e in result.path_edges if e >= num_edges]
+    assert motions == [result.path_edges[0]]  # the start is joined by one new motion
+    np.testing.assert_allclose(session.edge_states(motions[0])[0], start)
+    # Every path edge, the motion included, was checked free in this plan.
+    checked = {c.edge: c.free for c in result.checks}
+    assert all(checked.get(e) is True for e in result.path_edges)
+    assert {c.stage for c in result.checks} <= {"tree", "bisect", "graph"}
+    # Dense states: at most one sample spacing (5 m, horizontal) apart, and free by an independent FCL check.
+    steps = np.linalg.norm(np.diff(result.states[:, :2], axis=0), axis=1)
+    assert steps.max() <= 5.0 + 1e-6 and result.states.shape[0] > 2 * len(result.path_edges)
+    checker = _independent_checker(session, snapshot)
+    assert checker.check_motion(result.states)
+    for e in result.path_edges:
+        assert checker.check_motion(session.edge_states(e))
+    assert set(result.seconds) >= {"prepare", "checks", "selection", "library", "policy", "total"}
+
+
+def test_every_found_path_is_free_and_every_failure_has_a_status(heli_prior: WorldPrior) -> None:
+    session = QuerySession(heli_prior, name="heli")
+    start = _heli_start(session)
+    statuses = set()
+    for seed in range(100, 108):
+        snapshot = _heli_snapshot(session, seed)
+        checker = _independent_checker(session, snapshot)
+        for goal in (HELI_GOAL, 9, 13):
+            result = session.plan(snapshot, start, goal, seed=seed)
+            statuses.add(result.status)
+            truth = {c.edge: bool(checker.check_motion(session.edge_states(c.edge))) for c in result.checks}
+            assert truth == {c.edge: c.free for c in result.checks}  # every outcome is the FCL answer
+            if result.ok:
+                assert checker.check_motion(result.states)
+                np.testing.assert_allclose(result.states[0], start)
+                np.testing.assert_allclose(result.states[-1], session.vertex_state(goal))
+            else:
+                assert (
+                    result.status == "no_free_path"
+                    and result.path_edges == ()
+                    and "blocked" in result.message
+                )
+    assert statuses == {"path_found", "no_free_path"}
+
+
+def test_same_seed_same_checks_and_the_snapshot_cache(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
+) -> None:
+    session, snapshot, first = heli_plan
+    fresh = QuerySession(session.prior, name="again")
+    start = _heli_start(session)
+    other = fresh.plan(snapshot, start, HELI_GOAL, seed=0)
+    assert [(c.edge, c.free, c.stage) for c in other.checks] == [
+        (c.edge, c.free, c.stage) for c in first.checks
+    ]
+    assert other.path_edges == first.path_edges
+    np.testing.assert_array_equal(other.states, first.states)
+    # The same session on the same snapshot: the same motion ids, every answer from the cache.
+    again = fresh.plan(snapshot, start, HELI_GOAL, seed=0)
+    assert [c.edge for c in again.checks] == [c.edge for c in first.checks]
+    assert all(c.cached and c.check_ms == 0.0 for c in again.checks)
+    assert not any(c.cached for c in other.checks)
+
+
+def test_a_goal_state_and_a_vertex_id_are_the_same_goal(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
+) -> None:
+    session, snapshot, first = heli_plan
+    goal = session.goal_state_from_position(session.vertex_state(HELI_GOAL)[:3], yaw=0.0)
+    np.testing.assert_array_equal(goal, session.vertex_state(HELI_GOAL))
+    by_state = session.plan(snapshot, _heli_start(session), goal, seed=0)
+    assert by_state.path_edges == first.path_edges
+    # A vertex start with the vertex goal of the precomputed tree uses the tree.
+    tree = session.prior.trees[0]
+    own = session.plan(snapshot, session.vertex_state(tree.start), tree.goal, seed=0)
+    assert own.query == f"tree:{tree.name}"
+    assert own.path_vertices[:1] in ((), (tree.start,))
+
+
+def test_budgets_end_with_their_own_status(heli_prior: WorldPrior) -> None:
+    session = QuerySession(heli_prior, name="heli", max_checks=1)
+    snapshot = _heli_snapshot(session, 100)
+    capped = session.plan(snapshot, _heli_start(session), HELI_GOAL)
+    assert not capped.ok and capped.status == "max_checks" and len(capped.checks) == 1
+    assert "check budget" in capped.message
+    session.set_budgets(None, 1e-9)
+    timed = session.plan(snapshot, _heli_start(session) + np.array([1.0, 0.0, 0.0, 0.0]), HELI_GOAL)
+    assert not timed.ok and timed.status == "time_budget" and "time budget" in timed.message
+    with pytest.raises(ProblemError, match="max_checks"):
+        session.set_budgets(0, None)
+    with pytest.raises(ProblemError, match="time_budget_s"):
+        QuerySession(heli_prior, name="heli", time_budget_s=-1.0)
+
+
+@pytest.mark.parametrize(
+    ("start", "fragment"),
+    [
+        ([5000.0, 5000.0, 65.0, 0.0], "reach"),
+        ([0.0, float("nan"), 65.0, 0.0], "NaN"),
+        ([0.0, 0.0, 65.0], "4 values"),
+        (10**6, "outside the graph"),
+    ],
+)
+def test_unreachable_or_malformed_starts_are_refused(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult], start: object, fragment: str
+) -> None:
+    session, snapshot, _ = heli_plan
+    result = session.plan(snapshot, start, HELI_GOAL)  # type: ignore[arg-type]
+    assert not result.ok and result.status == "refused" and fragment in result.message
+    assert result.checks == () and result.path_edges == ()
+
+
+def test_no_maps_is_refused(heli_prior: WorldPrior) -> None:
+    session = QuerySession(heli_prior, name="heli")
+    with pytest.raises(PlanningError, match="no maps"):
+        session.plan(MapSnapshot(0), 0, HELI_GOAL)
+    assert session.prepare(MapSnapshot(0)) == 0.0
+
+
+def test_recheck_finds_a_box_on_a_motion_edge(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
+) -> None:
+    session, snapshot, result = heli_plan
+    motion = result.path_edges[0]
+    states = session.edge_states(motion)
+    middle = states[states.shape[0] // 2, :3]
+    far = snapshot.with_obstacles(
+        {**snapshot.obstacles, "probe/far": ((Box([5.0, 5.0, 5.0]), Pose([5000.0, 0, 0])),)}
+    )
+    kept = recheck_plan(session, result.path_edges, snapshot, far)
+    assert kept.kept and kept.rechecked == ()
+    new = snapshot.with_obstacles(
+        {**snapshot.obstacles, "probe/mid": ((Box([3.0, 3.0, 3.0]), Pose(middle)),)}
+    )
+    assert motion in affected_edges(session, result.path_edges, snapshot, new)
+    outcome = recheck_plan(session, result.path_edges, snapshot, new)
+    assert not outcome.kept and outcome.blocked == (motion,) and "replanning" in outcome.reason
+    assert not session.checker(new).check_motion(states)
+    # Replan from where the robot is now (along the first graph edge) on the new map.
+    along = session.edge_states(result.path_edges[1])
+    robot = along[along.shape[0] // 2]
+    replan = session.plan(new, robot, HELI_GOAL, seed=0)
+    assert replan.ok
+    np.testing.assert_allclose(replan.states[0], robot)
+    assert _independent_checker(session, new).check_motion(replan.states)
+    # Later plans never reuse the motion's id: it still names the same states.
+    np.testing.assert_array_equal(session.edge_states(motion), states)
+    with pytest.raises(PlanningError, match="nor motions the session knows"):
+        recheck_plan(session, [10**6], snapshot, new)
+
+
+def test_an_off_graph_goal_state_is_joined_too(
+    heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
+) -> None:
+    session, snapshot, _ = heli_plan
+    goal = session.goal_state_from_position(
+        session.vertex_state(HELI_GOAL)[:3] + np.array([20.0, 0.0, 0.0]), yaw=0.0
+    )
+    result = session.plan(snapshot, 0, goal, seed=0)
+    assert result.ok and result.path_vertices[0] == 0
+    np.testing.assert_allclose(result.states[0], session.vertex_state(0))
+    np.testing.assert_allclose(result.states[-1], goal)
+    assert result.path_edges[-1] >= session.prior.graph.num_edges  # the goal is joined by a new motion
+    assert _independent_checker(session, snapshot).check_motion(result.states)
+
+
+def test_a_legacy_tree_file_serves_its_own_query_only() -> None:
+    prior = load_prior(TREES / "heli_wires.npz")
+    session = QuerySession(prior, name="heli_wires")
+    tree = prior.trees[0]
+    domain = session.domain
+    assert isinstance(domain, HelicopterDomain)
+    world = domain.make_world("wires", 2)
+    parts = {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}
+    snapshot = MapSnapshot(1, parts, world.terrain, session.margin)
+    own = session.plan(snapshot, tree.start, tree.goal, seed=0)
+    assert own.ok and own.query == f"tree:{tree.name}" and own.stage in ("tree", "bisect")
+    other = session.plan(snapshot, tree.start, tree.goal - 1, seed=0)
+    assert other.status == "refused" and "drd build-tree" in other.message
+    assert session.library_edges().size > 0
+
+
+def test_a_prior_that_does_not_match_its_spec_is_refused(heli_prior: WorldPrior) -> None:
+    lengths = heli_prior.graph.lengths.copy()
+    lengths[0] += 3.0
+    bad = dataclasses.replace(heli_prior, graph=dataclasses.replace(heli_prior.graph, lengths=lengths))
+    with pytest.raises(PriorFileError, match="does not match"):
+        QuerySession(bad, name="bad")
+    with pytest.raises(TreeFileError, match="no domain spec"):
+        QuerySession(dataclasses.replace(heli_prior, domain_spec={}), name="bare")
+    with pytest.raises(PriorFileError, match="cannot be rebuilt"):
+        QuerySession(dataclasses.replace(heli_prior, domain_spec={"lattice": "nonsense"}), name="junk")
+    assert QuerySession(dataclasses.replace(heli_prior, trees=()), name="x").library_edges().size == 0
+
+
+def test_pose_helpers_and_motion_ids() -> None:
+    np.testing.assert_allclose(state_from_pose([1.0, 2.0, 3.0], 3 * math.pi), [1.0, 2.0, 3.0, -math.pi])
+    half = math.sqrt(0.5)
+    assert yaw_from_quaternion([0.0, 0.0, half, half]) == pytest.approx(math.pi / 2)
+    with pytest.raises(PlanningError):
+        state_from_pose([1.0, 2.0], 0.0)
+    with pytest.raises(PlanningError):
+        yaw_from_quaternion([0.0, 0.0, 0.0, 0.0])
+    registry = MotionRegistry(10, capacity=2)
+    a, b = np.zeros((2, 2)), np.ones((2, 2))
+    assert registry.id_for(a) == 10 and registry.id_for(b) == 11 and registry.id_for(a.copy()) == 10
+    assert registry.id_for(np.full((2, 2), 2.0)) == 12  # b, the least recently used, is forgotten
+    assert registry.states(11) is None and registry.is_motion_id(11) and registry.id_for(b) == 13
+
+
+# --------------------------------------------------------------------------------------------------
+# Arm
+
+
+@pytest.fixture(scope="module")
+def arm(tmp_path_factory: pytest.TempPathFactory) -> tuple[QuerySession, MapSnapshot]:
+    if not (SHARED_DATA / "panda" / "panda_spherized.urdf").is_file():
+        pytest.skip("shared Panda model not present (set DRD_SHARED_DATA)")
+    prior = _build_prior(tmp_path_factory.mktemp("arm"), "arm", "table_clutter", ARM_SPEC)
+    session = QuerySession(prior, name="arm")
+    domain = session.domain
+    assert isinstance(domain, ArmDomain)
+    world = domain.make_world("table_clutter", 5)
+    snapshot = MapSnapshot(1, {o.name: ((o.shape, o.pose),) for o in world.obstacles}, None, session.margin)
+    return session, snapshot
+
+
+def _arm_start(session: QuerySession) -> np.ndarray:
+    """A joint state off the roadmap, near the tree's start vertex."""
+    return session.vertex_state(0) + np.array([0.1, -0.05, 0.0, 0.05, 0.0, 0.0, 0.0])
+
+
+def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySession, MapSnapshot]) -> None:
+    session, snapshot = arm
+    start = _arm_start(session)
+    assert session.is_arm and len(session.joint_names) == 7
+    checker = _independent_checker(session, snapshot)
+    found = 0
+    for vertex in ARM_GOALS:
+        tool = session.positions(session.vertex_state(vertex))[0]
+        goal = session.goal_state_from_position(tool + np.array([0.01, 0.0, 0.0]), snapshot=snapshot)
+        np.testing.assert_array_equal(goal, session.vertex_state(vertex))
+        result = session.plan(snapshot, start, goal, seed=0)
+        assert result.status in ("path_found", "no_free_path")
+        if not result.ok:
+            continue
+        found += 1
+        np.testing.assert_allclose(result.states[0], start)
+        np.testing.assert_allclose(result.states[-1], goal)
+        assert result.path_edges[0] >= session.prior.graph.num_edges
+        assert np.abs(np.diff(result.states, axis=0)).max() <= session.domain.resolution + 1e-9
+        assert checker.check_motion(result.states)
+        assert all(c.free for c in result.checks if c.edge in result.path_edges)
+    assert found >= 2
+    with pytest.raises(PlanningError, match=r"farther than the tolerance 0\.050 m"):
+        session.goal_state_from_position([5.0, 5.0, 5.0])
+    far = session.plan(snapshot, start + 10.0, ARM_GOALS[0])
+    assert far.status == "refused" and "reach" in far.message
+
+
+def test_arm_recheck_finds_a_box_on_a_motion_edge(arm: tuple[QuerySession, MapSnapshot]) -> None:
+    session, snapshot = arm
+    domain = session.domain
+    assert isinstance(domain, ArmDomain)
+    result = session.plan(snapshot, _arm_start(session), ARM_GOALS[0], seed=0)
+    assert result.ok
+    motion = result.path_edges[0]
+    states = session.edge_states(motion)
+    q_mid = states[states.shape[0] // 2]
+    hand = domain.robot.fk.link_pose(q_mid, domain.robot.chain.tip_link)[0, :3, 3]
+    new = snapshot.with_obstacles(
+        {**snapshot.obstacles, "probe/hand": ((Box([0.05, 0.05, 0.05]), Pose(hand)),)}
+    )
+    assert not session.checker(new).check_motion(states)
+    outcome = recheck_plan(session, result.path_edges, snapshot, new)
+    assert motion in outcome.affected and not outcome.kept and outcome.blocked == (motion,)
+    far = snapshot.with_obstacles(
+        {**snapshot.obstacles, "probe/far": ((Box([0.1, 0.1, 0.1]), Pose([3.0, 3.0, 0.5])),)}
+    )
+    kept = recheck_plan(session, result.path_edges, snapshot, far)
+    assert kept.kept and kept.affected == ()
