@@ -40,6 +40,7 @@ from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
 from drd_planner.planner.result import PlanStatus
+from drd_planner.planning.domain_view import SnapshotCheckers, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_support import (
     DEFAULT_MOTIONS_KEPT,
@@ -135,7 +136,7 @@ class QuerySession:
         self._cache: dict[int, bool] = {}
         # The checker of the latest snapshot asked for, as one (snapshot, checker) pair: replacing the
         # tuple is atomic, so a map thread preparing the next snapshot never tears a planning thread's.
-        self._prepared: tuple[MapSnapshot, EdgeChecker] | None = None
+        self._checkers = SnapshotCheckers(self._domain)
         self._tool_positions: tuple[RobotModel | None, FloatArray] | None = None
 
     # ------------------------------------------------------------------------------------------------
@@ -217,11 +218,7 @@ class QuerySession:
 
         The arm uses ``snapshot.robot`` when the snapshot carries a ``robot_description``.
         """
-        q = np.asarray(states, dtype=np.float64).reshape(-1, self.state_dim)
-        if isinstance(self._domain, ArmDomain):
-            robot = snapshot.robot if snapshot is not None else None
-            return self._domain.end_effector_positions(q, robot)
-        return np.array(q[:, :3], dtype=np.float64)
+        return state_positions(self._domain, states, self.state_dim, snapshot)
 
     def edge_states(self, edge: int) -> FloatArray:
         """(K, D) states along a graph edge (first vertex to second) or a remembered motion (tail first).
@@ -237,10 +234,7 @@ class QuerySession:
             if self._trajectories is not None:
                 return np.asarray(self._trajectories[e], dtype=np.float64)
             u, v = self._prior.graph.edges[e]
-            a, b = self.vertex_state(int(u)), self.vertex_state(int(v))
-            resolution = float(getattr(self._domain, "resolution", 0.0))
-            steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution))) if resolution > 0 else 1
-            return np.asarray(a + np.linspace(0.0, 1.0, steps + 1)[:, None] * (b - a), dtype=np.float64)
+            return straight_edge_states(self._domain, self.vertex_state(int(u)), self.vertex_state(int(v)))
         states = self._motions.states(e)
         if states is None:
             forgotten = " (forgotten: older than the motions kept)" if self._motions.is_motion_id(e) else ""
@@ -316,29 +310,12 @@ class QuerySession:
     # Planning
 
     def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot``'s scene (and its ``robot_description`` arm).
-
-        The checker of the latest snapshot asked for is kept, so :meth:`prepare` on a map update
-        takes the FCL scene and checker build out of the next request.
-        """
-        prepared = self._prepared
-        if prepared is not None and prepared[0] is snapshot:
-            return prepared[1]
-        checker: EdgeChecker
-        if isinstance(self._domain, ArmDomain) and snapshot.robot is not None:
-            checker = self._domain.checker(snapshot.scene, robot=snapshot.robot)
-        else:
-            checker = self._domain.checker(snapshot.scene)
-        self._prepared = (snapshot, checker)
-        return checker
+        """The domain's edge checker on ``snapshot`` (kept for the latest snapshot, see :meth:`prepare`)."""
+        return self._checkers.checker(snapshot)
 
     def prepare(self, snapshot: MapSnapshot) -> float:
         """Build ``snapshot``'s FCL scene and checker now; the seconds taken (0.0 for a snapshot without maps)."""
-        if not snapshot.has_maps:
-            return 0.0
-        t0 = time.perf_counter()
-        self.checker(snapshot)
-        return time.perf_counter() - t0
+        return self._checkers.prepare(snapshot)
 
     def plan(
         self, snapshot: MapSnapshot, start: Endpoint, goal: Endpoint, *, seed: int = 0

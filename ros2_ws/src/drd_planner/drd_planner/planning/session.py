@@ -24,6 +24,7 @@ from drd_planner.data.tree_file import TreeBundle
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
 from drd_planner.exceptions import DrdError, PlanningError, TreeFileError, UnverifiedPathError
+from drd_planner.planning.domain_view import SnapshotCheckers, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
 
 FloatArray = npt.NDArray[np.float64]
@@ -169,9 +170,7 @@ class PlanningSession:
         self._trajectories = domain.edge_trajectories()
         self._cache_snapshot: MapSnapshot | None = None
         self._cache: dict[int, bool] = {}
-        # The checker of the latest snapshot asked for, as one (snapshot, checker) pair: replacing the
-        # tuple is atomic, so a map thread preparing the next snapshot never tears a planning thread's.
-        self._prepared: tuple[MapSnapshot, EdgeChecker] | None = None
+        self._checkers = SnapshotCheckers(domain)
         root = bundle.tree.bias(0, alpha=bundle.alpha)
         self._context = PolicyContext(
             bundle.problem.library,
@@ -231,11 +230,7 @@ class PlanningSession:
 
         The arm uses ``snapshot.robot`` when the snapshot carries a ``robot_description``.
         """
-        q = np.asarray(states, dtype=np.float64).reshape(-1, self.goal_state.size)
-        if isinstance(self._domain, ArmDomain):
-            robot = snapshot.robot if snapshot is not None else None
-            return self._domain.end_effector_positions(q, robot)
-        return np.array(q[:, :3], dtype=np.float64)
+        return state_positions(self._domain, states, self.goal_state.size, snapshot)
 
     @property
     def goal_position(self) -> FloatArray:
@@ -261,10 +256,7 @@ class PlanningSession:
         if self._trajectories is not None:
             return np.asarray(self._trajectories[edge], dtype=np.float64)
         u, v = self._domain.graph.edges[edge]
-        a, b = self.vertex_state(int(u)), self.vertex_state(int(v))
-        resolution = float(getattr(self._domain, "resolution", 0.0))
-        steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution))) if resolution > 0 else 1
-        return np.asarray(a + np.linspace(0.0, 1.0, steps + 1)[:, None] * (b - a), dtype=np.float64)
+        return straight_edge_states(self._domain, self.vertex_state(int(u)), self.vertex_state(int(v)))
 
     def path_vertices(self, edges: npt.ArrayLike) -> list[int]:
         """Vertex ids along a path of edges from the start (undirected edges may be walked backwards)."""
@@ -288,21 +280,8 @@ class PlanningSession:
         return np.concatenate([rows[0]] + [r[1:] for r in rows[1:]])
 
     def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot``'s scene (and its ``robot_description`` arm).
-
-        The checker of the latest snapshot asked for is kept, so :meth:`prepare` on a map update
-        takes the FCL scene and checker build out of the next request.
-        """
-        prepared = self._prepared
-        if prepared is not None and prepared[0] is snapshot:
-            return prepared[1]
-        checker: EdgeChecker
-        if isinstance(self._domain, ArmDomain) and snapshot.robot is not None:
-            checker = self._domain.checker(snapshot.scene, robot=snapshot.robot)
-        else:
-            checker = self._domain.checker(snapshot.scene)
-        self._prepared = (snapshot, checker)
-        return checker
+        """The domain's edge checker on ``snapshot`` (kept for the latest snapshot, see :meth:`prepare`)."""
+        return self._checkers.checker(snapshot)
 
     def prepare(self, snapshot: MapSnapshot) -> float:
         """Build ``snapshot``'s FCL scene and this tree's checker on it now; returns the seconds taken.
@@ -310,11 +289,7 @@ class PlanningSession:
         The node calls this when a map arrives, so a request on that map starts checking at once.
         A snapshot with no maps yet is not prepared (0.0).
         """
-        if not snapshot.has_maps:
-            return 0.0
-        t0 = time.perf_counter()
-        self.checker(snapshot)
-        return time.perf_counter() - t0
+        return self._checkers.prepare(snapshot)
 
     def plan(self, snapshot: MapSnapshot, *, seed: int = 0, checker: EdgeChecker | None = None) -> PlanResult:
         """Serve one request on ``snapshot`` (see the module docstring).
