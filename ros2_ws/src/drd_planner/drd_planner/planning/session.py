@@ -198,6 +198,10 @@ class PlanningSession:
         """The tree bundle."""
         return self._bundle
 
+    def library_edges(self) -> npt.NDArray[np.int64]:
+        """Edge ids of the tree's library (sorted, each once)."""
+        return np.asarray(self._bundle.problem.library.library_edges, dtype=np.int64)
+
     @property
     def margin(self) -> float:
         """Collision margin of the domain (metres); snapshots for this session use it."""

@@ -47,7 +47,6 @@ from typing import Any
 
 import numpy as np
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
@@ -61,23 +60,10 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
-from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.factory import RclpyMessages
 from drd_msgs_py.obstacles import obstacle_update, pose_from_msg
-from drd_msgs_py.plans import (
-    EDGE_COLOURS,
-    CheckRecord,
-    checked_edges_markers,
-    diagnostics_message,
-    edge_checks_message,
-    joint_trajectory_message,
-    line_list_marker,
-    path_message,
-    summary_status,
-)
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_planner.exceptions import DrdError
 from drd_planner.planner.prior_file import load_tree_bundle
@@ -87,15 +73,13 @@ from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.session import PlanningSession, PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.outputs import LATCHED, PlannerOutputs, plan_summary_values
 from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
 from drd_planner.ros.plan_worker import PlanWorker
-from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values, status_name
+from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
 #: Map subscriptions with ``map_subscribe_transient_local`` false: hears volatile and latched publishers.
 VOLATILE_MAPS = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
@@ -103,22 +87,16 @@ VOLATILE_MAPS = QoSProfile(
 #: Requests (topics and the service): reliable and deep enough that a burst reaches the node, which then
 #: coalesces it (with KEEP_LAST 10 the middleware would drop all but the last 10 unseen).
 REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-#: The per-check log.
-CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
 #: Served requests kept in :attr:`PlannerNode.history`.
 HISTORY_LENGTH = 16
 #: The newest records of the history that keep their map snapshot (older ones drop it: a snapshot
 #: holds the FCL scene of its maps).
 SNAPSHOTS_KEPT = 4
-#: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
-LIBRARY_EDGE_SEGMENTS = 4
 #: Seconds :meth:`PlannerNode.destroy_node` waits for a running plan.
 SHUTDOWN_WAIT_S = 1.0
 #: Longest executor wait (seconds) of ``planner_node``'s spin loop.
 SPIN_TIMEOUT_S = 0.25
-#: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
-TRAJECTORY_JOINT_SPEED = 0.5
 
 
 @dataclass(frozen=True)
@@ -165,7 +143,6 @@ class PlannerNode(LifecycleNode):
     def __init__(self, *, node_name: str = "drd_planner", **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         declare_parameters(self)
-        self._msgs = RclpyMessages()
         self._sessions: list[PlanningSession] = []
         self._obstacles: dict[str, Any] = {}
         self._snapshot = MapSnapshot(0)
@@ -177,16 +154,9 @@ class PlannerNode(LifecycleNode):
         self._pending: dict[str, _Request] = {}
         self._published: _Published | None = None
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
-        # Lifecycle publishers: silent until activate. /diagnostics is not: errors and the heartbeat
-        # are reported in every state.
-        self._plan_pub = self.create_lifecycle_publisher(PathMsg, "plan", LATCHED)
-        self._trajectory_pub = self.create_lifecycle_publisher(JointTrajectory, "joint_trajectory", LATCHED)
-        self._checks_pub = self.create_lifecycle_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
-        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
-        self._markers_pub = self.create_lifecycle_publisher(MarkerArray, "checked_edges", 10)
+        self._out = PlannerOutputs(self)  # lifecycle publishers; /diagnostics in every state
         self._errors: list[str] = []
         self._history: deque[PlanRecord] = deque(maxlen=HISTORY_LENGTH)
-        self._library_markers: dict[tuple[str, Any], Any] = {}
         self._last_plan: LastPlan | None = None
         self._limits = MapLimits.DEFAULT
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -236,6 +206,7 @@ class PlannerNode(LifecycleNode):
         self._limits = map_limits_of({spec.name: self.get_parameter(spec.name).value for spec in PARAMETERS})
         names = [p for p in self.get_parameter("tree_paths").value if p]
         self._frame = str(self.get_parameter("frame_id").value)
+        self._out.frame = self._frame
         max_checks = int(self.get_parameter("max_checks").value)
         tolerance = float(self.get_parameter("goal_tolerance").value)
         joint_tolerance = float(self.get_parameter("joint_tolerance").value)
@@ -317,7 +288,8 @@ class PlannerNode(LifecycleNode):
         """Forget the trees and the maps."""
         self._drop_interfaces()
         self._sessions, self._obstacles, self._snapshot = [], {}, MapSnapshot(0)
-        self._published, self._pending, self._library_markers = None, {}, {}
+        self._published, self._pending = None, {}
+        self._out.forget()
         return TransitionCallbackReturn.SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -396,15 +368,7 @@ class PlannerNode(LifecycleNode):
             + ", ".join(f"{k} {v}" for k, v in values.items() if k != "map_version")
             + ")"
         )
-        status = summary_status(
-            ok=True,
-            message=f"{source} accepted",
-            values={"source": source, **values},
-            name=status_name(self.get_name(), "maps"),
-            hardware_id=self.get_name(),
-            msgs=self._msgs,
-        )
-        self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
+        self._out.status("maps", ok=True, message=f"{source} accepted", values={"source": source, **values})
 
     def _prepare(self, snapshot: MapSnapshot) -> None:
         """Build the new maps' FCL scene and each tree's checker now, not in the next request.
@@ -545,7 +509,8 @@ class PlannerNode(LifecycleNode):
         else:
             if outcome.kept:
                 self._published = _Published(session, published.result, snapshot)
-                status = summary_status(
+                self._out.status(
+                    "map update",
                     ok=True,
                     message=outcome.reason,
                     values={
@@ -557,11 +522,7 @@ class PlannerNode(LifecycleNode):
                         "selection_s": f"{outcome.select_ms / 1e3:.6f}",
                         "result": "plan_kept",
                     },
-                    name=status_name(self.get_name(), "map update"),
-                    hardware_id=self.get_name(),
-                    msgs=self._msgs,
                 )
-                self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
                 self.get_logger().info(outcome.reason)
                 return
             reason = outcome.reason
@@ -576,19 +537,7 @@ class PlannerNode(LifecycleNode):
         if self._published is None:
             return
         self._published = None
-        stamp = self._stamp()
-        self._plan_pub.publish(
-            path_message(np.zeros((0, 3)), frame_id=self._frame, stamp=stamp, msgs=self._msgs)
-        )
-        if session.is_arm:
-            self._trajectory_pub.publish(
-                joint_trajectory_message(
-                    session.joint_names,
-                    np.zeros((0, len(session.joint_names))),
-                    frame_id=self._frame,
-                    msgs=self._msgs,
-                )
-            )
+        self._out.withdraw(session)
         self._report_error(
             f"{session.name}: the published plan is blocked on map version {snapshot.version} ({why}); "
             "published an empty plan"
@@ -596,10 +545,6 @@ class PlannerNode(LifecycleNode):
 
     # ------------------------------------------------------------------------------------------------
     # Publishing
-
-    def _stamp(self) -> tuple[int, int]:
-        sec, nsec = self.get_clock().now().seconds_nanoseconds()
-        return int(sec), int(nsec)
 
     def _publish(
         self,
@@ -618,47 +563,21 @@ class PlannerNode(LifecycleNode):
         publishing ``plan``/``joint_trajectory``) and ``messaging_s`` (all messages before the summary).
         """
         started = time.perf_counter()
-        stamp = self._stamp()
+        stamp = self._out.stamp()
         self._remember(PlanRecord(session, result, snapshot, dict(extra)))
         path = self._publish_plan(session, result, snapshot, stamp) if result.ok else None
         plan_messaging_s = time.perf_counter() - started
-        records = [
-            CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
-            for c in result.checks
-        ]
-        self._checks_pub.publish(edge_checks_message(records, stamp=stamp, msgs=self._msgs))
-        self._publish_markers(session, result, snapshot, stamp)
-        seconds = result.seconds
-        values = {
-            "tree": result.tree,
-            "map_version": result.map_version,
-            "checks": len(result.checks),
-            "free": len(result.checks) - result.num_blocked,
-            "blocked": result.num_blocked,
-            "tree_checks": sum(c.stage == "tree" for c in result.checks),
-            "bisect_checks": sum(c.stage == "bisect" for c in result.checks),
-            "check_s": f"{seconds.get('checks', 0.0):.6f}",
-            "selection_s": f"{seconds.get('selection', 0.0):.6f}",
-            "policy_s": f"{seconds.get('policy', 0.0):.6f}",
-            "prepare_s": f"{seconds.get('prepare', 0.0):.6f}",
-            "total_s": f"{seconds.get('total', 0.0):.6f}",
-            "planning_time": f"{seconds.get('total', 0.0):.6f}",
-            "wait_s": f"{wait_s:.6f}",
-            "plan_messaging_s": f"{plan_messaging_s:.6f}",
-            "messaging_s": f"{time.perf_counter() - started:.6f}",
-            "result": result.status,
-            **extra,
-        }
-        status = summary_status(
-            ok=result.ok,
-            message=result.message,
-            values=values,
-            name=status_name(self.get_name(), "plan"),
-            hardware_id=self.get_name(),
-            msgs=self._msgs,
+        self._out.checks(result, stamp)
+        self._out.markers(session, result, snapshot, stamp)
+        values = plan_summary_values(
+            result,
+            extra,
+            wait_s=wait_s,
+            plan_messaging_s=plan_messaging_s,
+            messaging_s=time.perf_counter() - started,
         )
         self._last_plan = LastPlan(str(result.status), str(extra.get("request", "request")), time.monotonic())
-        self._diag_pub.publish(diagnostics_message([status], stamp=stamp, msgs=self._msgs))
+        self._out.status("plan", ok=result.ok, message=result.message, values=values, stamp=stamp)
         if result.ok:
             self.get_logger().info(f"{result.tree}: {result.message}")
         else:
@@ -677,69 +596,10 @@ class PlannerNode(LifecycleNode):
         self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> Any:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); it becomes the published plan."""
-        if session.is_arm:
-            seconds = float(getattr(session.domain, "resolution", 0.05)) / TRAJECTORY_JOINT_SPEED
-            self._trajectory_pub.publish(
-                joint_trajectory_message(
-                    session.joint_names,
-                    result.states,
-                    frame_id=self._frame,
-                    stamp=stamp,
-                    seconds_per_point=seconds,
-                    msgs=self._msgs,
-                )
-            )
-            states = session.positions(result.states, snapshot)
-        else:
-            states = result.states
-        path = path_message(states, frame_id=self._frame, stamp=stamp, msgs=self._msgs)
-        self._plan_pub.publish(path)
-        if self._plan_pub.is_activated:  # an inactive node publishes nothing, so it has no plan out there
+        path = self._out.plan(session, result, snapshot, stamp)
+        if self._out.active:  # an inactive node publishes nothing, so it has no plan out there
             self._published = _Published(session, result, snapshot)
         return path
-
-    def _publish_markers(
-        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
-    ) -> None:
-        if self._markers_pub.get_subscription_count() > 0:  # thousands of points: only for a listener
-            self._markers_pub.publish(self._checked_markers(session, result, snapshot, stamp))
-
-    def _checked_markers(
-        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
-    ) -> Any:
-        """The checked edges at full resolution over the library edges in grey (built once per tree and arm)."""
-        segments, values = [], []
-        for check in result.checks:
-            pts = session.positions(session.edge_states(check.edge), snapshot)
-            segments.append(np.stack([pts[:-1], pts[1:]], axis=1))
-            values.append(np.full(len(pts) - 1, int(check.free)))
-        seg = np.concatenate(segments) if segments else np.zeros((0, 2, 3))
-        val = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
-        library = self._library_marker(session, snapshot)
-        library.header.stamp.sec, library.header.stamp.nanosec = stamp
-        return checked_edges_markers(
-            seg, val, frame_id=self._frame, stamp=stamp, msgs=self._msgs, background=[library]
-        )
-
-    def _library_marker(self, session: PlanningSession, snapshot: MapSnapshot) -> Any:
-        """Every library edge as a grey LINE_LIST, each drawn with at most :data:`LIBRARY_EDGE_SEGMENTS` segments."""
-        key = (session.name, snapshot.robot if session.is_arm else None)
-        marker = self._library_markers.get(key)
-        if marker is None:
-            segments = []
-            for edge in session.bundle.problem.library.library_edges:
-                pts = session.positions(session.edge_states(int(edge)), snapshot)
-                keep = np.unique(np.linspace(0, len(pts) - 1, LIBRARY_EDGE_SEGMENTS + 1).round().astype(int))
-                segments.append(np.stack([pts[keep[:-1]], pts[keep[1:]]], axis=1))
-            marker = line_list_marker(
-                np.concatenate(segments) if segments else np.zeros((0, 2, 3)),
-                ns="library",
-                rgba=EDGE_COLOURS[-1],
-                frame_id=self._frame,
-                msgs=self._msgs,
-            )
-            self._library_markers = {key: marker}  # one tree and arm model at a time is the common case
-        return marker
 
     def _on_worker_error(self, exc: Exception) -> None:
         self._report_error(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}")
@@ -762,15 +622,8 @@ class PlannerNode(LifecycleNode):
             last=self._last_plan,
             now=time.monotonic(),
         )
-        status = summary_status(
-            ok=True,
-            message=f"{values['state']}, maps {'known' if values['maps_known'] else 'not received yet'}",
-            values=values,
-            name=status_name(self.get_name(), "heartbeat"),
-            hardware_id=self.get_name(),
-            msgs=self._msgs,
-        )
-        self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
+        maps = "known" if values["maps_known"] else "not received yet"
+        self._out.status("heartbeat", ok=True, message=f"{values['state']}, maps {maps}", values=values)
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Refuse a runtime parameter change that fails its check (the old value stays), with the reason."""
@@ -791,15 +644,7 @@ class PlannerNode(LifecycleNode):
         self.get_logger().error(text)
         with self._lock:
             self._errors = [*self._errors[-99:], text]
-        status = summary_status(
-            ok=False,
-            message=text,
-            values={},
-            name=status_name(self.get_name(), topic),
-            hardware_id=self.get_name(),
-            msgs=self._msgs,
-        )
-        self._diag_pub.publish(diagnostics_message([status], stamp=self._stamp(), msgs=self._msgs))
+        self._out.status(topic, ok=False, message=text, values={})
 
 
 def _goal_xyz(goal: Any, frame: str) -> np.ndarray:

@@ -1,0 +1,236 @@
+"""The node's outputs: its publishers and the messages it sends on them.
+
+``plan``, ``joint_trajectory``, ``edge_checks`` and ``checked_edges`` are lifecycle publishers (silent
+until ``activate``); ``/diagnostics`` publishes in every state (errors, map reports, the heartbeat).
+Statuses are named after the node (:func:`~drd_planner.ros.status.status_name`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Protocol
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Path as PathMsg
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from trajectory_msgs.msg import JointTrajectory
+from visualization_msgs.msg import MarkerArray
+
+from drd_msgs_py.factory import RclpyMessages
+from drd_msgs_py.plans import (
+    EDGE_COLOURS,
+    CheckRecord,
+    checked_edges_markers,
+    diagnostics_message,
+    edge_checks_message,
+    joint_trajectory_message,
+    line_list_marker,
+    path_message,
+    summary_status,
+)
+from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.session import PlanResult
+from drd_planner.ros.status import status_name
+
+__all__ = ["CHECK_LOG", "LATCHED", "PlannerOutputs", "plan_summary_values"]
+
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+#: The per-check log.
+CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+#: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
+LIBRARY_EDGE_SEGMENTS = 4
+#: Joint speed (rad/s) used to time the published JointTrajectory (its points are evenly spaced).
+TRAJECTORY_JOINT_SPEED = 0.5
+
+
+class Session(Protocol):
+    """What the outputs read of a planning session (PlanningSession and QuerySession have it)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def domain(self) -> Any: ...
+    @property
+    def is_arm(self) -> bool: ...
+    @property
+    def joint_names(self) -> tuple[str, ...]: ...
+    def positions(self, states: Any, snapshot: MapSnapshot | None = None) -> Any: ...
+    def edge_states(self, edge: int) -> Any: ...
+    def library_edges(self) -> Any: ...
+
+
+def plan_summary_values(
+    result: PlanResult,
+    extra: Mapping[str, Any],
+    *,
+    wait_s: float,
+    plan_messaging_s: float,
+    messaging_s: float,
+) -> dict[str, Any]:
+    """The key/values of a plan's ``<node>: plan`` summary (counts, and times in seconds as text)."""
+    seconds = result.seconds
+    return {
+        "tree": result.tree,
+        "map_version": result.map_version,
+        "checks": len(result.checks),
+        "free": len(result.checks) - result.num_blocked,
+        "blocked": result.num_blocked,
+        "tree_checks": sum(c.stage == "tree" for c in result.checks),
+        "bisect_checks": sum(c.stage == "bisect" for c in result.checks),
+        "check_s": f"{seconds.get('checks', 0.0):.6f}",
+        "selection_s": f"{seconds.get('selection', 0.0):.6f}",
+        "policy_s": f"{seconds.get('policy', 0.0):.6f}",
+        "prepare_s": f"{seconds.get('prepare', 0.0):.6f}",
+        "total_s": f"{seconds.get('total', 0.0):.6f}",
+        "planning_time": f"{seconds.get('total', 0.0):.6f}",
+        "wait_s": f"{wait_s:.6f}",
+        "plan_messaging_s": f"{plan_messaging_s:.6f}",
+        "messaging_s": f"{messaging_s:.6f}",
+        "result": result.status,
+        **extra,
+    }
+
+
+class PlannerOutputs:
+    """Publishers of one planner node and the messages on them.
+
+    Args:
+        node: the lifecycle node that owns the publishers.
+        frame: the planning frame of published paths and markers.
+    """
+
+    def __init__(self, node: Any, frame: str = "map") -> None:
+        self._node = node
+        self.frame = frame
+        self.msgs = RclpyMessages()
+        self._plan = node.create_lifecycle_publisher(PathMsg, "plan", LATCHED)
+        self._trajectory = node.create_lifecycle_publisher(JointTrajectory, "joint_trajectory", LATCHED)
+        self._checks = node.create_lifecycle_publisher(DiagnosticArray, "edge_checks", CHECK_LOG)
+        self._markers = node.create_lifecycle_publisher(MarkerArray, "checked_edges", 10)
+        self._diagnostics = node.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._library_markers: dict[tuple[str, Any], Any] = {}
+
+    @property
+    def active(self) -> bool:
+        """Whether the lifecycle publishers are enabled (the node is active)."""
+        return bool(self._plan.is_activated)
+
+    def stamp(self) -> tuple[int, int]:
+        """Now on the node's clock, (sec, nanosec)."""
+        sec, nsec = self._node.get_clock().now().seconds_nanoseconds()
+        return int(sec), int(nsec)
+
+    def forget(self) -> None:
+        """Drop cached markers (the trees are unloaded)."""
+        self._library_markers = {}
+
+    def status(
+        self,
+        topic: str,
+        *,
+        ok: bool,
+        message: str,
+        values: Mapping[str, Any],
+        stamp: tuple[int, int] | None = None,
+    ) -> None:
+        """Publish one ``<node>: <topic>`` status on ``/diagnostics``."""
+        name = self._node.get_name()
+        status = summary_status(
+            ok=ok,
+            message=message,
+            values=values,
+            name=status_name(name, topic),
+            hardware_id=name,
+            msgs=self.msgs,
+        )
+        self._diagnostics.publish(diagnostics_message([status], stamp=stamp or self.stamp(), msgs=self.msgs))
+
+    def plan(
+        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> Any:
+        """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); returns the Path."""
+        if session.is_arm:
+            seconds = float(getattr(session.domain, "resolution", 0.05)) / TRAJECTORY_JOINT_SPEED
+            self._trajectory.publish(
+                joint_trajectory_message(
+                    session.joint_names,
+                    result.states,
+                    frame_id=self.frame,
+                    stamp=stamp,
+                    seconds_per_point=seconds,
+                    msgs=self.msgs,
+                )
+            )
+            states = session.positions(result.states, snapshot)
+        else:
+            states = result.states
+        path = path_message(states, frame_id=self.frame, stamp=stamp, msgs=self.msgs)
+        self._plan.publish(path)
+        return path
+
+    def withdraw(self, session: Session) -> None:
+        """Publish an empty ``plan`` (and ``joint_trajectory``): the plan out there is taken back."""
+        stamp = self.stamp()
+        self._plan.publish(path_message(np.zeros((0, 3)), frame_id=self.frame, stamp=stamp, msgs=self.msgs))
+        if session.is_arm:
+            names = session.joint_names
+            self._trajectory.publish(
+                joint_trajectory_message(
+                    names, np.zeros((0, len(names))), frame_id=self.frame, msgs=self.msgs
+                )
+            )
+
+    def checks(self, result: PlanResult, stamp: tuple[int, int]) -> None:
+        """Publish the plan's check log on ``edge_checks``."""
+        records = [
+            CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
+            for c in result.checks
+        ]
+        self._checks.publish(edge_checks_message(records, stamp=stamp, msgs=self.msgs))
+
+    def markers(
+        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> None:
+        """Publish ``checked_edges`` when someone listens (thousands of points)."""
+        if self._markers.get_subscription_count() > 0:
+            self._markers.publish(self._checked_markers(session, result, snapshot, stamp))
+
+    def _checked_markers(
+        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> Any:
+        """The checked edges at full resolution over the library edges in grey (built once per tree and arm)."""
+        segments, values = [], []
+        for check in result.checks:
+            pts = session.positions(session.edge_states(check.edge), snapshot)
+            segments.append(np.stack([pts[:-1], pts[1:]], axis=1))
+            values.append(np.full(len(pts) - 1, int(check.free)))
+        seg = np.concatenate(segments) if segments else np.zeros((0, 2, 3))
+        val = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
+        library = self._library_marker(session, snapshot)
+        library.header.stamp.sec, library.header.stamp.nanosec = stamp
+        return checked_edges_markers(
+            seg, val, frame_id=self.frame, stamp=stamp, msgs=self.msgs, background=[library]
+        )
+
+    def _library_marker(self, session: Session, snapshot: MapSnapshot) -> Any:
+        """Every library edge as a grey LINE_LIST, each drawn with at most :data:`LIBRARY_EDGE_SEGMENTS` segments."""
+        key = (session.name, snapshot.robot if session.is_arm else None)
+        marker = self._library_markers.get(key)
+        if marker is None:
+            segments = []
+            for edge in session.library_edges():
+                pts = session.positions(session.edge_states(int(edge)), snapshot)
+                keep = np.unique(np.linspace(0, len(pts) - 1, LIBRARY_EDGE_SEGMENTS + 1).round().astype(int))
+                segments.append(np.stack([pts[keep[:-1]], pts[keep[1:]]], axis=1))
+            marker = line_list_marker(
+                np.concatenate(segments) if segments else np.zeros((0, 2, 3)),
+                ns="library",
+                rgba=EDGE_COLOURS[-1],
+                frame_id=self.frame,
+                msgs=self.msgs,
+            )
+            self._library_markers = {key: marker}  # one tree and arm model at a time is the common case
+        return marker

@@ -1,0 +1,37 @@
+"""The node's outputs: the plan summary's values (what monitors and the tests read)."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
+
+from drd_planner.planning.session import PlanResult, SessionCheck
+from drd_planner.ros.outputs import plan_summary_values
+
+
+def _check(step: int, free: bool, stage: str) -> SessionCheck:
+    return SessionCheck(step, step, (0, 1), free, stage, 0.5, 0.1, False)
+
+
+def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:
+    checks = (_check(1, True, "tree"), _check(2, False, "tree"), _check(3, True, "bisect"))
+    result = PlanResult(
+        ok=True,
+        status="path_found",
+        message="found",
+        map_version=3,
+        tree="heli",
+        path_edges=(1, 3),
+        checks=checks,
+        seconds={"total": 0.25, "checks": 0.0015},
+    )
+    values = plan_summary_values(
+        result, {"request": "goal_pose"}, wait_s=0.01, plan_messaging_s=0.002, messaging_s=0.003
+    )
+    assert (values["checks"], values["free"], values["blocked"]) == (3, 2, 1)
+    assert (values["tree_checks"], values["bisect_checks"]) == (2, 1)
+    assert values["planning_time"] == values["total_s"] == "0.250000"
+    assert (
+        values["result"] == "path_found" and values["request"] == "goal_pose" and values["map_version"] == 3
+    )
