@@ -154,6 +154,7 @@ class Harness:
             context=self.context,
             parameter_overrides=[
                 Parameter("tree_paths", value=[str(tree)]),
+                Parameter("start_without_robot_state", value="prior_start"),
                 Parameter("frame_id", value=frame_id),
                 *parameters,
             ],

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Peak RSS of a real PlannerNode taking a stream of the largest terrains it accepts (a script, not a test).
 
-Loads both helicopter trees, then feeds ``--updates`` terrain clouds of ``--size`` x ``--size`` cells (the
+Loads the helicopter Wires tree, then feeds ``--updates`` terrain clouds of ``--size`` x ``--size`` cells (the
 default 500 x 500 is ``max_terrain_cells``) through the node's terrain callback, each one a new map that is
 converted, made current and prepared (FCL terrain tiles and each tree's checker), as on the ``terrain`` topic.
 Prints seconds per update and the process's peak RSS (``ru_maxrss``) after each.
@@ -38,7 +38,7 @@ def main() -> None:
     from drd_planner.ros.node import PlannerNode
 
     rclpy.init()
-    node = PlannerNode(parameter_overrides=[Parameter("tree_paths", value=["heli_wires", "heli_terrain"])])
+    node = PlannerNode(parameter_overrides=[Parameter("tree_paths", value=["heli_wires"])])
     try:
         if node.trigger_configure().name != "SUCCESS":
             raise SystemExit(f"configure failed: {node.errors}")

@@ -50,7 +50,11 @@ def context() -> Iterator[Any]:
 
 
 def _node(ctx: Any, trees: list[str]) -> PlannerNode:
-    return PlannerNode(context=ctx, parameter_overrides=[Parameter("tree_paths", value=trees)])
+    params = [
+        Parameter("tree_paths", value=trees),
+        Parameter("start_without_robot_state", value="prior_start"),
+    ]
+    return PlannerNode(context=ctx, parameter_overrides=params)
 
 
 def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
@@ -198,7 +202,9 @@ def test_bad_requests_and_maps_leave_errors_not_plans(context: Any) -> None:
         assert node.plan_for(wrong_frame) is None and "frame 'odom'" in node.errors[-1]
         far = _goal(session)
         far.pose.position.x += 500.0
-        assert node.plan_for(far) is None and "matches no loaded tree" in node.errors[-1]
+        assert (
+            node.plan_for(far) is None and "no maps received yet" in node.errors[-1]
+        )  # any goal, once maps come
         nan = _goal(session)
         nan.pose.position.z = float("nan")
         assert node.plan_for(nan) is None and "finite" in node.errors[-1]
@@ -293,6 +299,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
             "the planner_node console script is not installed (pip install -e ros2_ws/src/drd_planner)"
         )
     args = ["--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    args += ["-p", "start_without_robot_state:=prior_start"]
     process = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     peer = Peer(context)
     executor = SingleThreadedExecutor(context=context)

@@ -282,7 +282,11 @@ def _offline_plan(session_tree: Path, markers: Any, cloud: Any | None, frame: st
 def _start(ctx: Any, tree: Path, frame: str) -> tuple[PlannerNode, _Peer, Any]:
     node = PlannerNode(
         context=ctx,
-        parameter_overrides=[Parameter("tree_paths", value=[str(tree)]), Parameter("frame_id", value=frame)],
+        parameter_overrides=[
+            Parameter("tree_paths", value=[str(tree)]),
+            Parameter("frame_id", value=frame),
+            Parameter("start_without_robot_state", value="prior_start"),
+        ],
     )
     peer = _Peer.create(ctx)
     executor = SingleThreadedExecutor(context=ctx)

@@ -51,7 +51,10 @@ def context() -> Iterator[Any]:
 
 
 def _node(ctx: Any, **overrides: Any) -> PlannerNode:
-    params = [Parameter("tree_paths", value=[str(TREE)])]
+    params = [
+        Parameter("tree_paths", value=[str(TREE)]),
+        Parameter("start_without_robot_state", value="prior_start"),
+    ]
     params += [Parameter(k, value=v) for k, v in overrides.items()]
     return PlannerNode(context=ctx, parameter_overrides=params)
 
@@ -204,7 +207,7 @@ def test_error_texts_are_bounded_whatever_the_input_quotes(context: Any) -> None
         assert spin_until(executor, lambda: len(node.errors) >= 3)
         spin_for(executor, 0.3)
         assert all(len(e) <= MAX_ERROR_CHARS for e in node.errors)
-        assert "characters]" in node.errors[-1]
+        assert "goal_pose is in frame 'fff" in node.errors[-1]  # quoted, but only its beginning
         reports = [s for array in peer.diagnostics for s in array.status if s.level == b"\x02"]
         assert reports and all(len(s.message) <= MAX_ERROR_CHARS for s in reports)
 
@@ -315,8 +318,11 @@ def test_maps_beyond_the_limit_parameters_are_refused_naming_them_and_the_map_is
         assert node.trigger_cleanup().name == "SUCCESS"
         assert node.trigger_configure().name == "SUCCESS"  # limits are read at configure
         assert node.trigger_activate().name == "SUCCESS"
-        assert spin_until(executor, lambda: any("max_terrain_cells" in e for e in node.errors))
+        assert spin_until(
+            executor,
+            lambda: any("max_terrain_cells" in e for e in node.errors) and bool(node.snapshot.obstacles),
+        )
         assert "terrain refused, map unchanged" in node.errors[-1]
         assert "(parameter max_terrain_cells)" in node.errors[-1]
         assert node.snapshot.terrain is None  # cleanup forgot the maps; the latched terrain was refused
-        assert node.snapshot.obstacles  # the latched obstacle map was taken
+        assert node.snapshot.obstacles, node.errors[-3:]  # the latched obstacle map was taken

@@ -34,7 +34,10 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
     node = PlannerNode(
         context=context,
         node_name="heli_planner",
-        parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])],
+        parameter_overrides=[
+            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("start_without_robot_state", value="prior_start"),
+        ],
     )
     peer = Peer(context)
     with active_planner(context, node, peer) as executor:
@@ -84,7 +87,13 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
 
 def test_outputs_are_silent_until_activate(context: Any) -> None:
     """Lifecycle publishers: a plan made while inactive (the service is called directly) is not published."""
-    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    node = PlannerNode(
+        context=context,
+        parameter_overrides=[
+            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("start_without_robot_state", value="prior_start"),
+        ],
+    )
     peer = Peer(context)
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]

@@ -54,7 +54,11 @@ def context() -> Iterator[Any]:
 def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[ReplaySummary, PlannerNode]:
     if not bag.is_file():
         pytest.skip(f"{bag} not generated (python scripts/make_bags.py)")
-    params = [Parameter("tree_paths", value=[str(TREES / tree)]), Parameter("frame_id", value=frame)]
+    params = [
+        Parameter("tree_paths", value=[str(TREES / tree)]),
+        Parameter("frame_id", value=frame),
+        Parameter("start_without_robot_state", value="prior_start"),  # the bags carry no odometry
+    ]
     node = PlannerNode(context=ctx, parameter_overrides=params)
     try:
         assert node.trigger_configure().name == "SUCCESS", node.errors

@@ -36,7 +36,11 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.session import PlanningSession, PlanResult
+
+#: A session of one tree, or of a whole prior: what a picture reads of them is the same.
+AnySession = PlanningSession | QuerySession
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -163,7 +167,7 @@ def shape_outline(shape: Shape, pose: Pose, *, plane: npt.ArrayLike = TOP) -> Fl
 
 
 def edge_points(
-    session: PlanningSession, edges: Sequence[int], snapshot: MapSnapshot | None = None
+    session: AnySession, edges: Sequence[int], snapshot: MapSnapshot | None = None
 ) -> list[FloatArray]:
     """One (K, 3) polyline (metres, planning frame) per edge, in the order of ``edges``.
 
@@ -178,7 +182,7 @@ def edge_points(
     return np.split(points, np.cumsum([len(q) for q in states])[:-1])
 
 
-def _arm_skeleton(session: PlanningSession, snapshot: MapSnapshot, q: FloatArray) -> FloatArray:
+def _arm_skeleton(session: AnySession, snapshot: MapSnapshot, q: FloatArray) -> FloatArray:
     """(D + 2, 3) joint-frame origins and the end effector (metres) of one (D,) arm configuration."""
     from drd_planner.geometry.robot import RobotModel
 
@@ -252,9 +256,9 @@ class _Geometry:
         plan: (K, 3) the plan's positions (empty without a plan).
     """
 
-    def __init__(self, session: PlanningSession, snapshot: MapSnapshot, result: PlanResult) -> None:
+    def __init__(self, session: AnySession, snapshot: MapSnapshot, result: PlanResult) -> None:
         checked = {c.edge for c in result.checks}
-        library = np.asarray(session.bundle.problem.library.library_edges, dtype=np.int64)
+        library = np.asarray(session.library_edges(), dtype=np.int64)
         self.layers: dict[str, list[int]] = {
             "unchecked": sorted(int(e) for e in library if int(e) not in checked),
             "free": [c.edge for c in result.checks if c.free],
@@ -456,7 +460,7 @@ def _terrain_top(fig: Figure, ax: Axes, terrain: Heightfield) -> None:
 def _helicopter_top(
     fig: Figure,
     view: _View,
-    session: PlanningSession,
+    session: AnySession,
     snapshot: MapSnapshot,
     result: PlanResult,
     geometry: _Geometry,
@@ -481,7 +485,7 @@ def _helicopter_top(
 
 def _helicopter_side(
     ax: Axes,
-    session: PlanningSession,
+    session: AnySession,
     snapshot: MapSnapshot,
     result: PlanResult,
     geometry: _Geometry,
@@ -566,7 +570,7 @@ def _helicopter_side(
 def _arm_views(
     top: Axes,
     side: Axes,
-    session: PlanningSession,
+    session: AnySession,
     snapshot: MapSnapshot,
     result: PlanResult,
     geometry: _Geometry,
@@ -615,7 +619,7 @@ def _arm_views(
     side.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), framealpha=0.9)
 
 
-def _title(session: PlanningSession, result: PlanResult, title: str | None) -> str:
+def _title(session: AnySession, result: PlanResult, title: str | None) -> str:
     """The figure title: the given one, else tree, map version, outcome (the reason when there is no plan)."""
     if title is not None:
         return title
@@ -624,7 +628,7 @@ def _title(session: PlanningSession, result: PlanResult, title: str | None) -> s
 
 
 def draw_plan_picture(
-    session: PlanningSession, snapshot: MapSnapshot, result: PlanResult, *, title: str | None = None
+    session: AnySession, snapshot: MapSnapshot, result: PlanResult, *, title: str | None = None
 ) -> PlanDrawing:
     """Draw one plan (or a failed request) on a new figure; see the module docstring.
 
@@ -671,7 +675,7 @@ def _targets(path: Path) -> list[Path]:
 
 
 def plan_picture(
-    session: PlanningSession,
+    session: AnySession,
     snapshot: MapSnapshot,
     result: PlanResult,
     path: str | Path,

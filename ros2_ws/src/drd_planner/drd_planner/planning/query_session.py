@@ -206,6 +206,17 @@ class QuerySession:
         self._max_checks = max_checks
         self._time_budget_s = None if time_budget_s is None else float(time_budget_s)
 
+    @property
+    def goal_state(self) -> FloatArray:
+        """(D,) the goal state of the prior's stored query (the dataset's goal)."""
+        return self.vertex_state(int(self._domain.goal))
+
+    @property
+    def goal_position(self) -> FloatArray:
+        """(3,) the stored goal's position (m): the helicopter's, or the arm's end effector there."""
+        position: FloatArray = self.positions(self.goal_state)[0]
+        return position
+
     def vertex_state(self, vertex: int) -> FloatArray:
         """(D,) state of a graph vertex."""
         states = self._prior.graph.vertex_states

@@ -46,8 +46,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import rclpy
 from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import SetParametersResult
@@ -60,30 +62,47 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
+from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.obstacles import obstacle_update, pose_from_msg
+from drd_msgs_py.obstacles import obstacle_update
 from drd_msgs_py.terrain import heightfield_from_cloud
-from drd_planner.exceptions import DrdError
-from drd_planner.planner.prior_file import load_tree_bundle
+from drd_planner.exceptions import DrdError, PlanningError
+from drd_planner.planner.endpoints import Endpoint
+from drd_planner.planner.prior_file import load_prior
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.query_support import state_from_pose
 from drd_planner.planning.replan import recheck_plan
-from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planning.session import PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs, plan_summary_values
 from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
 from drd_planner.ros.plan_worker import PlanWorker
+from drd_planner.ros.requests import (
+    Goal,
+    ambiguity,
+    goal_endpoint,
+    goal_from_pose,
+    joint_vector,
+    pick_session,
+    start_from_odometry,
+)
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
+
+FloatArray = npt.NDArray[np.float64]
 
 #: Map subscriptions with ``map_subscribe_transient_local`` false: hears volatile and latched publishers.
 VOLATILE_MAPS = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
 )
+#: The robot's state (odometry, joint states): best effort, which hears reliable publishers too.
+ROBOT_STATE = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: Requests (topics and the service): reliable and deep enough that a burst reaches the node, which then
 #: coalesces it (with KEEP_LAST 10 the middleware would drop all but the last 10 unseen).
 REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -101,9 +120,11 @@ SPIN_TIMEOUT_S = 0.25
 
 @dataclass(frozen=True)
 class _Request:
-    """A goal waiting to be planned: the tree it matched, the goal, where it came from."""
+    """A goal waiting to be planned: the prior that serves it, the goal, the start, where it came from."""
 
-    session: PlanningSession
+    session: QuerySession
+    goal: Goal
+    start: FloatArray | None  # None: the robot's state when the plan starts
     source: str
     stamp: str
     coalesced: int = 0
@@ -115,14 +136,14 @@ class PlanRecord:
     """One served request, as kept in :attr:`PlannerNode.history`.
 
     Attributes:
-        session: the tree that planned it.
+        session: the prior that planned it.
         result: the plan (or why there is none) with its check log.
         snapshot: the maps it was planned on (None once :data:`SNAPSHOTS_KEPT` newer records exist).
         request: where it came from (``goal_pose``, ``goal_joints``, ``get_plan``, ``map_update``) and the
             other summary values of the request.
     """
 
-    session: PlanningSession
+    session: QuerySession
     result: PlanResult
     snapshot: MapSnapshot | None
     request: dict[str, Any]
@@ -130,11 +151,12 @@ class PlanRecord:
 
 @dataclass(frozen=True)
 class _Published:
-    """The plan on ``plan`` now: what a map update must re-check."""
+    """The plan on ``plan`` now: what a map update must re-check, and its goal for a replan."""
 
-    session: PlanningSession
+    session: QuerySession
     result: PlanResult
     snapshot: MapSnapshot
+    goal: Goal
 
 
 class PlannerNode(LifecycleNode):
@@ -143,12 +165,15 @@ class PlannerNode(LifecycleNode):
     def __init__(self, *, node_name: str = "drd_planner", **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         declare_parameters(self)
-        self._sessions: list[PlanningSession] = []
+        self._sessions: list[QuerySession] = []
+        self._robot_states: dict[bool, FloatArray] = {}  # is_arm -> the latest robot state
         self._obstacles: dict[str, Any] = {}
         self._snapshot = MapSnapshot(0)
         self._frame = "map"
         self._subs: list[Any] = []
         self._service: Any = None
+        self._replan_service: Any = None
+        self._tolerances = (1.0, 0.05)
         self._lock = threading.Lock()  # the pending requests and the map-changed flag
         self._planning = threading.Lock()  # one plan at a time: the sessions' caches, the published plan
         self._pending: dict[str, _Request] = {}
@@ -170,8 +195,8 @@ class PlannerNode(LifecycleNode):
     # Introspection (tests, diagnostics)
 
     @property
-    def sessions(self) -> tuple[PlanningSession, ...]:
-        """The loaded trees."""
+    def sessions(self) -> tuple[QuerySession, ...]:
+        """The loaded priors (a tree file loads as a prior of one tree)."""
         return tuple(self._sessions)
 
     @property
@@ -213,22 +238,26 @@ class PlannerNode(LifecycleNode):
         if not names:
             self._report_error("configure: parameter tree_paths names no tree file", topic="node")
             return TransitionCallbackReturn.FAILURE
+        budget = float(self.get_parameter("planning_time_budget").value)
         sessions = []
         for name in names:
             try:
                 path = resolve_tree_path(name)
                 sessions.append(
-                    PlanningSession(
-                        load_tree_bundle(path),
+                    QuerySession(
+                        load_prior(path),
                         name=path.stem,
                         max_checks=max_checks if max_checks > 0 else None,
-                        goal_tolerance=tolerance,
-                        joint_tolerance=joint_tolerance,
+                        time_budget_s=budget if budget > 0 else None,
                     )
                 )
             except DrdError as exc:
                 self._report_error(f"configure: {exc}", topic="node")
                 return TransitionCallbackReturn.FAILURE
+        ambiguous = ambiguity(sessions)
+        if ambiguous is not None:
+            self._report_error(f"configure: {ambiguous}", topic="node")
+            return TransitionCallbackReturn.FAILURE
         margins = {s.margin for s in sessions}
         if len(margins) != 1:
             self._report_error(
@@ -236,7 +265,8 @@ class PlannerNode(LifecycleNode):
             )
             return TransitionCallbackReturn.FAILURE
         self._sessions = sessions
-        self._obstacles, self._published, self._pending = {}, None, {}
+        self._obstacles, self._published, self._pending, self._robot_states = {}, None, {}, {}
+        self._tolerances = (tolerance, joint_tolerance)
         self._snapshot = MapSnapshot(0, margin=margins.pop())
         self.get_logger().info(f"loaded {len(sessions)} tree(s): {', '.join(s.name for s in sessions)}")
         return TransitionCallbackReturn.SUCCESS
@@ -255,6 +285,14 @@ class PlannerNode(LifecycleNode):
             (String, "robot_description", self._on_robot_description, maps, "maps"),
             (PoseStamped, "goal_pose", self._on_goal_pose, REQUESTS, "plan"),
             (JointState, "goal_joints", self._on_goal_joints, REQUESTS, "plan"),
+            (Odometry, str(self.get_parameter("odom_topic").value), self._on_odometry, ROBOT_STATE, "plan"),
+            (
+                JointState,
+                str(self.get_parameter("joint_states_topic").value),
+                self._on_joint_states,
+                ROBOT_STATE,
+                "plan",
+            ),
         ]
         self._subs = [
             self.create_subscription(
@@ -272,10 +310,17 @@ class PlannerNode(LifecycleNode):
             guard_service(self._on_get_plan, name="get_plan", report=report),
             qos_profile=REQUESTS,
         )
+        self._replan_service = self.create_service(
+            Trigger,
+            "replan",
+            guard_service(self._on_replan, name="replan", report=report),
+            qos_profile=REQUESTS,
+        )
         durability = "transient_local" if maps is LATCHED else "volatile"
         self.get_logger().info(
             f"active: maps on {', '.join(sub.topic_name for sub in self._subs[:3])} ({durability}); "
-            f"requests on {', '.join(sub.topic_name for sub in self._subs[3:])} and {self._service.srv_name}"
+            f"requests on {', '.join(sub.topic_name for sub in self._subs[3:5])}, {self._service.srv_name} and "
+            f"{self._replan_service.srv_name}; robot state on {', '.join(sub.topic_name for sub in self._subs[5:])}"
         )
         return TransitionCallbackReturn.SUCCESS
 
@@ -312,9 +357,10 @@ class PlannerNode(LifecycleNode):
         for sub in self._subs:
             self.destroy_subscription(sub)
         self._subs = []
-        if self._service is not None:
-            self.destroy_service(self._service)
-            self._service = None
+        for service in (self._service, self._replan_service):
+            if service is not None:
+                self.destroy_service(service)
+        self._service = self._replan_service = None
 
     # ------------------------------------------------------------------------------------------------
     # Maps
@@ -394,34 +440,52 @@ class PlannerNode(LifecycleNode):
 
     def _on_goal_pose(self, msg: PoseStamped) -> None:
         try:
-            xyz = _goal_xyz(msg, self._frame)
-        except MessageError as exc:
+            goal = goal_from_pose(msg, self._frame, "goal_pose")
+        except (MessageError, DrdError) as exc:
             self._report_error(f"goal_pose refused: {exc}")
             return
-        self._enqueue(xyz, "goal_pose", msg.header.stamp)
+        self._enqueue(goal, "goal_pose", msg.header.stamp)
 
     def _on_goal_joints(self, msg: JointState) -> None:
         arms = [s for s in self._sessions if s.is_arm]
         if not arms:
-            self._report_error("goal_joints refused: no arm tree is loaded")
+            self._report_error("goal_joints refused: no arm prior is loaded")
             return
         try:
-            q = _joint_goal(msg, arms[0].joint_names)
+            goal = Goal(joints=joint_vector(msg, arms[0].joint_names, "goal_joints"))
         except MessageError as exc:
             self._report_error(f"goal_joints refused: {exc}")
             return
-        self._enqueue(q, "goal_joints", msg.header.stamp)
+        self._enqueue(goal, "goal_joints", msg.header.stamp)
 
-    def _enqueue(self, goal: np.ndarray, source: str, stamp: Any) -> None:
-        session = self._session_for(goal, source)
+    def _on_odometry(self, msg: Any) -> None:
+        try:
+            state = start_from_odometry(msg, self._frame)
+        except (MessageError, DrdError) as exc:
+            self._report_error(f"odometry refused, robot state unchanged: {exc}")
+            return
+        self._robot_states[False] = state
+
+    def _on_joint_states(self, msg: JointState) -> None:
+        arms = [s for s in self._sessions if s.is_arm]
+        if not arms:
+            return  # a helicopter stack's joint states are not ours
+        try:
+            self._robot_states[True] = joint_vector(msg, arms[0].joint_names)
+        except MessageError as exc:
+            self._report_error(f"joint_states refused, robot state unchanged: {exc}")
+
+    def _enqueue(self, goal: Goal, source: str, stamp: Any) -> None:
+        session = pick_session(self._sessions, goal)
         if session is None:
+            self._report_error(f"{source} refused: no loaded prior plans for {goal.describe()}")
             return
         stamp_text = f"{int(stamp.sec)}.{int(stamp.nanosec):09d}"
         with self._lock:
             older = self._pending.get(session.name)
             coalesced = older.coalesced + 1 if older is not None else 0
             self._pending[session.name] = _Request(
-                session, source, stamp_text, coalesced, received=time.perf_counter()
+                session, goal, None, source, stamp_text, coalesced, received=time.perf_counter()
             )
         self._worker.wake()
 
@@ -436,6 +500,8 @@ class PlannerNode(LifecycleNode):
         for request in pending:
             self._plan_and_publish(
                 request.session,
+                request.goal,
+                request.start,
                 {"request": request.source, "request_stamp": request.stamp, "coalesced": request.coalesced},
                 wait_s=time.perf_counter() - request.received,
             )
@@ -448,52 +514,96 @@ class PlannerNode(LifecycleNode):
                 raise
 
     def _on_get_plan(self, request: Any, response: Any) -> Any:
-        result = self.plan_for(request.goal)
+        result = self.plan_for(request.goal, request.start)
         response.plan = result if result is not None else PathMsg()
         return response
 
-    def plan_for(self, goal: Any) -> Any | None:
-        """Serve one PoseStamped request now: the published Path, or None (the reason went to ``/diagnostics``)."""
+    def plan_for(self, goal: Any, start: Any = None) -> Any | None:
+        """Serve one ``get_plan`` now: the published Path, or None (the reason went to ``/diagnostics``).
+
+        Args:
+            goal: the goal PoseStamped.
+            start: a PoseStamped start (helicopter); None or an empty ``frame_id``: the robot's state.
+        """
         try:
-            xyz = _goal_xyz(goal, self._frame)
-        except MessageError as exc:
-            self._report_error(f"request refused: {exc}")
+            parsed = goal_from_pose(goal, self._frame)
+            given = None
+            if start is not None and str(start.header.frame_id):
+                given = goal_from_pose(start, self._frame, "start")
+        except (MessageError, DrdError) as exc:
+            self._report_error(f"get_plan refused: {exc}")
             return None
-        session = self._session_for(xyz, "request")
+        session = pick_session(self._sessions, parsed)
         if session is None:
+            self._report_error(f"get_plan refused: no loaded prior plans for {parsed.describe()}")
             return None
+        start_state = None
+        if given is not None:
+            if session.is_arm:
+                self._report_error("get_plan refused: an arm's start comes from joint_states, not a pose")
+                return None
+            assert given.position is not None
+            start_state = state_from_pose(given.position, given.yaw)
         received = time.perf_counter()
         with self._planning:
             path = self._plan_and_publish(
-                session, {"request": "get_plan"}, wait_s=time.perf_counter() - received
+                session, parsed, start_state, {"request": "get_plan"}, wait_s=time.perf_counter() - received
             )
         self._worker.wake()  # re-check it if a map arrived while it was planned
         return path
 
-    def _session_for(self, goal: np.ndarray, source: str) -> PlanningSession | None:
-        session = next((s for s in self._sessions if s.matches_goal(goal)), None)
-        if session is None:
-            what = "goal" if goal.size == 3 else "goal configuration"
-            known = "; ".join(
-                f"{s.name}: {np.round(s.goal_position if goal.size == 3 else s.goal_state, 2).tolist()}"
-                for s in self._sessions
-            )
-            self._report_error(
-                f"{source} refused: {what} {np.round(goal, 2).tolist()} matches no loaded tree ({known or 'none'})"
-            )
-        return session
+    def _on_replan(self, request: Any, response: Any) -> Any:
+        """``replan`` (std_srvs/Trigger): plan again to the published plan's goal from the robot's state now."""
+        published = self._published
+        if published is None:
+            response.success, response.message = False, "no plan is published: nothing to replan"
+            return response
+        with self._planning:
+            path = self._plan_and_publish(published.session, published.goal, None, {"request": "replan"})
+        self._worker.wake()
+        response.success = path is not None
+        response.message = (
+            "replanned" if path is not None else f"no new plan: {self._errors[-1] if self._errors else ''}"
+        )
+        return response
+
+    def _start_for(self, session: QuerySession) -> Endpoint:
+        """Where a plan of ``session`` starts when the request gives no start: the robot's state."""
+        state = self._robot_states.get(session.is_arm)
+        if state is not None:
+            return state
+        if str(self.get_parameter("start_without_robot_state").value) == "prior_start":
+            return int(session.domain.start)
+        topic = self.get_parameter("joint_states_topic" if session.is_arm else "odom_topic").value
+        raise PlanningError(
+            f"no robot state known yet: nothing received on {topic!r} (give get_plan a start, or set "
+            "start_without_robot_state to prior_start to plan from the prior's stored start)"
+        )
 
     def _plan_and_publish(
-        self, session: PlanningSession, values: dict[str, Any], *, wait_s: float = 0.0
+        self,
+        session: QuerySession,
+        goal: Goal,
+        start: FloatArray | None,
+        values: dict[str, Any],
+        *,
+        wait_s: float = 0.0,
     ) -> Any | None:
         """Plan on the current snapshot and publish; ``wait_s``: how long the request waited to be served."""
         snapshot = self._snapshot
+        tolerance, joint_tolerance = self._tolerances
         try:
-            result = session.plan(snapshot, seed=int(self.get_parameter("seed").value))
+            begin = start if start is not None else self._start_for(session)
+            end = goal_endpoint(session, goal, snapshot, tolerance=tolerance, joint_tolerance=joint_tolerance)
+            result = session.plan(snapshot, begin, end, seed=int(self.get_parameter("seed").value))
         except DrdError as exc:
             self._report_error(f"{values.get('request', 'request')} refused: {exc}")
             return None
-        return self._publish(session, result, snapshot, values, wait_s=wait_s)
+        # A start or goal the prior cannot serve is a refused request, not a plan.
+        if result.status == "refused":
+            self._report_error(f"{values.get('request', 'request')} refused: {result.message}")
+            return None
+        return self._publish(session, result, snapshot, values, goal, wait_s=wait_s)
 
     # ------------------------------------------------------------------------------------------------
     # Map updates after a published plan
@@ -508,7 +618,7 @@ class PlannerNode(LifecycleNode):
             self._report_error(f"{reason}; replanning")
         else:
             if outcome.kept:
-                self._published = _Published(session, published.result, snapshot)
+                self._published = _Published(session, published.result, snapshot, published.goal)
                 self._out.status(
                     "map update",
                     ok=True,
@@ -529,10 +639,15 @@ class PlannerNode(LifecycleNode):
             self.get_logger().warning(reason)
         if not bool(self.get_parameter("replan_on_map_update").value):
             self._withdraw(session, snapshot, why=f"{reason}; replan_on_map_update is false")
-        elif self._plan_and_publish(session, {"request": "map_update", "replan_reason": reason}) is None:
+        elif (
+            self._plan_and_publish(
+                session, published.goal, None, {"request": "map_update", "replan_reason": reason}
+            )
+            is None
+        ):
             self._withdraw(session, snapshot, why="no replacement was found")
 
-    def _withdraw(self, session: PlanningSession, snapshot: MapSnapshot, *, why: str) -> None:
+    def _withdraw(self, session: QuerySession, snapshot: MapSnapshot, *, why: str) -> None:
         """Take the published plan back: it is no longer known free on the current maps."""
         if self._published is None:
             return
@@ -548,10 +663,11 @@ class PlannerNode(LifecycleNode):
 
     def _publish(
         self,
-        session: PlanningSession,
+        session: QuerySession,
         result: PlanResult,
         snapshot: MapSnapshot,
         extra: dict[str, Any],
+        goal: Goal,
         *,
         wait_s: float = 0.0,
     ) -> Any | None:
@@ -565,7 +681,7 @@ class PlannerNode(LifecycleNode):
         started = time.perf_counter()
         stamp = self._out.stamp()
         self._remember(PlanRecord(session, result, snapshot, dict(extra)))
-        path = self._publish_plan(session, result, snapshot, stamp) if result.ok else None
+        path = self._publish_plan(session, result, snapshot, goal, stamp) if result.ok else None
         plan_messaging_s = time.perf_counter() - started
         self._out.checks(result, stamp)
         self._out.markers(session, result, snapshot, stamp)
@@ -593,12 +709,17 @@ class PlannerNode(LifecycleNode):
                 self._history[-SNAPSHOTS_KEPT - 1] = dataclasses.replace(old, snapshot=None)
 
     def _publish_plan(
-        self, session: PlanningSession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+        self,
+        session: QuerySession,
+        result: PlanResult,
+        snapshot: MapSnapshot,
+        goal: Goal,
+        stamp: tuple[int, int],
     ) -> Any:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); it becomes the published plan."""
         path = self._out.plan(session, result, snapshot, stamp)
         if self._out.active:  # an inactive node publishes nothing, so it has no plan out there
-            self._published = _Published(session, result, snapshot)
+            self._published = _Published(session, result, snapshot, goal)
         return path
 
     def _on_worker_error(self, exc: Exception) -> None:
@@ -645,31 +766,6 @@ class PlannerNode(LifecycleNode):
         with self._lock:
             self._errors = [*self._errors[-99:], text]
         self._out.status(topic, ok=False, message=text, values={})
-
-
-def _goal_xyz(goal: Any, frame: str) -> np.ndarray:
-    """(3,) goal position of a PoseStamped in ``frame`` (metres); NaN or a bad quaternion is refused."""
-    got = str(goal.header.frame_id)
-    if got != frame:
-        raise MessageError(f"goal is in frame {got!r}; the planner works in {frame!r}")
-    return np.array(pose_from_msg(goal.pose, "goal").position, dtype=np.float64)
-
-
-def _joint_goal(msg: Any, joint_names: tuple[str, ...]) -> np.ndarray:
-    """(D,) goal angles (rad) of a JointState, in the order of ``joint_names``; names may come in any order."""
-    names = [str(n) for n in msg.name]
-    positions = np.asarray(msg.position, dtype=np.float64).ravel()
-    if len(names) != positions.size:
-        raise MessageError(f"{len(names)} joint names but {positions.size} positions")
-    if len(set(names)) != len(names):
-        raise MessageError("joint names repeat")
-    missing = [j for j in joint_names if j not in names]
-    if missing:
-        raise MessageError(f"missing joints {missing}; the tree plans for {list(joint_names)}")
-    q = np.array([positions[names.index(j)] for j in joint_names])
-    if not np.all(np.isfinite(q)):
-        raise MessageError("joint positions must be finite")
-    return q
 
 
 def main(args: list[str] | None = None) -> int:

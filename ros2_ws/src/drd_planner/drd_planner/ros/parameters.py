@@ -55,6 +55,27 @@ def _frame(value: Any) -> str | None:
     return None
 
 
+def _topic(value: Any) -> str | None:
+    text = str(value)
+    if not text or len(text) > 256 or not all(c.isalnum() or c in "_/~" for c in text):
+        return "must be a topic name (letters, digits, _ and /, at most 256 characters)"
+    return None
+
+
+def _one_of(*choices: str) -> Callable[[Any], str | None]:
+    def check(value: Any) -> str | None:
+        return (
+            None if str(value) in choices else f"must be one of {', '.join(choices)}, got {str(value)[:40]!r}"
+        )
+
+    return check
+
+
+def _non_negative_seconds(value: Any) -> str | None:
+    v = float(value)
+    return None if math.isfinite(v) and 0.0 <= v <= 3600.0 else f"must be finite, >= 0 and <= 3600 s, got {v}"
+
+
 def _tree_paths(value: Any) -> str | None:
     names = [str(v) for v in value]
     if len(names) > 64 or any(len(n) > 4096 for n in names):
@@ -145,6 +166,32 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         "they get a latched map published before the node started; false: volatile, which also hears "
         "volatile publishers (most perception nodes, RViz tools) but no history. Read at activate; "
         "qos_overrides.<topic>.subscription.* parameters tune depth, reliability and history.",
+    ),
+    ParameterSpec(
+        "odom_topic",
+        "odom",
+        "nav_msgs/Odometry of the helicopter (pose in frame_id): where its plans start. Read at activate.",
+        _topic,
+    ),
+    ParameterSpec(
+        "joint_states_topic",
+        "joint_states",
+        "sensor_msgs/JointState of the arm (extra joints are ignored): where its plans start. Read at activate.",
+        _topic,
+    ),
+    ParameterSpec(
+        "start_without_robot_state",
+        "refuse",
+        "A request before any robot state arrived: 'refuse' it, or plan from the prior's stored start "
+        "('prior_start', for replays and tests without odometry).",
+        _one_of("refuse", "prior_start"),
+    ),
+    ParameterSpec(
+        "planning_time_budget",
+        0.0,
+        "Seconds a plan may take before it ends with status time_budget (0: no limit); read at configure.",
+        _non_negative_seconds,
+        float_range=(0.0, 3600.0),
     ),
     ParameterSpec(
         "replan_on_map_update",

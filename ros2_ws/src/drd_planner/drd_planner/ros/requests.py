@@ -1,0 +1,179 @@
+"""Requests and robot states as the node reads them: goals, starts, and which prior serves them.
+
+A goal is a :class:`Goal`: a position (and yaw) from ``goal_pose`` / ``get_plan``, or joint angles
+from ``goal_joints``. :func:`goal_endpoint` turns it into what the planner takes for one session:
+
+- a goal within ``goal_tolerance`` (m) of the prior's stored goal (``joint_tolerance`` rad for joints)
+  is that vertex, so a tree built for the stored query serves it;
+- else, within the tolerance of another vertex, the nearest such vertex (for the helicopter, among
+  vertices at that position, the heading nearest the goal's yaw);
+- else the goal state itself (x, y, z, yaw; or the joint angles), joined to the graph by new, checked
+  motions. An arm's end-effector position goal must lie within ``goal_tolerance`` of a roadmap vertex's
+  end effector (there is no inverse kinematics).
+
+The robot's state comes from ``odom`` (``nav_msgs/Odometry``, helicopter: x, y, z, yaw) or
+``joint_states`` (``sensor_msgs/JointState``, arm); :func:`pick_session` says which loaded prior
+serves a request: the one of the request's domain (a pose: the helicopter's, else the arm's end
+effector; joints: the arm's). Two priors of one domain are ambiguous and refused at configure
+(:func:`ambiguity`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.obstacles import pose_from_msg
+from drd_planner.planner.endpoints import Endpoint
+from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.query_support import state_from_pose, wrap_angle, yaw_from_quaternion
+
+FloatArray = npt.NDArray[np.float64]
+
+__all__ = [
+    "Goal",
+    "ambiguity",
+    "goal_endpoint",
+    "goal_from_pose",
+    "joint_vector",
+    "pick_session",
+    "start_from_odometry",
+]
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A requested goal.
+
+    Attributes:
+        position: (3,) metres in the planning frame (a pose goal), or None.
+        yaw: the pose goal's heading (rad), 0 for joint goals.
+        joints: (D,) joint angles (rad) in the session's joint order (a joint goal), or None.
+    """
+
+    position: FloatArray | None = None
+    yaw: float = 0.0
+    joints: FloatArray | None = None
+
+    def describe(self) -> str:
+        """The goal in one short phrase for logs."""
+        if self.joints is not None:
+            return f"joints {np.round(self.joints, 3).tolist()}"
+        assert self.position is not None
+        return f"position {np.round(self.position, 2).tolist()} yaw {self.yaw:.2f}"
+
+
+def goal_from_pose(msg: Any, frame: str, what: str = "goal") -> Goal:
+    """The :class:`Goal` of a ``PoseStamped`` in ``frame``; a wrong frame, NaN or a bad quaternion is refused."""
+    got = str(msg.header.frame_id)
+    if got != frame:
+        raise MessageError(f"{what} is in frame {got[:80]!r}; the planner works in {frame!r}")
+    pose = pose_from_msg(msg.pose, what)
+    return Goal(
+        position=np.array(pose.position, dtype=np.float64), yaw=yaw_from_quaternion(pose.quaternion_xyzw)
+    )
+
+
+def start_from_odometry(msg: Any, frame: str) -> FloatArray:
+    """(4,) helicopter state (x, y, z m, yaw rad) of a ``nav_msgs/Odometry`` whose pose is in ``frame``."""
+    got = str(msg.header.frame_id)
+    if got != frame:
+        raise MessageError(f"odometry is in frame {got[:80]!r}; the planner works in {frame!r}")
+    pose = pose_from_msg(msg.pose.pose, "odometry pose")
+    return state_from_pose(pose.position, yaw_from_quaternion(pose.quaternion_xyzw))
+
+
+def joint_vector(msg: Any, joint_names: Sequence[str], what: str = "joint state") -> FloatArray:
+    """(D,) angles (rad) of a ``JointState`` in the order of ``joint_names``; other joints are ignored."""
+    names = [str(n) for n in msg.name]
+    positions = np.asarray(msg.position, dtype=np.float64).ravel()
+    if len(names) != positions.size:
+        raise MessageError(f"{what}: {len(names)} joint names but {positions.size} positions")
+    if len(set(names)) != len(names):
+        raise MessageError(f"{what}: joint names repeat")
+    missing = [j for j in joint_names if j not in names]
+    if missing:
+        raise MessageError(f"{what}: missing joints {missing}; the prior plans for {list(joint_names)}")
+    q = np.array([positions[names.index(j)] for j in joint_names])
+    if not np.all(np.isfinite(q)):
+        raise MessageError(f"{what}: joint positions must be finite")
+    return q
+
+
+def ambiguity(sessions: Sequence[QuerySession]) -> str | None:
+    """Why ``sessions`` cannot serve requests unambiguously (two priors of one domain), or None."""
+    seen: dict[str, str] = {}
+    for session in sessions:
+        domain = session.domain.name
+        if domain in seen:
+            return (
+                f"priors {seen[domain]!r} and {session.name!r} both plan for the {domain} domain: a request "
+                "could go to either; load one prior per domain (run one node per prior, in its own namespace)"
+            )
+        seen[domain] = session.name
+    return None
+
+
+def pick_session(sessions: Sequence[QuerySession], goal: Goal) -> QuerySession | None:
+    """The prior that serves ``goal``: joints go to the arm's, a pose to the helicopter's, else the arm's."""
+    if goal.joints is not None:
+        return next((s for s in sessions if s.is_arm), None)
+    return next((s for s in sessions if not s.is_arm), next((s for s in sessions if s.is_arm), None))
+
+
+def goal_endpoint(
+    session: QuerySession, goal: Goal, snapshot: MapSnapshot, *, tolerance: float, joint_tolerance: float
+) -> Endpoint:
+    """What the planner takes for ``goal`` in ``session`` (module docstring): a vertex id or a state."""
+    domain = session.domain
+    stored = int(domain.goal)
+    if goal.joints is not None:
+        return _nearest_within(
+            session, goal.joints, stored, joint_tolerance, lambda s: np.abs(s - goal.joints)
+        )
+    assert goal.position is not None
+    if session.is_arm:
+        state = session.goal_state_from_position(goal.position, snapshot=snapshot, tolerance=tolerance)
+        return stored if np.array_equal(state, session.vertex_state(stored)) else state
+    return _helicopter_goal(session, goal.position, goal.yaw, stored, tolerance)
+
+
+def _nearest_within(
+    session: QuerySession, want: FloatArray, stored: int, tolerance: float, gap: Any
+) -> Endpoint:
+    """The stored goal if within ``tolerance`` (max per coordinate), else the nearest vertex within it, else ``want``."""
+    states = session.prior.graph.vertex_states
+    if states is None:
+        return want
+    if np.max(gap(states[stored])) <= tolerance:
+        return stored
+    gaps = np.max(gap(states), axis=1)
+    best = int(np.argmin(gaps))
+    return best if gaps[best] <= tolerance else np.asarray(want, dtype=np.float64)
+
+
+def _helicopter_goal(
+    session: QuerySession, position: FloatArray, yaw: float, stored: int, tolerance: float
+) -> Endpoint:
+    states = session.prior.graph.vertex_states
+    if states is None:
+        return state_from_pose(position, yaw)
+    offsets = np.max(np.abs(states[:, :3] - position), axis=1)  # metres, per axis as goal_tolerance says
+    if offsets[stored] <= tolerance:
+        return stored
+    near = np.flatnonzero(offsets <= tolerance)
+    if near.size == 0:
+        return state_from_pose(position, yaw)
+    turn = (
+        np.abs([wrap_angle(float(h) - yaw) for h in states[near, 3]])
+        if states.shape[1] > 3
+        else np.zeros(near.size)
+    )
+    order = np.lexsort((turn, offsets[near]))
+    return int(near[order[0]])
