@@ -8,6 +8,8 @@ Each bag (one rosbag2 MCAP file, see ``drd_msgs_py.bags``) holds, at these offse
   ``map``; arm: ``/obstacles`` in ``panda_link0``, plus ``/robot_description`` with
   ``--robot-description``: the Panda URDF is not copied into the repository, the node falls back to
   the tree's own model without it);
+- 0.0 s: the robot's state at the tree's start (helicopter: ``/odom``, ``nav_msgs/Odometry`` in ``map``;
+  arm: ``/joint_states``), where the node's plans start;
 - 0.5 s: a request for the tree's goal (``/goal_pose`` at the goal position; arm: ``/goal_joints``);
 - 1.5 s: the whole obstacle map again plus one new sphere placed on an edge of the first plan (so that
   edge is now in collision; every ``obstacles`` message is a full map because the topic is latched
@@ -136,6 +138,43 @@ def _request(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_n
     return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", time_ns, msg)
 
 
+def _robot_state(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_ns: int) -> BagMessage:
+    """The robot at the tree's start: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
+    start = session.vertex_state(session.domain.start)
+    if isinstance(session.domain, ArmDomain):
+        msg = msgs(
+            "sensor_msgs/msg/JointState",
+            header=header(msgs, frame, _stamp(time_ns)),
+            name=list(session.domain.robot.chain.joint_names),
+            position=np.asarray(start, dtype=np.float64),
+        )
+        return BagMessage("/joint_states", "sensor_msgs/msg/JointState", time_ns, msg)
+    yaw = float(start[3]) if start.size > 3 else 0.0
+    pose = msgs(
+        "geometry_msgs/msg/Pose",
+        position=msgs("geometry_msgs/msg/Point", x=float(start[0]), y=float(start[1]), z=float(start[2])),
+        orientation=msgs(
+            "geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0)
+        ),
+    )
+    msg = msgs(
+        "nav_msgs/msg/Odometry",
+        header=header(msgs, frame, _stamp(time_ns)),
+        child_frame_id="base_link",
+        pose=msgs("geometry_msgs/msg/PoseWithCovariance", pose=pose, covariance=np.zeros(36)),
+        twist=msgs(
+            "geometry_msgs/msg/TwistWithCovariance",
+            twist=msgs(
+                "geometry_msgs/msg/Twist",
+                linear=msgs("geometry_msgs/msg/Vector3", x=0.0, y=0.0, z=0.0),
+                angular=msgs("geometry_msgs/msg/Vector3", x=0.0, y=0.0, z=0.0),
+            ),
+            covariance=np.zeros(36),
+        ),
+    )
+    return BagMessage("/odom", "nav_msgs/msg/Odometry", time_ns, msg)
+
+
 def _finish(
     name: str,
     seed: int,
@@ -152,6 +191,7 @@ def _finish(
         return None
     messages = [
         *messages,
+        _robot_state(msgs, session, frame, _ns(MAPS_S)),
         _request(msgs, session, frame, _ns(FIRST_REQUEST_S)),
         _request(msgs, session, frame, _ns(SECOND_REQUEST_S)),
     ]

@@ -57,7 +57,6 @@ def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[Repl
     params = [
         Parameter("tree_paths", value=[str(TREES / tree)]),
         Parameter("frame_id", value=frame),
-        Parameter("start_without_robot_state", value="prior_start"),  # the bags carry no odometry
     ]
     node = PlannerNode(context=ctx, parameter_overrides=params)
     try:
@@ -174,8 +173,8 @@ def test_replay_without_a_planner_records_nothing(context: Any, tmp_path: Path) 
     summary = replay_bag(
         bag, context=context, record=tmp_path / "o.mcap", rate=10.0, settle=0.1, wait=0.2, log=lines.append
     )
-    assert len(summary.published) == 5 and not summary.recorded
-    assert set(summary.unmatched) == {"/terrain", "/obstacles", "/goal_pose"}
+    assert len(summary.published) == 6 and not summary.recorded
+    assert set(summary.unmatched) == {"/terrain", "/obstacles", "/odom", "/goal_pose"}
     assert summary.seconds < 5.0  # 2.5 s of bag at rate 10
     assert any("no subscriber on /goal_pose" in line for line in lines)
     assert read_bag(tmp_path / "o.mcap") == []

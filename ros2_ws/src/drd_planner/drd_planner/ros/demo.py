@@ -94,7 +94,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         context=context,
         parameter_overrides=[
             Parameter("tree_paths", value=[args.tree]),
-            Parameter("start_without_robot_state", value="prior_start"),  # the bundled bags carry no odometry
             Parameter("frame_id", value=frame),
             Parameter("seed", value=args.seed),
         ],
