@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from geometry_msgs.msg import Point, PoseStamped
+from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState, PointCloud2, PointField
 from std_msgs.msg import String
@@ -42,6 +43,7 @@ __all__ = [
     "interleave",
     "joint_cases",
     "marker_cases",
+    "odom_cases",
 ]
 
 Rng = np.random.Generator
@@ -675,6 +677,40 @@ def interleave(rng: Rng, *groups: list[Case]) -> list[Case]:
     """All cases of ``groups`` in one seeded random order."""
     cases = [c for group in groups for c in group]
     return [cases[i] for i in rng.permutation(len(cases))]
+
+
+def odom_cases(rng: Rng, odom: Any, *, count: int) -> list[Case]:
+    """``count`` malformed Odometry messages (the robot's state) mutated from a valid ``odom``; all must fail."""
+    cases = []
+    for _ in range(count):
+        msg = _copy(odom)
+        pose = msg.pose.pose
+        kind = _pick(rng, ("nan", "wrong_frame", "zero_quaternion", "non_unit_quaternion"))
+        reasons: tuple[str, ...]
+        if kind == "nan":
+            _set_vector(rng, _pick(rng, (pose.position, pose.orientation)), "xyz", _bad_float(rng))
+            reasons = _FINITE
+        elif kind == "wrong_frame":
+            msg.header.frame_id = str(_pick(rng, WRONG_FRAMES))
+            reasons = ("frame",)
+        elif kind == "zero_quaternion":
+            pose.orientation.x = pose.orientation.y = pose.orientation.z = pose.orientation.w = 0.0
+            reasons = _QUATERNION
+        else:
+            pose.orientation.w = float(rng.uniform(1.01, 100.0)) * _pick(rng, (-1.0, 1.0))
+            reasons = _QUATERNION
+        cases.append(Case("odom", f"odom/{kind}", msg, True, reasons))
+    return cases
+
+
+def valid_odometry(state: npt.ArrayLike, *, frame_id: str) -> Odometry:
+    """An Odometry at a (4,) helicopter state (x, y, z m, heading rad) in ``frame_id``."""
+    x, y, z, yaw = (float(v) for v in np.asarray(state, dtype=np.float64).ravel()[:4])
+    odom = Odometry()
+    odom.header.frame_id = frame_id
+    odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = x, y, z
+    odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    return odom
 
 
 def valid_goal(xyz: npt.ArrayLike, *, frame_id: str) -> PoseStamped:

@@ -27,6 +27,7 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not 
 import malformed as mf  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
+from nav_msgs.msg import Odometry  # noqa: E402
 from nav_msgs.msg import Path as PathMsg  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
@@ -105,6 +106,7 @@ class _Peer:
             "robot_description": n.create_publisher(String, "robot_description", LATCHED),
             "goal_pose": n.create_publisher(PoseStamped, "goal_pose", REQUESTS),
             "goal_joints": n.create_publisher(JointState, "goal_joints", REQUESTS),
+            "odom": n.create_publisher(Odometry, "odom", REQUESTS),
         }
         n.create_subscription(DiagnosticArray, "/diagnostics", peer._on_diagnostics, RECORD)
         n.create_subscription(DiagnosticArray, "edge_checks", peer._on_checks, RECORD)
@@ -357,6 +359,9 @@ def test_helicopter_node_survives_thousands_of_malformed_messages(context: Any) 
             mf.marker_cases(rng, markers, count=1300),
             mf.cloud_cases(rng, cloud, count=600),
             mf.goal_cases(rng, goal, count=500, tolerance=float(node.get_parameter("goal_tolerance").value)),
+            mf.odom_cases(
+                rng, mf.valid_odometry(session.vertex_state(session.domain.start), frame_id="map"), count=200
+            ),
         )
         # Valid maps first, so that "unchanged" means something and valid-after-mutation goals plan.
         peer.publishers["terrain"].publish(cloud)
