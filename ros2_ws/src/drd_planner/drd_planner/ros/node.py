@@ -1,37 +1,40 @@
-"""The ``drd_planner`` lifecycle node (rclpy): maps in, lazily checked plans out.
+"""The ``drd_planner`` lifecycle node (rclpy): maps and the robot's state in, lazily checked plans out.
 
 Interface (DESIGN.md section 6; names relative to the node namespace):
 
 - subscriptions (after ``activate``): ``obstacles`` (MarkerArray), ``terrain`` (PointCloud2) and
   ``robot_description`` (String, arm), reliable depth 1, transient_local (``map_subscribe_transient_local``
-  true, the default) or volatile (false: hears volatile publishers too), with QoS override parameters; requests ``goal_pose``
-  (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and ``goal_joints``
-  (JointState, arm), reliable depth 10;
-- service ``get_plan`` (``nav_msgs/srv/GetPlan``): the same answer as a ``goal_pose`` request;
+  true, the default) or volatile (false: hears volatile publishers too), with QoS override parameters;
+  requests ``goal_pose`` (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and
+  ``goal_joints`` (JointState, arm), reliable; the robot's state ``odom`` (Odometry, helicopter) and
+  ``joint_states`` (JointState, arm), best effort;
+- services ``get_plan`` (``nav_msgs/srv/GetPlan``: as ``goal_pose``, from ``start`` when its frame is set)
+  and ``replan`` (``std_srvs/srv/Trigger``: the published plan's goal again, from the robot's state now);
 - publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
   ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
   status per check) and ``checked_edges`` (MarkerArray) are lifecycle publishers (silent until
-  ``activate``); ``/diagnostics`` in every state: one summary per plan, re-check, accepted map or error
-  (statuses ``<node name>: plan`` / ``map update`` / ``maps`` / ``node``) and a 1 Hz ``<node name>: heartbeat``.
+  ``activate``, :mod:`drd_planner.ros.outputs`); ``/diagnostics`` in every state: one summary per plan,
+  re-check, accepted map or error (statuses ``<node name>: plan`` / ``map update`` / ``maps`` / ``node``)
+  and a 1 Hz ``<node name>: heartbeat``.
 
-Parameters: ``tree_paths`` (tree files or shipped tree names such as ``heli_wires``; one tree per
-goal), ``frame_id`` (planning frame), ``seed``, ``max_checks`` (0: no cap), ``goal_tolerance``
-(metres), ``joint_tolerance`` (radians), ``autostart`` (``planner_node`` configures and activates
-itself), ``replan_on_map_update``, ``map_subscribe_transient_local``; each with its description and
-range (:mod:`drd_planner.ros.parameters`; ``planner_node --help`` lists them).
+Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
+--help`` lists them). Each file in ``tree_paths`` is a world prior (a tree file is a prior of its one
+query) served by a :class:`~drd_planner.planning.query_session.QuerySession`; a request goes to the prior
+of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.ros.requests`).
 
 Consistency. Maps and requests arrive in executor callbacks; topic requests are planned in the node's
 planning thread (:mod:`drd_planner.ros.plan_worker`), service calls in their callback, one plan at a
 time. A plan runs to its end on the map snapshot it started from; a map that arrives meanwhile makes a
 new snapshot (its FCL scene and checkers built in the map callback) that the next plan uses. Topic
-requests are *coalesced*: while a plan runs, a newer request for the same tree supersedes an older
+requests are *coalesced*: while a plan runs, a newer request for the same prior supersedes an older
 one that has not started (the summary's ``coalesced`` value counts them); service calls are each
-answered. After a plan was published, a map update re-checks only the plan's edges the
-update can affect (:mod:`drd_planner.planning.replan`): the plan is kept if they stay free, replanned
-(and the reason put on ``/diagnostics``) if one is blocked, and withdrawn (an empty Path) if no library
-path is free any more. A bad message or request is reported on ``/diagnostics`` and in the log; it
-never stops the node, and no plan is published unless every one of its edges was checked free on the
-snapshot it was planned on.
+answered. Every map that arrives before a plan is published, or after, is compared with the map that
+plan was verified on; only the plan's edges the update can affect are re-checked
+(:mod:`drd_planner.planning.replan`): the plan is kept if they stay free, replanned from the robot's
+state now (and the reason put on ``/diagnostics``) if one is blocked, and withdrawn (an empty Path) if
+no free path is found. A bad message or request is reported on ``/diagnostics`` and in the log; no
+input ends the node (:mod:`drd_planner.ros.guard`), and no plan is published unless every one of its
+edges was checked free on the snapshot it was planned on.
 """
 
 from __future__ import annotations
