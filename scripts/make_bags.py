@@ -115,25 +115,35 @@ def _edge_blocked(
     return not session.checker(maps.snapshot).check(edge)
 
 
-def _request(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_ns: int) -> BagMessage:
-    goal = session.goal_state
-    if isinstance(session.domain, ArmDomain):
-        joints = session.domain.robot.chain.joint_names
-        msg = msgs(
-            "sensor_msgs/msg/JointState",
-            header=header(msgs, frame, _stamp(time_ns)),
-            name=list(joints),
-            position=np.asarray(goal, dtype=np.float64),
-        )
-        return BagMessage("/goal_joints", "sensor_msgs/msg/JointState", time_ns, msg)
-    yaw = float(goal[3]) if goal.size > 3 else 0.0
-    pose = msgs(
+def _joints(msgs: RosbagsMessages, session: PlanningSession, q: Any, frame: str, time_ns: int) -> Any:
+    """A JointState of the arm's chain joints at ``q`` (rad)."""
+    assert isinstance(session.domain, ArmDomain)
+    return msgs(
+        "sensor_msgs/msg/JointState",
+        header=header(msgs, frame, _stamp(time_ns)),
+        name=list(session.domain.robot.chain.joint_names),
+        position=np.asarray(q, dtype=np.float64),
+    )
+
+
+def _pose(msgs: RosbagsMessages, state: Any) -> Any:
+    """A Pose at a helicopter state (x, y, z m; heading rad as a yaw quaternion)."""
+    yaw = float(state[3]) if state.size > 3 else 0.0
+    return msgs(
         "geometry_msgs/msg/Pose",
-        position=msgs("geometry_msgs/msg/Point", x=float(goal[0]), y=float(goal[1]), z=float(goal[2])),
+        position=msgs("geometry_msgs/msg/Point", x=float(state[0]), y=float(state[1]), z=float(state[2])),
         orientation=msgs(
             "geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0)
         ),
     )
+
+
+def _request(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_ns: int) -> BagMessage:
+    goal = session.goal_state
+    if isinstance(session.domain, ArmDomain):
+        msg = _joints(msgs, session, goal, frame, time_ns)
+        return BagMessage("/goal_joints", "sensor_msgs/msg/JointState", time_ns, msg)
+    pose = _pose(msgs, goal)
     msg = msgs("geometry_msgs/msg/PoseStamped", header=header(msgs, frame, _stamp(time_ns)), pose=pose)
     return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", time_ns, msg)
 
@@ -142,21 +152,9 @@ def _robot_state(msgs: RosbagsMessages, session: PlanningSession, frame: str, ti
     """The robot at the tree's start: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
     start = session.vertex_state(session.domain.start)
     if isinstance(session.domain, ArmDomain):
-        msg = msgs(
-            "sensor_msgs/msg/JointState",
-            header=header(msgs, frame, _stamp(time_ns)),
-            name=list(session.domain.robot.chain.joint_names),
-            position=np.asarray(start, dtype=np.float64),
-        )
+        msg = _joints(msgs, session, start, frame, time_ns)
         return BagMessage("/joint_states", "sensor_msgs/msg/JointState", time_ns, msg)
-    yaw = float(start[3]) if start.size > 3 else 0.0
-    pose = msgs(
-        "geometry_msgs/msg/Pose",
-        position=msgs("geometry_msgs/msg/Point", x=float(start[0]), y=float(start[1]), z=float(start[2])),
-        orientation=msgs(
-            "geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0)
-        ),
-    )
+    pose = _pose(msgs, start)
     msg = msgs(
         "nav_msgs/msg/Odometry",
         header=header(msgs, frame, _stamp(time_ns)),
