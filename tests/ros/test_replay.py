@@ -149,6 +149,18 @@ def test_heli_bag_replays_into_the_node_and_matches_drd_plan(context: Any, tmp_p
         node.destroy_node()
 
 
+def test_replaying_a_bag_twice_gives_identical_check_logs(context: Any, tmp_path: Path) -> None:
+    logs = []
+    for k in range(2):
+        out = tmp_path / f"run{k}.mcap"
+        _, node = _replay(context, "heli_wires.npz", "map", BAGS / "heli_wires.mcap", out)
+        node.destroy_node()
+        checks = [m.message for m in read_bag(out) if m.topic == "/edge_checks"]
+        logs.append([[(s.name, _ok(s)) for s in log.status] for log in checks])
+    assert len(logs[0]) == 3 and all(logs[0])  # two requests and the replan after the update, each checked
+    assert logs[0] == logs[1]
+
+
 @pytest.mark.xfail(
     not NODE_HAS_ARM, reason="the node does not serve the arm yet (no joint_tolerance)", strict=False
 )
