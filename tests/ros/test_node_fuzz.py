@@ -38,6 +38,7 @@ from std_msgs.msg import String  # noqa: E402
 from trajectory_msgs.msg import JointTrajectory  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
 
+import drd_planner.ros.node as node_module  # noqa: E402
 from drd_msgs_py.exceptions import MessageError  # noqa: E402
 from drd_msgs_py.obstacles import obstacle_update  # noqa: E402
 from drd_msgs_py.terrain import heightfield_from_cloud  # noqa: E402
@@ -347,7 +348,10 @@ def _offline_error(case: mf.Case) -> str | None:
     return None
 
 
-def test_helicopter_node_survives_thousands_of_malformed_messages(context: Any) -> None:
+def test_helicopter_node_survives_thousands_of_malformed_messages(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(node_module, "STATE_ERROR_PERIOD_S", 0.0)  # one report per odometry case, unthrottled
     node, peer, executor = _start(context, HELI_TREE, "map")
     try:
         session = node.sessions[0]

@@ -326,3 +326,22 @@ def test_maps_beyond_the_limit_parameters_are_refused_naming_them_and_the_map_is
         assert "(parameter max_terrain_cells)" in node.errors[-1]
         assert node.snapshot.terrain is None  # cleanup forgot the maps; the latched terrain was refused
         assert node.snapshot.obstacles, node.errors[-3:]  # the latched obstacle map was taken
+
+
+def test_a_robot_state_stream_in_the_wrong_frame_is_reported_once_per_period(context: Any) -> None:
+    from nav_msgs.msg import Odometry
+
+    node, peer = _node(context), Peer(context)
+    odom = peer.node.create_publisher(Odometry, "odom", 10)
+    with active_planner(context, node, peer) as executor:
+        assert spin_until(executor, lambda: odom.get_subscription_count() > 0)
+        message = Odometry()
+        message.header.frame_id = "odom"  # the usual odometry frame, not the planning frame
+        message.pose.pose.orientation.w = 1.0
+        for _ in range(30):
+            odom.publish(message)
+            spin_for(executor, 0.01)
+        spin_for(executor, 0.3)
+        refused = [e for e in node.errors if e.startswith("odometry refused")]
+        assert len(refused) == 1 and "frame 'odom'" in refused[0]
+        assert node._robot_states.get(False) is None

@@ -115,6 +115,8 @@ HISTORY_LENGTH = 16
 #: The newest records of the history that keep their map snapshot (older ones drop it: a snapshot
 #: holds the FCL scene of its maps).
 SNAPSHOTS_KEPT = 4
+#: Seconds between two reports of the same refused robot-state message (odometry streams fast).
+STATE_ERROR_PERIOD_S = 5.0
 #: Seconds :meth:`PlannerNode.destroy_node` waits for a running plan.
 SHUTDOWN_WAIT_S = 1.0
 #: Longest executor wait (seconds) of ``planner_node``'s spin loop.
@@ -170,6 +172,7 @@ class PlannerNode(LifecycleNode):
         declare_parameters(self)
         self._sessions: list[QuerySession] = []
         self._robot_states: dict[bool, FloatArray] = {}  # is_arm -> the latest robot state
+        self._last_state_error: tuple[str, float] | None = None
         self._obstacles: dict[str, Any] = {}
         self._snapshot = MapSnapshot(0)
         self._frame = "map"
@@ -465,7 +468,7 @@ class PlannerNode(LifecycleNode):
         try:
             state = start_from_odometry(msg, self._frame)
         except (MessageError, DrdError) as exc:
-            self._report_error(f"odometry refused, robot state unchanged: {exc}")
+            self._report_state_error(f"odometry refused, robot state unchanged: {exc}")
             return
         self._robot_states[False] = state
 
@@ -476,7 +479,20 @@ class PlannerNode(LifecycleNode):
         try:
             self._robot_states[True] = joint_vector(msg, arms[0].joint_names)
         except MessageError as exc:
-            self._report_error(f"joint_states refused, robot state unchanged: {exc}")
+            self._report_state_error(f"joint_states refused, robot state unchanged: {exc}")
+
+    def _report_state_error(self, text: str) -> None:
+        """Report a refused robot state, at most once per :data:`STATE_ERROR_PERIOD_S` for the same text.
+
+        Odometry and joint states stream at tens of Hz; a stream in the wrong frame would otherwise
+        flood the log and ``/diagnostics``.
+        """
+        now = time.monotonic()
+        last = self._last_state_error
+        if last is not None and last[0] == text and now - last[1] < STATE_ERROR_PERIOD_S:
+            return
+        self._last_state_error = (text, now)
+        self._report_error(text)
 
     def _enqueue(self, goal: Goal, source: str, stamp: Any) -> None:
         session = pick_session(self._sessions, goal)
