@@ -7,17 +7,38 @@ Shared by :class:`~drd_planner.planning.session.PlanningSession` (one tree) and
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
+from drd_planner.exceptions import DrdError
 from drd_planner.planning.map_state import MapSnapshot
 
 FloatArray = npt.NDArray[np.float64]
 
-__all__ = ["SnapshotCheckers", "state_positions", "straight_edge_states"]
+__all__ = ["SnapshotCheckers", "domain_from_stored_spec", "state_positions", "straight_edge_states"]
+
+
+def domain_from_stored_spec(
+    domain_name: str, spec: Mapping[str, Any], *, label: str, error: type[DrdError]
+) -> Domain:
+    """The domain a file's stored spec builds; any failure is one ``error`` naming ``label``.
+
+    A spec the file checks let through may still fail deep in a domain's constructor with any
+    exception: it must end in the loader's one clear error, not a traceback.
+    """
+    try:
+        return domain_from_spec(domain_name, spec)
+    except DrdError as exc:
+        raise error(f"{label}: its domain spec cannot be rebuilt: {exc}") from exc
+    except Exception as exc:
+        raise error(
+            f"{label}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})"
+        ) from exc
 
 
 def state_positions(

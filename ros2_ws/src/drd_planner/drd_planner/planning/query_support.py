@@ -19,9 +19,10 @@ from collections.abc import Callable
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
-from drd_planner.exceptions import DrdError, PlanningError, PriorFileError, UnverifiedPathError
+from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.exceptions import PlanningError, PriorFileError, UnverifiedPathError
 from drd_planner.planner.prior import WorldPrior
+from drd_planner.planning.domain_view import domain_from_stored_spec
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -182,14 +183,7 @@ def rebuild_domain(prior: WorldPrior, name: str) -> Domain:
     """
     if not prior.domain_spec:
         raise PriorFileError(f"{name}: the prior has no domain spec (built from an authors' dataset?)")
-    try:
-        domain = domain_from_spec(prior.domain, prior.domain_spec)
-    except DrdError as exc:
-        raise PriorFileError(f"{name}: its domain spec cannot be rebuilt: {exc}") from exc
-    except Exception as exc:  # a spec the file checks let through must still end in one clear error
-        raise PriorFileError(
-            f"{name}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})"
-        ) from exc
+    domain = domain_from_stored_spec(prior.domain, prior.domain_spec, label=name, error=PriorFileError)
     if not same_graph(domain, prior):
         raise PriorFileError(f"{name}: the stored graph does not match the graph of its domain spec")
     return domain

@@ -22,9 +22,14 @@ from drd_planner.core.episode import EpisodeStatus, run_episode
 from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.data.tree_file import TreeBundle
 from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
-from drd_planner.exceptions import DrdError, PlanningError, TreeFileError, UnverifiedPathError
-from drd_planner.planning.domain_view import SnapshotCheckers, state_positions, straight_edge_states
+from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.exceptions import PlanningError, TreeFileError, UnverifiedPathError
+from drd_planner.planning.domain_view import (
+    SnapshotCheckers,
+    domain_from_stored_spec,
+    state_positions,
+    straight_edge_states,
+)
 from drd_planner.planning.map_state import MapSnapshot
 
 FloatArray = npt.NDArray[np.float64]
@@ -145,14 +150,9 @@ class PlanningSession:
         meta = bundle.problem.metadata
         if "domain_spec" not in meta or "domain" not in meta:
             raise TreeFileError(f"{name}: the tree file has no domain spec (built from an authors' dataset?)")
-        try:
-            domain = domain_from_spec(str(meta["domain"]), meta["domain_spec"])
-        except DrdError as exc:
-            raise TreeFileError(f"{name}: its domain spec cannot be rebuilt: {exc}") from exc
-        except Exception as exc:  # a spec the file checks let through must still end in one clear error
-            raise TreeFileError(
-                f"{name}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})"
-            ) from exc
+        domain = domain_from_stored_spec(
+            str(meta["domain"]), meta["domain_spec"], label=name, error=TreeFileError
+        )
         graph = bundle.problem.graph
         if (
             graph is None

@@ -577,13 +577,17 @@ class PlannerNode(LifecycleNode):
         if published is None:
             response.success, response.message = False, "no plan is published: nothing to replan"
             return response
+        errors = self._errors  # replaced by a new list on every report
         with self._planning:
             path = self._plan_and_publish(published.session, published.goal, None, {"request": "replan"})
         self._worker.wake()
         response.success = path is not None
-        response.message = (
-            "replanned" if path is not None else f"no new plan: {self._errors[-1] if self._errors else ''}"
-        )
+        if path is not None:
+            response.message = "replanned"
+        elif self._errors is not errors:
+            response.message = f"no new plan: {self._errors[-1]}"
+        else:
+            response.message = "no new plan: see the plan summary on /diagnostics"
         return response
 
     def _start_for(self, session: QuerySession) -> Endpoint:
