@@ -8,7 +8,9 @@ the bag (default ``bags/heli_wires.mcap``; ``--tree trees/arm_table_clutter.npz 
 bags/arm_table_clutter.mcap --frame-id panda_link0`` for the arm), else the helicopter "wires" world of the tree's domain
 drawn with ``--world-seed``. Each measured request is one ``goal_pose`` at the tree's goal (the arm's
 tool-point position), sent when the node is idle; its latency is the wall time from publishing it
-to the ``Path`` arriving at the peer. The node's summary on ``/diagnostics`` splits it (seconds):
+to the ``Path`` arriving at the peer. The "new query" run sends each request to another goal (a
+vertex of a seeded order the node has not been asked for: its library and DiRECt tree are built
+online, ``library_s``) instead; a goal with no free path on the map is skipped and counted. The node's summary on ``/diagnostics`` splits it (seconds):
 
 - ``check_s``: time in the collision checker (FCL) for the checks of this plan;
 - ``policy_s``: the policy's work: choosing each edge (``selection_s``: DiRECt tree walk, BiSECt)
@@ -38,22 +40,26 @@ To see where the node's threads spend their time, run the script under a samplin
 sees every thread, e.g. ``py-spy record -o profile.svg -- python scripts/bench_node_latency.py``.
 
 Usage: python scripts/bench_node_latency.py [--requests 30] [--bag bags/heli_wires.mcap]
-       [--tree trees/heli_wires.npz] [--world-seed 1] [--frame-id map] [--no-warm] [--json FILE]
+       [--tree trees/heli_wires.npz] [--world-seed 1] [--frame-id map] [--no-warm] [--no-new]
+       [--json FILE]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from geometry_msgs.msg import PoseStamped
 from rclpy.parameter import Parameter
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -80,11 +86,13 @@ class Sample:
     plan_messaging: float
     checks: int
     map_version: int
+    library: float = 0.0
+    query: str = ""
 
     @property
     def session_other(self) -> float:
-        """The planning session's work outside checks, policy and preparation (path states, log)."""
-        return max(self.total - self.check - self.policy - self.prepare, 0.0)
+        """The planning session's work outside checks, policy, library and preparation (path states, log)."""
+        return max(self.total - self.check - self.policy - self.prepare - self.library, 0.0)
 
     @property
     def transport(self) -> float:
@@ -128,12 +136,18 @@ class Probe:
             with self._lock:
                 self._summaries[values["request_stamp"]] = values
 
-    def request(self, *, timeout: float = 30.0) -> Sample:
-        """Publish one goal_pose and wait for its Path and summary."""
+    def request(self, goal: Any | None = None, *, timeout: float = 30.0) -> Sample | None:
+        """Publish one goal_pose (default: the stored goal) and wait for its Path and summary.
+
+        None when the goal has no free path on the map (a summary without a Path).
+        """
         self._count += 1
         stamp = (2_000_000 + self._count, 0)
         key = f"{stamp[0]}.{stamp[1]:09d}"
-        goal = self.harness.goal(stamp)
+        if goal is None:
+            goal = self.harness.goal(stamp)
+        else:
+            goal.header.stamp.sec, goal.header.stamp.nanosec = stamp
         with self._lock:
             plans = len(self._plans)
         start = time.perf_counter()
@@ -141,14 +155,18 @@ class Probe:
 
         def done() -> bool:
             with self._lock:
-                return len(self._plans) > plans and key in self._summaries
+                summary = self._summaries.get(key)
+                return summary is not None and (
+                    len(self._plans) > plans or summary.get("result") != "path_found"
+                )
 
         if not wait_for(done, timeout):
             raise RuntimeError(f"no plan for request {key}: {self.harness.node.errors[-3:]}")
         with self._lock:
-            arrived, values = self._plans[plans], self._summaries[key]
-        if values.get("result") != "path_found":
-            raise RuntimeError(f"request {key} gave {values.get('result')}: {values}")
+            values = self._summaries[key]
+            if values.get("result") != "path_found":
+                return None
+            arrived = self._plans[plans]
         return Sample(
             latency=arrived - start,
             check=float(values["check_s"]),
@@ -160,14 +178,44 @@ class Probe:
             plan_messaging=float(values["plan_messaging_s"]),
             checks=int(values["checks"]),
             map_version=int(values["map_version"]),
+            library=float(values.get("library_s", 0.0)),
+            query=values.get("query", ""),
         )
 
 
-def run(harness: Harness, markers: Any, *, requests: int, cold: bool) -> list[Sample]:
-    """``requests`` samples; ``cold``: the obstacle map is published again before each request."""
+def new_goals(harness: Harness, *, seed: int = 0) -> Iterator[Any]:
+    """PoseStamped goals at the prior's vertices in a seeded order, never the stored start or goal.
+
+    Helicopter: the vertex's position and heading; arm: its tool point (snapped back to that vertex).
+    """
+    session = harness.node.sessions[0]
+    graph = session.prior.graph
+    stored = {int(session.domain.start), int(session.domain.goal)}
+    for vertex in np.random.default_rng(seed).permutation(graph.num_vertices):
+        if int(vertex) in stored:
+            continue
+        state = session.vertex_state(int(vertex))
+        x, y, z = (float(v) for v in session.positions(state[None])[-1])
+        yaw = 0.0 if session.is_arm or state.size < 4 else float(state[3])
+        goal = PoseStamped()
+        goal.header.frame_id = harness.frame_id
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = x, y, z
+        goal.pose.orientation.z, goal.pose.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+        yield goal
+
+
+def run(
+    harness: Harness, markers: Any, *, requests: int, cold: bool, goals: Iterator[Any] | None = None
+) -> tuple[list[Sample], int]:
+    """``requests`` samples and the number of goals skipped (no free path).
+
+    ``cold``: the obstacle map is published again before each request; ``goals``: a new goal for each
+    request (None: the stored goal every time).
+    """
     probe = Probe(harness)
-    samples = []
-    for _ in range(requests):
+    samples: list[Sample] = []
+    skipped = 0
+    while len(samples) < requests:
         if cold:
             version = harness.node.snapshot.version
 
@@ -177,8 +225,14 @@ def run(harness: Harness, markers: Any, *, requests: int, cold: bool) -> list[Sa
             harness.obstacles.publish(markers)
             if not wait_for(taken, 10.0):
                 raise RuntimeError(f"the node did not take the map: {harness.node.errors[-3:]}")
-        samples.append(probe.request())
-    return samples
+        sample = probe.request(None if goals is None else next(goals))
+        if sample is None:
+            skipped += 1
+            if skipped > 5 * requests:
+                raise RuntimeError(f"{skipped} goals without a free path: {harness.node.errors[-3:]}")
+            continue
+        samples.append(sample)
+    return samples, skipped
 
 
 COLUMNS = (
@@ -187,6 +241,7 @@ COLUMNS = (
     ("policy", "policy: choosing edges, updating beliefs (policy_s)"),
     ("selection", "  of which choosing (selection_s)"),
     ("prepare", "scene + checker built in the request (prepare_s)"),
+    ("library", "the query's library and tree, found or built (library_s)"),
     ("session_other", "session's other work (path states, check log)"),
     ("plan_messaging", "building + publishing the Path (plan_messaging_s)"),
     ("wait", "hand-over to the planning thread (wait_s)"),
@@ -278,6 +333,24 @@ def _result(samples: list[Sample]) -> dict[str, Any]:
     }
 
 
+def print_comparison(repeated: list[Sample], new: list[Sample], skipped: int) -> None:
+    """Request-to-plan of a repeated and of a new query side by side (one run, the same machine)."""
+    print("\n== request -> Path: repeated query against new query (cold maps both) ==")
+    print(f"{'':<34} {'p50 ms':>9} {'p95 ms':>9} {'library p50 ms':>15} {'checks':>7}")
+    for label, samples in (("repeated (stored goal)", repeated), ("new (another goal each time)", new)):
+        latency = 1e3 * np.array([s.latency for s in samples])
+        library = 1e3 * np.array([s.library for s in samples])
+        print(
+            f"{label:<34} {np.percentile(latency, 50):>9.2f} {np.percentile(latency, 95):>9.2f} "
+            f"{np.percentile(library, 50):>15.2f} {np.mean([s.checks for s in samples]):>7.1f}"
+        )
+    queries = sorted({s.query for s in new})
+    ratio = np.median([s.latency for s in new]) / np.median([s.latency for s in repeated])
+    print(
+        f"new / repeated (p50): {ratio:.2f}x; new queries served as {queries}; {skipped} goals skipped (no free path)"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--requests", type=int, default=30)
@@ -288,6 +361,9 @@ def main() -> None:
         "--frame-id", default="map", help="planning frame of the node and the maps (the arm bag: panda_link0)"
     )
     parser.add_argument("--no-warm", action="store_true", help="skip the warm run (same snapshot)")
+    parser.add_argument(
+        "--no-new", action="store_true", help="skip the new-query run (another goal each time)"
+    )
     parser.add_argument("--domain-id", type=int, default=None, help="ROS domain id (default: ROS_DOMAIN_ID)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
@@ -306,13 +382,18 @@ def main() -> None:
         print(f"maps: {source}; tree {args.tree.name}")
         harness.publish_maps(markers, cloud)
         run(harness, markers, requests=2, cold=True)  # imports and first-use costs, not measured
-        cold = run(harness, markers, requests=args.requests, cold=True)
+        cold, _ = run(harness, markers, requests=args.requests, cold=True)
         print_table("cold: a new map snapshot before each request", cold)
         results["cold"] = _result(cold)
         if not args.no_warm:
-            warm = run(harness, markers, requests=args.requests, cold=False)
+            warm, _ = run(harness, markers, requests=args.requests, cold=False)
             print_table("warm: the same snapshot, every check a cache hit", warm)
             results["warm"] = _result(warm)
+        if not args.no_new:
+            new, skipped = run(harness, markers, requests=args.requests, cold=True, goals=new_goals(harness))
+            print_table("new query: another goal and a new map snapshot before each request", new)
+            print_comparison(cold, new, skipped)
+            results["new_query"] = {**_result(new), "skipped_goals": skipped}
         overhead = shares(cold)["overhead"]
         verdict = "met" if overhead < GOAL_SHARE else "NOT met"
         print(

@@ -1,4 +1,4 @@
-"""Generate the bundled replay bags from our world models (deterministic: same code and trees, same bytes).
+"""Generate the bundled replay bags from our world models (deterministic: same code and priors, same bytes).
 
     python scripts/make_bags.py [--out-dir bags] [--only heli|arm] [--robot-description URDF_FILE]
 
@@ -7,17 +7,26 @@ Each bag (one rosbag2 MCAP file, see ``drd_msgs_py.bags``) holds, at these offse
 - 0.0 s: the maps of one sampled world (helicopter: ``/terrain`` cloud + ``/obstacles`` markers in
   ``map``; arm: ``/obstacles`` in ``panda_link0``, plus ``/robot_description`` with
   ``--robot-description``: the Panda URDF is not copied into the repository, the node falls back to
-  the tree's own model without it);
-- 0.0 s: the robot's state at the tree's start (helicopter: ``/odom``, ``nav_msgs/Odometry`` in ``map``;
-  arm: ``/joint_states``), where the node's plans start;
-- 0.5 s: a request for the tree's goal (``/goal_pose`` at the goal position; arm: ``/goal_joints``);
+  the prior's own model without it);
+- 0.0 s: the robot's state at the prior's stored start (helicopter: ``/odom``, ``nav_msgs/Odometry`` in
+  ``map``; arm: ``/joint_states``), where the node's plans start;
+- 0.5 s: request 0, for the stored goal (``/goal_pose`` at the goal position; arm: ``/goal_joints``): the
+  query of the prior's precomputed tree;
 - 1.5 s: the whole obstacle map again plus one new sphere placed on an edge of the first plan (so that
   edge is now in collision; every ``obstacles`` message is a full map because the topic is latched
   with depth 1);
-- 2.5 s: the same request again (now planned around the new obstacle).
+- 2.5 s: request 1, the same goal again (now planned around the new obstacle);
+- 3.5 s: the robot has moved to a vertex halfway along that plan (a new ``/odom`` / ``/joint_states``);
+- 4.0 s: request 2, to another goal: a query no tree was built for (a library and tree made online);
+- 5.0 s: the robot is between two vertices, halfway along an edge of the plan of request 2;
+- 5.5 s: request 3, from there (joined to the graph by a new, checked motion) back to the stored start
+  (arm), or on to the stored goal (helicopter: its lattice only flies forward).
 
 The world seed is the first (from ``--first-seed``) whose first plan has at least one blocked check
-and on whose plan an added sphere blocks an edge yet leaves a free path; the script prints it.
+and on whose plan an added sphere blocks an edge yet leaves a free path; the goal of request 2 is the
+first of a seeded vertex order whose plan has a blocked check. Every request is planned as the node
+plans it (:func:`drd_planner.planning.bag_plan.plan_bag_request`), and the written bag is read back
+and planned again to the same check logs. The script prints what it chose.
 """
 
 from __future__ import annotations
@@ -32,28 +41,32 @@ from typing import Any
 
 import numpy as np
 
-from drd_msgs_py.bags import BagMessage, jazzy_typestore, maps_at_request, maps_until, open_bag, write_bag
+from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, maps_until, open_bag, write_bag
 from drd_msgs_py.factory import RosbagsMessages, header
 from drd_msgs_py.obstacles import markers_from_obstacles
 from drd_msgs_py.worlds import arm_world_messages, helicopter_world_messages
 from drd_planner.data.moveit_scene import ScenePrimitive
-from drd_planner.data.tree_file import load_tree
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Sphere
-from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planner import load_prior
+from drd_planner.planning.bag_plan import BagPlan, plan_bag_request
+from drd_planner.planning.query_session import QuerySession
 
 REPO = Path(__file__).resolve().parents[1]
 #: Bag time of the first message (2023-11-14T22:13:20Z): fixed, so the bags are byte-for-byte reproducible.
 START_NS = 1_700_000_000 * 10**9
 MAPS_S, FIRST_REQUEST_S, UPDATE_S, SECOND_REQUEST_S = 0.0, 0.5, 1.5, 2.5
+MOVE_S, THIRD_REQUEST_S, SECOND_MOVE_S, FOURTH_REQUEST_S = 3.5, 4.0, 5.0, 5.5
 #: Radius (m) of the sphere added at 1.5 s: helicopter (the vehicle radius and margin add to it), arm.
 HELI_SPHERE_RADIUS = 3.0
 ARM_SPHERE_RADIUS = 0.04
 PLAN_SEED = 0
+#: Candidate goals of request 2 tried (in a seeded order of the graph's vertices).
+GOAL_TRIES = 200
 
 
 @dataclass
@@ -63,10 +76,10 @@ class Scenario:
     name: str
     seed: int
     messages: list[BagMessage]
-    first: PlanResult
-    second: PlanResult
     blocked_edge: int
+    frame: str
     notes: list[str] = field(default_factory=list)
+    plans: list[BagPlan] = field(default_factory=list)
 
 
 def _ns(offset_s: float) -> int:
@@ -84,44 +97,34 @@ def _middle_out(edges: tuple[int, ...]) -> Iterator[int]:
     yield from sorted(inner, key=lambda e: (abs(inner.index(e) - mid), inner.index(e)))
 
 
-def _plan_at(session: PlanningSession, messages: list[BagMessage], time_ns: int, frame: str) -> PlanResult:
+def _snapshot(session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str) -> Any:
     maps = maps_until(
-        messages,
-        time_ns,
-        frame_id=frame,
-        margin=session.margin,
-        robot_from_description=_robot_loader(session),
+        messages, time_ns, frame_id=frame, margin=session.margin, robot_from_description=session.robot_loader
     )
     if maps.refused:
         raise DrdError(f"generated maps were refused: {maps.refused}")
-    return session.plan(maps.snapshot, seed=PLAN_SEED)
+    return maps.snapshot
 
 
-def _robot_loader(session: PlanningSession) -> Any:
-    domain = session.domain
-    return domain.robot_from_description if isinstance(domain, ArmDomain) else None
+def _plan(session: QuerySession, messages: list[BagMessage], index: int, frame: str) -> BagPlan:
+    """Request ``index`` of time-ordered ``messages``, planned as the node plans it."""
+    return plan_bag_request(
+        session, sorted(messages, key=lambda m: m.time_ns), index, frame=frame, seed=PLAN_SEED
+    )
 
 
 def _edge_blocked(
-    session: PlanningSession, messages: list[BagMessage], time_ns: int, frame: str, edge: int
+    session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str, edge: int
 ) -> bool:
-    maps = maps_until(
-        messages,
-        time_ns,
-        frame_id=frame,
-        margin=session.margin,
-        robot_from_description=_robot_loader(session),
-    )
-    return not session.checker(maps.snapshot).check(edge)
+    return not session.checker(_snapshot(session, messages, time_ns, frame)).check(edge)
 
 
-def _joints(msgs: RosbagsMessages, session: PlanningSession, q: Any, frame: str, time_ns: int) -> Any:
+def _joints(msgs: RosbagsMessages, session: QuerySession, q: Any, frame: str, time_ns: int) -> Any:
     """A JointState of the arm's chain joints at ``q`` (rad)."""
-    assert isinstance(session.domain, ArmDomain)
     return msgs(
         "sensor_msgs/msg/JointState",
         header=header(msgs, frame, _stamp(time_ns)),
-        name=list(session.domain.robot.chain.joint_names),
+        name=list(session.joint_names),
         position=np.asarray(q, dtype=np.float64),
     )
 
@@ -138,9 +141,9 @@ def _pose(msgs: RosbagsMessages, state: Any) -> Any:
     )
 
 
-def _request(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_ns: int) -> BagMessage:
-    goal = session.goal_state
-    if isinstance(session.domain, ArmDomain):
+def _request(msgs: RosbagsMessages, session: QuerySession, goal: Any, frame: str, time_ns: int) -> BagMessage:
+    """A request for the state ``goal``: ``/goal_joints`` (arm) or ``/goal_pose`` (helicopter)."""
+    if session.is_arm:
         msg = _joints(msgs, session, goal, frame, time_ns)
         return BagMessage("/goal_joints", "sensor_msgs/msg/JointState", time_ns, msg)
     pose = _pose(msgs, goal)
@@ -148,13 +151,14 @@ def _request(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_n
     return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", time_ns, msg)
 
 
-def _robot_state(msgs: RosbagsMessages, session: PlanningSession, frame: str, time_ns: int) -> BagMessage:
-    """The robot at the tree's start: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
-    start = session.vertex_state(session.domain.start)
-    if isinstance(session.domain, ArmDomain):
-        msg = _joints(msgs, session, start, frame, time_ns)
+def _robot_state(
+    msgs: RosbagsMessages, session: QuerySession, state: Any, frame: str, time_ns: int
+) -> BagMessage:
+    """The robot at ``state``: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
+    if session.is_arm:
+        msg = _joints(msgs, session, state, frame, time_ns)
         return BagMessage("/joint_states", "sensor_msgs/msg/JointState", time_ns, msg)
-    pose = _pose(msgs, start)
+    pose = _pose(msgs, state)
     msg = msgs(
         "nav_msgs/msg/Odometry",
         header=header(msgs, frame, _stamp(time_ns)),
@@ -176,30 +180,97 @@ def _robot_state(msgs: RosbagsMessages, session: PlanningSession, frame: str, ti
 def _finish(
     name: str,
     seed: int,
-    session: PlanningSession,
+    session: QuerySession,
     frame: str,
     messages: list[BagMessage],
-    first: PlanResult,
     edge: int,
     msgs: RosbagsMessages,
 ) -> Scenario | None:
-    """Add the two requests; the scenario if the second plan finds a path that avoids ``edge``."""
-    second = _plan_at(session, messages, _ns(UPDATE_S), frame)
-    if not second.ok or edge in second.path_edges:
-        return None
+    """Add the robot's state and requests 0 and 1; the scenario if request 1's plan avoids ``edge``."""
+    stored_start, stored_goal = int(session.domain.start), int(session.domain.goal)
     messages = [
         *messages,
-        _robot_state(msgs, session, frame, _ns(MAPS_S)),
-        _request(msgs, session, frame, _ns(FIRST_REQUEST_S)),
-        _request(msgs, session, frame, _ns(SECOND_REQUEST_S)),
+        _robot_state(msgs, session, session.vertex_state(stored_start), frame, _ns(MAPS_S)),
+        _request(msgs, session, session.vertex_state(stored_goal), frame, _ns(FIRST_REQUEST_S)),
+        _request(msgs, session, session.vertex_state(stored_goal), frame, _ns(SECOND_REQUEST_S)),
     ]
+    second = _plan(session, messages, 1, frame).result
+    if not second.ok or edge in second.path_edges:
+        return None
     messages.sort(key=lambda m: m.time_ns)
-    return Scenario(name, seed, messages, first, second, edge)
+    return Scenario(name, seed, messages, edge, frame)
+
+
+def _tour(scenario: Scenario, session: QuerySession, msgs: RosbagsMessages) -> Scenario | None:
+    """Add the moving robot and requests 2 (a new goal) and 3 (home from between two vertices).
+
+    Candidates are planned on one snapshot of the maps in force (they do not change after the update),
+    from the states the robot reports; :func:`_verify` then plans every request from the bag.
+    """
+    frame = scenario.frame
+    snapshot = _snapshot(session, scenario.messages, _ns(UPDATE_S), frame)
+    path = _plan(session, scenario.messages, 1, frame).result.path_vertices
+    here = path[len(path) // 2]
+    home = int(session.domain.start)
+    taken = {home, int(session.domain.goal), here}
+    order = np.random.default_rng(scenario.seed).permutation(session.prior.graph.num_vertices)
+    lengths = session.prior.graph.lengths
+    for goal in (int(v) for v in order[:GOAL_TRIES]):
+        if goal in taken:
+            continue
+        third = session.plan(snapshot, session.vertex_state(here), goal, seed=PLAN_SEED)
+        if not third.ok or third.num_blocked == 0 or third.query != "online" or len(third.path_edges) < 3:
+            continue
+        inner = list(third.path_edges[1:-1])
+        edge = max(inner, key=lambda e: (float(lengths[e]), -inner.index(e)))
+        samples = session.edge_states(edge)
+        between = samples[len(samples) // 2]
+        # Home (the arm), else on to the stored goal (the helicopter's lattice only flies forward).
+        last = next(
+            (
+                end
+                for end in (home, int(session.domain.goal))
+                if end != goal
+                and (plan := session.plan(snapshot, between, end, seed=PLAN_SEED)).ok
+                and plan.query == "connected"
+            ),
+            None,
+        )
+        if last is None:
+            continue
+        scenario.messages = sorted(
+            [
+                *scenario.messages,
+                _robot_state(msgs, session, session.vertex_state(here), frame, _ns(MOVE_S)),
+                _request(msgs, session, session.vertex_state(goal), frame, _ns(THIRD_REQUEST_S)),
+                _robot_state(msgs, session, between, frame, _ns(SECOND_MOVE_S)),
+                _request(msgs, session, session.vertex_state(last), frame, _ns(FOURTH_REQUEST_S)),
+            ],
+            key=lambda m: m.time_ns,
+        )
+        scenario.notes.append(
+            f"request 2: from vertex {here} to vertex {goal}; request 3: from the middle of edge {edge} "
+            f"to vertex {last}"
+        )
+        return scenario
+    return None
+
+
+def _first_plan(session: QuerySession, base: list[BagMessage], frame: str, msgs: RosbagsMessages) -> Any:
+    """Request 0 (the stored goal from the stored start) on the maps ``base``."""
+    t0 = _ns(MAPS_S)
+    stored_start, stored_goal = int(session.domain.start), int(session.domain.goal)
+    messages = [
+        *base,
+        _robot_state(msgs, session, session.vertex_state(stored_start), frame, t0),
+        _request(msgs, session, session.vertex_state(stored_goal), frame, _ns(FIRST_REQUEST_S)),
+    ]
+    return _plan(session, messages, 0, frame).result
 
 
 def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scenario:
-    """The helicopter Wires bag (tree ``trees/heli_wires.npz``, world model ``wires``, frame ``map``)."""
-    session = PlanningSession(load_tree(REPO / "trees" / "heli_wires.npz"), name="heli_wires")
+    """The helicopter Wires bag (prior ``trees/heli_wires.npz``, world model ``wires``, frame ``map``)."""
+    session = QuerySession(load_prior(REPO / "trees" / "heli_wires.npz"), name="heli_wires")
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     segments = domain.spec()["wire_segments"]
@@ -214,7 +285,7 @@ def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scen
             BagMessage("/terrain", "sensor_msgs/msg/PointCloud2", t0, cloud),
             BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t0, markers),
         ]
-        first = _plan_at(session, base, t0, frame)
+        first = _first_plan(session, base, frame, msgs)
         if not first.ok or first.num_blocked == 0:
             continue
         for edge in _middle_out(first.path_edges):
@@ -235,7 +306,9 @@ def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scen
             messages = [*base, BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t1, update)]
             if not _edge_blocked(session, messages, t1, frame, edge):
                 continue
-            scenario = _finish("heli_wires", seed, session, frame, messages, first, edge, msgs)
+            scenario = _finish("heli_wires", seed, session, frame, messages, edge, msgs)
+            if scenario is not None:
+                scenario = _tour(scenario, session, msgs)
             if scenario is not None:
                 scenario.notes.append(
                     f"sphere r={HELI_SPHERE_RADIUS} m at {np.round(centre, 2).tolist()} (map)"
@@ -247,8 +320,8 @@ def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scen
 def arm_scenario(
     msgs: RosbagsMessages, *, first_seed: int, tries: int, robot_description: str | None
 ) -> Scenario:
-    """The arm Table+Clutter bag (tree ``trees/arm_table_clutter.npz``, frame ``panda_link0``)."""
-    session = PlanningSession(load_tree(REPO / "trees" / "arm_table_clutter.npz"), name="arm_table_clutter")
+    """The arm Table+Clutter bag (prior ``trees/arm_table_clutter.npz``, frame ``panda_link0``)."""
+    session = QuerySession(load_prior(REPO / "trees" / "arm_table_clutter.npz"), name="arm_table_clutter")
     domain = session.domain
     assert isinstance(domain, ArmDomain)
     frame = "panda_link0"
@@ -261,7 +334,7 @@ def arm_scenario(
         world = domain.make_world("table_clutter", seed)
         markers = arm_world_messages(world, frame_id=frame, stamp=_stamp(t0), msgs=msgs)
         base = [*prefix, BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t0, markers)]
-        first = _plan_at(session, base, t0, frame)
+        first = _first_plan(session, base, frame, msgs)
         if not first.ok or first.num_blocked == 0:
             continue
         for edge in _middle_out(first.path_edges):
@@ -277,7 +350,9 @@ def arm_scenario(
                 messages = [*base, BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t1, update)]
                 if not _edge_blocked(session, messages, t1, frame, edge):
                     continue
-                scenario = _finish("arm_table_clutter", seed, session, frame, messages, first, edge, msgs)
+                scenario = _finish("arm_table_clutter", seed, session, frame, messages, edge, msgs)
+                if scenario is not None:
+                    scenario = _tour(scenario, session, msgs)
                 if scenario is not None:
                     where = np.round(centres[k], 3).tolist()
                     scenario.notes.append(f"sphere r={ARM_SPHERE_RADIUS} m at {where} (panda_link0)")
@@ -285,35 +360,52 @@ def arm_scenario(
     raise DrdError(f"no arm world seed in [{first_seed}, {first_seed + tries}) fits the scenario")
 
 
-def _verify(path: Path, scenario: Scenario, session_tree: str, frame: str) -> None:
-    """Read the written bag back and re-plan request 0 and 1 from it: the same check logs."""
-    session = PlanningSession(load_tree(REPO / "trees" / session_tree), name="verify")
-    messages = open_bag(path).decoded()
-    for index, want in ((0, scenario.first), (1, scenario.second)):
-        maps, _ = maps_at_request(
-            messages,
-            index,
-            frame_id=frame,
-            margin=session.margin,
-            robot_from_description=_robot_loader(session),
+def _planned(session: QuerySession, messages: list[BagMessage], frame: str) -> list[BagPlan]:
+    """Every request of time-ordered ``messages``, planned as the node plans it."""
+    return [
+        plan_bag_request(session, messages, r.index, frame=frame, seed=PLAN_SEED)
+        for r in bag_requests(messages)
+    ]
+
+
+def _verify(path: Path, scenario: Scenario, prior_file: str) -> None:
+    """Plan every request of the scenario, then of the written bag read back: the same check logs."""
+    scenario.plans = _planned(
+        QuerySession(load_prior(REPO / "trees" / prior_file), name="generate"),
+        scenario.messages,
+        scenario.frame,
+    )
+    session = QuerySession(load_prior(REPO / "trees" / prior_file), name="verify")
+    again = _planned(session, open_bag(path).decoded(), scenario.frame)
+    for want, got in zip(scenario.plans, again, strict=True):
+        if [(c.edge, c.free) for c in got.result.checks] != [(c.edge, c.free) for c in want.result.checks]:
+            raise DrdError(
+                f"{path}: request {want.request.index} re-planned from the bag differs from the generated plan"
+            )
+    queries = [p.result.query for p in again]
+    if not all(p.result.ok for p in again) or queries[2:] != ["online", "connected"]:
+        raise DrdError(
+            f"{path}: the requests do not plan as intended: {[p.result.status for p in again]}, {queries}"
         )
-        got = session.plan(maps.snapshot, seed=PLAN_SEED)
-        if [(c.edge, c.free) for c in got.checks] != [(c.edge, c.free) for c in want.checks]:
-            raise DrdError(f"{path}: request {index} re-planned from the bag differs from the generated plan")
+
+
+def _where(endpoint: Any) -> str:
+    return f"vertex {endpoint}" if isinstance(endpoint, int) else "the robot's state"
 
 
 def _report(scenario: Scenario, path: Path) -> None:
-    first, second = scenario.first, scenario.second
     print(f"{scenario.name}: world seed {scenario.seed}")
-    print(
-        f"  request 0: {len(first.checks)} checks, {first.num_blocked} blocked, path of {len(first.path_edges)} "
-        f"edges {list(first.path_edges)}"
-    )
-    print(f"  update at {UPDATE_S} s blocks plan edge {scenario.blocked_edge}: {'; '.join(scenario.notes)}")
-    print(
-        f"  request 1: {len(second.checks)} checks, {second.num_blocked} blocked, path of {len(second.path_edges)} "
-        f"edges {list(second.path_edges)}"
-    )
+    print(f"  update at {UPDATE_S} s blocks plan edge {scenario.blocked_edge}: {scenario.notes[-1]}")
+    for plan in scenario.plans:
+        r = plan.result
+        stages = sorted({c.stage for c in r.checks})
+        print(
+            f"  request {plan.request.index} at +{(plan.request.time_ns - START_NS) / 1e9:.1f} s from "
+            f"{_where(plan.start)} to {_where(plan.goal)}: {len(r.checks)} checks, {r.num_blocked} blocked, "
+            f"query {r.query}, stages {stages}, path of {len(r.path_edges)} edges"
+        )
+    for note in scenario.notes[:-1]:
+        print(f"  {note}")
     print(f"  wrote {path} ({path.stat().st_size / 1024:.1f} KiB, {len(scenario.messages)} messages)")
 
 
@@ -356,10 +448,10 @@ def main(argv: list[str] | None = None) -> int:
                     ),
                 )
             )
-        for name, frame, make in jobs:
+        for name, _frame, make in jobs:
             scenario = make()
             path = write_bag(out_dir / f"{name}.mcap", scenario.messages, overwrite=True)
-            _verify(path, scenario, f"{name}.npz", frame)
+            _verify(path, scenario, f"{name}.npz")
             _report(scenario, path)
     except (DrdError, ValueError) as exc:  # ValueError: MessageError / BagError of drd_msgs_py
         print(f"make_bags: error: {exc}", file=sys.stderr)

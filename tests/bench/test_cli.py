@@ -549,6 +549,9 @@ def test_build_tree_query_adds_trees_and_plan_uses_them(
     text = f"{' '.join(str(v) for v in states[7])},{' '.join(str(v) for v in states[60])}"  # states snap
     assert main(["build-tree", "--prior", str(prior), "--query", text, "--out", str(prior)]) == 0
     assert [(t.start, t.goal) for t in load_prior(prior).trees][1:] == [(3, 40), (7, 60)]
+    # Given eta and kappa leave the trees the prior's setting; 'auto' validates a tree's own on its query.
+    assert [t.leaf is None for t in load_prior(prior).trees] == [True, True, False]
+    assert "its own eta" in capsys.readouterr().out
     capsys.readouterr()
     assert main(["build-tree", "--prior", str(prior), "--query", "3,40", "--out", str(prior)]) == 2
     assert "already has a tree" in _one_error_line(capsys.readouterr().err)

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 from conftest import REPO_ROOT
 
-from drd_msgs_py.bags import BagMessage, maps_at_request, read_bag, write_bag
+from drd_msgs_py.bags import BagMessage, read_bag, write_bag
 from drd_planner.cli import main
-from drd_planner.data.tree_file import load_tree
-from drd_planner.planning.session import PlanningSession
+from drd_planner.planner import load_prior
+from drd_planner.planning.bag_plan import plan_bag_request
+from drd_planner.planning.query_session import QuerySession
 
 BAG = REPO_ROOT / "bags" / "heli_wires.mcap"
 TREE = REPO_ROOT / "trees" / "heli_wires.npz"
@@ -37,26 +38,33 @@ def _error(capsys: pytest.CaptureFixture[str]) -> str:
     return err[0]
 
 
-@pytest.mark.parametrize("request_index", [0, 1])
+@pytest.mark.parametrize("request_index", [0, 1, 2, 3])
 def test_plan_bag_prints_the_offline_check_log_and_path(
     bag: Path, request_index: int, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", str(request_index)]) == 0
     out = capsys.readouterr().out
-    session = PlanningSession(load_tree(TREE), name="offline")
-    maps, request = maps_at_request(read_bag(bag), request_index, frame_id="map", margin=session.margin)
-    want = session.plan(maps.snapshot, seed=0)
+    session = QuerySession(load_prior(TREE), name="offline")
+    planned = plan_bag_request(session, read_bag(bag), request_index, frame="map", seed=0)
+    want, request = planned.result, planned.request
     assert _log(out) == [(c.edge, c.free, c.stage) for c in want.checks]
     assert (
         f"request {request_index} (goal_pose at +{(request.time_ns - read_bag(bag)[0].time_ns) / 1e9:.2f} s)"
         in out
     )
     assert f"path edges: {list(want.path_edges)}" in out
-    assert f"verified free after {len(want.checks)} checks" in out
-    vertex_rows = [line.split() for line in out.splitlines() if re.match(r"^ +\d+: ", line)]
-    assert [int(r[0].rstrip(":")) for r in vertex_rows] == list(want.path_vertices)
+    assert f"verified free after {len(want.checks)} checks [query {want.query}, stage {want.stage}]" in out
+    num_vertices = session.prior.graph.num_vertices
+    vertex_rows = [line.split() for line in out.splitlines() if re.match(r"^ +(\d+|state): ", line)]
+    labels = [r[0].rstrip(":") for r in vertex_rows]
+    assert labels == [str(v) if v < num_vertices else "state" for v in want.path_vertices]
     states = np.array([[float(v) for v in r[1:]] for r in vertex_rows])
-    np.testing.assert_allclose(states, [session.vertex_state(v) for v in want.path_vertices], atol=5e-4)
+    on_graph = [k for k, v in enumerate(want.path_vertices) if v < num_vertices]
+    np.testing.assert_allclose(
+        states[on_graph], [session.vertex_state(want.path_vertices[k]) for k in on_graph], atol=5e-4
+    )
+    # The path starts where the robot reported itself (odometry) before the request.
+    np.testing.assert_allclose(states[0][:3], np.asarray(planned.start)[:3], atol=5e-4)
 
 
 def test_the_update_changes_the_plan(bag: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -73,8 +81,8 @@ def test_the_update_changes_the_plan(bag: Path, capsys: pytest.CaptureFixture[st
 
 
 def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", "2"]) == 2
-    assert "it has 2 request(s)" in _error(capsys)
+    assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--request", "4"]) == 2
+    assert "it has 4 request(s)" in _error(capsys)
     assert main(["plan", "--bag", str(tmp_path / "none.mcap"), "--tree", str(TREE)]) == 2
     assert "none.mcap" in _error(capsys)
     junk = tmp_path / "junk.mcap"
@@ -85,7 +93,7 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
     assert "--request" in _error(capsys)
     assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--frame", "odom"]) == 2
     assert "frame 'map'" in _error(capsys)  # the request is in map; the maps were refused too
-    # A request whose goal is not the tree's goal.
+    # A request whose goal lies beyond the graph's reach.
     messages = read_bag(bag)
     far = []
     for m in messages:
@@ -94,7 +102,13 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
         far.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
     moved = write_bag(tmp_path / "far.mcap", far)
     assert main(["plan", "--bag", str(moved), "--tree", str(TREE)]) == 2
-    assert "does not match tree" in _error(capsys)
+    assert "outside the graph's reach" in _error(capsys)
+    # No robot state before the request: an error, or the prior's start with --prior-start.
+    stateless = write_bag(tmp_path / "stateless.mcap", [m for m in read_bag(bag) if m.topic != "/odom"])
+    assert main(["plan", "--bag", str(stateless), "--tree", str(TREE)]) == 2
+    assert "no accepted odom message" in _error(capsys)
+    assert main(["plan", "--bag", str(stateless), "--tree", str(TREE), "--prior-start"]) == 0
+    assert "from vertex 0 to vertex 730" in capsys.readouterr().out
 
 
 def test_world_is_still_required_for_datasets(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -29,8 +29,16 @@ from drd_planner.exceptions import PriorFileError, TreeFileError
 from drd_planner.planner.prior_file import load_prior, load_tree_bundle
 
 REPO = Path(__file__).resolve().parents[2]
-BASE_TREE = REPO / "trees" / "heli_terrain.npz"
 Arrays = dict[str, np.ndarray]
+
+
+def tree_file_of(name: str, folder: Path) -> Path:
+    """The shipped prior ``trees/<name>.npz``'s own tree written as a tree file (``drd_planner.tree`` v2)."""
+    from drd_planner.data.tree_file import save_tree
+
+    return save_tree(folder / f"{name}_tree.npz", load_tree_bundle(REPO / "trees" / f"{name}.npz"))
+
+
 MEMORY_BOUND = 48 * 2**20
 """Largest Python/NumPy allocation peak while a zip bomb is refused."""
 

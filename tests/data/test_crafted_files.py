@@ -18,10 +18,8 @@ from typing import Any
 import numpy as np
 import pytest
 from crafting import (
-    BASE_TREE,
     LOADERS,
     MEMORY_BOUND,
-    REPO,
     Arrays,
     Craft,
     add_lying_member,
@@ -40,6 +38,7 @@ from crafting import (
     set_item,
     shape_lie,
     single_edge_paths,
+    tree_file_of,
 )
 
 from drd_planner.data.tree_file import load_tree
@@ -126,8 +125,8 @@ ARM_CASES: dict[str, Craft] = {
 
 
 @pytest.fixture(scope="module")
-def base_tree() -> tuple[dict[str, Any], Arrays]:
-    return read_trusted(BASE_TREE)
+def base_tree(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Arrays]:
+    return read_trusted(tree_file_of("heli_terrain", tmp_path_factory.mktemp("tree")))
 
 
 def test_the_base_tree_loads_when_rewritten_unchanged(
@@ -165,7 +164,7 @@ def test_crafted_tree_files_are_refused_clearly(
 def test_crafted_arm_specs_are_refused_before_the_roadmap_is_built(
     tmp_path: Path, case: str, loader: str
 ) -> None:
-    base = read_trusted(REPO / "trees" / "arm_table_clutter.npz")
+    base = read_trusted(tree_file_of("arm_table_clutter", tmp_path))
     path = ARM_CASES[case].write(base, tmp_path / f"{case}.npz")
     load, error = LOADERS[loader]
     message = refusal(load, path, error)
@@ -254,8 +253,7 @@ def test_the_last_line_of_defence_converts_anything(
         raise exc
 
     monkeypatch.setattr(tree_file, "check_tree_arrays", explode)
-    path = tmp_path / "tree.npz"
-    path.write_bytes(BASE_TREE.read_bytes())
+    path = tree_file_of("heli_terrain", tmp_path)
     for loader in LOADERS:
         load, error = LOADERS[loader]
         refusal(load, path, error)

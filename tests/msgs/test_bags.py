@@ -23,7 +23,6 @@ from drd_msgs_py.bags import (
     maps_until,
     open_bag,
     read_bag,
-    request_goal,
     write_bag,
 )
 from drd_msgs_py.exceptions import MessageError
@@ -203,26 +202,6 @@ def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) ->
     assert refused.snapshot.version == 1 and "robot_description" in refused.refused[0]
 
 
-def test_request_goals(rb: RosbagsMessages) -> None:
-    messages = [
-        _goal(rb, T0, (1.0, 2.0, 3.0)),
-        _joints(rb, T0 + 1, JOINTS[::-1], [float(i) for i in range(7)]),
-        _joints(rb, T0 + 2, JOINTS[:6], [0.0] * 6),
-        _goal(rb, T0 + 3, (1.0, 2.0, 3.0), frame="odom"),
-    ]
-    pose, joints, short, odom = bag_requests(messages)
-    np.testing.assert_allclose(request_goal(pose, frame_id="map"), [1.0, 2.0, 3.0])
-    np.testing.assert_allclose(
-        request_goal(joints, frame_id="map", joint_names=JOINTS), [6, 5, 4, 3, 2, 1, 0]
-    )
-    with pytest.raises(MessageError, match="lacks joint"):
-        request_goal(short, frame_id="map", joint_names=JOINTS)
-    with pytest.raises(MessageError, match="frame 'odom'"):
-        request_goal(odom, frame_id="map")
-    with pytest.raises(MessageError, match="arm tree"):
-        request_goal(joints, frame_id="map")
-
-
 def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessages, tmp_path: Path) -> None:
     with pytest.raises(BagError, match="does not exist"):
         open_bag(tmp_path / "nope.mcap")
@@ -285,7 +264,7 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
     assert contents.topics["/obstacles"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
     assert [r.kind for r in bag_requests(contents.decoded())] == [
         "goal_pose" if "heli" in name else "goal_joints"
-    ] * 2
+    ] * 4
     only = "heli" if name.startswith("heli") else "arm"
     run = subprocess.run(
         [

@@ -238,3 +238,34 @@ def test_a_query_no_training_world_connects_goes_straight_to_the_graph() -> None
     assert planner.query_model(0, 2).library is None
     result = planner.plan(0, 2, TableOracle(np.ones(4, dtype=bool)))
     assert result.found and result.stage is PlanStage.GRAPH
+
+
+def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_priors(
+    problem: Problem, prior: WorldPrior
+) -> None:
+    from drd_planner import LeafSetting
+
+    worlds = problem.require_worlds()
+    oracle = TableOracle(worlds.X[int(worlds.test_ids[0])])
+    own = prior.trees[0]
+    bisect_prior = dataclasses.replace(prior, eta=1.0)
+
+    def first_stage(planner: Planner, start: int, goal: int) -> str:
+        return planner.plan(start, goal, oracle, seed=0).checks[0].stage
+
+    # eta 1 everywhere: BiSECt from the first check.
+    assert first_stage(Planner(bisect_prior), own.start, own.goal) == "bisect"
+    # The tree's own eta 0.05 walks its tree; another query keeps the prior's eta 1.
+    with_leaf = dataclasses.replace(
+        bisect_prior, trees=(dataclasses.replace(own, leaf=LeafSetting(0.05, None)),)
+    )
+    planner = Planner(with_leaf)
+    assert first_stage(planner, own.start, own.goal) == "tree"
+    other = next((s, g) for s, g in _queries(problem, 50, seed=3) if (s, g) != (own.start, own.goal))
+    result = planner.plan(*other, oracle, seed=0)
+    assert result.query == "online" and all(c.stage != "tree" for c in result.checks)
+    # set_leaf overrides both (the validation's use).
+    planner.set_leaf(1.0, None)
+    assert first_stage(planner, own.start, own.goal) == "bisect"
+    planner.set_leaf(0.05, None)
+    assert planner.plan(*other, oracle, seed=0).checks[0].stage == "tree"

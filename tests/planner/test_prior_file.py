@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import zipfile
 from pathlib import Path
@@ -11,10 +12,12 @@ import numpy as np
 import pytest
 
 from drd_planner.core.tree import build_tree
+from drd_planner.data.npz_format import payload_digest
 from drd_planner.data.tree_file import TreeBundle, save_tree
 from drd_planner.domains.planar import make_planar_problem
 from drd_planner.exceptions import PriorFileError, TreeFileError
 from drd_planner.planner import (
+    LeafSetting,
     QueryTree,
     WorldPrior,
     load_prior,
@@ -34,7 +37,7 @@ def prior() -> WorldPrior:
     assert problem.start is not None and problem.goal is not None
     own = QueryTree("own", problem.start, problem.goal, problem.library, tree)
     base = prior_from_problem(problem, domain="planar", trees=(own,), eta=0.4, pseudo_count=5.0)
-    other = query_tree(base, 3, 20, tree_options={})
+    other, _ = query_tree(base, 3, 20, tree_options={})
     return WorldPrior(**{**base.__dict__, "trees": (own, other)})
 
 
@@ -103,8 +106,11 @@ def test_refusals_name_the_problem(prior: WorldPrior, tmp_path: Path) -> None:
     assert isinstance(PriorFileError("x"), TreeFileError)  # the node's existing catch still applies
 
 
-def _rewrite(src: Path, dst: Path, edit: object) -> None:
-    """Copy a prior with its header edited by ``edit(header) -> header`` (digests left stale)."""
+def _rewrite(src: Path, dst: Path, edit: object, *, resign: bool = False) -> None:
+    """Copy a prior with its header edited by ``edit(header) -> header``.
+
+    The digests are left stale, or recomputed with ``resign`` (a file as a writer would make it).
+    """
     with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w") as zout:
         for item in zin.infolist():
             data = zin.read(item.filename)
@@ -113,6 +119,8 @@ def _rewrite(src: Path, dst: Path, edit: object) -> None:
 
                 arr = np.load(io.BytesIO(data), allow_pickle=False)
                 header = edit(json.loads(arr.tobytes().decode()))  # type: ignore[operator]
+                if resign:
+                    header["payload_sha256"] = payload_digest(header["array_sha256"], header)
                 buf = io.BytesIO()
                 np.save(buf, np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), allow_pickle=False)
                 data = buf.getvalue()
@@ -121,9 +129,9 @@ def _rewrite(src: Path, dst: Path, edit: object) -> None:
 
 def test_another_version_and_tampering_are_refused(prior: WorldPrior, tmp_path: Path) -> None:
     path = save_prior(tmp_path / "p.npz", prior)
-    newer = tmp_path / "v2.npz"
-    _rewrite(path, newer, lambda h: {**h, "format_version": 2})
-    with pytest.raises(PriorFileError, match="version 2"):
+    newer = tmp_path / "v3.npz"
+    _rewrite(path, newer, lambda h: {**h, "format_version": 3})
+    with pytest.raises(PriorFileError, match="version 3"):
         load_prior(newer)
     tampered = tmp_path / "t.npz"
     _rewrite(path, tampered, lambda h: {**h, "eta": 0.9})
@@ -166,3 +174,37 @@ def test_the_shipped_files_fit_the_read_limits_with_room() -> None:
         assert max(i.file_size for i in infos) * 10 < safe_npz.MAX_MEMBER_BYTES
         assert max(i.file_size / i.compress_size for i in infos) * 5 < safe_npz.MAX_COMPRESSION_RATIO
         assert len(infos) * 10 < safe_npz.MAX_MEMBERS
+
+
+def test_a_trees_own_leaf_setting_round_trips_and_version_1_files_still_load(
+    prior: WorldPrior, tmp_path: Path
+) -> None:
+    own = dataclasses.replace(prior.trees[0], leaf=LeafSetting(0.1, None))
+    other = dataclasses.replace(prior.trees[1], leaf=LeafSetting(0.6, 20.0))
+    path = save_prior(tmp_path / "p.npz", dataclasses.replace(prior, trees=(own, other)))
+    back = load_prior(path)
+    assert [t.leaf for t in back.trees] == [LeafSetting(0.1, None), LeafSetting(0.6, 20.0)]
+    assert (load_tree_bundle(path, index=1).eta, load_tree_bundle(path, index=1).pseudo_count) == (0.6, 20.0)
+    # A version-1 file (before per-tree settings): every tree uses the prior's.
+    old = tmp_path / "v1.npz"
+    _rewrite(
+        path,
+        old,
+        lambda h: {
+            **h,
+            "format_version": 1,
+            "trees": [{k: v for k, v in t.items() if k != "leaf"} for t in h["trees"]],
+        },
+        resign=True,
+    )
+    assert [t.leaf for t in load_prior(old).trees] == [None, None]
+    assert load_tree_bundle(old).eta == prior.eta
+    bad = tmp_path / "bad.npz"
+    _rewrite(
+        path,
+        bad,
+        lambda h: {**h, "trees": [{**h["trees"][0], "leaf": {"eta": 2.0}}, h["trees"][1]]},
+        resign=True,
+    )
+    with pytest.raises(PriorFileError, match=r"tree 0: header field 'eta'"):
+        load_prior(bad)

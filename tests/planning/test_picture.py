@@ -21,11 +21,11 @@ from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_msgs_py.worlds import helicopter_world_messages
 from drd_planner.bench.plots import COLOURS
-from drd_planner.data.tree_file import load_tree
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
+from drd_planner.planner import load_tree_bundle
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.picture import (
     PictureError,
@@ -72,7 +72,7 @@ def _heli_case(session: PlanningSession, seed: int) -> Case:
 @pytest.fixture(scope="module")
 def heli() -> Case:
     """The first world from seed 3 on with a plan and a blocked check (seed 3 with the shipped tree)."""
-    session = PlanningSession(load_tree(TREES / "heli_wires.npz"), name="heli_wires")
+    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="heli_wires")
     cases = (_heli_case(session, seed) for seed in range(3, 23))
     case = next((c for c in cases if c.result.ok and c.result.num_blocked > 0), None)
     assert case is not None, "no world in 20 with a plan and a blocked check"
@@ -83,7 +83,7 @@ def heli() -> Case:
 def arm_session() -> PlanningSession:
     if not (SHARED_DATA / "panda" / "panda_spherized.urdf").is_file():
         pytest.skip("shared Panda model not present (set DRD_SHARED_DATA)")
-    return PlanningSession(load_tree(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
+    return PlanningSession(load_tree_bundle(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
 
 
 def _arm_case(session: PlanningSession, seeds: range, *, ok: bool) -> Case:

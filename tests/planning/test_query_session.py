@@ -270,8 +270,12 @@ def test_an_off_graph_goal_state_is_joined_too(
     assert _independent_checker(session, snapshot).check_motion(result.states)
 
 
-def test_a_legacy_tree_file_serves_its_own_query_only() -> None:
-    prior = load_prior(TREES / "heli_wires.npz")
+def test_a_legacy_tree_file_serves_its_own_query_only(tmp_path: Path) -> None:
+    from drd_planner.data.tree_file import save_tree
+    from drd_planner.planner import load_tree_bundle
+
+    legacy = save_tree(tmp_path / "tree.npz", load_tree_bundle(TREES / "heli_wires.npz"))
+    prior = load_prior(legacy)
     session = QuerySession(prior, name="heli_wires")
     tree = prior.trees[0]
     domain = session.domain

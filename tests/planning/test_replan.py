@@ -17,7 +17,6 @@ from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.obstacles import obstacle_update
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_msgs_py.worlds import helicopter_world_messages
-from drd_planner.data.tree_file import load_tree
 from drd_planner.domains.arm import ArmDomain, default_panda_dir
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
@@ -25,6 +24,7 @@ from drd_planner.exceptions import PlanningError, ProblemError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planner import load_tree_bundle
 from drd_planner.planning.map_state import MapSnapshot, Parts, changed_parts
 from drd_planner.planning.replan import (
     affected_edges,
@@ -67,7 +67,7 @@ def _random_shape(rng: np.random.Generator, scale: float) -> Shape:
 
 @pytest.fixture(scope="module")
 def heli() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
-    session = PlanningSession(load_tree(TREES / "heli_wires.npz"), name="heli_wires")
+    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="heli_wires")
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     world = domain.make_world("wires", HELI_SEED)
@@ -99,7 +99,7 @@ def test_heli_sweep_boxes_hold_every_checked_sphere(
 
 
 def test_sweep_boxes_are_cached_only_for_the_edges_asked() -> None:
-    session = PlanningSession(load_tree(TREES / "heli_wires.npz"), name="fresh")
+    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="fresh")
     assert cached_sweep_edges(session) == frozenset()
     edge_sweep_boxes(session, [5, 7, 5])
     assert cached_sweep_edges(session) == {5, 7}
@@ -254,7 +254,7 @@ def arm() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
         default_panda_dir()
     except ProblemError as exc:
         pytest.skip(str(exc))
-    session = PlanningSession(load_tree(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
+    session = PlanningSession(load_tree_bundle(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
     domain = session.domain
     assert isinstance(domain, ArmDomain)
     world = domain.make_world("table_clutter", ARM_SEED)

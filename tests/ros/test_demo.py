@@ -22,12 +22,18 @@ def test_main_job_plans_prints_the_check_logs_records_and_draws(
     pytest.importorskip("matplotlib", reason="the plots extra is not installed")
     assert main(["--out", str(tmp_path), "--rate", "4"]) == 0
     out = capsys.readouterr().out
-    # The request, the replan forced by the blocking obstacle, and the repeated request: three plans.
+    # The request, the replan forced by the blocking obstacle, the repeated request, then two requests
+    # from where the robot has moved: a new goal, and from between two vertices.
     assert "plan 0: goal_pose on map version 2" in out
     assert "plan 1: map_update" in out and "blocked by the update" in out
     assert "plan 2: goal_pose" in out
-    assert out.count("check   1: edge") == 3 and "BLOCKED" in out and "[bisect" in out
-    for k in range(3):
+    assert out.count("check   1: edge") == 5 and "BLOCKED" in out and "[bisect" in out
+    served = [line for line in out.splitlines() if line.startswith("  served by:")]
+    assert len(served) == 5
+    assert all("precomputed DiRECt tree 'heli_wires'" in line for line in served[:3])
+    assert "built online" in served[3] and "off the graph" in served[4]
+    assert "(1 new motions)" in out
+    for k in range(5):
         png = tmp_path / f"plan_{k}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     recorded = open_bag(tmp_path / "outputs.mcap")

@@ -31,10 +31,10 @@ from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update  # noqa: E402
 from drd_msgs_py.terrain import heightfield_from_cloud  # noqa: E402
 from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
-from drd_planner.data.tree_file import load_tree  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
+from drd_planner.planner import load_tree_bundle  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
@@ -96,7 +96,7 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
             heightfield_from_cloud(cloud, frame_id="map"),
             session.margin,
         )
-        offline = PlanningSession(load_tree(TREE), name="offline").plan(snapshot, seed=0)
+        offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
         assert offline.ok
         assert [s.name for s in log.status] == [f"edge/{c.edge}" for c in offline.checks]
         assert [s.level == b"\x00" for s in log.status] == [c.free for c in offline.checks]
@@ -133,10 +133,13 @@ def test_bad_tree_file_fails_configure_and_the_node_stays_up(context: Any, tmp_p
 
 
 def _crafted_trees(folder: Path) -> dict[str, Path]:
-    """Hostile variants of the shipped tree (issue 19 item 7), checksums recomputed where they matter."""
+    """Hostile variants of the shipped prior's tree as a tree file (issue 19 item 7), checksums recomputed
+    where they matter."""
     from drd_planner.data.npz_format import array_digest, payload_digest
+    from drd_planner.data.tree_file import save_tree
 
-    with np.load(TREE, allow_pickle=False) as archive:
+    source = save_tree(folder / "base_tree.npz", load_tree_bundle(TREE))
+    with np.load(source, allow_pickle=False) as archive:
         arrays = {k: archive[k] for k in archive.files}
     header = json.loads(arrays.pop("header").tobytes().decode())
     out: dict[str, Path] = {}
@@ -163,8 +166,8 @@ def _crafted_trees(folder: Path) -> dict[str, Path]:
     out["not a walk"] = folder / "single_edges.npz"
     np.savez(out["not a walk"], header=np.frombuffer(json.dumps(fields).encode(), dtype=np.uint8), **cut)
     # Every member flagged as encrypted (zipfile would raise RuntimeError).
-    data = bytearray(TREE.read_bytes())
-    with zipfile.ZipFile(TREE) as zf:
+    data = bytearray(source.read_bytes())
+    with zipfile.ZipFile(source) as zf:
         for info in zf.infolist():
             data[info.header_offset + 6] |= 1
     central = data.index(b"PK\x01\x02")
@@ -305,7 +308,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(peer.node)
     try:
-        session = PlanningSession(load_tree(TREE))
+        session = PlanningSession(load_tree_bundle(TREE))
         markers, cloud = _world(session)
         peer.terrain.publish(cloud)
         peer.obstacles.publish(markers)

@@ -21,8 +21,8 @@ from std_msgs.msg import String  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update  # noqa: E402
-from drd_planner.data.tree_file import load_tree  # noqa: E402
 from drd_planner.domains.arm import ArmDomain, default_panda_dir  # noqa: E402
+from drd_planner.planner import load_tree_bundle  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
@@ -94,7 +94,7 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         # Same checks as the offline session on the same decoded map; the plan's edges were checked free.
         update = obstacle_update(markers, frame_id=FRAME)
         snapshot = MapSnapshot(1, {k: o.parts for k, o in update.apply({}).items()}, None, session.margin)
-        offline = PlanningSession(load_tree(TREE), name="offline").plan(snapshot, seed=0)
+        offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
         assert offline.ok
         assert [s.name for s in log.status] == [f"edge/{c.edge}" for c in offline.checks]
         assert [s.level == b"\x00" for s in log.status] == [c.free for c in offline.checks]

@@ -42,7 +42,7 @@ import drd_planner.ros.node as node_module  # noqa: E402
 from drd_msgs_py.exceptions import MessageError  # noqa: E402
 from drd_msgs_py.obstacles import obstacle_update  # noqa: E402
 from drd_msgs_py.terrain import heightfield_from_cloud  # noqa: E402
-from drd_planner.data.tree_file import load_tree  # noqa: E402
+from drd_planner.planner import load_tree_bundle  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
 from drd_planner.ros.node import LATCHED, REQUESTS, PlannerNode  # noqa: E402
@@ -193,16 +193,19 @@ def _feed(executor: Any, node: PlannerNode, peer: _Peer, cases: list[mf.Case]) -
             if case.must_fail:
                 got = [(str(s.name), str(s.message), _values(s)) for _, s in peer.statuses[seen:]]
                 tally.problem(f"case {i} {case.kind}: a malformed message was accepted; got {got}")
-            _settle(executor, peer)
+            _settle(executor, peer, node=node)
             tally.followups += len(peer.error_reports(seen))
     return tally
 
 
-def _settle(executor: Any, peer: _Peer, quiet: float = 0.03, step: float = 0.005) -> None:
+def _settle(
+    executor: Any, peer: _Peer, quiet: float = 0.03, step: float = 0.005, node: PlannerNode | None = None
+) -> None:
     """Spin until the executor was idle for ``quiet`` seconds (a replan or plan after an accepted message).
 
     ``spin_once`` returns early when it ran a callback and late when the callback was long; only
-    spins that waited out their ``step`` (nothing to do) count towards the quiet time.
+    spins that waited out their ``step`` (nothing to do) while ``node``'s planning thread had nothing
+    to do either count towards the quiet time (a replan runs in that thread, not in a callback).
     """
     last, count = time.monotonic(), len(peer.statuses) + len(peer.plans)
     while time.monotonic() - last < quiet:
@@ -210,7 +213,8 @@ def _settle(executor: Any, peer: _Peer, quiet: float = 0.03, step: float = 0.005
         executor.spin_once(timeout_sec=step)
         took = time.monotonic() - t0
         now = len(peer.statuses) + len(peer.plans)
-        if now != count or not 0.8 * step <= took <= 3 * step:
+        busy = node is not None and not node.planning_idle
+        if busy or now != count or not 0.8 * step <= took <= 3 * step:
             last, count = time.monotonic(), now
 
 
@@ -279,7 +283,7 @@ def _offline_plan(session_tree: Path, markers: Any, cloud: Any | None, frame: st
     update = obstacle_update(markers, frame_id=frame)
     terrain = heightfield_from_cloud(cloud, frame_id=frame) if cloud is not None else None
     snapshot = MapSnapshot(1, {k: o.parts for k, o in update.apply({}).items()}, terrain, margin)
-    return PlanningSession(load_tree(session_tree), name="offline").plan(snapshot, seed=0)
+    return PlanningSession(load_tree_bundle(session_tree), name="offline").plan(snapshot, seed=0)
 
 
 def _start(ctx: Any, tree: Path, frame: str) -> tuple[PlannerNode, _Peer, Any]:
@@ -320,7 +324,7 @@ def _final_problems(tally: _Tally, peer: _Peer, executor: Any) -> None:
 
 def test_generator_is_seeded_and_its_malformed_cases_are_refused_offline() -> None:
     """The cases are a function of the seed, and drd_msgs_py refuses each must-fail one with its reason."""
-    session = PlanningSession(load_tree(HELI_TREE), name="heli")
+    session = PlanningSession(load_tree_bundle(HELI_TREE), name="heli")
     markers, cloud = mf.helicopter_bases(session.domain, seed=3)
     a = mf.marker_cases(np.random.default_rng(5), markers, count=200)
     b = mf.marker_cases(np.random.default_rng(5), markers, count=200)

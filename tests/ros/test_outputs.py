@@ -6,7 +6,8 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
-from drd_planner.planning.session import PlanResult, SessionCheck
+from drd_planner.planning.query_session import QueryPlanResult
+from drd_planner.planning.session import SessionCheck
 from drd_planner.ros.outputs import plan_summary_values
 
 
@@ -16,7 +17,7 @@ def _check(step: int, free: bool, stage: str) -> SessionCheck:
 
 def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:
     checks = (_check(1, True, "tree"), _check(2, False, "tree"), _check(3, True, "bisect"))
-    result = PlanResult(
+    result = QueryPlanResult(
         ok=True,
         status="path_found",
         message="found",
@@ -24,7 +25,9 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
         tree="heli",
         path_edges=(1, 3),
         checks=checks,
-        seconds={"total": 0.25, "checks": 0.0015},
+        seconds={"total": 0.25, "checks": 0.0015, "library": 0.125},
+        stage="bisect",
+        query="online",
     )
     values = plan_summary_values(
         result, {"request": "goal_pose"}, wait_s=0.01, plan_messaging_s=0.002, messaging_s=0.003
@@ -32,6 +35,7 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     assert (values["checks"], values["free"], values["blocked"]) == (3, 2, 1)
     assert (values["tree_checks"], values["bisect_checks"]) == (2, 1)
     assert values["planning_time"] == values["total_s"] == "0.250000"
+    assert (values["query"], values["stage"], values["library_s"]) == ("online", "bisect", "0.125000")
     assert (
         values["result"] == "path_found" and values["request"] == "goal_pose" and values["map_version"] == 3
     )

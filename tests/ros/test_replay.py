@@ -1,13 +1,15 @@
 """Bag replay end to end with real rclpy: the bundled bags into a real PlannerNode, outputs recorded.
 
 For each request of the bag: a plan was published; its check log (edge ids and outcomes, in order)
-equals the offline ``PlanningSession.plan`` on the maps decoded from the bag at that request (same
-seed); every edge of the plan was checked free in that log; the recorded bag reads back with rosbags.
+equals the offline plan of that request (:func:`drd_planner.planning.bag_plan.plan_bag_request`: the
+maps decoded from the bag at that request, from the robot's state in the bag, same seed); every edge
+of the plan was checked free in that log; the recorded bag reads back with rosbags. The requests go
+to the stored goal twice (a precomputed tree), then from where the robot has moved to a new goal (a
+library and tree built online) and from between two vertices (joined by a new motion).
 """
 
 from __future__ import annotations
 
-import inspect
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,11 +23,10 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not 
 
 from rclpy.parameter import Parameter  # noqa: E402
 
-import drd_planner.ros.node as node_module  # noqa: E402
-from drd_msgs_py.bags import BagMessage, bag_requests, maps_at_request, open_bag, read_bag  # noqa: E402
-from drd_planner.data.tree_file import load_tree  # noqa: E402
-from drd_planner.domains.arm import ArmDomain  # noqa: E402
-from drd_planner.planning.session import PlanningSession, PlanResult  # noqa: E402
+from drd_msgs_py.bags import BagMessage, bag_requests, open_bag, read_bag  # noqa: E402
+from drd_planner.planner import load_prior  # noqa: E402
+from drd_planner.planning.bag_plan import plan_bag_request  # noqa: E402
+from drd_planner.planning.query_session import QueryPlanResult, QuerySession  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 from drd_planner.ros.replay import ReplaySummary, main, replay_bag  # noqa: E402
 
@@ -34,7 +35,6 @@ os.environ["ROS_DOMAIN_ID"] = str(110 + os.getpid() % 20)
 
 BAGS = REPO_ROOT / "bags"
 TREES = REPO_ROOT / "trees"
-NODE_HAS_ARM = '"joint_tolerance"' in inspect.getsource(node_module)
 
 
 def _ok(status: Any) -> bool:
@@ -76,11 +76,13 @@ def _response(recorded: list[BagMessage], after_ns: int, before_ns: int) -> BagM
     return hits[0]
 
 
-def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str) -> list[PlanResult]:
+def _check_requests(
+    summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str
+) -> list[QueryPlanResult]:
     """The assertions of the module docstring for every request; the offline results."""
     messages = read_bag(bag)
     requests = bag_requests(messages)
-    assert len(requests) == 2
+    assert len(requests) == 4
     assert summary.published_per_topic == {t.name: t.count for t in open_bag(bag).topics.values()}
     assert not summary.unmatched
     # The recorded bag reads back with rosbags and holds what the replay received.
@@ -95,15 +97,12 @@ def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, fra
     # When each request really went out, on the bag's timeline (the recorder's clock).
     sent = [p.sent_ns for p in summary.published if p.topic.endswith(("goal_pose", "goal_joints"))]
     assert len(sent) == len(requests)
-    session = PlanningSession(load_tree(TREES / tree), name="offline")
-    domain = session.domain
-    loader = domain.robot_from_description if isinstance(domain, ArmDomain) else None
-    results = []
+    session = QuerySession(load_prior(TREES / tree), name="offline")
+    results, starts = [], []
     for k, request in enumerate(requests):
-        maps, _ = maps_at_request(
-            messages, request.index, frame_id=frame, margin=session.margin, robot_from_description=loader
-        )
-        offline = session.plan(maps.snapshot, seed=0)
+        planned = plan_bag_request(session, messages, request.index, frame=frame, seed=0)
+        offline = planned.result
+        starts.append(planned.start)
         assert offline.ok, offline.message
         results.append(offline)
         until = sent[k + 1] if k + 1 < len(sent) else 2**63
@@ -114,7 +113,7 @@ def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, fra
         assert set(offline.path_edges) <= free, "every plan edge was checked free for this request"
         plan = _response(by_topic["/plan"], sent[k], until).message
         assert plan.header.frame_id == frame and len(plan.poses) >= 2
-        if isinstance(domain, ArmDomain):
+        if session.is_arm:
             trajectory = _response(by_topic["/joint_trajectory"], sent[k], until).message
             got = np.array([p.positions for p in trajectory.points])
             np.testing.assert_allclose(got, offline.states, atol=1e-9)
@@ -128,13 +127,24 @@ def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, fra
             for s in m.message.status
         ]
         assert any(
-            v.get("result") == "path_found" and v.get("checks") == str(len(offline.checks)) for v in summaries
+            v.get("result") == "path_found"
+            and v.get("checks") == str(len(offline.checks))
+            and v.get("query") == offline.query
+            for v in summaries
         )
-    # The update between the requests blocked an edge of the first plan; the second plan avoids it.
-    first, second = results
+    # The update between the first two requests blocked an edge of the first plan; the second avoids it.
+    first, second = results[:2]
     blocked_later = {c.edge for c in second.checks if not c.free}
     assert blocked_later & set(first.path_edges)
     assert not blocked_later & set(second.path_edges)
+    # Then the robot moves: a goal no tree was built for, and a start between two vertices.
+    assert [r.query for r in results] == [first.query, first.query, "online", "connected"]
+    assert first.query.startswith("tree:")
+    num_vertices = session.prior.graph.num_vertices
+    assert results[2].path_vertices[0] < num_vertices <= results[3].path_vertices[0]  # a new start state
+    for k in (2, 3):  # each starts where the robot last reported itself before the request
+        reported = np.asarray(starts[k], dtype=float)
+        np.testing.assert_allclose(results[k].states[0][: reported.size], reported, atol=1e-6)
     return results
 
 
@@ -157,13 +167,10 @@ def test_replaying_a_bag_twice_gives_identical_check_logs(context: Any, tmp_path
         node.destroy_node()
         checks = [m.message for m in read_bag(out) if m.topic == "/edge_checks"]
         logs.append([[(s.name, _ok(s)) for s in log.status] for log in checks])
-    assert len(logs[0]) == 3 and all(logs[0])  # two requests and the replan after the update, each checked
+    assert len(logs[0]) == 5 and all(logs[0])  # four requests and the replan after the update, each checked
     assert logs[0] == logs[1]
 
 
-@pytest.mark.xfail(
-    not NODE_HAS_ARM, reason="the node does not serve the arm yet (no joint_tolerance)", strict=False
-)
 def test_arm_bag_replays_into_the_node_and_matches_drd_plan(context: Any, tmp_path: Path) -> None:
     if not (SHARED_DATA / "panda" / "panda.urdf").is_file():
         pytest.skip("the shared Panda files are needed for the arm tree")
@@ -185,9 +192,9 @@ def test_replay_without_a_planner_records_nothing(context: Any, tmp_path: Path) 
     summary = replay_bag(
         bag, context=context, record=tmp_path / "o.mcap", rate=10.0, settle=0.1, wait=0.2, log=lines.append
     )
-    assert len(summary.published) == 6 and not summary.recorded
+    assert len(summary.published) == 10 and not summary.recorded
     assert set(summary.unmatched) == {"/terrain", "/obstacles", "/odom", "/goal_pose"}
-    assert summary.seconds < 5.0  # 2.5 s of bag at rate 10
+    assert summary.seconds < 5.0  # 5.5 s of bag at rate 10
     assert any("no subscriber on /goal_pose" in line for line in lines)
     assert read_bag(tmp_path / "o.mcap") == []
     with pytest.raises(ValueError, match="rate"):

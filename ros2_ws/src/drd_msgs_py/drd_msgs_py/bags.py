@@ -33,7 +33,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.obstacles import Obstacle, obstacle_update, pose_from_msg
+from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.map_state import MapSnapshot
@@ -57,7 +57,6 @@ __all__ = [
     "maps_until",
     "open_bag",
     "read_bag",
-    "request_goal",
     "topic_base",
     "volatile_qos",
     "write_bag",
@@ -383,34 +382,6 @@ def bag_frame(messages: Sequence[BagMessage]) -> str | None:
                 if str(marker.header.frame_id):
                     return str(marker.header.frame_id)
     return None
-
-
-def request_goal(request: BagRequest, *, frame_id: str, joint_names: Sequence[str] = ()) -> FloatArray:
-    """The goal of a request: (3,) position (m) of a PoseStamped, or (J,) joints (rad) in ``joint_names`` order.
-
-    Raises:
-        MessageError: a pose in another frame, NaN, a bad quaternion; a JointState lacking one of
-            ``joint_names``, with ragged or non-finite positions; or no ``joint_names`` to order by.
-    """
-    msg = request.message
-    if request.kind == "goal_pose":
-        frame = str(msg.header.frame_id)
-        if frame != frame_id:
-            raise MessageError(f"goal_pose is in frame {frame!r}; the planner works in {frame_id!r}")
-        return np.array(pose_from_msg(msg.pose, "goal_pose").position, dtype=np.float64)
-    names = [str(n) for n in msg.name]
-    positions = np.asarray(msg.position, dtype=np.float64).ravel()
-    if len(names) != positions.size:
-        raise MessageError(f"goal_joints has {len(names)} names but {positions.size} positions")
-    if not joint_names:
-        raise MessageError("goal_joints needs an arm tree (no joint names to order the goal by)")
-    missing = [j for j in joint_names if j not in names]
-    if missing:
-        raise MessageError(f"goal_joints lacks joint(s) {missing}")
-    q = np.array([positions[names.index(j)] for j in joint_names], dtype=np.float64)
-    if not np.all(np.isfinite(q)):
-        raise MessageError(f"goal_joints positions must be finite, got {q.tolist()}")
-    return q
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # the names below load on first use (``planner_node`` install
     from drd_planner.exceptions import DrdError, PlanningError, PriorFileError
     from drd_planner.planner import (
         PLAN_POLICIES,
+        LeafSetting,
         Planner,
         PlanResult,
         PlanStage,
@@ -43,6 +44,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(
         (
             "PLAN_POLICIES",
+            "LeafSetting",
             "Planner",
             "PlanResult",
             "PlanStage",
@@ -64,6 +66,7 @@ __all__ = [
     "CheckRecord",
     "DrdError",
     "EdgeOracle",
+    "LeafSetting",
     "PlanResult",
     "PlanStage",
     "PlanStatus",

@@ -18,6 +18,7 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
 from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
+from drd_planner.planning.bag_cli import print_check
 
 if TYPE_CHECKING:
     from drd_planner.bench.suite import SuiteOptions
@@ -98,11 +99,25 @@ def _prior_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, floa
     )
 
 
+def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[Any, str]:
+    """A precomputed tree's own eta and kappa, validated on its query (``planner.leaf_validation``)."""
+    from drd_planner.planner.leaf_validation import tree_leaf_from_options
+
+    return tree_leaf_from_options(
+        problem,
+        eta=args.eta,
+        pseudo_counts=_kappas(args),
+        seed=args.seed,
+        tree_options=_tree_kwargs(args),
+        progress=None,
+    )
+
+
 def cmd_build_tree(args: argparse.Namespace) -> int:
     """``drd build-tree``: write a world prior with the dataset's DiRECt tree and any ``--query`` trees."""
     from drd_planner.planner.commands import cmd_build_tree as build
 
-    return build(args, tree_options=_tree_kwargs(args), leaf=_prior_leaf)
+    return build(args, tree_options=_tree_kwargs(args), leaf=_prior_leaf, tree_leaf=_tree_leaf)
 
 
 def _sizes(text: str) -> tuple[int, ...]:
@@ -205,15 +220,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from drd_planner.planner.commands import cmd_plan as plan
 
     if args.bag:
-        return _plan_bag(args)
+        from drd_planner.planning.bag_cli import cmd_plan_bag
+
+        return cmd_plan_bag(args)
     return plan(args)
-
-
-def _print_check(number: int, edge: int, ends: tuple[int, int] | None, free: bool, stage: str) -> None:
-    """One line of the check log (``number`` 1-based)."""
-    where = f" ({ends[0]}->{ends[1]})" if ends is not None else ""
-    state = "free   " if free else "BLOCKED"
-    print(f"  check {number:3d}: edge {edge:5d}{where:14s} {state} [{stage}]")
 
 
 def _print_episode(problem: Problem, result: EpisodeResult) -> None:
@@ -223,72 +233,12 @@ def _print_episode(problem: Problem, result: EpisodeResult) -> None:
         if graph is not None:
             u, v = graph.edges[rec.edge]
             ends = (int(u), int(v))
-        _print_check(k + 1, rec.edge, ends, rec.free, rec.stage)
+        print_check(k + 1, rec.edge, ends, rec.free, rec.stage)
     if result.success and result.path_edges is not None:
         which = "graph path" if result.path_index is None else f"path {result.path_index}"
         print(f"  -> {which} ({result.path_edges.size} edges) verified free after {result.num_checks} checks")
     else:
         print(f"  -> {result.status.value} after {result.num_checks} checks")
-
-
-def _plan_bag(args: argparse.Namespace) -> int:
-    """``drd plan --bag``: plan on the maps in force at a bag's K-th request, as the node would."""
-    from drd_msgs_py.bags import bag_frame, maps_at_request, read_bag, request_goal
-    from drd_msgs_py.exceptions import MessageError
-    from drd_planner.domains.arm import ArmDomain
-    from drd_planner.planner.prior_file import load_tree_bundle
-    from drd_planner.planning.session import PlanningSession
-    from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
-
-    if args.policy != "direct_bisect":
-        raise DrdError("--bag plans as the node does (direct_bisect); --policy cannot be changed")
-    if args.world is not None:
-        raise DrdError("--world selects a dataset world; with --bag use --request")
-    tree_path = resolve_tree_path(args.tree)
-    session = PlanningSession(load_tree_bundle(tree_path), name=tree_path.stem)
-    domain = session.domain
-    try:
-        messages = read_bag(resolve_bag_path(args.bag))
-        frame = args.frame or bag_frame(messages) or "map"
-        maps, request = maps_at_request(
-            messages,
-            args.request,
-            frame_id=frame,
-            margin=session.margin,
-            robot_from_description=domain.robot_from_description if isinstance(domain, ArmDomain) else None,
-        )
-        goal = request_goal(request, frame_id=frame, joint_names=session.joint_names)
-    except MessageError as exc:
-        raise DrdError(str(exc)) from exc
-    snapshot = maps.snapshot
-    start_ns = messages[0].time_ns
-    terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
-    robot = "" if maps.robot_description is None else ", robot_description"
-    print(
-        f"bag {args.bag}: request {request.index} ({request.kind} at +{(request.time_ns - start_ns) / 1e9:.2f} s); "
-        f"maps in {frame!r}: version {snapshot.version}, {len(snapshot.obstacles)} obstacles, terrain {terrain}{robot}"
-    )
-    for line in maps.refused:
-        print(f"  refused (map unchanged): {line}")
-    if not session.matches_goal(goal):
-        raise DrdError(
-            f"request {request.index}'s goal {np.round(goal, 3).tolist()} does not match tree {session.name} "
-            f"(goal {np.round(session.goal_state, 3).tolist()})"
-        )
-    result = session.plan(snapshot, seed=args.seed)
-    for k, check in enumerate(result.checks):
-        _print_check(k + 1, check.edge, check.endpoints, check.free, check.stage)
-    if not result.ok:
-        print(f"  -> {result.status} after {len(result.checks)} checks: {result.message}")
-        return 1
-    print(f"  -> path ({len(result.path_edges)} edges) verified free after {len(result.checks)} checks")
-    print(f"  path edges: {list(result.path_edges)}")
-    columns = "joint angles, rad" if session.is_arm else "x, y, z m; heading rad"
-    print(f"  path vertices ({columns}):")
-    for vertex in result.path_vertices:
-        state = session.vertex_state(vertex)
-        print(f"    {vertex:5d}: " + " ".join(f"{v:9.3f}" for v in state))
-    return 0
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -455,6 +405,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--world", type=int, default=None, help="0-based world row (--gccd / --dataset)")
     p.add_argument("--request", type=int, default=0, help="0-based request of the --bag (default 0)")
     p.add_argument("--frame", default=None, help="planning frame for --bag (default: the maps' frame)")
+    p.add_argument(
+        "--prior-start",
+        action="store_true",
+        help="--bag: plan from the prior's start when the bag has no robot state (odom / joint_states) yet",
+    )
     p.add_argument(
         "--query",
         type=query_arg,

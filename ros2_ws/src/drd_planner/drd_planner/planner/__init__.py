@@ -2,12 +2,13 @@
 
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.planner import PLAN_POLICIES, Planner, QueryModel
-from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
+from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior, prior_from_problem
 from drd_planner.planner.prior_file import load_prior, load_tree_bundle, save_prior
 from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
 
 __all__ = [
     "PLAN_POLICIES",
+    "LeafSetting",
     "PlanResult",
     "PlanStage",
     "PlanStatus",

@@ -58,9 +58,18 @@ def resolve_query(prior: WorldPrior, query: QueryText) -> tuple[int, int]:
 
 
 def query_tree(
-    prior: WorldPrior, start: int, goal: int, *, tree_options: dict[str, Any], name: str | None = None
-) -> QueryTree:
-    """An offline DiRECt tree for another query of ``prior``, on the library the planner would build online."""
+    prior: WorldPrior,
+    start: int,
+    goal: int,
+    *,
+    tree_options: dict[str, Any],
+    name: str | None = None,
+    tree_leaf: Any = None,
+) -> tuple[QueryTree, str]:
+    """An offline DiRECt tree for another query of ``prior``, on the library the planner would build online.
+
+    ``tree_leaf(problem)`` gives the tree's own ``(leaf, note)`` (None: the tree uses the prior's).
+    """
     if prior.worlds is None:
         raise DrdError("this prior has no training worlds over every edge; rebuild it from its dataset")
     from drd_planner.core.lazysp import GraphArcs
@@ -96,13 +105,18 @@ def query_tree(
         ),
     )
     tree = build_tree(problem, **tree_options)
-    return QueryTree(problem.name, start, goal, library, tree)
+    leaf, note = (None, "") if tree_leaf is None else tree_leaf(problem)
+    return QueryTree(problem.name, start, goal, library, tree, leaf), note
 
 
 def build_prior(
-    args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any
+    args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any, tree_leaf: Any = None
 ) -> tuple[WorldPrior, list[str]]:
-    """The prior ``drd build-tree`` writes, and one line per tree built (see :func:`cmd_build_tree`)."""
+    """The prior ``drd build-tree`` writes, and a few lines per tree built (see :func:`cmd_build_tree`).
+
+    ``leaf(problem, args)`` gives the prior's ``(eta, kappa, note)``; ``tree_leaf(problem, args)`` each
+    tree's own ``(LeafSetting or None, note)`` (None as the callable: trees use the prior's).
+    """
     import dataclasses
 
     from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
@@ -119,11 +133,13 @@ def build_prior(
         t0 = time.perf_counter()
         tree = build_tree(problem, **tree_options)
         assert problem.start is not None and problem.goal is not None
-        own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
         lines.append(
-            f"tree {own.name} ({own.start} -> {own.goal}): {tree.num_nodes} nodes, depth {tree.depth()}, "
-            f"built in {time.perf_counter() - t0:.2f} s"
+            f"tree {problem.name} ({problem.start} -> {problem.goal}): {tree.num_nodes} nodes, depth "
+            f"{tree.depth()}, built in {time.perf_counter() - t0:.2f} s"
         )
+        own_leaf, own_note = (None, "") if tree_leaf is None else tree_leaf(problem, args)
+        own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree, own_leaf)
+        lines += ["  " + line for line in own_note.splitlines()]
         prior = prior_from_problem(
             problem,
             domain=problem_domain(problem),
@@ -144,24 +160,28 @@ def build_prior(
         if prior.tree_for(start, goal) is not None:
             raise DrdError(f"the prior already has a tree for {start} -> {goal}")
         t0 = time.perf_counter()
-        qt = query_tree(prior, start, goal, tree_options=tree_options)
+        own_leaf_of = None if tree_leaf is None else (lambda p: tree_leaf(p, args))
+        qt, note = query_tree(prior, start, goal, tree_options=tree_options, tree_leaf=own_leaf_of)
         trees.append(qt)
         lines.append(
             f"tree {qt.name}: {qt.tree.num_nodes} nodes, depth {qt.tree.depth()}, {qt.library.num_paths} "
             f"paths, built in {time.perf_counter() - t0:.2f} s"
         )
+        lines += ["  " + line for line in note.splitlines()]
         prior = dataclasses.replace(prior, trees=tuple(trees))
     return prior, lines
 
 
-def cmd_build_tree(args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any) -> int:
+def cmd_build_tree(
+    args: argparse.Namespace, *, tree_options: dict[str, Any], leaf: Any, tree_leaf: Any = None
+) -> int:
     """``drd build-tree``: write a world prior (training worlds over every edge) with its DiRECt trees.
 
     Prints a few short lines: how eta and kappa were chosen (with the validation's time and the mean
     checks of every candidate), each tree built, the file written and the whole command's time.
     """
     t0 = time.perf_counter()
-    prior, lines = build_prior(args, tree_options=tree_options, leaf=leaf)
+    prior, lines = build_prior(args, tree_options=tree_options, leaf=leaf, tree_leaf=tree_leaf)
     out = save_prior(args.out, prior)
     for line in lines:
         print(line)

@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -35,10 +36,11 @@ from drd_planner.core.switch_threshold import (
     DEFAULT_ETA_CANDIDATES,
     DEFAULT_PSEUDO_COUNTS,
     SwitchThresholdChoice,
+    select_switch_threshold,
 )
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.planner import Planner
-from drd_planner.planner.prior import prior_from_problem
+from drd_planner.planner.prior import LeafSetting, prior_from_problem
 from drd_planner.planner.query_sampling import draw_queries
 from drd_planner.progress import Progress
 
@@ -156,3 +158,36 @@ def leaf_from_options(
         progress=progress,
     )
     return choice.eta, choice.pseudo_count, "\n".join(choice.summary_lines())
+
+
+def tree_leaf_from_options(
+    problem: Problem,
+    *,
+    eta: float | None,
+    pseudo_counts: Sequence[float | None],
+    seed: int,
+    tree_options: Mapping[str, Any],
+    progress: bool | None = False,
+) -> tuple[LeafSetting | None, str]:
+    """``(leaf, note)``: a precomputed tree's own eta and kappa, validated on its own query.
+
+    A tree serves one query, so its setting is chosen on that query's held-out feasible training worlds
+    (:func:`~drd_planner.core.switch_threshold.select_switch_threshold`, the validation ``drd bench``
+    runs), not on the random queries that choose the prior's. When eta and kappa are both given, the
+    tree has no setting of its own (None: the prior's, as given, applies). ``note`` is a short report.
+    """
+    if eta is not None and len(pseudo_counts) == 1:
+        return None, "its own eta and kappa: the prior's (given)"
+    expand = float(tree_options.get("expand_threshold", 0.05))
+    choice = select_switch_threshold(
+        problem,
+        candidates=None if eta is None else (eta,),
+        pseudo_counts=pseudo_counts,
+        seed=seed,
+        expand_threshold=expand,
+        tree_options=tree_options,
+        progress=progress,
+    )
+    lines = choice.summary_lines()
+    lines[0] = f"its own {lines[0]} (its own query)"
+    return LeafSetting(choice.eta, choice.pseudo_count), "\n".join(lines)

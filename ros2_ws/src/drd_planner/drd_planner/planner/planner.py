@@ -44,7 +44,7 @@ from drd_planner.planner.graph_fallback import (
     fallback_edge_weights,
     posterior_free_probability,
 )
-from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_library import query_library, vertex_sequence
 from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
@@ -71,6 +71,7 @@ class QueryModel:
         theta: (E,) BiSECt's training bias.
         label: ``tree:<name>`` or ``online``.
         build_s: seconds it took to build.
+        precomputed: the prior's tree it uses, or None for a model built online.
     """
 
     query: QueryGraph
@@ -79,6 +80,7 @@ class QueryModel:
     theta: FloatArray
     label: str
     build_s: float
+    precomputed: QueryTree | None = None
 
     @property
     def start(self) -> int:
@@ -122,6 +124,7 @@ class Planner:
         self._expand = expand_threshold
         self._connector = (connector or connector_for(prior)) if connect_states else None
         self._sample_index: EdgeSampleIndex | None = None
+        self._leaf_override: LeafSetting | None = None
 
     @classmethod
     def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: Any) -> Planner:
@@ -139,12 +142,22 @@ class Planner:
         return self._endpoints.snap_tolerance
 
     def set_leaf(self, eta: float, pseudo_count: float | None) -> None:
-        """Use another switch threshold and leaf pseudo-count from the next plan on (the cache stays valid).
+        """Use this switch threshold and leaf pseudo-count for every query from the next plan on.
+
+        It overrides the prior's setting and the precomputed trees' own; the cache stays valid.
 
         Raises:
             ProblemError: eta outside (0, 1] or a pseudo-count that is not positive.
         """
+        self._leaf_override = LeafSetting(eta, pseudo_count)
         self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count)
+
+    def leaf(self, model: QueryModel) -> LeafSetting:
+        """The eta and kappa of a query's library stage.
+
+        Set by :meth:`set_leaf`, else its precomputed tree's own (:attr:`QueryTree.leaf`), else the prior's.
+        """
+        return self._leaf_override or self.prior.leaf_for(model.precomputed)
 
     @property
     def connector(self) -> QueryConnector | None:
@@ -204,7 +217,15 @@ class Planner:
         if qt is not None:
             theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
             query = prior_query(prior, qt.start, qt.goal)
-            return QueryModel(query, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0)
+            return QueryModel(
+                query,
+                qt.library,
+                qt.tree,
+                theta,
+                f"tree:{qt.name}",
+                time.perf_counter() - t0,
+                qt,
+            )
         if prior.worlds is None:
             served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
             raise QueryError(
@@ -349,21 +370,25 @@ class Planner:
         reason = (
             f"no free path from {model.start} to {model.goal} in the graph: {blocked} blocked edges "
             f"disconnect them ({len(checks)} checks)"
+            if blocked
+            else f"the graph has no path from {model.start} to {model.goal} even with every edge free"
+            + (" (its edges are directed)" if model.query.graph.directed else "")
         )
         return _unproven(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin)
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None
         prior = self.prior
+        leaf = self.leaf(model)
         return PolicyContext(
             library=model.library,
             edge_costs=model.query.edge_costs,
             train_theta=model.theta,
             tree=model.tree if policy in TREE_POLICIES else None,
             seed=seed,
-            eta=prior.eta,
+            eta=leaf.eta,
             alpha=prior.alpha,
-            pseudo_count=prior.pseudo_count,
+            pseudo_count=leaf.pseudo_count,
             graph=model.query.graph,
             start=model.start,
             goal=model.goal,

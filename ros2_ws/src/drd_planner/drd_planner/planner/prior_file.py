@@ -1,10 +1,11 @@
 """The world-prior file: one graph, its training worlds over every edge, and zero or more trees.
 
-Format ``drd_planner.prior`` version 1: a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`;
+Format ``drd_planner.prior`` version 2 (version 1 still loads): a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`;
 read by :mod:`drd_planner.data.safe_npz`, so loading never executes code and checks every size before
 it allocates) with a JSON header (name, domain
 and its spec, check metadata, switch threshold eta, alpha, kappa, online-library settings, one entry
-per tree with its name, start, goal and build info, provenance, SHA-256 digests) and these arrays:
+per tree with its name, start, goal, build info and, from version 2, its own ``leaf`` (eta and kappa
+validated on that query, or null for the prior's), provenance, SHA-256 digests) and these arrays:
 
 ================== ======== ===============================================================
 name               dtype    shape and meaning
@@ -74,12 +75,14 @@ from drd_planner.data.tree_file import ARRAY_DTYPES as TREE_DTYPES
 from drd_planner.data.tree_file import FORMAT_NAME as TREE_FORMAT_NAME
 from drd_planner.data.tree_file import MAX_PSEUDO_COUNT, TreeBundle, load_tree
 from drd_planner.exceptions import DrdError, PriorFileError
-from drd_planner.planner.prior import QueryTree, WorldPrior
+from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "load_prior", "load_tree_bundle", "save_prior"]
 
 FORMAT_NAME = "drd_planner.prior"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions this reader accepts (version 1 has no per-tree ``leaf``).
+READ_VERSIONS = (1, 2)
 
 MAX_TREES = 1000
 """Most precomputed trees one prior file may hold (one per query; ``drd build-tree`` adds one at a time)."""
@@ -148,7 +151,8 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
             arrays[f"t{i}_vertex_paths"], arrays[f"t{i}_vertex_offsets"] = pack_ragged(
                 qt.library.vertex_paths, np.int64
             )
-        trees.append({"name": qt.name, "start": qt.start, "goal": qt.goal, "info": t.info})
+        leaf = None if qt.leaf is None else {"eta": qt.leaf.eta, "pseudo_count": qt.leaf.pseudo_count}
+        trees.append({"name": qt.name, "start": qt.start, "goal": qt.goal, "info": t.info, "leaf": leaf})
     header = {
         "software_version": __version__,
         "name": prior.name,
@@ -208,7 +212,7 @@ def load_prior(path: str | Path, *, expected_domain: str | None = None) -> World
         with refusing(PriorFileError, src, _WHAT):
             return prior_from_bundle(bundle)
     header, arrays = read_checked_npz(
-        src, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, error=PriorFileError, what=_WHAT
+        src, format_name=FORMAT_NAME, format_version=READ_VERSIONS, error=PriorFileError, what=_WHAT
     )
     with refusing(PriorFileError, src, _WHAT):
         domain = header.get("domain")
@@ -315,6 +319,7 @@ def _tree_from(
         library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
         check_walks(graph, library.path_edges, start, goal, vertex_paths)
         check_tree_arrays(a, graph.num_edges, m, library.library_edges)
+        leaf = _leaf_from(entry.get("leaf"))
     except DrdError as exc:
         raise PriorFileError(f"tree {i}: {exc}") from exc
     lib_edges = a["library_edges"]
@@ -332,7 +337,21 @@ def _tree_from(
         world_free=np.ascontiguousarray(worlds[:, lib_edges]),
         world_weights=weights,
     )
-    return QueryTree(name, start, goal, library, tree)
+    return QueryTree(name, start, goal, library, tree, leaf)
+
+
+def _leaf_from(entry: Any) -> LeafSetting | None:
+    """A tree's own eta and kappa from its header entry (absent or null: the prior's)."""
+    if entry is None:
+        return None
+    if not isinstance(entry, dict):
+        raise PriorFileError(
+            f"its 'leaf' must be an object with eta and pseudo_count, got {short(entry, 40)}"
+        )
+    return LeafSetting(
+        header_fraction(entry, "eta"),
+        header_number(entry, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True),
+    )
 
 
 def prior_from_bundle(bundle: TreeBundle) -> WorldPrior:
@@ -376,12 +395,13 @@ def _bundle_of(prior: WorldPrior, path: str | Path, index: int) -> TreeBundle:
             "(add one with `drd build-tree --prior FILE --query START,GOAL`)"
         )
     qt = prior.trees[index]
+    leaf = prior.leaf_for(qt)
     return TreeBundle(
         problem=prior.query_problem(qt),
         tree=qt.tree,
         domain=prior.domain,
-        eta=prior.eta,
+        eta=leaf.eta,
         alpha=prior.alpha,
-        pseudo_count=prior.pseudo_count,
+        pseudo_count=leaf.pseudo_count,
         provenance=prior.provenance,
     )

@@ -36,7 +36,7 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.session import PlanningSession, PlanResult
 
 #: A session of one tree, or of a whole prior: what a picture reads of them is the same.
@@ -230,6 +230,13 @@ def _along(points: FloatArray) -> FloatArray:
     return np.concatenate([[0.0], np.cumsum(steps)])
 
 
+def end_states(session: AnySession, result: PlanResult) -> tuple[FloatArray, FloatArray]:
+    """(D,) start and goal states drawn: the plan's own ends, else the prior's stored query."""
+    if result.ok and result.states.shape[0] >= 2:
+        return np.asarray(result.states[0]), np.asarray(result.states[-1])
+    return session.vertex_state(session.domain.start), session.goal_state
+
+
 def _split_obstacles(snapshot: MapSnapshot) -> tuple[FloatArray, list[tuple[Shape, Pose]]]:
     """((C, 2, 3) capsule segments of the wires, [(shape, pose)] of every other part), in key order.
 
@@ -258,7 +265,9 @@ class _Geometry:
 
     def __init__(self, session: AnySession, snapshot: MapSnapshot, result: PlanResult) -> None:
         checked = {c.edge for c in result.checks}
-        library = np.asarray(session.library_edges(), dtype=np.int64)
+        # The stored query's library, drawn only for a plan of that query (a new query has its own).
+        own_query = not isinstance(result, QueryPlanResult) or result.query.startswith("tree:")
+        library = np.asarray(session.library_edges() if own_query else (), dtype=np.int64)
         self.layers: dict[str, list[int]] = {
             "unchecked": sorted(int(e) for e in library if int(e) not in checked),
             "free": [c.edge for c in result.checks if c.free],
@@ -418,10 +427,16 @@ class _View:
         self.ax.plot(gx, gy, "*", color="black", markersize=14, zorder=9, label="goal")
 
     def fit(self, points: FloatArray, *, pad: float) -> None:
-        """Fit (N, 3) world points with ``pad`` (fraction of the larger span) around them; equal aspect."""
+        """Fit (N, 3) world points with ``pad`` (fraction of the larger span) around them; equal aspect.
+
+        The shorter side spans at least half the longer one, so a straight plan keeps its surroundings.
+        """
         xy = self.project(points)
         lo, hi = xy.min(axis=0), xy.max(axis=0)
-        margin = pad * float(max(np.max(hi - lo), 1e-9))
+        longest = float(max(np.max(hi - lo), 1e-9))
+        grow = np.maximum(0.5 * longest - (hi - lo), 0.0) / 2.0
+        lo, hi = lo - grow, hi + grow
+        margin = pad * longest
         self.ax.set_xlim(float(lo[0] - margin), float(hi[0] + margin))
         self.ax.set_ylim(float(lo[1] - margin), float(hi[1] + margin))
         self.ax.set_aspect("equal")
@@ -468,8 +483,7 @@ def _helicopter_top(
     """The helicopter's top view; returns the wire segments."""
     if snapshot.terrain is not None:
         _terrain_top(fig, view.ax, snapshot.terrain)
-    start = session.vertex_state(session.domain.start)[:3]
-    goal = session.goal_state[:3]
+    start, goal = (state[:3] for state in end_states(session, result))
     points = np.vstack([geometry.points(), start, goal])
     span = float(np.max(np.ptp(points[:, :2], axis=0)))
     wires = view.obstacles(snapshot, solid_label="no-fly zone / tower", min_size=0.01 * span)
@@ -494,8 +508,7 @@ def _helicopter_side(
     """The side view: altitude along the plan (or along the start-goal line without one); returns the crossings."""
     from drd_planner.bench.plots import COLOURS
 
-    start = session.vertex_state(session.domain.start)[:3]
-    goal = session.goal_state[:3]
+    start, goal = (state[:3] for state in end_states(session, result))
     planned = geometry.plan.shape[0] >= 2
     if planned:
         reference = geometry.plan
@@ -577,9 +590,10 @@ def _arm_views(
     drawing: PlanDrawing,
 ) -> None:
     """The arm's top (x, y) and side (vertical plane through start -> goal) views of the end effector."""
+    start, goal = end_states(session, result)
     skeletons = {
-        "start": _arm_skeleton(session, snapshot, session.vertex_state(session.domain.start)),
-        "goal": _arm_skeleton(session, snapshot, session.goal_state),
+        "start": _arm_skeleton(session, snapshot, start),
+        "goal": _arm_skeleton(session, snapshot, goal),
     }
     heading = skeletons["goal"][-1, :2] - skeletons["start"][-1, :2]
     norm = float(np.linalg.norm(heading))

@@ -24,6 +24,7 @@ query when there is one, DiRECt online otherwise, the graph fallback when the li
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -138,6 +139,8 @@ class QuerySession:
         # tuple is atomic, so a map thread preparing the next snapshot never tears a planning thread's.
         self._checkers = SnapshotCheckers(self._domain)
         self._tool_positions: tuple[RobotModel | None, FloatArray] | None = None
+        for qt in prior.trees[:cache_size]:  # first use costs ~80 ms (bias, query graph): pay it here
+            self._planner.query_model(qt.start, qt.goal)
 
     # ------------------------------------------------------------------------------------------------
     # What the node reads
@@ -176,6 +179,11 @@ class QuerySession:
     def joint_names(self) -> tuple[str, ...]:
         """The arm's chain joint names, root to tip (empty for other domains)."""
         return self._domain.robot.chain.joint_names if isinstance(self._domain, ArmDomain) else ()
+
+    @property
+    def robot_loader(self) -> Callable[[str], Any] | None:
+        """Turns a ``robot_description`` URDF into the snapshot's robot (the arm), or None."""
+        return self._domain.robot_from_description if isinstance(self._domain, ArmDomain) else None
 
     @property
     def state_dim(self) -> int:

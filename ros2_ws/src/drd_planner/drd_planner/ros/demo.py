@@ -41,6 +41,7 @@ def print_record(number: int, record: PlanRecord) -> None:
     print(f"\nplan {number}: {asked} on map version {result.map_version}, tree {result.tree}")
     if "replan_reason" in record.request:
         print(f"  why: {record.request['replan_reason']}")
+    print(f"  served by: {_served_by(result.query)} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)")
     for check in result.checks:
         state = "free   " if check.free else "BLOCKED"
         source = "cache" if check.cached else f"{check.check_ms:7.3f} ms"
@@ -59,6 +60,17 @@ def print_record(number: int, record: PlanRecord) -> None:
     print(f"  {what}: edges {list(result.path_edges)}, {len(positions)} poses, {length:.2f} m long")
     for label, row in (("start", positions[0]), ("goal ", positions[-1])):
         print(f"    {label} ({row[0]:9.3f}, {row[1]:9.3f}, {row[2]:8.3f}) m")
+
+
+def _served_by(query: str) -> str:
+    """What the summary's ``query`` label means, for people."""
+    if query.startswith("tree:"):
+        return f"the precomputed DiRECt tree {query[5:]!r} of this query"
+    if query == "online":
+        return "a new query: its path library and DiRECt tree built online from the prior"
+    if query == "connected":
+        return "a new query from or to a state off the graph, joined by new motions; library and tree built online"
+    return query or "-"
 
 
 def build_parser() -> argparse.ArgumentParser:

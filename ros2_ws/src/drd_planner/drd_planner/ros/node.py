@@ -20,7 +20,7 @@ Interface (DESIGN.md section 6; names relative to the node namespace):
 Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
 --help`` lists them). Each file in ``tree_paths`` is a world prior (a tree file is a prior of its one
 query) served by a :class:`~drd_planner.planning.query_session.QuerySession`; a request goes to the prior
-of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.ros.requests`).
+of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.planning.requests`).
 
 Consistency. Maps and requests arrive in executor callbacks; topic requests are planned in the node's
 planning thread (:mod:`drd_planner.ros.plan_worker`), service calls in their callback, one plan at a
@@ -76,16 +76,10 @@ from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planner.prior_file import load_prior
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.query_support import state_from_pose
 from drd_planner.planning.replan import recheck_plan
-from drd_planner.planning.session import PlanResult
-from drd_planner.planning.shipped import resolve_tree_path
-from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
-from drd_planner.ros.outputs import LATCHED, PlannerOutputs, plan_summary_values
-from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
-from drd_planner.ros.plan_worker import PlanWorker
-from drd_planner.ros.requests import (
+from drd_planner.planning.requests import (
     Goal,
     ambiguity,
     goal_endpoint,
@@ -94,6 +88,12 @@ from drd_planner.ros.requests import (
     pick_session,
     start_from_odometry,
 )
+from drd_planner.planning.session import PlanResult
+from drd_planner.planning.shipped import resolve_tree_path
+from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.outputs import LATCHED, PlannerOutputs, plan_summary_values
+from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
+from drd_planner.ros.plan_worker import PlanWorker
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_values, map_values
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
@@ -113,8 +113,9 @@ REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 #: Served requests kept in :attr:`PlannerNode.history`.
 HISTORY_LENGTH = 16
 #: The newest records of the history that keep their map snapshot (older ones drop it: a snapshot
-#: holds the FCL scene of its maps).
-SNAPSHOTS_KEPT = 4
+#: holds its terrain heightfield, up to 2 MB at the default ``max_terrain_cells``, and obstacle parts;
+#: FCL scenes live in ``planning.map_state``'s own bounded cache). 8 covers the bundled bags' plans.
+SNAPSHOTS_KEPT = 8
 #: Seconds between two reports of the same refused robot-state message (odometry streams fast).
 STATE_ERROR_PERIOD_S = 5.0
 #: Seconds :meth:`PlannerNode.destroy_node` waits for a running plan.
@@ -149,7 +150,7 @@ class PlanRecord:
     """
 
     session: QuerySession
-    result: PlanResult
+    result: QueryPlanResult
     snapshot: MapSnapshot | None
     request: dict[str, Any]
 
@@ -214,6 +215,11 @@ class PlannerNode(LifecycleNode):
     def published(self) -> PlanResult | None:
         """The plan currently on ``plan`` (None: none, or it was withdrawn)."""
         return self._published.result if self._published is not None else None
+
+    @property
+    def planning_idle(self) -> bool:
+        """True when the planning thread has served every request and map wake-up so far."""
+        return self._worker.idle
 
     @property
     def history(self) -> tuple[PlanRecord, ...]:
@@ -687,7 +693,7 @@ class PlannerNode(LifecycleNode):
     def _publish(
         self,
         session: QuerySession,
-        result: PlanResult,
+        result: QueryPlanResult,
         snapshot: MapSnapshot,
         extra: dict[str, Any],
         goal: Goal,

@@ -30,6 +30,7 @@ from drd_msgs_py.plans import (
     summary_status,
 )
 from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.query_session import QueryPlanResult
 from drd_planner.planning.session import PlanResult
 from drd_planner.ros.status import status_name
 
@@ -63,17 +64,24 @@ class Session(Protocol):
 
 
 def plan_summary_values(
-    result: PlanResult,
+    result: QueryPlanResult,
     extra: Mapping[str, Any],
     *,
     wait_s: float,
     plan_messaging_s: float,
     messaging_s: float,
 ) -> dict[str, Any]:
-    """The key/values of a plan's ``<node>: plan`` summary (counts, and times in seconds as text)."""
+    """The key/values of a plan's ``<node>: plan`` summary (counts, and times in seconds as text).
+
+    ``query`` says what served it (``tree:<name>`` a precomputed tree, ``online`` a library and tree
+    built for a new query, ``connected`` the same with new motions to off-graph states) and ``stage``
+    what proved the path; ``library_s`` is the time spent finding or building the query's library.
+    """
     seconds = result.seconds
     return {
         "tree": result.tree,
+        "query": result.query,
+        "stage": result.stage,
         "map_version": result.map_version,
         "checks": len(result.checks),
         "free": len(result.checks) - result.num_blocked,
@@ -84,6 +92,7 @@ def plan_summary_values(
         "selection_s": f"{seconds.get('selection', 0.0):.6f}",
         "policy_s": f"{seconds.get('policy', 0.0):.6f}",
         "prepare_s": f"{seconds.get('prepare', 0.0):.6f}",
+        "library_s": f"{seconds.get('library', 0.0):.6f}",
         "total_s": f"{seconds.get('total', 0.0):.6f}",
         "planning_time": f"{seconds.get('total', 0.0):.6f}",
         "wait_s": f"{wait_s:.6f}",

@@ -41,12 +41,19 @@ class PlanWorker:
         self._woken = False
         self._stopping = False
         self._looping = False  # a thread is in its loop (set and cleared under the condition)
+        self._busy = False  # ``work`` is running (set and cleared under the condition)
         self._thread: threading.Thread | None = None
 
     @property
     def running(self) -> bool:
         """Whether the thread is alive."""
         return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def idle(self) -> bool:
+        """True when no ``work`` runs and none is asked for (every wake so far has been served)."""
+        with self._condition:
+            return not (self._woken or self._busy)
 
     def start(self) -> None:
         """Start the thread; a wake before the start is served at once.
@@ -92,6 +99,7 @@ class PlanWorker:
                     self._looping = False
                     return
                 self._woken = False
+                self._busy = True
             try:
                 self._work()
             except Exception as exc:  # a bug in one plan must not end the planning thread
@@ -99,3 +107,6 @@ class PlanWorker:
                     self._on_error(exc)
                 except Exception:  # the reporter failed too: keep the thread alive
                     pass
+            finally:
+                with self._condition:
+                    self._busy = False

@@ -72,6 +72,8 @@ LATCHED_OUTPUTS = ("plan", "joint_trajectory")
 #: Depth of the recording subscriptions (volatile: a plan latched before the replay is not recorded).
 RECORD_DEPTH = 100
 _SPIN_S = 0.02
+#: Seconds spun after every subscriber matched, before the first message (discovery settles both ways).
+_MATCH_GRACE_S = 0.3
 
 
 class ReplayError(DrdError):
@@ -311,6 +313,11 @@ def replay_bag(
                 )
             for topic in unmatched:
                 say(f"  no subscriber on {topic} after {wait:g} s; publishing anyway")
+            # A publisher counts a subscriber before that subscriber has matched the publisher in turn;
+            # a volatile message sent in between is dropped (seen with the odometry at time 0).
+            grace = time.monotonic() + _MATCH_GRACE_S
+            while time.monotonic() < grace:
+                executor.spin_once(timeout_sec=_SPIN_S)
             t0 = timeline.start()
             for raw in contents.messages:
                 due = t0 + (raw.time_ns - start_ns) / 1e9 / rate

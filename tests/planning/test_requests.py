@@ -18,7 +18,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_planner.planner import load_prior
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
-from drd_planner.ros.requests import (
+from drd_planner.planning.requests import (
     Goal,
     ambiguity,
     goal_endpoint,

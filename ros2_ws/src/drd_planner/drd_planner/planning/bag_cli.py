@@ -1,0 +1,87 @@
+"""``drd plan --bag``: plan a bag's request offline as the node would, and print its check log."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from drd_planner.exceptions import DrdError
+
+__all__ = ["cmd_plan_bag", "print_check"]
+
+
+def print_check(number: int, edge: int, ends: tuple[int, int] | None, free: bool, stage: str) -> None:
+    """One line of the check log (``number`` 1-based; ``ends``: the edge's vertex ids, None for a motion)."""
+    where = f" ({ends[0]}->{ends[1]})" if ends is not None else ""
+    state = "free   " if free else "BLOCKED"
+    print(f"  check {number:3d}: edge {edge:5d}{where:14s} {state} [{stage}]")
+
+
+def _where(value: object) -> str:
+    if isinstance(value, int):
+        return f"vertex {value}"
+    return "state " + str(np.round(np.asarray(value, dtype=np.float64), 3).tolist())
+
+
+def cmd_plan_bag(args: argparse.Namespace) -> int:
+    """Plan the ``--request``-th request of ``--bag`` with the prior ``--tree``; 0 when a path was found.
+
+    The plan starts at the robot's state in the bag before the request (``odom`` / ``joint_states``;
+    ``--prior-start`` uses the prior's start when there is none) and goes to the request's goal as the
+    node reads it (:func:`drd_planner.planning.bag_plan.plan_bag_request`).
+    """
+    from drd_msgs_py.bags import bag_frame, read_bag
+    from drd_msgs_py.exceptions import MessageError
+    from drd_planner.planner.prior_file import load_prior
+    from drd_planner.planning.bag_plan import plan_bag_request
+    from drd_planner.planning.query_session import QuerySession
+    from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
+
+    if args.policy != "direct_bisect":
+        raise DrdError("--bag plans as the node does (direct_bisect); --policy cannot be changed")
+    if args.world is not None or args.query is not None:
+        raise DrdError("--world and --query select a dataset world and query; with --bag use --request")
+    tree_path = resolve_tree_path(args.tree)
+    session = QuerySession(load_prior(tree_path), name=tree_path.stem, max_checks=args.max_checks)
+    try:
+        messages = read_bag(resolve_bag_path(args.bag))
+        frame = args.frame or bag_frame(messages) or "map"
+        plan = plan_bag_request(
+            session, messages, args.request, frame=frame, seed=args.seed, prior_start=args.prior_start
+        )
+    except MessageError as exc:
+        raise DrdError(str(exc)) from exc
+    if plan.result.status == "refused":  # a start or goal the prior cannot serve
+        raise DrdError(f"request {args.request} refused: {plan.result.message}")
+    snapshot, request, result = plan.maps.snapshot, plan.request, plan.result
+    terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
+    robot = "" if plan.maps.robot_description is None else ", robot_description"
+    print(
+        f"bag {args.bag}: request {request.index} ({request.kind} at +{(request.time_ns - messages[0].time_ns) / 1e9:.2f} s); "
+        f"maps in {frame!r}: version {snapshot.version}, {len(snapshot.obstacles)} obstacles, terrain {terrain}{robot}"
+    )
+    for line in (*plan.maps.refused, *plan.notes):
+        print(f"  refused: {line}")
+    print(f"  from {_where(plan.start)} to {_where(plan.goal)}")
+    for k, check in enumerate(result.checks):
+        print_check(k + 1, check.edge, check.endpoints, check.free, check.stage)
+    if not result.ok:
+        print(f"  -> {result.status} after {len(result.checks)} checks: {result.message}")
+        return 1
+    print(
+        f"  -> path ({len(result.path_edges)} edges) verified free after {len(result.checks)} checks "
+        f"[query {result.query}, stage {result.stage}]"
+    )
+    print(f"  path edges: {list(result.path_edges)}")
+    columns = "joint angles, rad" if session.is_arm else "x, y, z m; heading rad"
+    print(f"  path vertices ({columns}; 'state' is the request's own start or goal, joined by a motion):")
+    num_vertices = session.prior.graph.num_vertices
+    ends = {0: plan.start, len(result.path_vertices) - 1: plan.goal}
+    for k, vertex in enumerate(result.path_vertices):
+        state = (
+            session.vertex_state(vertex) if vertex < num_vertices else np.asarray(ends.get(k), dtype=float)
+        )
+        label = f"{vertex:5d}" if vertex < num_vertices else "state"
+        print(f"    {label}: " + " ".join(f"{v:9.3f}" for v in state))
+    return 0
