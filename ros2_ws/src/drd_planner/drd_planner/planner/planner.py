@@ -21,7 +21,6 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections import OrderedDict
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,10 +30,8 @@ import numpy.typing as npt
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
-from drd_planner.core.library import PathLibrary
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
-from drd_planner.core.tree import TreeNodes
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
@@ -44,9 +41,10 @@ from drd_planner.planner.graph_fallback import (
     fallback_edge_weights,
     posterior_free_probability,
 )
-from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior
-from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
+from drd_planner.planner.prior import LeafSetting, WorldPrior
+from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
 from drd_planner.planner.query_library import query_library, vertex_sequence
+from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
 
 FloatArray = npt.NDArray[np.float64]
@@ -57,40 +55,6 @@ DEFAULT_CACHE_SIZE = 16
 #: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
 #: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
 PLAN_POLICIES = tuple(sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS)}))
-
-
-@dataclass(frozen=True)
-class QueryModel:
-    """What one query needs before its first check (cached per query).
-
-    Attributes:
-        query: the graph, worlds and costs it plans over (the prior's, or with motions to off-graph states).
-        library: its path library, or None when no training world has a free path (then the graph
-            stage starts at once).
-        tree: the precomputed tree, or one grown online; None without a library.
-        theta: (E,) BiSECt's training bias.
-        label: ``tree:<name>`` or ``online``.
-        build_s: seconds it took to build.
-        precomputed: the prior's tree it uses, or None for a model built online.
-    """
-
-    query: QueryGraph
-    library: PathLibrary | None
-    tree: TreeNodes | None
-    theta: FloatArray
-    label: str
-    build_s: float
-    precomputed: QueryTree | None = None
-
-    @property
-    def start(self) -> int:
-        """Start vertex id (in the query graph)."""
-        return self.query.start
-
-    @property
-    def goal(self) -> int:
-        """Goal vertex id (in the query graph)."""
-        return self.query.goal
 
 
 class Planner:

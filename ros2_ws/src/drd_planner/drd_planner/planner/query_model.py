@@ -1,0 +1,51 @@
+"""What one query needs before its first check: its graph, library, tree and bias (cached per query)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.core.library import PathLibrary
+from drd_planner.core.tree import TreeNodes
+from drd_planner.planner.prior import QueryTree
+from drd_planner.planner.query_graph import QueryGraph
+
+FloatArray = npt.NDArray[np.float64]
+
+__all__ = ["QueryModel"]
+
+
+@dataclass(frozen=True)
+class QueryModel:
+    """What one query needs before its first check (cached per query).
+
+    Attributes:
+        query: the graph, worlds and costs it plans over (the prior's, or with motions to off-graph states).
+        library: its path library, or None when no training world has a free path (then the graph
+            stage starts at once).
+        tree: the precomputed tree, or one grown online; None without a library.
+        theta: (E,) BiSECt's training bias.
+        label: ``tree:<name>`` or ``online``.
+        build_s: seconds it took to build.
+        precomputed: the prior's tree it uses, or None for a model built online.
+    """
+
+    query: QueryGraph
+    library: PathLibrary | None
+    tree: TreeNodes | None
+    theta: FloatArray
+    label: str
+    build_s: float
+    precomputed: QueryTree | None = None
+
+    @property
+    def start(self) -> int:
+        """Start vertex id (in the query graph)."""
+        return self.query.start
+
+    @property
+    def goal(self) -> int:
+        """Goal vertex id (in the query graph)."""
+        return self.query.goal
