@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -45,3 +47,17 @@ def test_given_settings_skip_validation_and_bad_input_is_refused() -> None:
     assert kappa is None and 0 < eta <= 1 and "random queries" in note
     with pytest.raises(ProblemError, match="candidate"):
         validate_query_leaf(problem, domain="planar", etas=())
+
+
+def test_a_tree_whose_query_cannot_be_validated_uses_the_priors_setting() -> None:
+    from drd_planner.planner.leaf_validation import tree_leaf_from_options
+
+    problem = make_planar_problem(model="forest", num_worlds=40, seed=3)
+    worlds = problem.require_worlds()
+    blocked = dataclasses.replace(
+        problem, worlds=dataclasses.replace(worlds, R=np.zeros_like(worlds.R))
+    )  # no training world has a free library path: nothing to validate on
+    leaf, note = tree_leaf_from_options(blocked, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
+    assert leaf is None and "not validated on this query" in note
+    leaf, note = tree_leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
+    assert leaf is not None and note.startswith("its own eta")

@@ -179,15 +179,18 @@ def tree_leaf_from_options(
     if eta is not None and len(pseudo_counts) == 1:
         return None, "its own eta and kappa: the prior's (given)"
     expand = float(tree_options.get("expand_threshold", 0.05))
-    choice = select_switch_threshold(
-        problem,
-        candidates=None if eta is None else (eta,),
-        pseudo_counts=pseudo_counts,
-        seed=seed,
-        expand_threshold=expand,
-        tree_options=tree_options,
-        progress=progress,
-    )
+    try:
+        choice = select_switch_threshold(
+            problem,
+            candidates=None if eta is None else (eta,),
+            pseudo_counts=pseudo_counts,
+            seed=seed,
+            expand_threshold=expand,
+            tree_options=tree_options,
+            progress=progress,
+        )
+    except ProblemError as exc:  # e.g. fewer than two training worlds with a free path for this query
+        return None, f"its own eta and kappa: the prior's (not validated on this query: {exc})"
     lines = choice.summary_lines()
     lines[0] = f"its own {lines[0]} (its own query)"
     return LeafSetting(choice.eta, choice.pseudo_count), "\n".join(lines)
