@@ -26,7 +26,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
@@ -63,7 +62,6 @@ __all__ = [
     "write_raw_bag",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Topics whose latest message is the map (replayed reliable + transient_local, depth 1).
 MAP_TOPICS = frozenset({"obstacles", "terrain", "robot_description"})

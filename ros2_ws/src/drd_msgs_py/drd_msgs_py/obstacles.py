@@ -25,8 +25,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_msgs_py.arrays import FloatArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
@@ -48,7 +48,6 @@ __all__ = [
     "pose_from_msg",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 CUBE, SPHERE, CYLINDER, LINE_STRIP, LINE_LIST, TRIANGLE_LIST = 1, 2, 3, 4, 5, 11
 ADD, DELETE, DELETEALL = 0, 2, 3

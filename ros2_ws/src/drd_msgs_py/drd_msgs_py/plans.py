@@ -25,7 +25,6 @@ __all__ = [
     "summary_status",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 OK, WARN, ERROR = 0, 1, 2
 _LINE_LIST, _DELETEALL, _ADD = 5, 3, 0
 

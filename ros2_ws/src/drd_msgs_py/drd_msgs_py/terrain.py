@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_msgs_py.arrays import FloatArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_planner.exceptions import GeometryError
@@ -23,7 +24,6 @@ from drd_planner.planning.map_limits import MapLimits
 
 __all__ = ["GRID_TOL", "cloud_from_heightfield", "heightfield_from_cloud"]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Allowed deviation of a point's x, y from its grid position, as a fraction of the cell size.
 GRID_TOL = 1e-3

@@ -13,16 +13,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.bench.runner import run_benchmark
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Training-set sizes of the paper's Fig. 4 style curve (900 = every training world of the authors' split).
 DEFAULT_SIZES = (50, 100, 200, 450, 900)

@@ -30,12 +30,11 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError, ProblemError
 
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 EmbeddingName = Literal["auto", "coords", "index"]
 
 PEER_NAME = "ompl_lazyprm"

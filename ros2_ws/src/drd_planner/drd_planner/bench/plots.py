@@ -21,14 +21,12 @@ from matplotlib.collections import LineCollection
 from matplotlib.container import ErrorbarContainer
 from matplotlib.figure import Figure
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.bench.learning_curve import TrainingCurve
 from drd_planner.bench.stats import Table1
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import ProblemError
-
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
 
 #: Colours of the checked-edges figure (matplotlib colour specs).
 COLOURS = {"unchecked": "#c8c8c8", "free": "#2ca02c", "blocked": "#d62728", "path": "#1f4fd8"}

@@ -28,10 +28,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import maximum_flow, shortest_path
 
+from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
@@ -41,9 +41,6 @@ from drd_planner.planner.planner import PLAN_POLICIES, Planner
 from drd_planner.planner.query_library import ShortestPaths
 from drd_planner.planner.result import PlanStage, PlanStatus
 from drd_planner.progress import Progress
-
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 GRAPH_BASELINES = tuple(lazysp_name(s) for s in SELECTORS)
 #: Policies of the query benchmark besides the library policies.

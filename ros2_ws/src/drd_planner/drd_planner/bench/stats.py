@@ -22,10 +22,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.exceptions import DrdError
-
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: The policy every other is compared with (the paper's DiRECt + BiSECt).
 REFERENCE = "direct_bisect"

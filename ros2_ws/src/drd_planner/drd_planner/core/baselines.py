@@ -17,12 +17,10 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bernoulli import BernoulliLibraryState
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Scores within this absolute distance in log space (a relative 1e-12 in probability) are ties, so
 #: that rounding in a sum of logs cannot decide between mathematically equal probabilities.

@@ -13,12 +13,9 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: theta is clamped into [THETA_EPS, 1 - THETA_EPS] so that no untested path has p = 1 or 0.
 THETA_EPS = 1e-9

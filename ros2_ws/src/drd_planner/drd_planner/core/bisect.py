@@ -13,12 +13,10 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bernoulli import BernoulliLibraryState
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.logmath import log1mexp
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 def bias_from_worlds(

@@ -28,11 +28,10 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import PolicyError, ProblemError
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 #: Library paths: per path its edge ids, as a sequence of ints or an integer array.
 PathsLike = Sequence[Sequence[int] | npt.NDArray[np.integer[Any]]]
 

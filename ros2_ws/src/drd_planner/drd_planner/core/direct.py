@@ -25,11 +25,8 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Relative tolerance for ties between test scores (first test wins).
 TIE_RTOL = 1e-9

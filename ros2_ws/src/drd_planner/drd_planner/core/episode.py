@@ -16,11 +16,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import IntArray
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import PolicyError, UnverifiedPathError
-
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 
 @runtime_checkable

@@ -32,12 +32,9 @@ import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, dijkstra
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: The selectors, in the order of the registry names ``lazysp``, ``lazysp_reverse``, ...
 SELECTORS: Final = ("forward", "reverse", "alternate", "bisection", "weightsamp", "balanced")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
+from drd_planner.arrays import FloatArray
 
 _LOG_HALF = -0.6931471805599453
 

@@ -18,15 +18,12 @@ from functools import cached_property
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.direct import DirectSelector
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, direct_node_edge, leaf_bias, node_summary
 from drd_planner.exceptions import ProblemError
-
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Nodes one lazy tree may hold; past it, nodes become leaves (BiSECt takes over), so memory stays bounded.
 DEFAULT_MAX_NODES = 4096

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.core.baselines import LazySPSet, MaxTally, MVoI, RandomEdge, SetCover, WeightedMaxTally
 from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
@@ -22,8 +23,6 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import ConsistentWorldsBias
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree, TreeNodes
 from drd_planner.exceptions import PolicyError, ProblemError
-
-FloatArray = npt.NDArray[np.float64]
 
 #: Default switch threshold: hand over to BiSECt when the consistent fraction is <= eta.
 DEFAULT_ETA = 0.2

@@ -6,14 +6,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True)

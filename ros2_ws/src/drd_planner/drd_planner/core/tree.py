@@ -20,14 +20,12 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.direct import DirectSelector
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import ProblemError
-
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
 
 NO_EDGE = -1
 NO_CHILD = -1

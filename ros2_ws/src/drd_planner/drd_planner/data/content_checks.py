@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
 
@@ -61,9 +62,6 @@ MAX_TREE_NODES = 1_000_000
 MAX_WORLD_OUTCOMES = 2**29
 """Most training-world outcomes (worlds x edges) one file may unpack to booleans: 512 MiB. The shipped
 files hold at most 5.4 million (1800 worlds x 3012 edges)."""
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 def _fail(message: str) -> ProblemError:

@@ -57,6 +57,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner import __version__
+from drd_planner.arrays import IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.data.dataset_file import Dataset, save_dataset
@@ -82,8 +83,6 @@ __all__ = [
     "world_seeds",
 ]
 
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 EdgeTuple = tuple[int, ...]
 VertexTuple = tuple[int, ...]
 

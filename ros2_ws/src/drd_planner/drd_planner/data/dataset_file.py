@@ -38,6 +38,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner import __version__
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
@@ -59,9 +60,6 @@ __all__ = [
 FORMAT_NAME = "drd_planner.dataset"
 FORMAT_VERSION = 1
 
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
 
 _REQUIRED = {
     "edges": np.int64,

@@ -24,14 +24,13 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.data.matfile import load_mat_variable
 from drd_planner.exceptions import DatasetError, ProblemError
-
-IntArray = npt.NDArray[np.int64]
 
 REQUIRED_FILES = (
     "graph.txt",

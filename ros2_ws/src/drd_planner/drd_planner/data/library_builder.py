@@ -18,12 +18,10 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
+from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 EdgeTuple = tuple[int, ...]
 VertexTuple = tuple[int, ...]

@@ -9,9 +9,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import IntArray
 from drd_planner.exceptions import DrdError
-
-IntArray = npt.NDArray[np.int64]
 
 __all__ = ["pack_ragged", "unpack_ragged"]
 

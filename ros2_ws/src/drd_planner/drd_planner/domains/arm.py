@@ -42,6 +42,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from scipy.stats import qmc
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.arm_description import check_description_size, check_robot_coordinates
 from drd_planner.domains.arm_static import static_problems
@@ -57,10 +58,6 @@ from drd_planner.geometry.ordering import bisection_order
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 from drd_planner.planning.map_limits import MapLimits
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Default start: the gripper low (about 0.13 m above the base) over the front left of the table (rad).
 DEFAULT_START: tuple[float, ...] = (0.5, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785)

@@ -26,15 +26,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from drd_planner.arrays import FloatArray
 from drd_planner.data.moveit_scene import ScenePrimitive, parse_planning_scene, read_planning_scene
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Cylinder, Pose
-
-FloatArray = npt.NDArray[np.float64]
 
 WORLD_MODELS: tuple[str, ...] = ("clutter", "table_clutter")
 

@@ -20,11 +20,9 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
-
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 
 @runtime_checkable

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import ProblemError
 
-FloatArray = npt.NDArray[np.float64]
 Pose = tuple[float, float, float]
 
 __all__ = ["DubinsPath", "shortest_dubins_path"]

@@ -22,8 +22,8 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.helicopter_checker import HelicopterChecker, obstacle_boxes
 from drd_planner.domains.helicopter_lattice import HelicopterLattice, LatticeParams, build_lattice
@@ -40,8 +40,6 @@ from drd_planner.domains.helicopter_worlds import (
 )
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.scene import Scene
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["HelicopterDomain"]
 

@@ -26,6 +26,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.aabb import shape_aabb
 from drd_planner.geometry.ordering import bisection_rank
@@ -34,10 +35,6 @@ from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.terrain_collider import cell_maxima, window_max
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 __all__ = ["HelicopterChecker", "helicopter_checker", "obstacle_boxes"]
 

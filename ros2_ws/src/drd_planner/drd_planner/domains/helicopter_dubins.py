@@ -16,9 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["DubinsPath", "dubins_path", "wrap_angle"]
 

@@ -34,18 +34,14 @@ from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
-import numpy.typing as npt
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import breadth_first_order
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.helicopter_dubins import DubinsPath, dubins_path, wrap_angle
 from drd_planner.domains.helicopter_params import params_from_dict, params_to_dict
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 __all__ = ["HelicopterLattice", "LatticeParams", "build_lattice"]
 

@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.domains.helicopter_params import check_range, params_from_dict, params_to_dict
 from drd_planner.exceptions import GeometryError, ProblemError
 from drd_planner.geometry.pose import Pose
@@ -59,8 +60,6 @@ from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Cylinder, Shape
 from drd_planner.geometry.terrain import Heightfield, read_esri_ascii
 from drd_planner.geometry.wires import Wire
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = [
     "DEFAULT_TERRAIN_FILE",

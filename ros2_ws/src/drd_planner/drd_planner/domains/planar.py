@@ -25,6 +25,7 @@ from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
@@ -38,10 +39,6 @@ from drd_planner.domains.planar_worlds import (
     world_from_rng,
 )
 from drd_planner.exceptions import ProblemError
-
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 _CHUNK_ELEMENTS = 1 << 20  # segment x box pairs per vectorised block
 

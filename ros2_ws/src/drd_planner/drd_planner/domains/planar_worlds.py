@@ -51,10 +51,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import ProblemError
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 PointSampler = Callable[[np.random.Generator], FloatArray | None]
 Rect = tuple[float, float, float, float]
 

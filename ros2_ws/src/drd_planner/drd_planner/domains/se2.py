@@ -38,15 +38,13 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.dubins import shortest_dubins_path
 from drd_planner.domains.planar import validate_edge_ids
 from drd_planner.domains.planar_worlds import SE2_VARIANT, WORLD_MODELS, as_boxes, generate_world
 from drd_planner.exceptions import ProblemError
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 GridState = tuple[int, int, int]
 
 __all__ = [

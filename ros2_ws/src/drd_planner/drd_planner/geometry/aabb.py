@@ -7,14 +7,11 @@ boxes, spheres, cylinders and capsules under any rotation) so that the numpy pre
 from __future__ import annotations
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import FloatArray, Pose
+from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
-
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 #: Spheres per chunk in the two-level prefilter of :func:`spheres_overlap_aabbs`.
 SPHERE_CHUNK = 16

@@ -13,11 +13,9 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.urdf_model import KinematicChain
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 __all__ = ["ForwardKinematics"]
 

@@ -11,11 +11,9 @@ from collections import deque
 from functools import lru_cache
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import IntArray
 from drd_planner.exceptions import GeometryError
-
-IntArray = npt.NDArray[np.int64]
 
 __all__ = ["bisection_order", "bisection_rank"]
 

@@ -14,9 +14,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import GeometryError
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["Pose", "as_points", "frozen_array"]
 

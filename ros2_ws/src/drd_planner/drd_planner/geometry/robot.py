@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.kinematics import ForwardKinematics
 from drd_planner.geometry.urdf_model import (
@@ -28,10 +29,6 @@ from drd_planner.geometry.urdf_model import (
     parse_srdf,
     parse_urdf_chain,
 )
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Configurations per block in the self-collision test (bounds the (block, P, 3) temporaries).
 SELF_COLLISION_BLOCK = 4096

@@ -24,19 +24,17 @@ import fcl
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.aabb import boxes_overlap_box, shape_aabb, spheres_overlap_aabbs
 from drd_planner.geometry.fcl_queries import first_hit, pair_collides, pair_distance
 from drd_planner.geometry.ordering import bisection_rank
-from drd_planner.geometry.pose import FloatArray, Pose, as_points
+from drd_planner.geometry.pose import Pose, as_points
 from drd_planner.geometry.shapes import Capsule, Shape, Sphere, TriangleMesh, make_fcl_geometry, shape_point
 from drd_planner.geometry.solid import ClosedMesh, closed_mesh
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.terrain_collider import TerrainCollider
 from drd_planner.geometry.wires import Wire
-
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 __all__ = ["Scene"]
 

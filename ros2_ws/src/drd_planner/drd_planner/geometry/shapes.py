@@ -17,10 +17,9 @@ import fcl
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import FloatArray, Pose, frozen_array
-
-IntArray = npt.NDArray[np.int64]
+from drd_planner.geometry.pose import Pose, frozen_array
 
 __all__ = [
     "Box",

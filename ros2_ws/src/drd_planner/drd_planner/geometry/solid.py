@@ -12,10 +12,9 @@ import numpy as np
 import numpy.typing as npt
 import trimesh
 
+from drd_planner.arrays import BoolArray
 from drd_planner.geometry.pose import Pose, as_points
 from drd_planner.geometry.shapes import TriangleMesh
-
-BoolArray = npt.NDArray[np.bool_]
 
 __all__ = ["ClosedMesh", "closed_mesh"]
 

@@ -34,12 +34,11 @@ import numpy as np
 import numpy.typing as npt
 from scipy import ndimage
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import FloatArray, as_points
+from drd_planner.geometry.pose import as_points
 from drd_planner.geometry.shapes import TriangleMesh
 
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 Interpolation = Literal["bilinear", "triangles"]
 #: How unknown (NaN) heights count in collision checks (see the module docstring).
 Unknown = Literal["blocked", "highest_neighbour"]

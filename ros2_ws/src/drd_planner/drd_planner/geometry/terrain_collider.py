@@ -17,17 +17,13 @@ import math
 
 import fcl
 import numpy as np
-import numpy.typing as npt
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.ndimage import maximum_filter1d
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import FloatArray
 from drd_planner.geometry.shapes import bvh_model
 from drd_planner.geometry.terrain import Heightfield, cell_triangles
-
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 __all__ = ["TerrainCollider", "cell_maxima", "window_max"]
 

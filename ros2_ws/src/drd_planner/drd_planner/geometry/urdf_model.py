@@ -26,13 +26,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 import yourdfpy
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Joint types the chain may contain (continuous joints are revolute joints with limits [-pi, pi]).
 MOVABLE_TYPES: frozenset[str] = frozenset({"revolute", "continuous", "prismatic"})

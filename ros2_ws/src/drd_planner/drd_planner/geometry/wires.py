@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import FloatArray, Pose, frozen_array
+from drd_planner.geometry.pose import Pose, frozen_array
 from drd_planner.geometry.shapes import Capsule
 
 __all__ = ["Wire", "capsule_between"]

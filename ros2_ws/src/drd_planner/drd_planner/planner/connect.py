@@ -32,16 +32,12 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-import numpy.typing as npt
 from scipy.spatial import cKDTree
 
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.prior import WorldPrior
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: Vertices a new state is joined to (each a new edge), at most.
 DEFAULT_NEIGHBOURS = 4

@@ -14,10 +14,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
 
+from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import PlanningError
-
-FloatArray = npt.NDArray[np.float64]
 
 #: Default snap tolerance as a fraction of the median edge length.
 SNAP_FRACTION_OF_EDGE = 0.25

@@ -29,12 +29,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.graph import ExplicitGraph
-
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 #: LazySP selector of the graph stage (see the module doc for the measurement behind it).
 FALLBACK_SELECTOR = "balanced"

@@ -25,8 +25,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
@@ -46,9 +46,6 @@ from drd_planner.planner.query_graph import MotionDispatch, connected_query, pri
 from drd_planner.planner.query_library import query_library, vertex_sequence
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16

@@ -14,8 +14,8 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
@@ -23,9 +23,6 @@ from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
 from drd_planner.exceptions import ProblemError
-
-BoolArray = npt.NDArray[np.bool_]
-FloatArray = npt.NDArray[np.float64]
 
 #: Library size of an online query library (the authors' m).
 DEFAULT_MAX_PATHS = 500

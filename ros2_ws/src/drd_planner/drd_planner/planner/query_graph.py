@@ -6,8 +6,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.planner.connect import (
     EdgeSampleIndex,
@@ -18,9 +18,6 @@ from drd_planner.planner.connect import (
 )
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
-
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 
 @dataclass(frozen=True)

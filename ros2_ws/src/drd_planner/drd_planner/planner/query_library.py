@@ -31,13 +31,10 @@ import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-
-BoolArray = npt.NDArray[np.bool_]
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: The most Dijkstra calls for one library (about 0.2 ms each on the SE(2) lattice; see the module doc).
 DEFAULT_MAX_SEARCHES = 256

@@ -4,15 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-import numpy.typing as npt
-
+from drd_planner.arrays import FloatArray
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import TreeNodes
 from drd_planner.planner.prior import QueryTree
 from drd_planner.planner.query_graph import QueryGraph
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["QueryModel"]
 

@@ -12,12 +12,11 @@ import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
+from drd_planner.arrays import BoolArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError
-
-BoolArray = npt.NDArray[np.bool_]
 
 #: Training worlds sampled to judge whether a start reaches a goal "in most worlds".
 REACH_SAMPLE = 200

@@ -7,13 +7,10 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.exceptions import PlanningError
-
-IntArray = npt.NDArray[np.int64]
-FloatArray = npt.NDArray[np.float64]
 
 
 class PlanStatus(str, Enum):

@@ -12,11 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
-import numpy.typing as npt
-
 from drd_msgs_py.bags import BagMaps, BagMessage, BagRequest, maps_at_request, topic_base
 from drd_msgs_py.exceptions import MessageError
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
@@ -27,8 +25,6 @@ from drd_planner.planning.requests import (
     joint_vector,
     start_from_odometry,
 )
-
-FloatArray = npt.NDArray[np.float64]
 
 #: The node's defaults of ``goal_tolerance`` (m) and ``joint_tolerance`` (rad).
 GOAL_TOLERANCE_M = 1.0

@@ -13,12 +13,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.map_state import MapSnapshot
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = ["SnapshotCheckers", "domain_from_stored_spec", "state_positions", "straight_edge_states"]
 

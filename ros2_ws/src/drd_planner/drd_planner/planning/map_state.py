@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from typing import TypeVar
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.geometry.aabb import shape_aabb
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.robot import RobotModel
@@ -31,7 +31,6 @@ from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.terrain_collider import TerrainCollider
 
-FloatArray = npt.NDArray[np.float64]
 K = TypeVar("K")
 V = TypeVar("V")
 

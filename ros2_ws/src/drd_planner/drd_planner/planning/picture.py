@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
@@ -48,8 +49,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from matplotlib.text import Text
 
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = [
     "TOP",

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.domains.helicopter import HelicopterDomain
@@ -52,9 +53,6 @@ from drd_planner.planning.query_support import (
     state_from_pose,
 )
 from drd_planner.planning.session import PlanResult, SessionCheck
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: How far (state units) a start or goal state may lie from a vertex and still be that vertex.
 DEFAULT_SNAP_TOLERANCE = 1e-6

@@ -19,12 +19,11 @@ from collections.abc import Callable
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.exceptions import PlanningError, PriorFileError, UnverifiedPathError
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planning.domain_view import domain_from_stored_spec
-
-FloatArray = npt.NDArray[np.float64]
 
 #: Motions a session remembers (for ``edge_states`` and re-checks of published plans); oldest dropped first.
 DEFAULT_MOTIONS_KEPT = 1024

@@ -61,8 +61,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.domains.helicopter import HelicopterDomain
@@ -71,8 +71,6 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.shapes import Shape
 from drd_planner.planning.map_state import MapSnapshot, changed_parts, obstacle_boxes
-
-FloatArray = npt.NDArray[np.float64]
 
 
 class ReplanSession(Protocol):

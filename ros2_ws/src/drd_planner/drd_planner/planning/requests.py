@@ -25,16 +25,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import pose_from_msg
+from drd_planner.arrays import FloatArray
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.query_support import state_from_pose, wrap_angle, yaw_from_quaternion
-
-FloatArray = npt.NDArray[np.float64]
 
 __all__ = [
     "Goal",

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.core.episode import EpisodeStatus, run_episode
 from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.data.tree_file import TreeBundle
@@ -31,8 +32,6 @@ from drd_planner.planning.domain_view import (
     straight_edge_states,
 )
 from drd_planner.planning.map_state import MapSnapshot
-
-FloatArray = npt.NDArray[np.float64]
 
 #: How far (metres, in x, y, z) a requested goal position may be from the tree's goal position.
 DEFAULT_GOAL_TOLERANCE = 1.0

@@ -48,8 +48,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-import numpy.typing as npt
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
@@ -71,6 +69,7 @@ from visualization_msgs.msg import MarkerArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import obstacle_update
 from drd_msgs_py.terrain import heightfield_from_cloud
+from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planner.prior_file import load_prior
@@ -98,7 +97,6 @@ from drd_planner.ros.status import HEARTBEAT_PERIOD_S, LastPlan, heartbeat_value
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Map subscriptions with ``map_subscribe_transient_local`` false: hears volatile and latched publishers.
 VOLATILE_MAPS = QoSProfile(
