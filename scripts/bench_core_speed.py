@@ -22,7 +22,8 @@ import numpy as np
 
 from drd_planner.core.bisect import Bisect, bias_from_worlds
 from drd_planner.core.policies import DirectBisectPolicy
-from drd_planner.core.tree import build_tree
+from drd_planner.core.problem import Problem
+from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.gccd import load_gccd_folder
 
 
@@ -37,6 +38,26 @@ def matmul_rate(m: int, k: int, n: int, repeats: int) -> float:
         a @ b
         best = min(best, time.perf_counter() - t0)
     return 2.0 * m * k * n / best / 1e9
+
+
+def time_tree_builds(problem: Problem, repeats: int) -> dict[str, DecisionTree]:
+    """The fastest of ``repeats`` builds of the default and the full-candidate tree, by label; prints each."""
+    builds = {}
+    for label, mpr in (("default (MaxProbReg candidates)", True), ("full (all edges as candidates)", False)):
+        best = None
+        for _ in range(repeats):
+            tree = build_tree(problem, progress=False, max_prob_region=mpr)
+            if best is None or tree.info["build_seconds"] < best.info["build_seconds"]:
+                best = tree
+        assert best is not None
+        builds[label] = best
+        info = best.info
+        rate = info["matmul_flops"] / info["build_seconds"] / 1e9
+        print(
+            f"tree build, {label}: {info['build_seconds']:.3f} s, {best.num_nodes} nodes, depth {best.depth()}, "
+            f"{info['matmul_flops'] / 1e9:.2f} GFLOP in ECD products -> {rate:.1f} GFLOP/s"
+        )
+    return builds
 
 
 def main() -> None:
@@ -55,21 +76,7 @@ def main() -> None:
     n_train = worlds.train_ids.size
     print(f"dataset_2d_2: {n_train} training worlds, {problem.num_edges} edges, {problem.num_paths} paths")
 
-    builds = {}
-    for label, mpr in (("default (MaxProbReg candidates)", True), ("full (all edges as candidates)", False)):
-        best = None
-        for _ in range(args.repeats):
-            tree = build_tree(problem, progress=False, max_prob_region=mpr)
-            if best is None or tree.info["build_seconds"] < best.info["build_seconds"]:
-                best = tree
-        assert best is not None
-        builds[label] = best
-        info = best.info
-        rate = info["matmul_flops"] / info["build_seconds"] / 1e9
-        print(
-            f"tree build, {label}: {info['build_seconds']:.3f} s, {best.num_nodes} nodes, depth {best.depth()}, "
-            f"{info['matmul_flops'] / 1e9:.2f} GFLOP in ECD products -> {rate:.1f} GFLOP/s"
-        )
+    builds = time_tree_builds(problem, args.repeats)
     full = builds["full (all edges as candidates)"]
     full_rate = full.info["matmul_flops"] / full.info["build_seconds"] / 1e9
     ref_rate = matmul_rate(problem.num_paths, n_train, 2 * problem.num_edges, args.repeats + 2)

@@ -32,8 +32,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from drd_planner.data.dataset_builder import make_domain
 from drd_planner.data.dataset_cli import parse_domain_spec
+from drd_planner.data.domain_factory import make_domain
 
 
 def _counts(text: str) -> list[int]:

@@ -3,7 +3,7 @@
 
 Each case runs in a fresh child process (so its peak RSS, ``resource.getrusage`` ``ru_maxrss``, is its own)
 under an address-space limit (``--max-gib``), and does what the node's map callback does with the message:
-convert it (``obstacle_update(...).apply``, ``heightfield_from_cloud``), make the next
+convert it through the node's map store (:class:`~drd_planner.planning.map_store.MapStore`), make the next
 :class:`~drd_planner.planning.map_state.MapSnapshot` and build its FCL scene (and, for terrain, the helicopter
 checker's terrain prefilter). Cases:
 
@@ -62,7 +62,6 @@ def _msgs() -> Any:
 
 
 def _cubes(msgs: Any, keys: list[str], *, delete_all_first: bool, shift: float = 0.0) -> Any:
-    from drd_msgs_py.obstacles import markers_from_obstacles
     from drd_planner.geometry.pose import Pose
     from drd_planner.geometry.shapes import Box
 
@@ -70,7 +69,20 @@ def _cubes(msgs: Any, keys: list[str], *, delete_all_first: bool, shift: float =
     for key in keys:
         k = int(key.rpartition("/")[2])
         obstacles.append((key, Box((1.0, 1.0, 1.0)), Pose((3.0 * (k % 300) + shift, 3.0 * (k // 300), 5.0))))
-    return markers_from_obstacles(obstacles, frame_id="map", msgs=msgs, delete_all_first=delete_all_first)
+    return _markers(obstacles, msgs, delete_all_first=delete_all_first)
+
+
+def _markers(obstacles: list[Any], msgs: Any, *, delete_all_first: bool = True) -> Any:
+    from drd_planner.planning.world_messages import obstacle_markers
+
+    return obstacle_markers(obstacles, frame_id="map", msgs=msgs, delete_all_first=delete_all_first)
+
+
+def _store(margin: float = 0.0) -> Any:
+    """The node's map store, in ``map``, with the benchmark's limits."""
+    from drd_planner.planning.map_store import MapStore
+
+    return MapStore(frame_id="map", margin=margin, limits=_limits())
 
 
 def _touch(snapshot: Any) -> None:
@@ -78,29 +90,24 @@ def _touch(snapshot: Any) -> None:
     snapshot.scene.spheres_collide_mask(np.array([[0.0, 0.0, -1e4]]), 1.0)
 
 
-def _obstacle_step(
-    snapshot: Any, current: dict[str, Any], msg: Any
-) -> tuple[Any, dict[str, Any], float, float]:
-    from drd_msgs_py.obstacles import obstacle_update
-
+def _obstacle_step(store: Any, msg: Any) -> tuple[Any, float, float]:
     t0 = READY[0] = time.perf_counter()
-    current = obstacle_update(msg, frame_id="map", limits=_limits()).apply(current)
+    snapshot = store.apply_obstacles(msg)
     t1 = time.perf_counter()
-    snapshot = snapshot.with_obstacles({k: o.parts for k, o in current.items()})
     _touch(snapshot)
-    return snapshot, current, t1 - t0, time.perf_counter() - t1
+    return snapshot, t1 - t0, time.perf_counter() - t1
 
 
 def case_markers(n: int) -> list[dict[str, Any]]:
-    from drd_planner.planning.map_state import MapSnapshot
-
     msgs = _msgs()
     keys = [f"box/{k}" for k in range(n - 1)]  # with the DELETEALL first: n markers
     full = _cubes(msgs, keys, delete_all_first=True)
     one = _cubes(msgs, keys[:1], delete_all_first=False, shift=0.5)
-    snapshot, current, convert, scene = _obstacle_step(MapSnapshot(0), {}, full)
+    store = _store()
+    snapshot, convert, scene = _obstacle_step(store, full)
     rows = [{"case": "markers: full map", "size": n, "convert": convert, "scene": scene, "rss": _rss_mib()}]
-    snapshot, current, convert, scene = _obstacle_step(snapshot, current, one)
+    _second, convert, scene = _obstacle_step(store, one)
+    del snapshot  # as the node: the previous snapshot is alive while the next one is made
     rows.append({"case": "markers: one-marker update", "size": n, "convert": convert, "scene": scene})
     rows[-1]["rss"] = _rss_mib()
     return rows
@@ -115,15 +122,12 @@ def _cloud(msgs: Any, rows: int, cols: int, cell: float) -> Any:
     return cloud_from_heightfield(Heightfield((0.0, 0.0), cell, heights), frame_id="map", msgs=msgs)
 
 
-def _terrain_step(msg: Any, radius: float, previous: Any = None) -> tuple[Any, float, float]:
-    from drd_msgs_py.terrain import heightfield_from_cloud
+def _terrain_step(store: Any, msg: Any, radius: float) -> tuple[Any, float, float]:
     from drd_planner.domains.helicopter_checker import HelicopterChecker
-    from drd_planner.planning.map_state import MapSnapshot
 
     t0 = READY[0] = time.perf_counter()
-    terrain = heightfield_from_cloud(msg, frame_id="map", limits=_limits()) if msg is not None else None
+    snapshot = store.apply_terrain(msg)
     t1 = time.perf_counter()
-    snapshot = (previous if previous is not None else MapSnapshot(0, margin=1.0)).with_terrain(terrain)
     _touch(snapshot)
     points = np.array([[0.0, 0.0, 50.0], [0.0, 0.0, 60.0]])
     checker = HelicopterChecker(snapshot.scene, points, [0, 2], radius=radius)
@@ -134,17 +138,18 @@ def _terrain_step(msg: Any, radius: float, previous: Any = None) -> tuple[Any, f
 def case_terrain(size: int) -> list[dict[str, Any]]:
     msgs = _msgs()
     msg = _cloud(msgs, size, size, 1.0)
-    snapshot, convert, scene = _terrain_step(msg, 5.0)
+    store = _store(margin=1.0)
+    snapshot, convert, scene = _terrain_step(store, msg, 5.0)
     rows = [{"case": "terrain: new cloud", "size": size * size, "convert": convert, "scene": scene}]
     rows[-1]["rss"] = _rss_mib()
     msg = _cloud(msgs, size, size, 0.9)
     del msgs
-    snapshot, convert, scene = _terrain_step(msg, 5.0, previous=snapshot)
-    del msg
+    _second, convert, scene = _terrain_step(store, msg, 5.0)
+    del msg, snapshot
     rows.append({"case": "terrain: a second cloud replaces it", "size": size * size, "convert": convert})
     rows[-1] |= {"scene": scene, "rss": _rss_mib()}
     one = _cubes(_msgs(), ["box/0"], delete_all_first=False)
-    _snap, _cur, convert, scene = _obstacle_step(snapshot, {}, one)
+    _snap, convert, scene = _obstacle_step(store, one)
     rows.append(
         {"case": "terrain: one-marker update", "size": size * size, "convert": convert, "scene": scene}
     )
@@ -203,16 +208,14 @@ def case_urdf(links: int) -> list[dict[str, Any]]:
 
 
 def case_mesh(triangles: int) -> list[dict[str, Any]]:
-    from drd_msgs_py.obstacles import markers_from_obstacles
     from drd_planner.geometry.pose import Pose
     from drd_planner.geometry.shapes import TriangleMesh
-    from drd_planner.planning.map_state import MapSnapshot
 
     rng = np.random.default_rng(0)
     vertices = rng.uniform(-50.0, 50.0, size=(3 * triangles, 3))
     mesh = TriangleMesh(vertices, np.arange(3 * triangles).reshape(-1, 3))
-    msg = markers_from_obstacles([("mesh/0", mesh, Pose())], frame_id="map", msgs=_msgs())
-    _snapshot, _current, convert, scene = _obstacle_step(MapSnapshot(0), {}, msg)
+    msg = _markers([("mesh/0", mesh, Pose())], _msgs())
+    _snapshot, convert, scene = _obstacle_step(_store(), msg)
     return [
         {
             "case": "one TRIANGLE_LIST marker",

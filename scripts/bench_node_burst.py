@@ -53,9 +53,9 @@ from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import MarkerArray
 
-import drd_planner.ros.node as node_module
 from drd_msgs_py.factory import RclpyMessages
-from drd_msgs_py.worlds import helicopter_world_messages
+from drd_planner.planning.service import HISTORY_LENGTH
+from drd_planner.planning.world_messages import helicopter_world_messages
 from drd_planner.ros.node import LATCHED, REQUESTS, PlannerNode
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -499,12 +499,12 @@ def warm_up(harness: Harness, *, burst: int = 50, calls: int | None = None) -> N
     """Requests before measuring, so that one-time allocations are not counted as growth.
 
     One topic request (imports, caches, the first scene), as many single service calls as the node
-    keeps served requests in its bounded ``history`` (:data:`drd_planner.ros.node.HISTORY_LENGTH`)
+    keeps served requests in its bounded ``history`` (:data:`drd_planner.planning.service.HISTORY_LENGTH`)
     plus one (or ``calls``), then a topic burst of ``burst`` requests (first-burst queues and wait
     sets). A request that is lost here (a node queue shorter than ``burst``) does not stop the warm-up.
     """
     if calls is None:
-        calls = int(getattr(node_module, "HISTORY_LENGTH", 16)) + 1
+        calls = HISTORY_LENGTH + 1
     for run, count in ((topic_burst, 1), *((service_burst, 1) for _ in range(calls))):
         warm = run(harness, requests=count, stall=30.0)
         if warm.answered != count or warm.results[0] in ("none", "0"):

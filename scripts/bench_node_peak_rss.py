@@ -52,7 +52,7 @@ def main() -> None:
             terrain = Heightfield((-100.0, -100.0), 1.0 + 0.1 * k, heights)
             cloud = cloud_from_heightfield(terrain, frame_id="map", msgs=msgs)
             t0 = time.perf_counter()
-            node._on_terrain(cloud)
+            node._on_map("terrain", cloud)
             seconds = time.perf_counter() - t0
             print(
                 f"terrain {n} x {n} #{k + 1}: {seconds:.2f} s, map version {node.snapshot.version}, "

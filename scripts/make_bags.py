@@ -41,20 +41,23 @@ from typing import Any
 
 import numpy as np
 
-from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, maps_until, open_bag, write_bag
+from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, open_bag, write_bag
 from drd_msgs_py.factory import RosbagsMessages, header
-from drd_msgs_py.obstacles import markers_from_obstacles
-from drd_msgs_py.worlds import arm_world_messages, helicopter_world_messages
-from drd_planner.data.moveit_scene import ScenePrimitive
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.exceptions import DrdError
+from drd_planner.geometry.moveit_scene import ScenePrimitive
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Sphere
 from drd_planner.planner import load_prior
-from drd_planner.planning.bag_plan import BagPlan, plan_bag_request
+from drd_planner.planning.bag_plan import BagPlan, maps_until, plan_bag_request
 from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.world_messages import (
+    arm_world_messages,
+    helicopter_world_messages,
+    obstacle_markers,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 #: Bag time of the first message (2023-11-14T22:13:20Z): fixed, so the bags are byte-for-byte reproducible.
@@ -99,7 +102,7 @@ def _middle_out(edges: tuple[int, ...]) -> Iterator[int]:
 
 def _snapshot(session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str) -> Any:
     maps = maps_until(
-        messages, time_ns, frame_id=frame, margin=session.margin, robot_from_description=session.robot_loader
+        messages, time_ns, frame_id=frame, margin=session.margin, robot_loader=session.robot_loader
     )
     if maps.refused:
         raise DrdError(f"generated maps were refused: {maps.refused}")
@@ -294,7 +297,7 @@ def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scen
             again, _ = helicopter_world_messages(
                 world, wire_segments=segments, frame_id=frame, stamp=_stamp(t1), msgs=msgs
             )
-            added = markers_from_obstacles(
+            added = obstacle_markers(
                 [("new_obstacle/0", Sphere(HELI_SPHERE_RADIUS), Pose(centre))],
                 frame_id=frame,
                 stamp=_stamp(t1),

@@ -17,7 +17,8 @@ import argparse
 import numpy as np
 
 from drd_planner import Planner, prior_from_problem
-from drd_planner.domains.planar import PlanarChecker, make_planar_problem, sample_worlds
+from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
+from drd_planner.domains.planar import PlanarChecker
 from drd_planner.planner.connect import EdgeSampleIndex, imputed_outcomes
 
 
@@ -31,8 +32,7 @@ def main() -> None:
     args = parser.parse_args()
     for model in args.models.split(","):
         problem = make_planar_problem(model=model, num_worlds=300, seed=5)
-        meta = problem.metadata
-        boxes = sample_worlds(model, 300, seed=meta["world_seed"], keep_clear=np.asarray(meta["keep_clear"]))
+        boxes = planar_problem_worlds(problem)
         prior = prior_from_problem(problem, domain="planar")
         planner = Planner(prior)
         connector = planner.connector

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
+
 REPO = Path(__file__).resolve().parents[1]
 SRC = REPO / "ros2_ws" / "src"
 PACKAGES = ("drd_msgs_py", "drd_planner")
@@ -161,6 +163,7 @@ ROSDEP_KEY = {
     "networkx": "python3-networkx",
     "tqdm": "python3-tqdm",
     "yaml": "python3-yaml",
+    "typing_extensions": "python3-typing-extensions",
     "matplotlib": "python3-matplotlib",
     "trimesh": "python3-trimesh-pip",
 }

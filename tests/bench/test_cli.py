@@ -381,7 +381,7 @@ def test_benchmark_json_maps_nan_bounds_to_null() -> None:
 
 
 def test_run_benchmark_on_a_planar_problem() -> None:
-    from drd_planner.domains.planar import make_planar_problem
+    from drd_planner.data.planar_problem import make_planar_problem
 
     problem = make_planar_problem(num_worlds=100, max_paths=30, seed=1)
     res = run_benchmark(problem, policies=["bisect", "direct_bisect"], seed=0, max_worlds=4, progress=False)

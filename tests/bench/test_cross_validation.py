@@ -7,11 +7,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from drd_planner.bench.cross_validation import cross_validate
-from drd_planner.bench.runner import run_world, train_bias
+from drd_planner.bench.cross_validation import FoldSettings, cross_validate
+from drd_planner.bench.runner import PolicySettings, run_world, train_bias
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import DrdError
 
 
@@ -21,7 +21,9 @@ def problem() -> Problem:
 
 
 def test_every_feasible_world_is_tested_once_by_a_fold_that_held_it_out(problem: Problem) -> None:
-    result = cross_validate(problem, policies=("bisect", "direct_bisect"), folds=3, eta=0.2, seed=2)
+    result = cross_validate(
+        problem, policies=("bisect", "direct_bisect"), folds=3, seed=2, settings=FoldSettings(eta=0.2)
+    )
     worlds = problem.require_worlds()
     feasible = np.flatnonzero(worlds.R.any(axis=1))
     assert np.array_equal(np.sort(result.worlds), feasible)
@@ -35,7 +37,15 @@ def test_every_feasible_world_is_tested_once_by_a_fold_that_held_it_out(problem:
     position = 3
     world = int(held[position])
     for name in ("bisect", "direct_bisect"):
-        episode = run_world(sub, name, world, theta=train_bias(sub), tree=tree, seed=2 + position, eta=0.2)
+        episode = run_world(
+            sub,
+            name,
+            world,
+            theta=train_bias(sub),
+            tree=tree,
+            seed=2 + position,
+            settings=PolicySettings(eta=0.2),
+        )
         assert result.checks[name][result.worlds == world][0] == episode.num_checks
     assert (result.lower_bound <= result.checks["bisect"] + 1e-9).all()
 

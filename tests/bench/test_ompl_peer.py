@@ -143,7 +143,10 @@ def test_problem_without_graph_is_refused() -> None:
 
 
 def test_skip_message_names_the_extra() -> None:
-    assert SKIP_MESSAGE == "ompl_lazyprm skipped: OMPL not installed; pip install 'drd_planner[peer]'"
+    assert SKIP_MESSAGE == (
+        "ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): "
+        "pip install -e 'ros2_ws/src/drd_planner[peer]'"
+    )
     ok, message = ompl_available()
     assert message.startswith("OMPL ") if ok else message.startswith("ompl_lazyprm skipped")
 

@@ -13,6 +13,7 @@ from drd_planner.bench.runner import (
     DEFAULT_POLICIES,
     TABLE1_POLICIES,
     BenchmarkResult,
+    PolicySettings,
     PolicyStats,
     available_policies,
     benchmark_json,
@@ -47,7 +48,9 @@ def test_default_policies_are_the_registered_table1_set() -> None:
 
 
 def test_policy_context_passes_the_graph_when_supported(problem: Problem, tree: DecisionTree) -> None:
-    ctx = policy_context(problem, theta=train_bias(problem), tree=tree, seed=5, eta=0.3)
+    ctx = policy_context(
+        problem, theta=train_bias(problem), tree=tree, seed=5, settings=PolicySettings(eta=0.3)
+    )
     assert ctx.seed == 5 and ctx.eta == 0.3 and ctx.tree is tree
     assert isinstance(ctx, PolicyContext)
     assert ctx.graph is problem.graph and ctx.graph is not None

@@ -12,7 +12,7 @@ from scipy.sparse.csgraph import dijkstra
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.lazysp import DEFAULT_MAX_CHECKS, GraphArcs, LazySP, bisection_position
+from drd_planner.core.lazysp import DEFAULT_MAX_CHECKS, GraphArcs, LazySP, LazySPSettings, bisection_position
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import GRAPH_POLICIES, POLICIES, PolicyContext
 from drd_planner.data.gccd import load_gccd_folder
@@ -66,7 +66,7 @@ def run(policy: LazySP, x: np.ndarray, library: PathLibrary | None = None) -> Ep
     ],
 )
 def test_selector_check_orders_on_the_grid(selector: str, expected: list[int]) -> None:
-    result = run(LazySP(grid(), 0, 8, selector=selector), world(10))
+    result = run(LazySP(grid(), 0, 8, LazySPSettings(selector=selector)), world(10))
     assert [c.edge for c in result.checks] == expected
     assert result.status is EpisodeStatus.PATH_FOUND
     assert result.path_index is None  # LazySP's own path, not a library path
@@ -76,7 +76,7 @@ def test_selector_check_orders_on_the_grid(selector: str, expected: list[int]) -
 
 def test_free_world_checks_exactly_the_shortest_path() -> None:
     for selector in ("forward", "reverse", "alternate", "bisection", "weightsamp", "balanced"):
-        result = run(LazySP(grid(), 0, 8, selector=selector, seed=1), world())
+        result = run(LazySP(grid(), 0, 8, LazySPSettings(selector=selector, seed=1)), world())
         assert sorted(c.edge for c in result.checks) == sorted(PATH_A)
         np.testing.assert_array_equal(result.path_edges, PATH_A)
 
@@ -108,11 +108,11 @@ def test_does_not_stop_on_a_proven_library_path() -> None:
 
 
 def test_check_budget_reports_max_checks() -> None:
-    result = run(LazySP(grid(), 0, 8, max_checks=3), world(10))
+    result = run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=3)), world(10))
     assert result.status is EpisodeStatus.MAX_CHECKS
     assert result.num_checks == 3 and not result.success and result.path_edges is None
     # The budget does not cut an episode whose path is verified by the last allowed check.
-    assert run(LazySP(grid(), 0, 8, max_checks=4), world()).status is EpisodeStatus.PATH_FOUND
+    assert run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=4)), world()).status is EpisodeStatus.PATH_FOUND
 
 
 def test_default_budget_is_1000_checks() -> None:
@@ -159,7 +159,7 @@ def test_bisection_position_matches_lemur() -> None:
 
 def test_weightsamp_batched_counts_equal_one_search_per_sample() -> None:
     graph = grid()
-    policy = LazySP(graph, 0, 8, selector="weightsamp", nsamps=150, seed=5)
+    policy = LazySP(graph, 0, 8, LazySPSettings(selector="weightsamp", nsamps=150, seed=5))
     policy.observe(0, True)
     policy.observe(10, False)
     counts = policy.shortest_path_counts()
@@ -185,13 +185,17 @@ def test_weightsamp_batched_counts_equal_one_search_per_sample() -> None:
 def test_weightsamp_is_seeded_and_picks_the_most_sampled_edge() -> None:
     orders = []
     for seed in (3, 3, 4):
-        result = run(LazySP(grid(), 0, 8, selector="weightsamp", nsamps=50, seed=seed), world(10))
+        result = run(
+            LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=seed)), world(10)
+        )
         np.testing.assert_array_equal(result.path_edges, PATH_B)
         orders.append([c.edge for c in result.checks])
     assert orders[0] == orders[1]
-    policy = LazySP(grid(), 0, 8, selector="weightsamp", nsamps=50, seed=9)
+    policy = LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=9))
     first = policy.select()
-    counts = LazySP(grid(), 0, 8, selector="weightsamp", nsamps=50, seed=9).shortest_path_counts()[PATH_A]
+    counts = LazySP(
+        grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=9)
+    ).shortest_path_counts()[PATH_A]
     assert first == PATH_A[len(PATH_A) - 1 - int(np.argmax(counts[::-1]))]  # ties go to the later edge
 
 
@@ -213,7 +217,7 @@ def test_registry_and_missing_graph() -> None:
         assert policy.name == name
         assert isinstance(policy, GraphPathPolicy)
     with pytest.raises(ProblemError, match="selector"):
-        LazySP(grid(), 0, 8, selector="sideways")
+        LazySP(grid(), 0, 8, LazySPSettings(selector="sideways"))
     with pytest.raises(ProblemError, match="start"):
         LazySP(grid(), 9, 8)
 
@@ -269,10 +273,10 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
 def test_balanced_checks_from_the_walled_in_end() -> None:
     # Nothing checked: both known-free regions are one vertex, so it starts forward (e0 of path A). Then
     # the start's region has grown and the goal's has not: it checks from the goal's end.
-    policy = LazySP(grid(), 0, 8, selector="balanced")
+    policy = LazySP(grid(), 0, 8, LazySPSettings(selector="balanced"))
     assert policy.select() == 0
     policy.observe(0, True)
     assert policy.known_free_reach() == (2, 1)
     assert policy.select() == 11
-    result = run(LazySP(grid(), 0, 8, selector="balanced"), world(0, 6))
+    result = run(LazySP(grid(), 0, 8, LazySPSettings(selector="balanced")), world(0, 6))
     assert result.status is EpisodeStatus.NO_FREE_PATH

@@ -11,7 +11,7 @@ from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import DirectBisectPolicy
 from drd_planner.core.tree import NO_EDGE, build_tree
 from drd_planner.data.gccd import load_gccd_folder
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 
 #: Test worlds per dataset; eta small enough that the tree (not only BiSECt) chooses checks.

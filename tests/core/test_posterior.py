@@ -11,7 +11,7 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DirectBisectPolicy
 from drd_planner.core.posterior import ConsistentWorldsBias, TrainingOutcomes
 from drd_planner.core.tree import build_tree
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 
 # 4 training worlds over the library edges 1, 3, 4 of a 6-edge graph.

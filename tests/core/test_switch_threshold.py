@@ -3,9 +3,9 @@ import pytest
 
 from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import DirectBisectPolicy
-from drd_planner.core.switch_threshold import select_switch_threshold
+from drd_planner.core.switch_threshold import ValidationGrid, select_switch_threshold
 from drd_planner.core.tree import build_tree
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 
 
@@ -15,7 +15,9 @@ def problem():  # type: ignore[no-untyped-def]
 
 
 def test_choice_is_the_best_validated_candidate(problem) -> None:  # type: ignore[no-untyped-def]
-    choice = select_switch_threshold(problem, candidates=(0.1, 0.3, 1.0), pseudo_counts=(None, 10.0), seed=1)
+    choice = select_switch_threshold(
+        problem, ValidationGrid(candidates=(0.1, 0.3, 1.0), pseudo_counts=(None, 10.0)), seed=1
+    )
     assert set(choice.mean_checks) == {(e, k) for e in (0.1, 0.3, 1.0) for k in (None, 10.0)}
     assert choice.mean_checks[(choice.eta, choice.pseudo_count)] == min(choice.mean_checks.values())
     worlds = problem.worlds
@@ -30,7 +32,9 @@ def test_choice_is_the_best_validated_candidate(problem) -> None:  # type: ignor
 def test_validation_means_are_recomputable(problem, kappa) -> None:  # type: ignore[no-untyped-def]
     import dataclasses
 
-    choice = select_switch_threshold(problem, candidates=(0.2,), pseudo_counts=(kappa,), seed=5)
+    choice = select_switch_threshold(
+        problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(kappa,)), seed=5
+    )
     assert (choice.eta, choice.pseudo_count) == (0.2, kappa)
     worlds = problem.worlds
     held = np.asarray(choice.validation_ids)
@@ -48,9 +52,11 @@ def test_validation_tree_is_built_with_the_final_trees_options(problem, options)
     import dataclasses
 
     choice = select_switch_threshold(
-        problem, candidates=(0.05,), pseudo_counts=(None,), seed=5, tree_options=options
+        problem, ValidationGrid(candidates=(0.05,), pseudo_counts=(None,), tree_options=options), seed=5
     )
-    default = select_switch_threshold(problem, candidates=(0.05,), pseudo_counts=(None,), seed=5)
+    default = select_switch_threshold(
+        problem, ValidationGrid(candidates=(0.05,), pseudo_counts=(None,)), seed=5
+    )
     worlds = problem.worlds
     held = np.asarray(choice.validation_ids)
     fit = np.setdiff1d(worlds.train_ids, held)
@@ -84,26 +90,30 @@ def test_same_seed_same_choice_and_ties_go_to_larger_eta_then_fixed_leaf(problem
 @pytest.mark.parametrize("cands", [(), (0.0,), (1.5,), (-0.1, 0.5)])
 def test_bad_candidates_are_refused(problem, cands) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ProblemError, match="eta candidates"):
-        select_switch_threshold(problem, candidates=cands)
+        select_switch_threshold(problem, ValidationGrid(candidates=cands))
 
 
 @pytest.mark.parametrize("kappas", [(), (0.0,), (-1.0,), (float("nan"),)])
 def test_bad_pseudo_counts_are_refused(problem, kappas) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ProblemError, match="pseudo-counts"):
-        select_switch_threshold(problem, candidates=(0.2,), pseudo_counts=kappas)
+        select_switch_threshold(problem, ValidationGrid(candidates=(0.2,), pseudo_counts=kappas))
 
 
 def test_max_worlds_limits_the_validation_worlds(problem) -> None:  # type: ignore[no-untyped-def]
-    full = select_switch_threshold(problem, candidates=(0.2, 1.0), pseudo_counts=(None,), seed=1)
+    full = select_switch_threshold(
+        problem, ValidationGrid(candidates=(0.2, 1.0), pseudo_counts=(None,)), seed=1
+    )
     quick = select_switch_threshold(
-        problem, candidates=(0.2, 1.0), pseudo_counts=(None,), seed=1, max_worlds=3
+        problem, ValidationGrid(candidates=(0.2, 1.0), pseudo_counts=(None,)), seed=1, max_worlds=3
     )
     assert len(full.validation_ids) > 3
     assert len(quick.validation_ids) == 3
     assert set(quick.validation_ids) <= set(problem.worlds.train_ids.tolist())
     assert quick.seconds > 0 and quick.as_json()["num_validation_worlds"] == 3
     with pytest.raises(ProblemError, match="max_worlds"):
-        select_switch_threshold(problem, candidates=(0.2,), pseudo_counts=(None,), max_worlds=0)
+        select_switch_threshold(
+            problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(None,)), max_worlds=0
+        )
 
 
 def test_summary_is_a_few_short_lines() -> None:

@@ -9,7 +9,7 @@ from drd_planner.core.direct import DirectSelector
 from drd_planner.core.policies import DirectBisectPolicy, DirectOnlyPolicy
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree, build_tree, greedy_cover_regions
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 
 
 @pytest.fixture(scope="module")

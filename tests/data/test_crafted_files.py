@@ -247,7 +247,7 @@ def test_the_last_line_of_defence_converts_anything(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path, exc: BaseException
 ) -> None:
     """Whatever the explicit checks miss still leaves the loaders as their one error type."""
-    import drd_planner.data.tree_file as tree_file
+    from drd_planner.data import tree_file
 
     def explode(*args: object, **kwargs: object) -> None:
         raise exc

@@ -37,7 +37,7 @@ DEEP = 100_000
 @pytest.fixture(scope="module")
 def base_prior(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Arrays]:
     from drd_planner.core.tree import build_tree
-    from drd_planner.domains.planar import make_planar_problem
+    from drd_planner.data.planar_problem import make_planar_problem
     from drd_planner.planner import QueryTree, prior_from_problem, save_prior
 
     problem = make_planar_problem(model="forest", num_worlds=60, seed=2)

@@ -7,6 +7,7 @@ both its cells are free. The other dataset test modules import it from here.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import multiprocessing
 import os
@@ -23,18 +24,13 @@ import numpy.typing as npt
 import pytest
 
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.data.dataset_builder import (
-    ChunkTask,
-    build_dataset,
-    choose_start_method,
-    derived_seed,
-    evaluate_chunk,
-    make_domain,
-    parts_dir,
-    world_seeds,
-)
+from drd_planner.data.dataset_builder import build_dataset
+from drd_planner.data.dataset_chunks import parts_dir
 from drd_planner.data.dataset_file import load_dataset
+from drd_planner.data.dataset_options import BuildOptions, DatasetRecipe
+from drd_planner.data.domain_factory import make_domain
 from drd_planner.data.library_builder import build_path_library, split_worlds
+from drd_planner.data.seeding import derived_seed, world_seeds
 from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.exceptions import DatasetError
 
@@ -159,7 +155,17 @@ def build_grid(out: Path, **kwargs: Any) -> Any:
         "progress": False,
         **kwargs,
     }
-    return build_dataset(out, **settings)
+    return build_with(out, settings)
+
+
+_OPTION_FIELDS = {f.name for f in dataclasses.fields(BuildOptions)}
+
+
+def build_with(out: Path, settings: dict[str, Any]) -> Any:
+    """``build_dataset`` with the recipe's and the options' fields given in one mapping."""
+    options = BuildOptions(**{k: v for k, v in settings.items() if k in _OPTION_FIELDS})
+    recipe = DatasetRecipe(**{k: v for k, v in settings.items() if k not in _OPTION_FIELDS})
+    return build_dataset(out, recipe, options)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -173,38 +179,6 @@ def test_grid_domain_satisfies_the_protocol() -> None:
     assert domain.graph.num_edges == 42  # 24 axis-aligned + 18 diagonal edges on 4 x 4
     rebuilt = make_domain("grid_test", domain.spec(), factory=GRID_FACTORY)
     assert np.array_equal(rebuilt.graph.edges, domain.graph.edges)
-
-
-def test_world_seeds_are_deterministic_prefix_stable_and_distinct() -> None:
-    a, b = world_seeds(7, 10), world_seeds(7, 25)
-    assert a.dtype == np.int64
-    assert np.array_equal(a, b[:10])
-    assert np.unique(b).size == b.size
-    assert np.all(b >= 0)
-    assert not np.array_equal(world_seeds(8, 10), a)
-    assert derived_seed(7, 1) != derived_seed(7, 2)
-    assert int(a[3]) == int(np.random.SeedSequence(7, spawn_key=(0, 3)).generate_state(1, np.uint64)[0]) >> 1
-
-
-def test_evaluate_chunk_matches_direct_checks() -> None:
-    domain = GridDomain()
-    seeds = world_seeds(3, 5)
-    task = ChunkTask(
-        index=0,
-        first=0,
-        seeds=tuple(int(s) for s in seeds),
-        domain="grid_test",
-        spec_json='{"block_probability": 0.25, "delay_s": 0.0, "size": 4}',
-        factory=GRID_FACTORY,
-        world_model="uniform",
-        k=5,
-    )
-    result = evaluate_chunk(task)
-    x = np.unpackbits(result.x_packed, axis=1, count=domain.graph.num_edges).astype(bool)
-    assert np.array_equal(x, grid_x(domain, "uniform", seeds))
-    for edges, verts in result.paths():
-        assert verts[0] == domain.start and verts[-1] == domain.goal
-        assert list(domain.graph.vertex_path_to_edges(verts)) == list(edges)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -261,16 +235,6 @@ def test_two_local_workers_give_identical_bytes(reference: Path, tmp_path: Path,
     assert out.read_bytes() == reference.read_bytes()
 
 
-def test_start_method_choice() -> None:
-    with pytest.raises(DatasetError, match="start method 'teleport' is not available here"):
-        choose_start_method("teleport")
-    assert choose_start_method("spawn") == "spawn"
-    # A fresh single-threaded interpreter (as under `drd build-dataset`) forks where it can.
-    code = "from drd_planner.data.dataset_builder import choose_start_method as c; print(c())"
-    fresh = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert fresh.stdout.strip() == ("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-
-
 def test_chunk_size_does_not_change_the_file(reference: Path, tmp_path: Path) -> None:
     out = tmp_path / "grid.npz"
     build_grid(out, workers=1, chunk_size=40)
@@ -292,16 +256,18 @@ def test_dask_local_cluster_gives_identical_bytes(reference: Path, tmp_path: Pat
 def test_domain_instance_without_factory(reference: Path, tmp_path: Path) -> None:
     # A Domain instance: its class (importable, with from_spec) is what workers rebuild.
     out = tmp_path / "grid.npz"
-    report = build_dataset(
+    report = build_with(
         out,
-        domain=GridDomain(),
-        world_model="uniform",
-        num_worlds=40,
-        seed=7,
-        chunk_size=6,
-        max_paths=30,
-        workers=2,
-        progress=False,
+        {
+            "domain": GridDomain(),
+            "world_model": "uniform",
+            "num_worlds": 40,
+            "seed": 7,
+            "chunk_size": 6,
+            "max_paths": 30,
+            "workers": 2,
+            "progress": False,
+        },
     )
     assert report.complete
     assert out.read_bytes() == reference.read_bytes()
@@ -413,8 +379,8 @@ def test_no_solvable_world_is_refused(tmp_path: Path) -> None:
 
 
 def test_unreachable_scheduler_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import drd_planner.data.dataset_builder as builder
+    import drd_planner.data.dataset_schedulers as schedulers
 
-    monkeypatch.setattr(builder, "DASK_CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(schedulers, "DASK_CONNECT_TIMEOUT_S", 1.0)
     with pytest.raises(DatasetError, match=r"cannot connect to the Dask scheduler at 'tcp://127\.0\.0\.1:9'"):
         build_grid(tmp_path / "x.npz", scheduler="tcp://127.0.0.1:9", num_worlds=4)

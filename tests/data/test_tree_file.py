@@ -17,8 +17,8 @@ from drd_planner.core.policies import DirectBisectPolicy
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.npz_format import array_digest, payload_digest
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.data.tree_file import FORMAT_VERSION, TreeBundle, load_tree, save_tree
-from drd_planner.domains.planar import make_planar_problem
 from drd_planner.exceptions import ProblemError, TreeFileError
 
 TREE_ARRAYS = (

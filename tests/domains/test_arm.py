@@ -12,18 +12,12 @@ from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.domains.arm import (
-    DEFAULT_GOAL,
-    DEFAULT_START,
-    ArmDomain,
-    ArmEdgeChecker,
-    EdgeSamples,
-    check_arm_edge,
-    statically_valid,
-)
+from drd_planner.domains.arm import DEFAULT_GOAL, DEFAULT_START, ArmDomain, ArmParams
+from drd_planner.domains.arm_checker import ArmEdgeChecker, check_arm_edge
+from drd_planner.domains.arm_roadmap import EdgeSamples, statically_valid
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.base import EdgeChecker, domain_from_spec
-from drd_planner.exceptions import ProblemError
+from drd_planner.exceptions import PlanningError, ProblemError
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Pose
 
@@ -117,7 +111,7 @@ def test_roadmap_rejects_a_self_colliding_start() -> None:
     if not PANDA.is_dir():
         pytest.skip("shared Panda model not present")
     with pytest.raises(ProblemError, match="start configuration"):
-        ArmDomain(start=(0.0, 0.3, 0.0, -3.0, 0.0, 0.3, 0.0), num_samples=20, k=4)
+        ArmDomain(ArmParams(start=(0.0, 0.3, 0.0, -3.0, 0.0, 0.3, 0.0), num_samples=20, k=4))
 
 
 @pytest.mark.parametrize(
@@ -141,7 +135,7 @@ def test_an_invalid_start_or_goal_says_which_check_failed(spec: dict[str, object
     if not PANDA.is_dir():
         pytest.skip("shared Panda model not present")
     with pytest.raises(ProblemError) as info:
-        ArmDomain(num_samples=20, k=4, **spec)  # type: ignore[arg-type]
+        ArmDomain.from_spec({"num_samples": 20, "k": 4, **spec})
     assert re.search(says, str(info.value)), str(info.value)
     assert "or below the floor" not in str(info.value)  # not the old "limits, self-colliding or floor"
 
@@ -260,6 +254,16 @@ def test_metadata_and_trajectories(domain: ArmDomain) -> None:
     assert domain.world_models == ("clutter", "table_clutter")
 
 
+def test_online_members_kept_from_the_defaults_and_its_own(domain: ArmDomain) -> None:
+    assert domain.vehicle_radius == 0.0 and domain.periodic_dims == ()
+    assert domain.world_model_params("clutter") == {}
+    assert domain.position_goals == "vertex" and domain.has_sweep_model
+    assert domain.joint_names == tuple(domain.robot.chain.joint_names)
+    assert domain.sweep_robot(None) is None and domain.sweep_robot(domain.robot) is None
+    with pytest.raises(PlanningError, match="the arm domain matches goal positions to roadmap vertices"):
+        domain.state_from_position([0.0, 0.0, 0.0], 0.0)
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
@@ -280,7 +284,7 @@ def test_bad_specs(spec: dict[str, object], message: str) -> None:
 def test_missing_shared_data_gives_a_clear_error(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setenv("DRD_SHARED_DATA", str(tmp_path))
     with pytest.raises(ProblemError, match="DRD_SHARED_DATA"):
-        ArmDomain(num_samples=10)
+        ArmDomain(ArmParams(num_samples=10))
 
 
 def test_world_from_moveit_scene(domain: ArmDomain) -> None:

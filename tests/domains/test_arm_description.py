@@ -7,7 +7,6 @@ import time
 import pytest
 from conftest import SHARED_DATA
 
-import drd_planner.domains.arm as arm_module
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import ProblemError
@@ -48,7 +47,7 @@ def test_thousands_of_links_are_refused_before_the_model_is_built(
     def no_parse(*_: object) -> None:
         raise AssertionError("the description was parsed before its size was checked")
 
-    monkeypatch.setattr(arm_module, "_robot_from_text", no_parse)
+    monkeypatch.setattr(domain.loader, "model", no_parse)
     big = _with_extra_links((PANDA / "panda_spherized.urdf").read_text(), 8000)
     start = time.perf_counter()
     with pytest.raises(ProblemError) as info:

@@ -10,7 +10,8 @@ from scipy.spatial import cKDTree
 
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_checker import HelicopterChecker, helicopter_checker
-from drd_planner.domains.helicopter_worlds import HelicopterWorld, NoFlyZone, TerrainParams
+from drd_planner.domains.helicopter_world_params import NoFlyZone, TerrainParams
+from drd_planner.domains.helicopter_worlds import HelicopterWorld
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.scene import Scene

@@ -1,4 +1,4 @@
-"""Tests of the helicopter lattice and its Dubins primitives: known answers and lattice invariants."""
+"""Tests of the helicopter lattice: its Dubins primitives and the lattice invariants (Dubins itself: test_dubins)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from scipy.sparse import csr_array
 from scipy.sparse.csgraph import breadth_first_order
 
-from drd_planner.domains.helicopter_dubins import dubins_path, wrap_angle
+from drd_planner.domains.dubins import wrap_angle
 from drd_planner.domains.helicopter_lattice import HelicopterLattice, LatticeParams, build_lattice
 from drd_planner.exceptions import ProblemError
 
@@ -19,73 +19,6 @@ R = 100.0
 @pytest.fixture(scope="module")
 def lattice() -> HelicopterLattice:
     return build_lattice()
-
-
-# --------------------------------------------------------------------------------------------------
-# Dubins
-
-
-@pytest.mark.parametrize(
-    ("end", "length", "word"),
-    [
-        ((100.0, 0.0, 0.0), 100.0, None),  # straight
-        ((100.0, 100.0, math.pi / 2), math.pi * R / 2, None),  # left quarter circle
-        ((100.0, -100.0, -math.pi / 2), math.pi * R / 2, None),  # right quarter circle
-        ((0.0, 200.0, math.pi), math.pi * R, None),  # left half circle
-        ((150.0, 100.0, math.pi / 2), 50.0 + math.pi * R / 2, "LSL"),  # straight then quarter circle
-    ],
-)
-def test_dubins_known_lengths(end: tuple[float, float, float], length: float, word: str | None) -> None:
-    path = dubins_path((0.0, 0.0, 0.0), end, radius=R)
-    assert path.length == pytest.approx(length, abs=1e-9)
-    if word is not None:
-        assert path.word == word
-    ex, ey, eh = path.end()
-    assert (ex, ey) == pytest.approx(end[:2], abs=1e-9)
-    assert float(wrap_angle(eh - end[2])) == pytest.approx(0.0, abs=1e-9)
-
-
-def test_dubins_lane_change_is_a_symmetric_s_curve() -> None:
-    # (0,0,0) -> (150, 50, 0): arc theta, straight s, arc -theta with 2R(1 - cos t) + s sin t = 50 and
-    # 2R sin t + s cos t = 150; solve for t by bisection and compare the total length 2 R t + s.
-    def lateral(t: float) -> float:
-        s = (150.0 - 2 * R * math.sin(t)) / math.cos(t)
-        return 2 * R * (1 - math.cos(t)) + s * math.sin(t) - 50.0
-
-    lo, hi = 1e-6, 0.8
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if lateral(mid) < 0 else (lo, mid)
-    t = 0.5 * (lo + hi)
-    s = (150.0 - 2 * R * math.sin(t)) / math.cos(t)
-    path = dubins_path((0.0, 0.0, 0.0), (150.0, 50.0, 0.0), radius=R)
-    assert path.word == "LSR"
-    assert path.segments == pytest.approx((R * t, s, R * t), abs=1e-6)
-
-
-def test_dubins_random_poses_reach_their_goal_with_bounded_curvature() -> None:
-    rng = np.random.default_rng(7)
-    for _ in range(200):
-        start = (*rng.uniform(-300, 300, 2), rng.uniform(-math.pi, math.pi))
-        end = (*rng.uniform(-300, 300, 2), rng.uniform(-math.pi, math.pi))
-        path = dubins_path(start, end, radius=R)
-        assert path.length >= math.hypot(end[0] - start[0], end[1] - start[1]) - 1e-9
-        poses = path.sample(np.linspace(0.0, path.length, 400))
-        assert poses[0, :2] == pytest.approx(start[:2], abs=1e-9)
-        assert poses[-1, :2] == pytest.approx(end[:2], abs=1e-6)
-        # heading changes by at most ds / R between samples (curvature bound), positions follow headings
-        ds = path.length / 399
-        dh = np.abs(wrap_angle(np.diff(poses[:, 2])))
-        assert np.all(dh <= ds / R + 1e-9)
-        step = np.linalg.norm(np.diff(poses[:, :2], axis=0), axis=1)
-        assert np.all(step <= ds + 1e-9)
-
-
-def test_dubins_rejects_bad_radius() -> None:
-    with pytest.raises(ProblemError):
-        dubins_path((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), radius=0.0)
-    with pytest.raises(ProblemError):
-        dubins_path((0.0, 0.0, 0.0), (math.nan, 0.0, 0.0), radius=1.0)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -12,16 +12,14 @@ from scipy.sparse.csgraph import breadth_first_order
 
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_params import params_to_dict
-from drd_planner.domains.helicopter_worlds import (
-    WORLD_MODELS,
+from drd_planner.domains.helicopter_world_params import (
     CanyonParams,
-    HelicopterWorld,
     NoFlyZone,
     TerrainParams,
     WiresParams,
     default_terrain_path,
-    model_params_from_dict,
 )
+from drd_planner.domains.helicopter_worlds import WORLD_MODELS, HelicopterWorld, model_params_from_dict
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.shapes import Cylinder
 
@@ -214,7 +212,7 @@ def test_default_terrain_path_follows_drd_shared_data(
 
 
 def test_wires_on_known_line_sites_pick_a_subset_of_them() -> None:
-    from drd_planner.domains.helicopter_worlds import WiresParams as _Wires
+    from drd_planner.domains.helicopter_world_params import WiresParams as _Wires
 
     sites = (200.0, 350.0, 500.0)
     params = _Wires(line_sites=sites, lines=(1, 3))

@@ -1,4 +1,4 @@
-"""MCAP bags (rosbags): round trips, offered QoS, the maps at each request, refusals, the bundled bags."""
+"""MCAP bags (rosbags): round trips, offered QoS, requests, refusals, the bundled bags."""
 
 from __future__ import annotations
 
@@ -19,22 +19,17 @@ from drd_msgs_py.bags import (
     bag_requests,
     default_qos,
     jazzy_typestore,
-    maps_at_request,
-    maps_until,
     open_bag,
     read_bag,
+    request_at,
     write_bag,
 )
-from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages, header
-from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update
 from drd_msgs_py.terrain import cloud_from_heightfield
-from drd_msgs_py.worlds import arm_world_messages
-from drd_planner.data.moveit_scene import ScenePrimitive
-from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Cylinder, Sphere
 from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planning.world_messages import obstacle_markers
 
 T0 = 1_000_000_000_000
 SEC = 10**9
@@ -65,7 +60,7 @@ def _obstacles(rb: RosbagsMessages, t: int, extra: bool = False, frame: str = "m
     ]
     if extra:
         items.append(("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0))))
-    markers = markers_from_obstacles(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
+    markers = obstacle_markers(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
     return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
 
 
@@ -153,53 +148,15 @@ def test_offered_qos_is_latched_on_map_topics_only(rb: RosbagsMessages, tmp_path
     assert topics["/goal_pose"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
 
 
-def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp_path: Path) -> None:
+def test_requests_and_frame_of_a_bag(rb: RosbagsMessages, tmp_path: Path) -> None:
     messages = read_bag(write_bag(tmp_path / "m.mcap", _scenario(rb)))
-    requests = bag_requests(messages)
-    assert [(r.index, r.kind, r.time_ns) for r in requests] == [
-        (0, "goal_pose", T0 + SEC // 2),
-        (1, "goal_pose", T0 + 5 * SEC // 2),
+    assert [(r.index, r.kind, r.time_ns, r.position) for r in bag_requests(messages)] == [
+        (0, "goal_pose", T0 + SEC // 2, 2),
+        (1, "goal_pose", T0 + 5 * SEC // 2, 5),
     ]
+    assert request_at(messages, 1).time_ns == T0 + 5 * SEC // 2
     assert bag_frame(messages) == "map"
-    first, req0 = maps_at_request(messages, 0, frame_id="map", margin=2.0)
-    assert (req0.index, req0.position) == (0, 2)
-    snap = first.snapshot
-    assert snap.version == 2 and snap.margin == 2.0 and first.applied == 2 and not first.refused
-    expected = obstacle_update(_obstacles(rb, T0).message, frame_id="map").apply({})
-    assert set(snap.obstacles) == set(expected) == {"tower/0", "nofly/1", "wire/2"}
-    assert all(snap.obstacles[k] == expected[k].parts for k in expected)
-    assert snap.terrain is not None and snap.terrain.shape == (6, 9)
-    # The wrong-frame update is refused (map unchanged, version not bumped); the next one is applied.
-    second, _ = maps_at_request(messages, 1, frame_id="map", margin=2.0)
-    assert second.snapshot.version == 3 and len(second.refused) == 1 and "frame 'odom'" in second.refused[0]
-    assert set(second.snapshot.obstacles) == {"tower/0", "nofly/1", "wire/2", "new_obstacle/0"}
-    # The new sphere is really in the scene at request 1 and not at request 0.
-    probe = (np.array([[5.0, 5.0, 50.0]]), np.array([0.5]))
-    assert second.snapshot.scene.spheres_collide(*probe) and not snap.scene.spheres_collide(*probe)
-    # maps_until is inclusive in time and agrees with maps_at_request.
-    until = maps_until(messages, T0 + 3 * SEC // 2, frame_id="map", margin=2.0)
-    assert until.snapshot.version == 3 and set(until.snapshot.obstacles) == set(second.snapshot.obstacles)
-    assert maps_until(messages, T0 + 3 * SEC // 2 - 1, frame_id="map", margin=2.0).snapshot.version == 2
-    # A planner in another frame refuses every map.
-    other, _ = maps_at_request(messages, 0, frame_id="odom", margin=0.0)
-    assert other.snapshot.version == 0 and len(other.refused) == 2
-
-
-def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) -> None:
-    text = BagMessage(
-        "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
-    )
-    messages = [text, _obstacles(rb, T0), _goal(rb, T0 + 1, (0.0, 0.0, 0.0))]
-    plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
-    assert (
-        plain.robot_description == "<robot/>" and plain.snapshot.version == 1 and plain.snapshot.robot is None
-    )
-
-    def refuse(_urdf: str) -> Any:
-        raise MessageError("no such robot")
-
-    refused, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0, robot_from_description=refuse)
-    assert refused.snapshot.version == 1 and "robot_description" in refused.refused[0]
+    assert bag_frame(messages[2:3]) is None
 
 
 def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessages, tmp_path: Path) -> None:
@@ -221,37 +178,14 @@ def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessag
     with pytest.raises(BagError, match="exists already"):
         write_bag(good, _scenario(rb))
     with pytest.raises(BagError, match="has 2 request"):
-        maps_at_request(read_bag(good), 2, frame_id="map", margin=0.0)
+        request_at(read_bag(good), 2)
     bad_type = BagMessage("/x", "nosuch_msgs/msg/Thing", T0, None)
     with pytest.raises(BagError, match="nosuch_msgs"):
         write_bag(tmp_path / "t.mcap", [bad_type])
     assert not (tmp_path / "t.mcap").exists()
 
 
-def test_arm_world_markers_rebuild_the_world(msgs: Any) -> None:
-    world = ArmWorld(
-        (
-            ScenePrimitive("table_top", Box((0.8, 1.2, 0.04)), Pose((0.6, 0.0, 0.1), (0.0, 0.0, 0.1, 0.995))),
-            ScenePrimitive("cylinder_1", Cylinder(0.04, 0.3), Pose((0.5, 0.2, 0.27))),
-            ScenePrimitive("obj/2", Sphere(0.05), Pose((0.4, -0.3, 0.2))),
-        ),
-        "table_clutter",
-        7,
-    )
-    markers = arm_world_messages(world, frame_id="panda_link0", stamp=(3, 4), msgs=msgs)
-    got = obstacle_update(markers, frame_id="panda_link0").apply({})
-    assert set(got) == {"table_top/0", "cylinder_1/0", "obj/2/0"}
-    for p in world.obstacles:
-        ((shape, pose),) = got[f"{p.name}/0"].parts
-        assert shape == p.shape
-        np.testing.assert_allclose(pose.position, p.pose.position, atol=1e-12)
-        np.testing.assert_allclose(
-            np.abs(pose.quaternion_xyzw @ p.pose.quaternion_xyzw), 1.0, atol=1e-9
-        )  # same rotation
-    with pytest.raises(MessageError, match="frame"):
-        obstacle_update(markers, frame_id="map")
-
-
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["heli_wires", "arm_table_clutter"])
 def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Path) -> None:
     bundled = REPO_ROOT / "bags" / f"{name}.mcap"

@@ -1,4 +1,4 @@
-"""PointCloud2 <-> heightfield: round trip, NaN as unknown, and every refusal."""
+"""PointCloud2 <-> height grid: round trip, NaN as unknown, and every refusal."""
 
 from __future__ import annotations
 
@@ -9,18 +9,23 @@ import numpy as np
 import pytest
 
 from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.limits import MessageLimits
+from drd_msgs_py.shapes import HeightGrid
 from drd_msgs_py.terrain import cloud_from_heightfield, heightfield_from_cloud
-from drd_planner.geometry.terrain import Heightfield
-from drd_planner.planning.map_limits import MapLimits
 
 FRAME = "map"
 
 
-def _terrain() -> Heightfield:
+def _grid(origin: tuple[float, float], cell: float, heights: Any) -> HeightGrid:
+    """A height grid of ``heights`` (metres) at ``origin`` with ``cell`` spacing."""
+    return HeightGrid(origin, cell, np.asarray(heights, dtype=np.float64))
+
+
+def _terrain() -> HeightGrid:
     rng = np.random.default_rng(0)
     heights = rng.uniform(0, 40, (7, 9))
     heights[2, 3] = np.nan
-    return Heightfield((-100.0, 250.0), 25.0, heights)
+    return _grid((-100.0, 250.0), 25.0, heights)
 
 
 def test_round_trip_keeps_the_grid_and_float32_heights(msgs: Any) -> None:
@@ -130,8 +135,10 @@ def test_a_cloud_over_the_cell_limit_is_refused_from_its_header(msgs: Any) -> No
     )
     cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)  # 7 x 9 = 63 cells
     with pytest.raises(MessageError, match=r"63 cells .* max_terrain_cells = 62 "):
-        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_terrain_cells=62))
-    assert heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_terrain_cells=63)).shape == (
+        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MessageLimits(max_terrain_cells=62))
+    assert heightfield_from_cloud(
+        cloud, frame_id=FRAME, limits=MessageLimits(max_terrain_cells=63)
+    ).shape == (
         7,
         9,
     )
@@ -143,32 +150,23 @@ def test_a_cloud_over_the_byte_limit_is_refused_from_its_length(msgs: Any) -> No
         heightfield_from_cloud(padded, frame_id=FRAME)
     cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)  # 756 bytes
     with pytest.raises(MessageError, match="parameter max_message_bytes"):
-        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MapLimits(max_message_bytes=755))
+        heightfield_from_cloud(cloud, frame_id=FRAME, limits=MessageLimits(max_message_bytes=755))
 
 
 def test_tiny_cells_huge_coordinates_and_too_few_known_heights_are_refused(msgs: Any) -> None:
-    tiny = Heightfield((0.0, 0.0), 1e-5, [[0.0, 1.0], [2.0, 3.0]])
+    tiny = _grid((0.0, 0.0), 1e-5, [[0.0, 1.0], [2.0, 3.0]])
     with pytest.raises(
         MessageError, match=r"cells are 1e-05 m, under the limit min_terrain_cell_size = 0.05 \("
     ):
         heightfield_from_cloud(cloud_from_heightfield(tiny, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
-    far = Heightfield((0.0, 0.0), 1.0, [[0.0, 1.0], [2.0, 3e30]])
+    far = _grid((0.0, 0.0), 1.0, [[0.0, 1.0], [2.0, 3e30]])
     with pytest.raises(MessageError, match=r"z values reach 3e\+30 m .* max_coordinate = 1000000.0"):
         heightfield_from_cloud(cloud_from_heightfield(far, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
-    east = Heightfield((2e6, 0.0), 1.0, np.zeros((2, 2)))
+    east = _grid((2e6, 0.0), 1.0, np.zeros((2, 2)))
     with pytest.raises(MessageError, match=r"x values reach 2e\+06 m"):
         heightfield_from_cloud(cloud_from_heightfield(east, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
     # Issue 19 item 8: one NaN in a 2 x 2 cloud left no terrain cell, and every plan then failed.
     for heights in ([[0.0, 1.0], [2.0, np.nan]], [[0.0] * 3, [0.0, np.nan, 0.0], [0.0] * 3]):
-        cloud = cloud_from_heightfield(Heightfield((0.0, 0.0), 1.0, heights), frame_id=FRAME, msgs=msgs)
+        cloud = cloud_from_heightfield(_grid((0.0, 0.0), 1.0, heights), frame_id=FRAME, msgs=msgs)
         with pytest.raises(MessageError, match="no cell with four known heights"):
             heightfield_from_cloud(cloud, frame_id=FRAME)
-
-
-def test_the_unknown_terrain_option_reaches_the_heightfield(msgs: Any) -> None:
-    cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)
-    assert heightfield_from_cloud(cloud, frame_id=FRAME).unknown == "blocked"
-    rim = MapLimits(unknown_terrain="highest_neighbour")
-    terrain = heightfield_from_cloud(cloud, frame_id=FRAME, limits=rim)
-    assert terrain.unknown == "highest_neighbour"
-    assert terrain.surface_heights[2, 3] == np.nanmax(terrain.heights[1:4, 2:5])

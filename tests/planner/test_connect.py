@@ -7,7 +7,8 @@ import pytest
 
 from drd_planner import Planner, PlanStatus, TableOracle, prior_from_problem
 from drd_planner.core.problem import Problem
-from drd_planner.domains.planar import PlanarChecker, make_planar_problem, sample_worlds
+from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
+from drd_planner.domains.planar import PlanarChecker
 from drd_planner.planner import WorldPrior
 from drd_planner.planner.connect import (
     DubinsConnector,
@@ -38,10 +39,7 @@ class PlanarWorldOracle:
 @pytest.fixture(scope="module")
 def planar() -> tuple[Problem, list[np.ndarray], WorldPrior]:
     problem = make_planar_problem(model="forest", num_worlds=300, seed=5)
-    meta = problem.metadata
-    boxes = sample_worlds(
-        "forest", 300, seed=meta["world_seed"], keep_clear=np.asarray(meta["keep_clear"], dtype=np.float64)
-    )
+    boxes = planar_problem_worlds(problem)
     return problem, boxes, prior_from_problem(problem, domain="planar")
 
 
@@ -119,6 +117,7 @@ def test_refusals_for_unreachable_states_and_plain_oracles(
     assert off.status is PlanStatus.REFUSED and "connector" in off.reason
 
 
+@pytest.mark.slow
 def test_imputed_free_probability_tracks_the_true_one(
     planar: tuple[Problem, list[np.ndarray], WorldPrior],
 ) -> None:

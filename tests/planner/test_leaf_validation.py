@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.leaf_validation import (
     BISECT_LEAF,

@@ -14,7 +14,7 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.core.worlds import WorldDatabase
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import QueryTree, WorldPrior
 from drd_planner.planner.query_library import ShortestPaths
@@ -51,6 +51,7 @@ def _queries(problem: Problem, count: int, seed: int) -> list[tuple[int, int]]:
     return pairs
 
 
+@pytest.mark.slow
 def test_every_found_path_was_checked_free_and_no_path_is_exact(problem: Problem, prior: WorldPrior) -> None:
     planner = Planner(prior)
     worlds = problem.require_worlds()

@@ -13,8 +13,8 @@ import pytest
 
 from drd_planner.core.tree import build_tree
 from drd_planner.data.npz_format import payload_digest
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.data.tree_file import TreeBundle, save_tree
-from drd_planner.domains.planar import make_planar_problem
 from drd_planner.exceptions import PriorFileError, TreeFileError
 from drd_planner.planner import (
     LeafSetting,

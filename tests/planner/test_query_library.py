@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from drd_planner.core.lazysp import GraphArcs
-from drd_planner.domains.planar import make_planar_problem
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.query_library import build_query_library, query_library
 

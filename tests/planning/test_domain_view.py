@@ -20,7 +20,11 @@ def test_straight_edges_move_at_most_the_resolution_per_step_and_end_on_the_vert
     states = straight_edge_states(Fine(), [0.0, 0.0], [0.35, -0.05])  # type: ignore[arg-type]
     assert np.allclose(states[0], [0.0, 0.0]) and np.allclose(states[-1], [0.35, -0.05])
     assert len(states) == 5 and np.max(np.abs(np.diff(states, axis=0))) <= 0.1 + 1e-12
-    assert len(straight_edge_states(object(), [0.0], [5.0])) == 2  # type: ignore[arg-type]
+
+    class Stored:
+        resolution = 0.0  # edges are stored trajectories: no straight-edge sampling
+
+    assert len(straight_edge_states(Stored(), [0.0], [5.0])) == 2  # type: ignore[arg-type]
 
 
 def test_helicopter_positions_are_the_state_xyz() -> None:

@@ -19,8 +19,8 @@ from drd_planner.planning.map_state import (
     SCENE_CACHE_SIZE,
     MapSnapshot,
     Parts,
+    SceneCache,
     changed_parts,
-    terrain_collider,
 )
 
 
@@ -39,18 +39,20 @@ def test_terrain_colliders_of_dropped_snapshots_are_freed() -> None:
     for k in range(8):
         snapshot = MapSnapshot(0).with_terrain(_terrain(k))
         assert snapshot.scene.spheres_collide([[4.0, 4.0, k - 0.5]], 0.1)
-        alive.add(terrain_collider(snapshot.terrain))  # type: ignore[arg-type]
+        alive.add(snapshot.cache.terrain_collider(snapshot.terrain))  # type: ignore[arg-type]
         del snapshot
     gc.collect()
     assert len(alive) <= COLLIDER_CACHE_SIZE
 
 
 def test_snapshots_kept_by_the_caller_do_not_keep_their_scenes() -> None:
-    # A node's plan history keeps snapshots; their FCL scenes (and terrain tiles) must not stay with them.
+    # A node's plan history keeps snapshots (of one map store: one lineage, one cache); their FCL scenes (and
+    # terrain tiles) must not stay with them.
     before = _live_colliders()
     history = []
+    snapshot = MapSnapshot(0)
     for k in range(8):
-        snapshot = MapSnapshot(k).with_terrain(_terrain(k))
+        snapshot = snapshot.with_terrain(_terrain(k))
         assert not snapshot.scene.spheres_collide([[4.0, 4.0, k + 0.5]], 0.1)
         history.append(snapshot)
     assert _live_colliders() - before <= COLLIDER_CACHE_SIZE + SCENE_CACHE_SIZE
@@ -61,7 +63,8 @@ def test_snapshots_kept_by_the_caller_do_not_keep_their_scenes() -> None:
 def test_scene_is_built_once_while_kept() -> None:
     snapshot = MapSnapshot(0).with_terrain(_terrain(1))
     assert snapshot.scene is snapshot.scene
-    assert terrain_collider(snapshot.terrain) is terrain_collider(snapshot.terrain)  # type: ignore[arg-type]
+    cache = snapshot.cache
+    assert cache.terrain_collider(snapshot.terrain) is cache.terrain_collider(snapshot.terrain)  # type: ignore[arg-type]
 
 
 def _boxes(count: int, *, moved: int | None = None) -> dict[str, Parts]:
@@ -159,7 +162,7 @@ def test_changed_parts_sees_a_new_unknown_terrain_option() -> None:
 
 def test_a_new_terrain_is_built_after_the_oldest_is_let_go(monkeypatch: pytest.MonkeyPatch) -> None:
     """Peak memory of a stream of terrain updates: never more than COLLIDER_CACHE_SIZE colliders at once."""
-    import drd_planner.planning.map_state as map_state
+    from drd_planner.planning import map_state
 
     alive: weakref.WeakSet[TerrainCollider] = weakref.WeakSet()
     at_build: list[int] = []
@@ -177,3 +180,13 @@ def test_a_new_terrain_is_built_after_the_oldest_is_let_go(monkeypatch: pytest.M
         snapshot = snapshot.with_terrain(_terrain(k))  # the node keeps the current snapshot while it builds
         assert snapshot.scene.spheres_collide([[4.0, 4.0, k - 0.5]], 0.1)
     assert max(at_build) <= COLLIDER_CACHE_SIZE - 1
+
+
+def test_each_lineage_of_snapshots_owns_its_cache() -> None:
+    """Snapshots made from one another share one scene cache; an unrelated snapshot has its own."""
+    first = MapSnapshot(0).with_terrain(_terrain(1))
+    second = first.with_obstacles({"box/0": ((Box((1.0, 1.0, 1.0)), Pose((4.0, 4.0, 5.0))),)})
+    other = MapSnapshot(0).with_terrain(_terrain(1))
+    assert isinstance(first.cache, SceneCache) and second.cache is first.cache
+    assert other.cache is not first.cache
+    assert second.scene is second.scene and other.scene is not second.scene

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import struct
 import sys
 from dataclasses import dataclass
@@ -17,25 +16,17 @@ from conftest import REPO_ROOT, SHARED_DATA
 from rosbags.typesys import Stores, get_typestore
 
 from drd_msgs_py.factory import RosbagsMessages
-from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update
-from drd_msgs_py.terrain import heightfield_from_cloud
-from drd_msgs_py.worlds import helicopter_world_messages
+from drd_msgs_py.obstacles import markers_from_obstacles
 from drd_planner.bench.plots import COLOURS
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
-from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
+from drd_planner.geometry.shapes import Capsule
 from drd_planner.planner import load_tree_bundle
+from drd_planner.planning.map_intake import obstacle_map, obstacles_data, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture import (
-    PictureError,
-    capsule_segment,
-    draw_plan_picture,
-    plan_picture,
-    profile_crossings,
-    shape_outline,
-)
+from drd_planner.planning.picture import PictureError, draw_plan_picture, plan_picture
 from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planning.world_messages import helicopter_world_messages
 
 TREES = REPO_ROOT / "trees"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -53,9 +44,8 @@ def _msgs() -> RosbagsMessages:
 
 
 def _snapshot_from_markers(markers: object, frame: str, cloud: object | None, margin: float) -> MapSnapshot:
-    update = obstacle_update(markers, frame_id=frame)
-    obstacles = {key: o.parts for key, o in update.apply({}).items()}
-    terrain = None if cloud is None else heightfield_from_cloud(cloud, frame_id=frame)
+    obstacles = obstacle_map(markers, frame_id=frame)
+    terrain = None if cloud is None else terrain_from_cloud(cloud, frame_id=frame)
     return MapSnapshot(1, obstacles, terrain, margin)
 
 
@@ -100,7 +90,7 @@ def _arm_world(session: PlanningSession, seed: int) -> Case:
     assert isinstance(domain, ArmDomain)
     world = domain.make_world("table_clutter", seed)
     obstacles = [(f"object/{k}", o.shape, o.pose) for k, o in enumerate(world.obstacles)]
-    markers = markers_from_obstacles(obstacles, frame_id="panda_link0", msgs=_msgs())
+    markers = markers_from_obstacles(obstacles_data(obstacles), frame_id="panda_link0", msgs=_msgs())
     snapshot = _snapshot_from_markers(markers, "panda_link0", None, session.margin)
     return Case(session, snapshot, session.plan(snapshot, seed=0))
 
@@ -114,52 +104,6 @@ def _png_size(path: Path) -> tuple[int, int]:
 
 def _segments(drawing: object, key: str) -> list[np.ndarray]:
     return list(drawing.layers[key].get_segments())  # type: ignore[attr-defined]
-
-
-# --------------------------------------------------------------------------------------------------
-# Geometry helpers
-
-
-def test_outlines_of_posed_shapes() -> None:
-    yaw = math.radians(30.0)
-    box = shape_outline(
-        Box((4.0, 2.0, 10.0)), Pose((1.0, 2.0, 0.0), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2)))
-    )
-    assert box.shape == (4, 2)
-    area = 0.5 * abs(np.dot(box[:, 0], np.roll(box[:, 1], 1)) - np.dot(box[:, 1], np.roll(box[:, 0], 1)))
-    assert area == pytest.approx(8.0)
-    assert box.mean(axis=0) == pytest.approx([1.0, 2.0])
-    circle = shape_outline(Cylinder(3.0, 50.0), Pose((10.0, 0.0, 25.0)))
-    assert np.linalg.norm(circle - [10.0, 0.0], axis=1) == pytest.approx(np.full(len(circle), 3.0))
-    # A cylinder lying along x, seen from the side (x, z): a 20 x 6 rectangle.
-    lying = Pose((0.0, 0.0, 5.0), (0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4)))
-    side = shape_outline(Cylinder(3.0, 20.0), lying, plane=[[1, 0], [0, 0], [0, 1]])
-    assert np.ptp(side, axis=0) == pytest.approx([20.0, 6.0])
-    sphere = shape_outline(Sphere(0.5), Pose((0.0, 1.0, 2.0)), plane=[[0, 0], [1, 0], [0, 1]])
-    assert np.linalg.norm(sphere - [1.0, 2.0], axis=1) == pytest.approx(np.full(len(sphere), 0.5))
-    capsule = shape_outline(Capsule(1.0, 4.0), Pose())  # along z, seen from above: a unit disc
-    assert np.ptp(capsule, axis=0) == pytest.approx([2.0, 2.0], abs=1e-2)
-    flat = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 1, 2]])  # in the x-z plane
-    assert shape_outline(flat, Pose()).shape == (2, 2)  # edge-on from above: a segment
-
-
-def test_capsule_segment_and_crossings() -> None:
-    tilt = Pose((5.0, 0.0, 4.0), (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)))  # z axis -> -y
-    ends = capsule_segment(Capsule(0.1, 2.0), tilt)
-    assert np.sort(ends[:, 1]) == pytest.approx([-1.0, 1.0])
-    assert ends[:, [0, 2]] == pytest.approx(np.array([[5.0, 4.0], [5.0, 4.0]]))
-    reference = np.array([[0.0, 0.0, 50.0], [10.0, 0.0, 50.0], [10.0, 10.0, 50.0]])
-    wires = np.array(
-        [
-            [[5.0, -1.0, 3.0], [5.0, 1.0, 5.0]],  # crosses the first leg at s = 5, z = 4
-            [[9.0, 4.0, 7.0], [11.0, 4.0, 9.0]],  # crosses the second leg at s = 14, z = 8
-            [[20.0, -5.0, 1.0], [20.0, 5.0, 1.0]],  # misses
-        ]
-    )
-    s, z = profile_crossings(reference, wires)
-    assert s == pytest.approx([5.0, 14.0])
-    assert z == pytest.approx([4.0, 8.0])
-    assert profile_crossings(reference, np.zeros((0, 2, 3)))[0].size == 0
 
 
 # --------------------------------------------------------------------------------------------------

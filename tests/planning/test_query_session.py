@@ -20,6 +20,7 @@ from drd_planner.cli import main
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
+from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import PlanningError, PriorFileError, ProblemError, TreeFileError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box
@@ -27,7 +28,7 @@ from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planning.map_state import MapSnapshot, Parts
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.query_support import MotionRegistry, state_from_pose, yaw_from_quaternion
+from drd_planner.planning.query_support import MotionRegistry, yaw_from_quaternion
 from drd_planner.planning.replan import affected_edges, recheck_plan
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
@@ -340,6 +341,7 @@ def _arm_start(session: QuerySession) -> np.ndarray:
     return session.vertex_state(0) + np.array([0.1, -0.05, 0.0, 0.05, 0.0, 0.0, 0.0])
 
 
+@pytest.mark.slow
 def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySession, MapSnapshot]) -> None:
     session, snapshot = arm
     start = _arm_start(session)

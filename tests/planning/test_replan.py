@@ -14,9 +14,6 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 from drd_msgs_py.factory import RosbagsMessages
-from drd_msgs_py.obstacles import obstacle_update
-from drd_msgs_py.terrain import heightfield_from_cloud
-from drd_msgs_py.worlds import helicopter_world_messages
 from drd_planner.domains.arm import ArmDomain, default_panda_dir
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
@@ -25,6 +22,7 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import load_tree_bundle
+from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot, Parts, changed_parts
 from drd_planner.planning.replan import (
     affected_edges,
@@ -34,6 +32,7 @@ from drd_planner.planning.replan import (
     recheck_plan,
 )
 from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planning.world_messages import helicopter_world_messages
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
 HELI_SEED = 2  # a Wires world whose plan has 6 edges
@@ -192,9 +191,9 @@ def test_heli_map_resent_through_messages_is_compared_by_value(
 
     def snapshot_of(version: int) -> MapSnapshot:
         markers, cloud = helicopter_world_messages(world, wire_segments=8, frame_id="map", msgs=msgs)
-        obstacles = obstacle_update(markers, frame_id="map").apply({})
-        terrain = heightfield_from_cloud(cloud, frame_id="map")
-        return MapSnapshot(version, {k: o.parts for k, o in obstacles.items()}, terrain, session.margin)
+        obstacles = obstacle_map(markers, frame_id="map")
+        terrain = terrain_from_cloud(cloud, frame_id="map")
+        return MapSnapshot(version, obstacles, terrain, session.margin)
 
     first = snapshot_of(1)
     plan = session.plan(first, seed=0)

@@ -15,6 +15,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from drd_msgs_py.exceptions import MessageError
+from drd_planner.exceptions import PlanningError
 from drd_planner.planner import load_prior
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
@@ -25,6 +26,8 @@ from drd_planner.planning.requests import (
     goal_from_pose,
     joint_vector,
     pick_session,
+    read_goal,
+    read_robot_state,
     start_from_odometry,
 )
 
@@ -108,3 +111,19 @@ def test_one_prior_per_domain_serves_requests(session: QuerySession) -> None:
     assert reason is not None and "helicopter" in reason and "'again'" in reason
     assert pick_session([session], _goal(np.zeros(3))) is session
     assert pick_session([session], Goal(joints=np.zeros(7))) is None  # joints need an arm prior
+
+
+def test_one_parser_reads_goals_and_robot_states_of_any_namespace(session: QuerySession) -> None:
+    pose = PoseStamped()
+    pose.header.frame_id = "map"
+    pose.pose.position.x, pose.pose.orientation.w = 5.0, 1.0
+    goal = read_goal("/robot1/goal_pose", pose, [session], "map")
+    assert goal.joints is None and goal.position is not None and goal.position[0] == 5.0
+    with pytest.raises(PlanningError, match="no arm prior is loaded"):
+        read_goal("goal_joints", JointState(), [session], "map")
+    odom = Odometry()
+    odom.header.frame_id = "map"
+    odom.pose.pose.orientation.w = 1.0
+    read = read_robot_state("odom", odom, [session], "map")
+    assert read is not None and read[0] is False and read[1].shape == (4,)
+    assert read_robot_state("/robot1/joint_states", JointState(), [session], "map") is None  # not ours

@@ -18,8 +18,12 @@ from drd_planner.exceptions import PlanningError, TreeFileError
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import load_tree_bundle
-from drd_planner.planning.map_state import MapSnapshot, changed_parts, terrain_collider
+from drd_planner.planning.map_state import MapSnapshot, changed_parts
 from drd_planner.planning.session import PlanningSession
+
+#: Worlds of the test tree with a free library path, and worlds where every library path is blocked.
+PATH_SEEDS = (100, 102, 104, 106, 107, 109)
+BLOCKED_SEEDS = (101, 103)
 
 SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'
 
@@ -48,17 +52,9 @@ def _snapshot(session: PlanningSession, seed: int) -> MapSnapshot:
 
 def test_plan_is_verified_and_matches_the_offline_episode(bundle: TreeBundle) -> None:
     session = PlanningSession(bundle, name="wires")
-    for seed in range(100, 106):
+    for seed in (*PATH_SEEDS, *BLOCKED_SEEDS):
         snapshot = _snapshot(session, seed)
         result = session.plan(snapshot, seed=7)
-        checked = {c.edge: c.free for c in result.checks}
-        if result.ok:
-            assert all(checked.get(e) is True for e in result.path_edges)
-            assert result.path_vertices[0] == session.domain.start
-            assert result.path_vertices[-1] == session.domain.goal
-            assert result.states.shape[1] == 4 and result.states.shape[0] > len(result.path_edges)
-        else:
-            assert result.path_edges == () and "checks" in result.message
         # The same policy on the same scene through the plain runner asks for the same edges.
         ctx = dataclasses.replace(session._context, seed=7)
         offline = run_episode(
@@ -70,6 +66,22 @@ def test_plan_is_verified_and_matches_the_offline_episode(bundle: TreeBundle) ->
         assert [(c.edge, c.free, c.stage) for c in offline.checks] == [
             (c.edge, c.free, c.stage) for c in result.checks
         ]
+        checked = {c.edge: c.free for c in result.checks}
+        if seed in BLOCKED_SEEDS:  # every library path is blocked in these worlds
+            assert not result.ok and result.status == "no_free_path", result.message
+            assert result.path_edges == () and "checks" in result.message
+            continue
+        assert result.ok, f"seed {seed}: {result.message}"  # these worlds have a free library path
+        assert result.status == "path_found" and result.path_edges
+        assert all(checked.get(e) is True for e in result.path_edges)
+        vertices = result.path_vertices
+        assert vertices[0] == session.domain.start and vertices[-1] == session.domain.goal
+        edges = session.domain.graph.edges
+        for k, e in enumerate(result.path_edges):  # each edge joins consecutive path vertices
+            assert tuple(int(v) for v in edges[e]) == (vertices[k], vertices[k + 1])
+        assert result.states.shape[1] == 4 and result.states.shape[0] > len(result.path_edges)
+        np.testing.assert_allclose(result.states[0], session.vertex_state(vertices[0]))
+        np.testing.assert_allclose(result.states[-1], session.vertex_state(vertices[-1]))
 
 
 def test_checks_are_cached_per_map_version(bundle: TreeBundle) -> None:
@@ -142,7 +154,9 @@ def test_snapshots_with_the_same_terrain_share_its_collider_and_answer_alike() -
     first = MapSnapshot(1, {}, world.terrain, session.margin).with_obstacles(obstacles)
     second = first.with_obstacles({})
     assert first.scene is not second.scene and first.scene.terrain is second.scene.terrain
-    assert terrain_collider(world.terrain) is terrain_collider(world.terrain)  # FCL tiles built once
+    assert first.cache.terrain_collider(world.terrain) is second.cache.terrain_collider(
+        world.terrain
+    )  # built once
     lone = Scene(margin=session.margin)
     lone.add_terrain(world.terrain)  # its own collider
     a, b = session.checker(second), session.domain.checker(lone)

@@ -8,7 +8,7 @@ valid on purpose (a repeated LINE_STRIP point, a huge id, some NaN heights, a DE
 ...): those have ``must_fail=False`` and may be accepted.
 
 Valid bases come from the planner's own world models (the helicopter "wires" world of a tree's
-domain via :func:`drd_msgs_py.worlds.helicopter_world_messages`; the arm "table_clutter" world as
+domain via :func:`drd_planner.planning.world_messages.helicopter_world_messages`; the arm "table_clutter" world as
 CUBE/CYLINDER/SPHERE markers). Messages are copied through rclpy's CDR serialization before being
 mutated, so a base is never changed. Same seed, same cases.
 """
@@ -31,7 +31,7 @@ from std_msgs.msg import String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from drd_msgs_py.factory import RclpyMessages
-from drd_msgs_py.worlds import arm_world_messages, helicopter_world_messages
+from drd_planner.planning.world_messages import arm_world_messages, helicopter_world_messages
 
 __all__ = [
     "Case",

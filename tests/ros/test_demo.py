@@ -13,6 +13,8 @@ from harness import use_domain
 from drd_msgs_py.bags import open_bag
 from drd_planner.ros.demo import main
 
+pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
+
 use_domain(30)
 
 

@@ -28,15 +28,14 @@ from rclpy.parameter import Parameter  # noqa: E402
 from sensor_msgs.msg import PointCloud2  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update  # noqa: E402
-from drd_msgs_py.terrain import heightfield_from_cloud  # noqa: E402
-from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
 from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
@@ -89,11 +88,11 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
         last = plan.poses[-1].pose.position
         assert np.allclose([last.x, last.y, last.z], session.goal_state[:3])
         # Every edge of the plan was checked free, and the log equals the offline session on the same maps.
-        update = obstacle_update(markers, frame_id="map")
+
         snapshot = MapSnapshot(
             1,
-            {k: o.parts for k, o in update.apply({}).items()},
-            heightfield_from_cloud(cloud, frame_id="map"),
+            obstacle_map(markers, frame_id="map"),
+            terrain_from_cloud(cloud, frame_id="map"),
             session.margin,
         )
         offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
@@ -213,7 +212,7 @@ def test_bad_requests_and_maps_leave_errors_not_plans(context: Any) -> None:
         assert node.plan_for(nan) is None and "finite" in node.errors[-1]
         cloud = PointCloud2()
         cloud.header.frame_id = "map"
-        node._on_terrain(cloud)
+        node._on_map("terrain", cloud)
         assert "terrain refused" in node.errors[-1] and node.snapshot.version == 0
         assert State.PRIMARY_STATE_INACTIVE == node._state_machine.current_state[0]
     finally:
@@ -294,6 +293,7 @@ def test_maps_are_prepared_on_arrival_and_a_bug_in_a_plan_leaves_the_node_planni
         assert float(summary["selection_s"]) <= float(summary["policy_s"])
 
 
+@pytest.mark.slow
 def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
     beside = Path(sys.executable).parent / "planner_node"  # the venv's scripts, even when not on PATH
     exe = str(beside) if beside.is_file() else shutil.which("planner_node")
@@ -346,7 +346,7 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         assert first is not None and first.ok
         # Far from every plan edge: nothing to re-check, the plan stays, no new plan is published.
         far = Pose(position=(-5000.0, -5000.0, 0.0))
-        update = markers_from_obstacles(
+        update = obstacle_markers(
             [("extra/1", Sphere(5.0), far)], frame_id="map", msgs=msgs, delete_all_first=False
         )
         peer.obstacles.publish(update)
@@ -358,7 +358,7 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         edge = first.path_edges[len(first.path_edges) // 2]
         states = session.edge_states(edge)
         middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
-        update = markers_from_obstacles(
+        update = obstacle_markers(
             [("extra/2", Box((30.0, 30.0, 30.0)), middle)], frame_id="map", msgs=msgs, delete_all_first=False
         )
         peer.obstacles.publish(update)

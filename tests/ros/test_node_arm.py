@@ -20,11 +20,12 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.obstacles import markers_from_obstacles, obstacle_update  # noqa: E402
 from drd_planner.domains.arm import ArmDomain, default_panda_dir  # noqa: E402
 from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planning.map_intake import obstacle_map  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.world_messages import obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "arm_table_clutter.npz"
@@ -52,7 +53,7 @@ def _node(ctx: Any) -> PlannerNode:
 def _world_markers(domain: ArmDomain, seed: int) -> Any:
     world = domain.make_world("table_clutter", seed)
     obstacles = [(f"object/{k}", p.shape, p.pose) for k, p in enumerate(world.obstacles)]
-    return markers_from_obstacles(obstacles, frame_id=FRAME, msgs=RclpyMessages())
+    return obstacle_markers(obstacles, frame_id=FRAME, msgs=RclpyMessages())
 
 
 def _joint_goal(session: PlanningSession, *, reverse: bool = True) -> JointState:
@@ -65,6 +66,7 @@ def _joint_goal(session: PlanningSession, *, reverse: bool = True) -> JointState
     return msg
 
 
+@pytest.mark.slow
 def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) -> None:
     node = _node(context)
     peer = Peer(context)
@@ -92,8 +94,7 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         xyz = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in path.poses])
         np.testing.assert_allclose(xyz, domain.end_effector_positions(q), atol=1e-9)
         # Same checks as the offline session on the same decoded map; the plan's edges were checked free.
-        update = obstacle_update(markers, frame_id=FRAME)
-        snapshot = MapSnapshot(1, {k: o.parts for k, o in update.apply({}).items()}, None, session.margin)
+        snapshot = MapSnapshot(1, obstacle_map(markers, frame_id=FRAME), None, session.margin)
         offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
         assert offline.ok
         assert [s.name for s in log.status] == [f"edge/{c.edge}" for c in offline.checks]
@@ -120,13 +121,13 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
         assert isinstance(domain, ArmDomain)
         # The robot stack's description has mesh collisions: kinematics from it, spheres from the tree's model.
         urdf = (default_panda_dir() / "panda.urdf").read_text(encoding="utf-8")
-        node._on_robot_description(String(data=urdf))
+        node._on_map("robot_description", String(data=urdf))
         robot = node.snapshot.robot
         assert robot is not None and node.snapshot.version == 1
         assert robot.chain.joint_names == domain.robot.chain.joint_names
         assert robot.spheres.count == domain.robot.spheres.count
         # Plans then check with that model (self-collision included): still the offline answer.
-        node._on_obstacles(_world_markers(domain, 5))
+        node._on_map("obstacles", _world_markers(domain, 5))
         assert node.plan_for(_pose_goal(session)) is not None
         # A longer forearm: different kinematics, so a different end-effector goal position.
         stretched = urdf.replace(
@@ -134,7 +135,7 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
             '<origin rpy="1.57079632679 0 0" xyz="0 -0.45 0"/>',
         )
         assert stretched != urdf
-        node._on_robot_description(String(data=stretched))
+        node._on_map("robot_description", String(data=stretched))
         assert node.snapshot.robot is not None and node.snapshot.robot is not robot
         moved = session.positions(session.goal_state, node.snapshot)[0]
         assert np.linalg.norm(moved - session.goal_position) > 0.05
@@ -144,7 +145,7 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
             ("not xml", "robot_description refused"),
             (_renamed_joint(urdf), "tree was built for"),
         ]:
-            node._on_robot_description(String(data=bad))
+            node._on_map("robot_description", String(data=bad))
             assert words in node.errors[-1]
             assert node.snapshot.version == version
     finally:
@@ -180,10 +181,10 @@ def test_bad_joint_goals_are_refused(context: Any) -> None:
         ragged.position = list(ragged.position)[:3]
         cases.append((ragged, "positions"))
         for msg, words in cases:
-            node._on_goal_joints(msg)
+            node._on_request("goal_joints", msg)
             assert words in node.errors[-1], node.errors[-1]
         # A valid goal before any obstacle map: refused, nothing planned.
-        node._on_goal_joints(_joint_goal(session))
+        node._on_request("goal_joints", _joint_goal(session))
         node._serve()
         assert "no maps" in node.errors[-1] and node.published is None
     finally:

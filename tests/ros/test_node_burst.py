@@ -37,7 +37,11 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from rclpy.qos import ReliabilityPolicy  # noqa: E402
+
 from drd_planner.ros.node import REQUESTS  # noqa: E402
+
+pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
 
 ROOT = Path(__file__).resolve().parents[2]
 TREE = ROOT / "trees" / "heli_wires.npz"
@@ -47,9 +51,6 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 TRACED_BOUND = 256 * 2**10
 OBJECTS_BOUND = 150
 RSS_BOUND = 8 * 2**20
-#: The node keeps this many requests (KEEP_LAST) before it takes them; a deeper burst can only be
-#: coalesced if the queue holds it. Until node.py's request QoS is deep enough, the bursts lose requests.
-QUEUE_TOO_SHORT = REQUESTS.depth < BURST
 
 
 def _script(name: str) -> ModuleType:
@@ -94,12 +95,13 @@ def _growths(report: Any) -> list[dict[str, int]]:  # during (when measured), th
     return [during, quiet]
 
 
-@pytest.mark.xfail(
-    QUEUE_TOO_SHORT,
-    reason=f"node.py keeps only REQUESTS.depth = {REQUESTS.depth} goal_pose requests (KEEP_LAST): the rest of "
-    "a burst is dropped by DDS before the node can coalesce it",
-    strict=True,
-)
+def test_request_queues_hold_a_whole_burst() -> None:
+    """The node keeps REQUESTS.depth requests (KEEP_LAST) before it takes them: a shallower queue drops the
+    rest of a burst in DDS before the node can coalesce it (topics) or answer it (get_plan)."""
+    assert REQUESTS.depth >= BURST, f"REQUESTS.depth = {REQUESTS.depth} < a burst of {BURST}"
+    assert REQUESTS.reliability == ReliabilityPolicy.RELIABLE
+
+
 def test_topic_burst_is_answered_or_coalesced_with_flat_memory(harness: Any) -> None:
     reports, plans = [], harness.plans
     tracemalloc.start()
@@ -126,12 +128,6 @@ def test_topic_burst_is_answered_or_coalesced_with_flat_memory(harness: Any) -> 
     assert not harness.node.errors
 
 
-@pytest.mark.xfail(
-    QUEUE_TOO_SHORT,
-    reason="node.py's get_plan service uses the default service QoS (KEEP_LAST 10): a burst of calls "
-    "loses all but about 10 requests; it needs the deep request QoS too",
-    strict=True,
-)
 def test_service_burst_answers_every_call_with_flat_memory(harness: Any) -> None:
     plans = harness.plans
     report = bench.service_burst(harness, requests=BURST)

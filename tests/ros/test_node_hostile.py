@@ -29,14 +29,14 @@ from lifecycle_msgs.srv import ChangeState  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
 
-import drd_planner.ros.node as node_module  # noqa: E402
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.obstacles import markers_from_obstacles  # noqa: E402
-from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box  # noqa: E402
+from drd_planner.planning import map_store as map_store_module  # noqa: E402
+from drd_planner.planning import service as service_module  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
 from drd_planner.ros.guard import MAX_ERROR_CHARS  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
@@ -114,7 +114,7 @@ def test_an_unexpected_exception_in_a_map_callback_does_not_end_the_node(
         def out_of_memory(*args: Any, **kwargs: Any) -> Any:
             raise MemoryError("cannot allocate 14.3 TiB")
 
-        monkeypatch.setattr(node_module, "heightfield_from_cloud", out_of_memory)
+        monkeypatch.setattr(map_store_module, "terrain_from_cloud", out_of_memory)
         peer.terrain.publish(_tiny_cell_cloud())
         assert spin_until(executor, lambda: any("MemoryError" in e for e in node.errors))
         assert "terrain: internal error, input dropped" in node.errors[-1]
@@ -178,7 +178,7 @@ def test_a_map_that_arrives_while_the_first_plan_is_made_is_checked_before_it_st
         middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
         version = node.snapshot.version
         peer.obstacles.publish(
-            markers_from_obstacles(
+            obstacle_markers(
                 [("extra/1", Box((30.0, 30.0, 30.0)), middle)],
                 frame_id="map",
                 msgs=RclpyMessages(),
@@ -257,6 +257,7 @@ SIGNAL_STARTS = 20
 SIGNAL_DEADLINE_S = 2.0
 
 
+@pytest.mark.slow
 def test_sigint_and_sigterm_end_background_started_nodes_at_any_moment_within_2_s() -> None:
     """20 starts as a shell script's `cmd &` makes them (SIGINT ignored), signalled at seeded moments."""
     rng = np.random.default_rng(19)
@@ -296,12 +297,12 @@ def test_only_the_newest_served_requests_keep_their_map_snapshots(context: Any) 
     with active_planner(context, node, peer) as executor:
         _publish_world(executor, node, peer)
         goal = _goal(node.sessions[0])
-        for _ in range(node_module.SNAPSHOTS_KEPT + 3):
+        for _ in range(service_module.SNAPSHOTS_KEPT + 3):
             assert node.plan_for(goal) is not None
         history = node.history
-        assert len(history) == node_module.SNAPSHOTS_KEPT + 3
+        assert len(history) == service_module.SNAPSHOTS_KEPT + 3
         kept = [record.snapshot is not None for record in history]
-        assert kept == [False] * 3 + [True] * node_module.SNAPSHOTS_KEPT
+        assert kept == [False] * 3 + [True] * service_module.SNAPSHOTS_KEPT
 
 
 def test_maps_beyond_the_limit_parameters_are_refused_naming_them_and_the_map_is_kept(context: Any) -> None:
@@ -344,4 +345,4 @@ def test_a_robot_state_stream_in_the_wrong_frame_is_reported_once_per_period(con
         spin_for(executor, 0.3)
         refused = [e for e in node.errors if e.startswith("odometry refused")]
         assert len(refused) == 1 and "frame 'odom'" in refused[0]
-        assert node._robot_states.get(False) is None
+        assert node.service is not None and node.service.robot_states.get(False) is None

@@ -18,10 +18,10 @@ from sensor_msgs.msg import PointCloud2  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.planner import load_tree_bundle  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.node import LATCHED, PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
@@ -85,6 +85,7 @@ def test_a_latched_map_published_before_the_node_started_reaches_the_default_nod
     assert _maps_reach_the_node(context, transient_local=True, publisher_qos=LATCHED, before=True)
 
 
+@pytest.mark.slow
 def test_a_default_qos_publisher_reaches_the_node_with_volatile_map_subscriptions(context: Any) -> None:
     assert not _maps_reach_the_node(
         context, transient_local=True, publisher_qos=10, before=False

@@ -23,12 +23,11 @@ from rclpy.parameter import Parameter  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.obstacles import markers_from_obstacles  # noqa: E402
-from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.cli import main as drd  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'
@@ -114,7 +113,9 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         assert "no robot state known yet" in node.errors[-1] and "'odom'" in node.errors[-1]
         start = session.vertex_state(0) + np.array([-30.0, 0.0, 0.0, 0.0])  # off the graph
         odom.publish(_pose(Odometry(), start))
-        assert spin_until(executor, lambda: node._robot_states.get(False) is not None)
+        assert spin_until(
+            executor, lambda: node.service is not None and node.service.robot_states.get(False) is not None
+        )
         for seed in range(100, 130):  # the first world with a free path from there
             if seed > 100:
                 _publish_world(executor, node, peer, seed)
@@ -146,7 +147,10 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         # The robot moved along its plan; `replan` plans again from where it is now.
         moved = np.array(published.states[len(published.states) // 3], dtype=float)
         odom.publish(_pose(Odometry(), moved))
-        assert spin_until(executor, lambda: np.allclose(node._robot_states[False], moved))
+        assert spin_until(
+            executor,
+            lambda: node.service is not None and np.allclose(node.service.robot_states[False], moved),
+        )
         future = replan.call_async(Trigger.Request())
         assert spin_until(executor, future.done) and future.result().success, future.result().message
         # The plan topic may trail the response: wait until the newest plan on it starts where the robot is.
@@ -162,7 +166,7 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         box = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
         count = len(peer.plans)
         peer.obstacles.publish(
-            markers_from_obstacles(
+            obstacle_markers(
                 [("extra/1", Box((30.0, 30.0, 30.0)), box)],
                 frame_id="map",
                 msgs=RclpyMessages(),

@@ -16,8 +16,8 @@ from rclpy.parameter import Parameter  # noqa: E402
 from sensor_msgs.msg import PointCloud2  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_msgs_py.worlds import helicopter_world_messages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"

@@ -28,7 +28,9 @@ from drd_planner.planner import load_prior  # noqa: E402
 from drd_planner.planning.bag_plan import plan_bag_request  # noqa: E402
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
-from drd_planner.ros.replay import ReplaySummary, main, replay_bag  # noqa: E402
+from drd_planner.ros.replay import ReplayOptions, ReplaySummary, main, replay_bag  # noqa: E402
+
+pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ["ROS_DOMAIN_ID"] = str(110 + os.getpid() % 20)
@@ -62,7 +64,7 @@ def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[Repl
     try:
         assert node.trigger_configure().name == "SUCCESS", node.errors
         assert node.trigger_activate().name == "SUCCESS"
-        summary = replay_bag(bag, context=ctx, nodes=[node], record=out, settle=1.0)
+        summary = replay_bag(bag, context=ctx, nodes=[node], options=ReplayOptions(record=out, settle=1.0))
     except BaseException:
         node.destroy_node()
         raise
@@ -189,16 +191,15 @@ def test_replay_without_a_planner_records_nothing(context: Any, tmp_path: Path) 
     if not bag.is_file():
         pytest.skip(f"{bag} not generated")
     lines: list[str] = []
-    summary = replay_bag(
-        bag, context=context, record=tmp_path / "o.mcap", rate=10.0, settle=0.1, wait=0.2, log=lines.append
-    )
+    options = ReplayOptions(record=tmp_path / "o.mcap", rate=10.0, settle=0.1, wait=0.2, log=lines.append)
+    summary = replay_bag(bag, context=context, options=options)
     assert len(summary.published) == 10 and not summary.recorded
     assert set(summary.unmatched) == {"/terrain", "/obstacles", "/odom", "/goal_pose"}
     assert summary.seconds < 5.0  # 5.5 s of bag at rate 10
     assert any("no subscriber on /goal_pose" in line for line in lines)
     assert read_bag(tmp_path / "o.mcap") == []
     with pytest.raises(ValueError, match="rate"):
-        replay_bag(bag, context=context, rate=0.0)
+        replay_bag(bag, context=context, options=ReplayOptions(rate=0.0))
 
 
 def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -14,7 +14,7 @@ setup(
         (f"share/{PACKAGE}", ["package.xml"]),
     ],
     python_requires=">=3.10",
-    install_requires=["numpy>=1.24", "rosbags>=0.11", "drd_planner"],
+    install_requires=["numpy>=1.24", "rosbags>=0.11"],
     zip_safe=True,
     maintainer="drd_planner maintainers",
     maintainer_email="maintainers@drd-planner.invalid",

@@ -42,6 +42,8 @@ setup(
         "dask[distributed]>=2024.1",
         "yourdfpy>=0.0.56",
         "rosbags>=0.11",
+        "typing_extensions>=4.6",
+        "drd_msgs_py",
     ],
     extras_require={
         "plots": ["matplotlib>=3.6"],

@@ -1,4 +1,4 @@
-"""Rosbag2 MCAP bags of maps and requests (rosbags), and the maps a planner holds at each request.
+"""Rosbag2 MCAP bags of maps and requests (rosbags): reading, writing, and finding the requests.
 
 A bag here is one self-contained ``.mcap`` file as rosbag2's MCAP storage writes it (``ros2 bag play
 FILE.mcap`` and :class:`rosbags.rosbag2.Reader` open it directly): every channel carries its topic, type,
@@ -9,18 +9,17 @@ unless told, and an empty QoS replays as volatile, so :func:`write_bag` always g
   (a late subscriber still gets the latest map; so every ``obstacles`` message should be a whole map);
 - every other topic: reliable, volatile, depth 10.
 
-:func:`maps_at_request` replays a bag's map messages the way the planner node applies them
-(``obstacle_update(...).apply``, ``heightfield_from_cloud``; one snapshot version per accepted map;
-a refused message leaves the maps unchanged) and gives the :class:`MapSnapshot` in force at a
-request. Times are integer nanoseconds; shapes and positions metres.
+:func:`bag_requests` lists a bag's planning requests and :func:`request_at` finds one; applying the map
+messages before a request as a planner does is the planner's part (drd_planner's ``planning.bag_plan``).
+Times are integer nanoseconds.
 """
 
 from __future__ import annotations
 
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -32,17 +31,13 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.obstacles import Obstacle, obstacle_update
-from drd_msgs_py.terrain import heightfield_from_cloud
-from drd_planner.exceptions import DrdError
-from drd_planner.planning.map_state import MapSnapshot
+from drd_msgs_py.topics import MAP_TOPICS, REQUEST_TOPICS, topic_base
 
 __all__ = [
     "MAP_TOPICS",
     "REQUEST_TOPICS",
     "BagContents",
     "BagError",
-    "BagMaps",
     "BagMessage",
     "BagRequest",
     "BagTopic",
@@ -52,10 +47,9 @@ __all__ = [
     "default_qos",
     "jazzy_typestore",
     "latched_qos",
-    "maps_at_request",
-    "maps_until",
     "open_bag",
     "read_bag",
+    "request_at",
     "topic_base",
     "volatile_qos",
     "write_bag",
@@ -63,20 +57,11 @@ __all__ = [
 ]
 
 
-#: Topics whose latest message is the map (replayed reliable + transient_local, depth 1).
-MAP_TOPICS = frozenset({"obstacles", "terrain", "robot_description"})
-#: Topics that are planning requests.
-REQUEST_TOPICS = frozenset({"goal_pose", "goal_joints"})
 _UNSET = QosTime(0, 0)  # "unspecified": the middleware default (infinite deadline, lifespan, lease)
 
 
 class BagError(MessageError):
     """A bag that cannot be written or read: missing, not a rosbag2 MCAP file, corrupt, inconsistent."""
-
-
-def topic_base(topic: str) -> str:
-    """The last name of a topic (``/robot1/obstacles`` -> ``obstacles``)."""
-    return topic.rstrip("/").rsplit("/", 1)[-1]
 
 
 def latched_qos(depth: int = 1) -> Qos:
@@ -106,7 +91,10 @@ def default_qos(topic: str, *, latched: Iterable[str] = MAP_TOPICS) -> Qos:
 
 @lru_cache(maxsize=1)
 def jazzy_typestore() -> Typestore:
-    """The rosbags typestore of ROS 2 Jazzy's message definitions (built once)."""
+    """The rosbags typestore of ROS 2 Jazzy's message definitions (built once).
+
+    The cache holds a constant: the typestore depends on nothing but the fixed Jazzy definitions.
+    """
     return get_typestore(Stores.ROS2_JAZZY)
 
 
@@ -382,93 +370,8 @@ def bag_frame(messages: Sequence[BagMessage]) -> str | None:
     return None
 
 
-@dataclass(frozen=True)
-class BagMaps:
-    """The maps in force at some point of a bag.
-
-    Attributes:
-        snapshot: the planner's map snapshot (version = accepted map messages so far).
-        robot_description: the latest ``robot_description`` text (None: none in the bag so far).
-        refused: one line per map message the planner would refuse (and ignore).
-        applied: how many map messages were accepted.
-        obstacles: the named obstacles behind ``snapshot.obstacles`` (key ``ns/id``).
-    """
-
-    snapshot: MapSnapshot
-    robot_description: str | None = None
-    refused: tuple[str, ...] = ()
-    applied: int = 0
-    obstacles: Mapping[str, Obstacle] = field(default_factory=dict)
-
-
-def _decode_maps(
-    messages: Sequence[BagMessage],
-    *,
-    frame_id: str,
-    margin: float,
-    robot_from_description: Callable[[str], Any] | None,
-) -> BagMaps:
-    snapshot = MapSnapshot(0, margin=margin)
-    obstacles: dict[str, Obstacle] = {}
-    description: str | None = None
-    refused: list[str] = []
-    applied = 0
-    for m in messages:
-        base = topic_base(m.topic)
-        when = f"{base} at {m.time_ns} ns"
-        try:
-            if base == "obstacles":
-                obstacles = obstacle_update(m.message, frame_id=frame_id).apply(obstacles)
-                snapshot = snapshot.with_obstacles({k: o.parts for k, o in obstacles.items()})
-            elif base == "terrain":
-                snapshot = snapshot.with_terrain(heightfield_from_cloud(m.message, frame_id=frame_id))
-            elif base == "robot_description":
-                text = str(m.message.data)
-                if robot_from_description is not None:
-                    snapshot = snapshot.with_robot(robot_from_description(text))
-                description = text
-            else:
-                continue
-        except (MessageError, DrdError) as exc:
-            refused.append(f"{when} refused: {exc}")
-            continue
-        applied += 1
-    return BagMaps(snapshot, description, tuple(refused), applied, obstacles)
-
-
-def maps_until(
-    messages: Sequence[BagMessage],
-    time_ns: int,
-    *,
-    frame_id: str,
-    margin: float,
-    robot_from_description: Callable[[str], Any] | None = None,
-) -> BagMaps:
-    """The maps after every map message at or before ``time_ns`` (time-ordered ``messages``).
-
-    Args:
-        messages: the bag's decoded messages in time order (:func:`read_bag`).
-        time_ns: bag time, inclusive.
-        frame_id: the planning frame (maps in another frame are refused, as by the node).
-        margin: collision margin of the snapshot (metres; the session's ``margin``).
-        robot_from_description: turns a ``robot_description`` URDF into the snapshot's robot (e.g.
-            ``ArmDomain.robot_from_description``); None keeps only the text.
-    """
-    upto = [m for m in messages if m.time_ns <= time_ns]
-    return _decode_maps(upto, frame_id=frame_id, margin=margin, robot_from_description=robot_from_description)
-
-
-def maps_at_request(
-    messages: Sequence[BagMessage],
-    index: int,
-    *,
-    frame_id: str,
-    margin: float,
-    robot_from_description: Callable[[str], Any] | None = None,
-) -> tuple[BagMaps, BagRequest]:
-    """The maps in force when the ``index``-th (0-based) request arrives, and that request.
-
-    Every map message before the request in bag order counts (arguments as :func:`maps_until`).
+def request_at(messages: Sequence[BagMessage], index: int) -> BagRequest:
+    """The ``index``-th (0-based) request of time-ordered ``messages``.
 
     Raises:
         BagError: the bag has no request ``index`` (the text says how many it has).
@@ -478,11 +381,4 @@ def maps_at_request(
         raise BagError(
             f"request {index} is not in the bag: it has {len(requests)} request(s) (goal_pose / goal_joints)"
         )
-    request = requests[index]
-    maps = _decode_maps(
-        messages[: request.position],
-        frame_id=frame_id,
-        margin=margin,
-        robot_from_description=robot_from_description,
-    )
-    return maps, request
+    return requests[index]

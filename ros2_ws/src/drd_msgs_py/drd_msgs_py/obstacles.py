@@ -1,39 +1,44 @@
-"""Obstacles: ``visualization_msgs/MarkerArray`` <-> collision parts (shapes with world poses).
+"""Obstacles: ``visualization_msgs/MarkerArray`` <-> plain marker shapes with their poses.
 
 Marker semantics (DESIGN.md section 6):
 
 - CUBE: a box of ``scale`` (x, y, z) metres; SPHERE: a sphere of diameter ``scale.x`` (= y = z);
   CYLINDER: a cylinder along the marker's z with diameter ``scale.x`` (= y) and height ``scale.z``;
 - LINE_STRIP: a wire (or any thin body) of diameter ``scale.x`` through ``points`` (given in the marker
-  frame): one capsule per segment, so a wire with sag arrives as its polyline;
+  frame; a consumer makes one capsule per segment, so a wire with sag arrives as its polyline);
 - TRIANGLE_LIST: a triangle mesh, three ``points`` per triangle (a surface, as FCL treats meshes);
 - actions ADD (= MODIFY) replaces the obstacle ``ns/id``, DELETE removes it, DELETEALL removes all.
 
 :func:`obstacle_update` validates a whole array before anything is applied: one bad marker (a DELETEALL
 in a foreign frame included) and the array is refused with a :class:`MessageError` that names it, so a
-consumer keeps its previous map. Sizes are bounded by a :class:`~drd_planner.planning.map_limits.MapLimits`
+consumer keeps its previous map. Sizes are bounded by a :class:`~drd_msgs_py.limits.MessageLimits`
 (``max_markers``, ``max_line_points``, ``max_mesh_triangles``), counted from the markers' lengths before
-any shape is built, and again over the whole map in :meth:`ObstacleUpdate.apply`.
+any shape is read, and again over the whole map in :meth:`ObstacleUpdate.apply`. Shapes come out as the
+plain data of :mod:`drd_msgs_py.shapes`; turning them into collision geometry is the consumer's part.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, TypedDict
 
 import numpy as np
 
 from drd_msgs_py.arrays import FloatArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
-from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Box, Cylinder, Shape, Sphere, TriangleMesh
-from drd_planner.geometry.wires import capsule_between
-from drd_planner.planning.map_limits import MapLimits
+from drd_msgs_py.limits import DEFAULT_LIMITS, MessageLimits
+from drd_msgs_py.shapes import (
+    BoxData,
+    CylinderData,
+    LineStripData,
+    MeshData,
+    PoseData,
+    ShapeData,
+    SphereData,
+)
 
 __all__ = [
     "CUBE",
@@ -41,6 +46,7 @@ __all__ = [
     "LINE_STRIP",
     "SPHERE",
     "TRIANGLE_LIST",
+    "MarkerStyle",
     "Obstacle",
     "ObstacleUpdate",
     "markers_from_obstacles",
@@ -70,23 +76,29 @@ _TYPE_NAMES = {
 SCALE_RTOL = 1e-6
 #: How far a quaternion's norm may be from 1 before it is refused as malformed.
 QUATERNION_TOL = 1e-3
+#: LINE_STRIP points closer than this (metres) are one point (nothing between them).
+SAME_POINT_M = 1e-9
 
 
 @dataclass(frozen=True)
 class Obstacle:
-    """One named obstacle: the collision parts of one marker.
+    """One named obstacle: the shape of one marker and its pose.
 
     Attributes:
         key: ``"<ns>/<id>"`` of the marker.
-        parts: (shape, world pose) pairs (several for a LINE_STRIP).
+        shape: the marker's shape (a LINE_STRIP's points in the marker frame).
+        pose: the marker's pose in the message frame.
         kind: the marker type name (``CUBE``, ``LINE_STRIP``, ...).
         points: the marker's point count (LINE_STRIP points, TRIANGLE_LIST vertices; 0 for other types).
+        label: where it came from, for error texts (``marker 3 (ns/1)``).
     """
 
     key: str
-    parts: tuple[tuple[Shape, Pose], ...]
+    shape: ShapeData
+    pose: PoseData
     kind: str
     points: int = 0
+    label: str = field(default="", compare=False)
 
 
 @dataclass(frozen=True)
@@ -104,7 +116,7 @@ class ObstacleUpdate:
     operations: tuple[tuple[str, str], ...]
     obstacles: dict[str, Obstacle]
     frame_id: str
-    limits: MapLimits = MapLimits.DEFAULT
+    limits: MessageLimits = DEFAULT_LIMITS
 
     def apply(self, current: dict[str, Obstacle]) -> dict[str, Obstacle]:
         """The obstacle map after this update (a new dict; ``current`` is not changed).
@@ -127,7 +139,7 @@ class ObstacleUpdate:
         return out
 
 
-def _check_counts(limits: MapLimits, what: str, markers: int, line_points: int, triangles: int) -> None:
+def _check_counts(limits: MessageLimits, what: str, markers: int, line_points: int, triangles: int) -> None:
     """MessageError naming the first of ``limits`` that the counts exceed."""
     for name, count, unit in (
         ("max_markers", markers, "obstacles"),
@@ -148,15 +160,15 @@ def _finite(values: Sequence[float], what: str) -> tuple[float, ...]:
     return out
 
 
-def pose_from_msg(msg: Any, what: str) -> Pose:
-    """A ``geometry_msgs/Pose`` as a :class:`Pose`; NaN/inf or a non-unit quaternion raise MessageError."""
+def pose_from_msg(msg: Any, what: str) -> PoseData:
+    """A ``geometry_msgs/Pose`` as :class:`PoseData`; NaN/inf or a non-unit quaternion raise MessageError."""
     p, q = msg.position, msg.orientation
     position = _finite((p.x, p.y, p.z), f"{what} position")
     quat = _finite((q.x, q.y, q.z, q.w), f"{what} orientation")
     norm = math.sqrt(sum(v * v for v in quat))
     if abs(norm - 1.0) > QUATERNION_TOL:
         raise MessageError(f"{what} orientation is not a unit quaternion (norm {norm:.6g})")
-    return Pose(position, quat)
+    return PoseData((position[0], position[1], position[2]), (quat[0], quat[1], quat[2], quat[3]))
 
 
 def _points(msg: Any, what: str) -> FloatArray:
@@ -173,18 +185,33 @@ def _same(a: float, b: float) -> bool:
     return abs(a - b) <= SCALE_RTOL * max(abs(a), abs(b))
 
 
-def _line_strip(points: FloatArray, diameter: float, pose: Pose, what: str) -> tuple[tuple[Shape, Pose], ...]:
+def _line_strip(points: FloatArray, diameter: float, what: str) -> LineStripData:
     if points.shape[0] < 2:
         raise MessageError(f"{what}: a LINE_STRIP needs at least 2 points, got {points.shape[0]}")
-    world = pose.transform_points(points)
-    parts = tuple(
-        capsule_between(a, b, diameter / 2.0)
-        for a, b in itertools.pairwise(world)
-        if np.linalg.norm(b - a) > 1e-9  # a repeated point: nothing between them
-    )
-    if not parts:
+    if not np.any(np.linalg.norm(np.diff(points, axis=0), axis=1) > SAME_POINT_M):
         raise MessageError(f"{what}: every LINE_STRIP point is the same (zero-length wire)")
-    return parts
+    return LineStripData(points, diameter)
+
+
+def _triangles(points: FloatArray, what: str) -> MeshData:
+    if points.shape[0] < 3 or points.shape[0] % 3:
+        raise MessageError(f"{what}: TRIANGLE_LIST needs 3k points (k >= 1), got {points.shape[0]}")
+    return MeshData(points, np.arange(points.shape[0], dtype=np.int64).reshape(-1, 3))
+
+
+def _round_shape(kind: int, scale: tuple[float, ...], what: str) -> ShapeData:
+    """The CUBE, SPHERE or CYLINDER of a marker's ``scale`` (metres)."""
+    name = _TYPE_NAMES[kind]
+    _positive_scale(scale, f"{what} {name} scale")
+    if kind == CUBE:
+        return BoxData((scale[0], scale[1], scale[2]))
+    if kind == SPHERE:
+        if not (_same(scale[0], scale[1]) and _same(scale[0], scale[2])):
+            raise MessageError(f"{what}: SPHERE scale must be equal on x, y, z (ellipsoids unsupported)")
+        return SphereData(scale[0] / 2.0)
+    if not _same(scale[0], scale[1]):
+        raise MessageError(f"{what}: CYLINDER scale.x and scale.y must be equal (elliptic unsupported)")
+    return CylinderData(scale[0] / 2.0, scale[2])
 
 
 def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
@@ -192,57 +219,24 @@ def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
     name = _TYPE_NAMES.get(kind, f"type {kind}")
     pose = pose_from_msg(marker.pose, what)
     scale = _finite((marker.scale.x, marker.scale.y, marker.scale.z), f"{what} scale")
-    try:
-        if kind == CUBE:
-            _positive_scale(scale, f"{what} CUBE scale")
-            parts: tuple[tuple[Shape, Pose], ...] = ((Box(scale), pose),)
-        elif kind == SPHERE:
-            _positive_scale(scale, f"{what} SPHERE scale")
-            if not (_same(scale[0], scale[1]) and _same(scale[0], scale[2])):
-                raise MessageError(f"{what}: SPHERE scale must be equal on x, y, z (ellipsoids unsupported)")
-            parts = ((Sphere(scale[0] / 2.0), pose),)
-        elif kind == CYLINDER:
-            _positive_scale(scale, f"{what} CYLINDER scale")
-            if not _same(scale[0], scale[1]):
-                raise MessageError(
-                    f"{what}: CYLINDER scale.x and scale.y must be equal (elliptic unsupported)"
-                )
-            parts = ((Cylinder(scale[0] / 2.0, scale[2]), pose),)
-        elif kind == LINE_STRIP:
-            _positive_scale(scale[:1], f"{what} LINE_STRIP scale.x (diameter)")
-            parts = _line_strip(_points(marker, what), scale[0], pose, what)
-        elif kind == TRIANGLE_LIST:
-            pts = _points(marker, what)
-            if pts.shape[0] < 3 or pts.shape[0] % 3:
-                raise MessageError(f"{what}: TRIANGLE_LIST needs 3k points (k >= 1), got {pts.shape[0]}")
-            faces = np.arange(pts.shape[0], dtype=np.int64).reshape(-1, 3)
-            parts = ((TriangleMesh(pts, faces), pose),)
-        else:
-            raise MessageError(
-                f"{what}: unsupported marker type {name}; use CUBE, SPHERE, CYLINDER, LINE_STRIP or TRIANGLE_LIST"
-            )
-    except GeometryError as exc:
-        raise MessageError(f"{what}: {exc}") from exc
-    return Obstacle(key, parts, name, len(marker.points) if kind in (LINE_STRIP, TRIANGLE_LIST) else 0)
+    shape: ShapeData
+    if kind in (CUBE, SPHERE, CYLINDER):
+        shape = _round_shape(kind, scale, what)
+    elif kind == LINE_STRIP:
+        _positive_scale(scale[:1], f"{what} LINE_STRIP scale.x (diameter)")
+        shape = _line_strip(_points(marker, what), scale[0], what)
+    elif kind == TRIANGLE_LIST:
+        shape = _triangles(_points(marker, what), what)
+    else:
+        raise MessageError(
+            f"{what}: unsupported marker type {name}; use CUBE, SPHERE, CYLINDER, LINE_STRIP or TRIANGLE_LIST"
+        )
+    points = len(marker.points) if kind in (LINE_STRIP, TRIANGLE_LIST) else 0
+    return Obstacle(key, shape, pose, name, points, label=what)
 
 
-def obstacle_update(msg: Any, *, frame_id: str, limits: MapLimits = MapLimits.DEFAULT) -> ObstacleUpdate:
-    """Validate a MarkerArray (rclpy or rosbags) and turn it into an :class:`ObstacleUpdate`.
-
-    Every marker's frame is checked first (a DELETEALL in another frame refuses the array like any other
-    marker), then the array's size against ``limits`` (markers, LINE_STRIP points, TRIANGLE_LIST triangles,
-    counted from the markers' lengths), and only then are shapes built.
-
-    Args:
-        msg: ``visualization_msgs/MarkerArray``.
-        frame_id: the planning frame; every marker must be in it (no TF lookups here).
-        limits: size limits of one array (and, in :meth:`ObstacleUpdate.apply`, of the map).
-
-    Raises:
-        MessageError: a marker in another frame, an array over a size limit (the text names the limit's
-            parameter), a marker of an unsupported type or action, with NaN or infinite numbers, a non-unit
-            quaternion, a zero or negative size, too few points.
-    """
+def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence[Any]:
+    """The markers of ``msg`` once every frame and the array's size are checked (see :func:`obstacle_update`)."""
     markers = getattr(msg, "markers", None)
     if markers is None:
         raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
@@ -259,6 +253,27 @@ def obstacle_update(msg: Any, *, frame_id: str, limits: MapLimits = MapLimits.DE
         elif int(marker.action) == ADD and int(marker.type) == TRIANGLE_LIST:
             triangles += len(marker.points) // 3
     _check_counts(limits, "the MarkerArray has", 0, line_points, triangles)
+    return markers  # type: ignore[no-any-return]
+
+
+def obstacle_update(msg: Any, *, frame_id: str, limits: MessageLimits = DEFAULT_LIMITS) -> ObstacleUpdate:
+    """Validate a MarkerArray (rclpy or rosbags) and turn it into an :class:`ObstacleUpdate`.
+
+    Every marker's frame is checked first (a DELETEALL in another frame refuses the array like any other
+    marker), then the array's size against ``limits`` (markers, LINE_STRIP points, TRIANGLE_LIST triangles,
+    counted from the markers' lengths), and only then are shapes built.
+
+    Args:
+        msg: ``visualization_msgs/MarkerArray``.
+        frame_id: the planning frame; every marker must be in it (no TF lookups here).
+        limits: size limits of one array (and, in :meth:`ObstacleUpdate.apply`, of the map).
+
+    Raises:
+        MessageError: a marker in another frame, an array over a size limit (the text names the limit's
+            parameter), a marker of an unsupported type or action, with NaN or infinite numbers, a non-unit
+            quaternion, a zero or negative size, too few points.
+    """
+    markers = _checked_markers(msg, frame_id, limits)
     operations: list[tuple[str, str]] = []
     obstacles: dict[str, Obstacle] = {}
     for i, marker in enumerate(markers):
@@ -277,7 +292,7 @@ def obstacle_update(msg: Any, *, frame_id: str, limits: MapLimits = MapLimits.DE
     return ObstacleUpdate(tuple(operations), obstacles, frame_id, limits)
 
 
-def _pose_msg(msgs: MessageFactory, pose: Pose) -> Any:
+def _pose_msg(msgs: MessageFactory, pose: PoseData) -> Any:
     p, q = pose.position, pose.quaternion_xyzw
     return msgs(
         "geometry_msgs/msg/Pose",
@@ -292,8 +307,44 @@ def _point_msgs(msgs: MessageFactory, points: FloatArray) -> list[Any]:
     return [msgs("geometry_msgs/msg/Point", x=float(x), y=float(y), z=float(z)) for x, y, z in points]
 
 
+def _shape_fields(msgs: MessageFactory, shape: ShapeData) -> dict[str, Any]:
+    """The ``type``, ``scale`` (and ``points``) fields of a marker of ``shape``."""
+    points: FloatArray | None = None
+    size: tuple[float, ...]
+    if isinstance(shape, LineStripData):
+        kind, size = LINE_STRIP, (float(shape.diameter), 0.0, 0.0)
+        points = np.asarray(shape.points, dtype=np.float64).reshape(-1, 3)
+    elif isinstance(shape, BoxData):
+        kind, size = CUBE, tuple(float(v) for v in shape.size)
+    elif isinstance(shape, SphereData):
+        kind, size = SPHERE, (2 * shape.radius,) * 3
+    elif isinstance(shape, CylinderData):
+        kind, size = CYLINDER, (2 * shape.radius, 2 * shape.radius, shape.length)
+    else:
+        kind, size = TRIANGLE_LIST, (1.0, 1.0, 1.0)
+        points = np.asarray(shape.vertices)[np.asarray(shape.faces).reshape(-1)]
+    fields = {"type": kind, "scale": msgs("geometry_msgs/msg/Vector3", x=size[0], y=size[1], z=size[2])}
+    if points is not None:
+        fields["points"] = _point_msgs(msgs, points)
+    return fields
+
+
+class MarkerStyle(TypedDict, total=False):
+    """Optional keywords of :func:`markers_from_obstacles` (its defaults apply), for wrappers that pass them on.
+
+    Attributes:
+        stamp: (sec, nanosec) of the headers.
+        delete_all_first: start with a DELETEALL marker, so the array replaces the whole map.
+        color: RGBA of the markers (for RViz).
+    """
+
+    stamp: tuple[int, int]
+    delete_all_first: bool
+    color: tuple[float, float, float, float]
+
+
 def markers_from_obstacles(
-    obstacles: Sequence[tuple[str, Shape | FloatArray, Pose | float]],
+    obstacles: Sequence[tuple[str, ShapeData, PoseData]],
     *,
     frame_id: str,
     stamp: tuple[int, int] = (0, 0),
@@ -304,9 +355,8 @@ def markers_from_obstacles(
     """A MarkerArray for ``obstacles``, the inverse of :func:`obstacle_update`.
 
     Args:
-        obstacles: ``(key, shape, pose)`` for Box, Sphere, Cylinder and TriangleMesh, or
-            ``(key, points, diameter)`` with (K >= 2, 3) world points for a wire (LINE_STRIP).
-            Keys look like ``"ns/id"``.
+        obstacles: ``(key, shape, pose)``; keys look like ``"ns/id"``. A wire is a :class:`LineStripData`
+            (points in the marker frame, usually with the identity pose).
         frame_id: the frame of every marker.
         stamp: (sec, nanosec) of the headers.
         msgs: the message factory (rclpy or rosbags classes).
@@ -314,44 +364,18 @@ def markers_from_obstacles(
         color: RGBA of the markers (for RViz).
 
     Raises:
-        MessageError: a key that is not ``ns/id`` or a shape with no marker form (a bare Capsule:
-            send it as a two-point LINE_STRIP).
+        MessageError: a key that is not ``ns/id``.
     """
     head = header(msgs, frame_id, stamp)
     rgba = msgs("std_msgs/msg/ColorRGBA", r=color[0], g=color[1], b=color[2], a=color[3])
     markers: list[Any] = []
     if delete_all_first:
         markers.append(msgs("visualization_msgs/msg/Marker", header=head, action=DELETEALL))
-    identity = Pose()
     for key, shape, pose in obstacles:
         ns, _, ident = key.rpartition("/")
         if not ident.lstrip("-").isdigit():
             raise MessageError(f"obstacle key must look like 'ns/<int id>', got {key!r}")
         fields: dict[str, Any] = {"header": head, "ns": ns, "id": int(ident), "action": ADD, "color": rgba}
-        if isinstance(shape, np.ndarray):
-            fields |= {
-                "type": LINE_STRIP,
-                "pose": _pose_msg(msgs, identity),
-                "scale": msgs("geometry_msgs/msg/Vector3", x=float(pose), y=0.0, z=0.0),  # type: ignore[arg-type]
-                "points": _point_msgs(msgs, np.asarray(shape, dtype=np.float64).reshape(-1, 3)),
-            }
-        else:
-            assert isinstance(pose, Pose)
-            fields["pose"] = _pose_msg(msgs, pose)
-            if isinstance(shape, Box):
-                kind, size = CUBE, tuple(float(v) for v in shape.size)
-            elif isinstance(shape, Sphere):
-                kind, size = SPHERE, (2 * shape.radius,) * 3
-            elif isinstance(shape, Cylinder):
-                kind, size = CYLINDER, (2 * shape.radius, 2 * shape.radius, shape.length)
-            elif isinstance(shape, TriangleMesh):
-                kind, size = TRIANGLE_LIST, (1.0, 1.0, 1.0)
-                fields["points"] = _point_msgs(msgs, shape.vertices[shape.faces.reshape(-1)])
-            else:
-                raise MessageError(f"{key}: {type(shape).__name__} has no marker form; send a LINE_STRIP")
-            fields |= {
-                "type": kind,
-                "scale": msgs("geometry_msgs/msg/Vector3", x=size[0], y=size[1], z=size[2]),
-            }
+        fields |= {"pose": _pose_msg(msgs, pose), **_shape_fields(msgs, shape)}
         markers.append(msgs("visualization_msgs/msg/Marker", **fields))
     return msgs("visualization_msgs/msg/MarkerArray", markers=markers)

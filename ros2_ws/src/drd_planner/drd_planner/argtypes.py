@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+from typing import TypeVar
 
 __all__ = ["bounded_float", "bounded_int"]
+
+_N = TypeVar("_N", int, float)
 
 
 def _check(value: float, at_least: float | None, above: float | None, at_most: float | None) -> None:
@@ -23,31 +26,32 @@ def _check(value: float, at_least: float | None, above: float | None, at_most: f
         raise argparse.ArgumentTypeError(f"must be at most {at_most:g}, got {value}")
 
 
-def bounded_int(*, at_least: int | None = None, at_most: int | None = None) -> Callable[[str], int]:
-    """A converter of text to an int within the given bounds (inclusive)."""
+def _converter(
+    convert: Callable[[str], _N], noun: str, bounds: tuple[float | None, float | None, float | None]
+) -> Callable[[str], _N]:
+    """A converter of text with ``convert``, then checked against ``(at_least, above, at_most)``.
 
-    def parse(text: str) -> int:
+    Text that ``convert`` rejects is "not ``noun``".
+    """
+
+    def parse(text: str) -> _N:
         try:
-            value = int(text)
+            value = convert(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-        _check(value, at_least, None, at_most)
+            raise argparse.ArgumentTypeError(f"{text!r} is not {noun}") from None
+        _check(value, *bounds)
         return value
 
     return parse
+
+
+def bounded_int(*, at_least: int | None = None, at_most: int | None = None) -> Callable[[str], int]:
+    """A converter of text to an int within the given bounds (inclusive)."""
+    return _converter(int, "an integer", (at_least, None, at_most))
 
 
 def bounded_float(
     *, at_least: float | None = None, above: float | None = None, at_most: float | None = None
 ) -> Callable[[str], float]:
     """A converter of text to a finite float within the given bounds (``above`` is exclusive)."""
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        _check(value, at_least, above, at_most)
-        return value
-
-    return parse
+    return _converter(float, "a number", (at_least, above, at_most))

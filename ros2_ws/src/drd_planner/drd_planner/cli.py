@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -13,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from drd_planner import __version__
+from drd_planner.command_errors import run_command
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree
@@ -153,18 +153,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``drd bench``: every policy on every test world of one dataset (``--gccd``/``--dataset``) or all (``--all``)."""
     from drd_planner.bench.runner import check_policy_names, write_bench_files
     from drd_planner.bench.suite import (
-        SuiteResult,
         costs_figure,
-        dataset_json,
-        leaf_lines,
-        run_dataset,
         run_suite,
         suite_json,
         suite_markdown,
     )
-    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
-    from drd_planner.data.tree_file import check_bundle_fits
-    from drd_planner.planner.prior_file import load_tree_bundle
 
     if args.queries is not None:
         from drd_planner.bench.query_cli import cmd_bench_queries
@@ -182,30 +175,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
         figures = costs_figure(suite.runs, options)
         doc = suite_json(suite, options, figures=figures)
     else:
-        problem = load_problem_from_args(args)
-        tree = None
-        if args.tree:
-            bundle = load_tree_bundle(args.tree, expected_domain=problem_domain(problem))
-            check_bundle_fits(bundle, problem)
-            tree = bundle.tree
-            if options.eta is None:  # the settings stored with the tree, unless --eta/--kappa say otherwise
-                options = dataclasses.replace(options, eta=bundle.eta)
-            if args.kappa is None:
-                options = dataclasses.replace(options, pseudo_counts=(bundle.pseudo_count,))
-        run = run_dataset(problem, options, tree=tree)
-        suite = SuiteResult([run], [], run.seconds)
-        figures = costs_figure(suite.runs, options)
-        doc = dataset_json(run, options)
-        doc["figures"] += [str(p) for p in figures]
+        suite, figures, doc = _bench_one_dataset(args, options)
     report = suite_markdown(suite, options)
-    print(report, end="")
-    for name, reason in suite.skipped:
-        print(f"skipped {name}: {reason}")
-    for run in suite.runs:
-        for note in run.notes:
-            print(f"note: {note}")
-    for line in leaf_lines(suite.runs):
-        print(line)
+    _print_bench(report, suite)
     write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
     if options.figures is not None:
         count = sum(len(r.figures) for r in suite.runs) + len(figures)
@@ -248,7 +220,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from drd_planner.core.episode import TableOracle, run_episode
     from drd_planner.core.policies import POLICIES, PolicyContext
     from drd_planner.core.tree import build_tree
-    from drd_planner.domains.planar import make_planar_problem
+    from drd_planner.data.planar_problem import make_planar_problem
 
     print(f"drd demo: planar '{args.model}' world model, {args.worlds} worlds, seed {args.seed}")
     problem = make_planar_problem(model=args.model, num_worlds=args.worlds, seed=args.seed)
@@ -292,6 +264,45 @@ def _kappa_option(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _bench_one_dataset(args: argparse.Namespace, options: Any) -> tuple[Any, list[Path], dict[str, Any]]:
+    """``drd bench`` on one dataset (``--gccd``/``--dataset``, with ``--tree``): (suite, figures, JSON doc)."""
+    from drd_planner.bench.suite import SuiteResult, costs_figure, dataset_json, run_dataset
+    from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
+    from drd_planner.data.tree_file import check_bundle_fits
+    from drd_planner.planner.prior_file import load_tree_bundle
+
+    problem = load_problem_from_args(args)
+    tree = None
+    if args.tree:
+        bundle = load_tree_bundle(args.tree, expected_domain=problem_domain(problem))
+        check_bundle_fits(bundle, problem)
+        tree = bundle.tree
+        if options.eta is None:  # the settings stored with the tree, unless --eta/--kappa say otherwise
+            options = dataclasses.replace(options, eta=bundle.eta)
+        if args.kappa is None:
+            options = dataclasses.replace(options, pseudo_counts=(bundle.pseudo_count,))
+    run = run_dataset(problem, options, tree=tree)
+    suite = SuiteResult([run], [], run.seconds)
+    figures = list(costs_figure(suite.runs, options))
+    doc = dataset_json(run, options)
+    doc["figures"] += [str(p) for p in figures]
+    return suite, figures, doc
+
+
+def _print_bench(report: str, suite: Any) -> None:
+    """The markdown report, then skipped datasets, notes and the validated leaf settings."""
+    from drd_planner.bench.suite import leaf_lines
+
+    print(report, end="")
+    for name, reason in suite.skipped:
+        print(f"skipped {name}: {reason}")
+    for run in suite.runs:
+        for note in run.notes:
+            print(f"note: {note}")
+    for line in leaf_lines(suite.runs):
+        print(line)
+
+
 def _kappas(args: argparse.Namespace) -> tuple[float | None, ...]:
     """The ``--kappa`` candidates (the validated defaults when not given)."""
     from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS
@@ -302,13 +313,26 @@ def _kappas(args: argparse.Namespace) -> tuple[float | None, ...]:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``drd``."""
     from drd_planner.data.dataset_cli import add_build_dataset_parser
-    from drd_planner.planner.commands import query_arg
-    from drd_planner.planner.planner import PLAN_POLICIES
 
     parser = argparse.ArgumentParser(prog="drd", description="DiRECt + BiSECt active edge evaluation.")
     parser.add_argument("--version", action="version", version=f"drd_planner {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     add_build_dataset_parser(sub)
+    _add_build_tree_parser(sub)
+    _add_bench_parser(sub)
+    _add_plan_parser(sub)
+    p = sub.add_parser("demo", help="self-contained demo on a generated planar problem")
+    p.add_argument("--model", default="one_wall", choices=PLANAR_WORLD_MODELS, help="planar world model")
+    p.add_argument("--worlds", type=int, default=300)
+    p.add_argument("--episodes", type=int, default=3)
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def _add_build_tree_parser(sub: Any) -> None:
+    """The ``build-tree`` subcommand."""
+    from drd_planner.planner.commands import query_arg
 
     p = sub.add_parser(
         "build-tree", help="write a world prior (any query) with the dataset's DiRECt tree and --query trees"
@@ -338,6 +362,9 @@ def build_parser() -> argparse.ArgumentParser:
     _tree_options(p)
     p.set_defaults(func=cmd_build_tree)
 
+
+def _add_bench_parser(sub: Any) -> None:
+    """The ``bench`` subcommand."""
     p = sub.add_parser("bench", help="benchmark policies on a dataset's (or every dataset's) test worlds")
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
@@ -390,6 +417,12 @@ def build_parser() -> argparse.ArgumentParser:
     _tree_options(p)
     p.set_defaults(func=cmd_bench)
 
+
+def _add_plan_parser(sub: Any) -> None:
+    """The ``plan`` subcommand."""
+    from drd_planner.planner.commands import query_arg
+    from drd_planner.planner.planner import PLAN_POLICIES
+
     p = sub.add_parser(
         "plan", help="plan once offline with a tree file on one dataset world, or at a request of a bag"
     )
@@ -424,26 +457,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_plan)
 
-    p = sub.add_parser("demo", help="self-contained demo on a generated planar problem")
-    p.add_argument("--model", default="one_wall", choices=PLANAR_WORLD_MODELS, help="planar world model")
-    p.add_argument("--worlds", type=int, default=300)
-    p.add_argument("--episodes", type=int, default=3)
-    p.add_argument("--seed", type=int, default=0)
-    p.set_defaults(func=cmd_demo)
-    return parser
-
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; errors print one line and exit 2."""
-    args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except DrdError as exc:
-        print(f"drd: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("drd: interrupted", file=sys.stderr)
-        return 130
+    return run_command(build_parser().parse_args(argv))
 
 
 if __name__ == "__main__":

@@ -20,15 +20,15 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
-from drd_planner.bench.runner import run_benchmark
+from drd_planner.bench.runner import BenchmarkResult, PolicySettings, run_benchmark
 from drd_planner.bench.stats import bootstrap_mean_ci
 from drd_planner.core.policies import DEFAULT_ALPHA, TREE_POLICIES
 from drd_planner.core.problem import Problem
-from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS, select_switch_threshold
+from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS, ValidationGrid, select_switch_threshold
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
 
-__all__ = ["CrossValidationResult", "cross_validate"]
+__all__ = ["CrossValidationResult", "FoldSettings", "cross_validate"]
 
 
 @dataclass(frozen=True)
@@ -87,16 +87,31 @@ class CrossValidationResult:
         return out
 
 
+@dataclass(frozen=True)
+class FoldSettings:
+    """What every fold is given or learns.
+
+    Attributes:
+        eta: switch threshold; None validates it per fold on that fold's training worlds.
+        pseudo_counts: candidate kappas of the posterior leaf (None: fixed leaf bias), validated per
+            fold together with eta; a single candidate fixes it.
+        alpha: data weight of the bias.
+        tree_options: keyword arguments of :func:`drd_planner.core.tree.build_tree`.
+    """
+
+    eta: float | None = None
+    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS
+    alpha: float = DEFAULT_ALPHA
+    tree_options: Mapping[str, Any] | None = None
+
+
 def cross_validate(
     problem: Problem,
     *,
     policies: Sequence[str],
     folds: int = 10,
     seed: int = 0,
-    eta: float | None = None,
-    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS,
-    alpha: float = DEFAULT_ALPHA,
-    tree_options: Mapping[str, Any] | None = None,
+    settings: FoldSettings | None = None,
     progress: bool | None = None,
 ) -> CrossValidationResult:
     """Run ``policies`` on every feasible world of ``problem`` by ``folds``-fold cross-validation.
@@ -106,27 +121,21 @@ def cross_validate(
         policies: registry names, as for :func:`drd_planner.bench.runner.run_benchmark`.
         folds: number of folds (>= 2).
         seed: seeds the deal of worlds into folds, the eta validation and the policies.
-        eta: switch threshold; None validates it per fold on that fold's training worlds.
-        pseudo_counts: candidate kappas of the posterior leaf (None: fixed leaf bias), validated per
-            fold together with eta; a single candidate fixes it.
-        alpha: data weight of the bias.
-        tree_options: keyword arguments of :func:`drd_planner.core.tree.build_tree`.
+        settings: eta, kappa candidates, alpha and tree options (None: :class:`FoldSettings` defaults).
         progress: show a progress bar over folds (None: only on a terminal).
 
     Raises:
         DrdError: fewer than 2 folds or fewer feasible worlds than folds.
     """
+    settings = settings or FoldSettings()
     if folds < 2:
         raise DrdError(f"cross-validation needs at least 2 folds, got {folds}")
     worlds = problem.require_worlds()
     feasible = np.flatnonzero(worlds.R.any(axis=1)).astype(np.int64)
     if feasible.size < folds:
         raise DrdError(f"{problem.name}: {feasible.size} feasible worlds cannot fill {folds} folds")
-    options = dict(tree_options or {})
-    expand = float(options.pop("expand_threshold", 0.05))
     rng = np.random.default_rng(seed)
     deal = np.array_split(rng.permutation(feasible), folds)
-    needs_tree = any(p in TREE_POLICIES for p in policies)
     order: list[npt.NDArray[np.int64]] = []
     fold_of: list[npt.NDArray[np.int64]] = []
     checks: dict[str, list[int]] = {p: [] for p in policies}
@@ -134,7 +143,7 @@ def cross_validate(
     lower: list[float] = []
     etas: list[float] = []
     chosen_kappas: list[float | None] = []
-    kappas = tuple(pseudo_counts)
+    kappas = tuple(settings.pseudo_counts)
     if not kappas:
         raise DrdError("pseudo_counts needs at least one candidate (None for the fixed leaf bias)")
     everything = np.arange(worlds.num_worlds, dtype=np.int64)
@@ -149,33 +158,9 @@ def cross_validate(
         held = np.sort(held)
         fit = np.setdiff1d(everything, held)
         sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held))
-        fold_eta, fold_kappa = eta, kappas[0] if len(kappas) == 1 else None
-        if needs_tree and (eta is None or len(kappas) > 1):
-            choice = select_switch_threshold(
-                sub,
-                candidates=None if eta is None else (eta,),
-                pseudo_counts=kappas,
-                seed=seed,
-                alpha=alpha,
-                expand_threshold=expand,
-                tree_options=options,
-            )
-            fold_eta, fold_kappa = choice.eta, choice.pseudo_count
-        elif fold_eta is None:
-            fold_eta = 1.0
-        tree = build_tree(sub, expand_threshold=expand, progress=False, **options) if needs_tree else None
-        result = run_benchmark(
-            sub,
-            policies=policies,
-            tree=tree,
-            seed=seed,
-            eta=fold_eta,
-            alpha=alpha,
-            pseudo_count=fold_kappa,
-            progress=False,
-        )
-        etas.append(float(fold_eta))
-        chosen_kappas.append(fold_kappa)
+        result = _run_fold(sub, policies, seed, settings)
+        etas.append(float(result.settings["eta"]))
+        chosen_kappas.append(result.settings["pseudo_count"])
         order.append(np.asarray(result.test_ids, dtype=np.int64))
         fold_of.append(np.full(len(result.test_ids), k, dtype=np.int64))
         lower.extend(result.lower_bound)
@@ -196,10 +181,37 @@ def cross_validate(
         settings={
             "folds": folds,
             "seed": seed,
-            "alpha": alpha,
-            "eta": eta,
+            "alpha": settings.alpha,
+            "eta": settings.eta,
             "pseudo_counts": list(kappas),
             "chosen_pseudo_counts": chosen_kappas,
-            "tree_options": dict(tree_options or {}),
+            "tree_options": dict(settings.tree_options or {}),
         },
+    )
+
+
+def _run_fold(sub: Problem, policies: Sequence[str], seed: int, settings: FoldSettings) -> BenchmarkResult:
+    """One fold's benchmark on ``sub``'s test worlds, its eta and kappa validated on its training worlds.
+
+    The eta and kappa used are in the result's ``settings``.
+    """
+    options = dict(settings.tree_options or {})
+    kappas = tuple(settings.pseudo_counts)
+    needs_tree = any(p in TREE_POLICIES for p in policies)
+    eta, kappa = settings.eta, kappas[0] if len(kappas) == 1 else None
+    if needs_tree and (eta is None or len(kappas) > 1):
+        grid = ValidationGrid.around(eta, kappas, options, alpha=settings.alpha)
+        choice = select_switch_threshold(sub, grid, seed=seed)
+        eta, kappa = choice.eta, choice.pseudo_count
+    elif eta is None:
+        eta = 1.0
+    expand = float(options.pop("expand_threshold", 0.05))
+    tree = build_tree(sub, expand_threshold=expand, progress=False, **options) if needs_tree else None
+    return run_benchmark(
+        sub,
+        policies=policies,
+        tree=tree,
+        seed=seed,
+        settings=PolicySettings(eta, settings.alpha, kappa),
+        progress=False,
     )

@@ -15,8 +15,7 @@ from typing import Any
 import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
-from drd_planner.bench.runner import run_benchmark
-from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
+from drd_planner.bench.runner import DEFAULT_SETTINGS, PolicySettings, run_benchmark
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
@@ -68,9 +67,7 @@ def training_size_curve(
     sizes: Sequence[int] = DEFAULT_SIZES,
     seed: int = 0,
     max_worlds: int | None = None,
-    eta: float = DEFAULT_ETA,
-    alpha: float = DEFAULT_ALPHA,
-    pseudo_count: float | None = None,
+    settings: PolicySettings = DEFAULT_SETTINGS,
     tree_options: Mapping[str, Any] | None = None,
 ) -> TrainingCurve:
     """Rebuild the tree on nested seeded training subsets and measure each policy on the test worlds.
@@ -80,9 +77,7 @@ def training_size_curve(
         sizes: training-set sizes, each in [1, number of training worlds].
         seed: seed of the training-id permutation (and the episodes' base seed).
         max_worlds: only the first ``max_worlds`` test worlds.
-        eta: switch threshold of ``direct_bisect``.
-        alpha: data weight of the bias.
-        pseudo_count: kappa of ``direct_bisect``'s posterior leaf (None: fixed leaf bias).
+        settings: eta, alpha and the leaf pseudo-count of the Bayesian policies.
         tree_options: keyword arguments for :func:`drd_planner.core.tree.build_tree`.
 
     Raises:
@@ -111,9 +106,7 @@ def training_size_curve(
             policies=CURVE_POLICIES,
             tree=tree,
             seed=seed,
-            eta=eta,
-            alpha=alpha,
-            pseudo_count=pseudo_count,
+            settings=settings,
             max_worlds=max_worlds,
             progress=False,
         )

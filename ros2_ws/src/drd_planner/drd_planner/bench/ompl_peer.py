@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, IntArray
+from drd_planner.bench.extras import install_hint
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError, ProblemError
@@ -38,7 +39,7 @@ from drd_planner.exceptions import DrdError, ProblemError
 EmbeddingName = Literal["auto", "coords", "index"]
 
 PEER_NAME = "ompl_lazyprm"
-SKIP_MESSAGE = "ompl_lazyprm skipped: OMPL not installed; pip install 'drd_planner[peer]'"
+SKIP_MESSAGE = f"ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): {install_hint('peer')}"
 WORKER_MODULE = "drd_planner.bench.ompl_worker"
 
 #: How much shorter than the straight line (length units) an edge may be for the coords embedding: the

@@ -33,6 +33,8 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
@@ -120,11 +122,39 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
 
     space = _space(ob, coords)
     dim = coords.shape[1]
-    si = ob.SpaceInformation(space)
     book = _Bookkeeper(graph)
 
     def vertex(state: Any) -> int:
         return vertex_of[tuple(float(state[k]) for k in range(dim))]
+
+    si, validator = _space_information(ob, space, book, vertex)
+    roadmap, keep_alive = _roadmap(ob, space, si, coords, (edges, lengths))
+    if roadmap.numVertices() != graph.num_vertices or roadmap.numEdges() != graph.num_edges:
+        raise RuntimeError(
+            f"PlannerData holds {roadmap.numVertices()} vertices / {roadmap.numEdges()} edges, "
+            f"graph has {graph.num_vertices} / {graph.num_edges}"
+        )
+    start_state, goal_state = ob.State(space), ob.State(space)
+    for k in range(dim):
+        start_state[k] = float(coords[int(config["start"]), k])
+        goal_state[k] = float(coords[int(config["goal"]), k])
+    session = _Session(ob, og, si, roadmap, (start_state, goal_state), vertex, book, config)
+    for world, row in zip(config["world_ids"], rows, strict=True):
+        out.write(json.dumps(session.solve(int(world), row)) + "\n")
+        out.flush()
+    out.write(json.dumps({"done": True}) + "\n")
+    out.flush()
+    del validator, keep_alive  # OMPL held them (the validator, the roadmap's states) until here
+
+
+def _space_information(
+    ob: Any, space: Any, book: _Bookkeeper, vertex: Callable[[Any], int]
+) -> tuple[Any, Any]:
+    """``(space information, motion validator)``: every state valid, motions answered by ``book``.
+
+    The caller keeps the validator (a Python object OMPL calls back) alive while OMPL runs.
+    """
+    si = ob.SpaceInformation(space)
 
     def state_valid(state: Any) -> bool:
         book.state_checks += 1
@@ -139,7 +169,21 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
     validator = validator_class(si)
     si.setMotionValidator(validator)
     si.setup()
+    return si, validator
 
+
+def _roadmap(
+    ob: Any,
+    space: Any,
+    si: Any,
+    coords: npt.NDArray[np.float64],
+    graph_edges: tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]],
+) -> tuple[Any, list[Any]]:
+    """``(PlannerData, its states)``: a vertex per (V, d) ``coords`` row, an edge per (E, 2) edge with its length.
+
+    Each vertex gets its own ``State``; the caller keeps the returned states alive while OMPL runs.
+    """
+    edges, lengths = graph_edges
     roadmap = ob.PlannerData(si)
     keep_alive = []
     for row in coords.tolist():
@@ -150,28 +194,35 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
         roadmap.addVertex(ob.PlannerDataVertex(st()))
     for (u, v), length in zip(edges.tolist(), lengths.tolist(), strict=True):
         roadmap.addEdge(int(u), int(v), ob.PlannerDataEdge(), ob.Cost(float(length)))
-    if roadmap.numVertices() != graph.num_vertices or roadmap.numEdges() != graph.num_edges:
-        raise RuntimeError(
-            f"PlannerData holds {roadmap.numVertices()} vertices / {roadmap.numEdges()} edges, "
-            f"graph has {graph.num_vertices} / {graph.num_edges}"
-        )
+    return roadmap, keep_alive
 
-    start_state, goal_state = ob.State(space), ob.State(space)
-    for k in range(dim):
-        start_state[k] = float(coords[int(config["start"]), k])
-        goal_state[k] = float(coords[int(config["goal"]), k])
-    time_limit = float(config["time_limit_s"])
 
-    for world, row in zip(config["world_ids"], rows, strict=True):
+@dataclass
+class _Session:
+    """Everything one LazyPRM solve per world needs: OMPL modules, space, roadmap, query and bookkeeper."""
+
+    ob: Any
+    og: Any
+    si: Any
+    roadmap: Any
+    endpoints: tuple[Any, Any]
+    vertex: Callable[[Any], int]
+    book: _Bookkeeper
+    config: dict[str, Any]
+
+    def solve(self, world: int, row: npt.NDArray[np.bool_]) -> dict[str, Any]:
+        """The JSON record of one LazyPRM solve on world ``world`` with its (E,) row of X."""
+        ob, book = self.ob, self.book
         book.reset(row)
-        planner = og.LazyPRM(roadmap)
-        planner.setRange(float(config["connect_radius"]))
+        planner = self.og.LazyPRM(self.roadmap)
+        planner.setRange(float(self.config["connect_radius"]))
         planner.setMaxNearestNeighbors(1)
-        pdef = ob.ProblemDefinition(si)
-        pdef.setStartAndGoalStates(start_state, goal_state)
+        pdef = ob.ProblemDefinition(self.si)
+        pdef.setStartAndGoalStates(*self.endpoints)
         planner.setProblemDefinition(pdef)
         planner.setup()
         milestones_before, edges_before = int(planner.milestoneCount()), int(planner.edgeCount())
+        time_limit = float(self.config["time_limit_s"])
         t0 = time.perf_counter()
 
         def stop(t0: float = t0, planner: Any = planner) -> bool:
@@ -182,18 +233,11 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
         status = planner.solve(ob.PlannerTerminationCondition(ob.PlannerTerminationConditionFn(stop)))
         wall = time.perf_counter() - t0
         solved = pdef.hasExactSolution()
-        path_vertices: list[int] = []
-        if solved:
-            path = pdef.getSolutionPath()
-            for i in range(path.getStateCount()):
-                v = vertex(path.getState(i))
-                if not path_vertices or path_vertices[-1] != v:
-                    path_vertices.append(v)
-        record = {
-            "world": int(world),
+        return {
+            "world": world,
             "status": str(status),
             "solved": bool(solved),
-            "path_vertices": path_vertices,
+            "path_vertices": self._path_vertices(pdef) if solved else [],
             "checked_edges": list(book.checked),
             "motion_calls": book.motion_calls,
             "connector_calls": book.connector_calls,
@@ -207,10 +251,16 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
             "edges_after": int(planner.edgeCount()),
             "wall_s": wall,
         }
-        out.write(json.dumps(record) + "\n")
-        out.flush()
-    out.write(json.dumps({"done": True}) + "\n")
-    out.flush()
+
+    def _path_vertices(self, pdef: Any) -> list[int]:
+        """Graph vertices of the solution path, repeats in a row merged."""
+        path = pdef.getSolutionPath()
+        path_vertices: list[int] = []
+        for i in range(path.getStateCount()):
+            v = self.vertex(path.getState(i))
+            if not path_vertices or path_vertices[-1] != v:
+                path_vertices.append(v)
+        return path_vertices
 
 
 def _probe() -> dict[str, Any]:

@@ -34,7 +34,7 @@ from scipy.sparse.csgraph import maximum_flow, shortest_path
 from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
+from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError
 from drd_planner.planner.planner import PLAN_POLICIES, Planner
@@ -197,7 +197,7 @@ def _episode(
         return path, checks, PlanStatus.FOUND.value if path is not None else PlanStatus.NO_PATH.value, 0.0, ""
     if name in GRAPH_BASELINES:
         selector = SELECTORS[GRAPH_BASELINES.index(name)]
-        policy = LazySP(graph, start, goal, selector=selector, seed=seed)
+        policy = LazySP(graph, start, goal, LazySPSettings(selector=selector, seed=seed))
         t0 = time.perf_counter()
         result = run_episode(
             None, planner.prior.edge_costs, policy, TableOracle(outcomes), max_checks=max_checks

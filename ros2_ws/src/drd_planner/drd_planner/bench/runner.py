@@ -129,15 +129,32 @@ class BenchmarkResult:
         return {name: stats.checks for name, stats in self.policies.items()}
 
 
+@dataclass(frozen=True)
+class PolicySettings:
+    """The settings of the Bayesian policies in one benchmark run (the :class:`PolicyContext` fields).
+
+    Attributes:
+        eta: switch threshold of ``direct_bisect``.
+        alpha: data weight of the bias.
+        pseudo_count: kappa of ``direct_bisect``'s posterior leaf; None keeps the leaf bias fixed.
+    """
+
+    eta: float = DEFAULT_ETA
+    alpha: float = DEFAULT_ALPHA
+    pseudo_count: float | None = None
+
+
+#: The defaults of every setting.
+DEFAULT_SETTINGS = PolicySettings()
+
+
 def policy_context(
     problem: Problem,
     *,
     theta: npt.NDArray[np.float64],
     tree: DecisionTree | None,
     seed: int,
-    eta: float = DEFAULT_ETA,
-    alpha: float = DEFAULT_ALPHA,
-    pseudo_count: float | None = None,
+    settings: PolicySettings = DEFAULT_SETTINGS,
 ) -> PolicyContext:
     """The context a policy factory gets: library, unit costs, (E,) training bias, tree, seed and graph.
 
@@ -149,9 +166,9 @@ def policy_context(
         theta,
         tree,
         seed,
-        eta=eta,
-        alpha=alpha,
-        pseudo_count=pseudo_count,
+        eta=settings.eta,
+        alpha=settings.alpha,
+        pseudo_count=settings.pseudo_count,
         graph=problem.graph,
         start=problem.start,
         goal=problem.goal,
@@ -173,9 +190,7 @@ def run_world(
     theta: npt.NDArray[np.float64],
     tree: DecisionTree | None,
     seed: int,
-    eta: float = DEFAULT_ETA,
-    alpha: float = DEFAULT_ALPHA,
-    pseudo_count: float | None = None,
+    settings: PolicySettings = DEFAULT_SETTINGS,
     max_checks: int | None = None,
 ) -> EpisodeResult:
     """One episode of policy ``name`` on world row ``world`` against its row of X.
@@ -187,10 +202,7 @@ def run_world(
     worlds = problem.require_worlds()
     if not 0 <= world < worlds.num_worlds:
         raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
-    ctx = policy_context(
-        problem, theta=theta, tree=tree, seed=seed, eta=eta, alpha=alpha, pseudo_count=pseudo_count
-    )
-    policy = POLICIES[name](ctx)
+    policy = POLICIES[name](policy_context(problem, theta=theta, tree=tree, seed=seed, settings=settings))
     oracle = TableOracle(worlds.X[world])
     return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
 
@@ -212,9 +224,7 @@ def run_benchmark(
     policies: Sequence[str] = DEFAULT_POLICIES,
     tree: DecisionTree | None = None,
     seed: int = 0,
-    eta: float = DEFAULT_ETA,
-    alpha: float = DEFAULT_ALPHA,
-    pseudo_count: float | None = None,
+    settings: PolicySettings = DEFAULT_SETTINGS,
     max_worlds: int | None = None,
     max_checks: int | None = None,
     progress: bool | None = None,
@@ -226,9 +236,7 @@ def run_benchmark(
         policies: registry names (see ``drd_planner.core.policies.POLICIES``).
         tree: a prebuilt tree; built from the training worlds when a tree policy needs one.
         seed: base seed; world k of the test list uses ``seed + k``.
-        eta: switch threshold of ``direct_bisect``.
-        alpha: data weight of the bias.
-        pseudo_count: kappa of ``direct_bisect``'s posterior leaf; None keeps the leaf bias fixed.
+        settings: eta, alpha and the leaf pseudo-count of the Bayesian policies.
         max_worlds: only the first ``max_worlds`` test worlds (smoke runs).
         max_checks: cap on the checks of one episode (None: no cap); capped episodes are failures.
         progress: report the episodes (policies x worlds) on stderr (a bar on a terminal, plain lines
@@ -250,7 +258,7 @@ def run_benchmark(
         tree = build_tree(problem, progress=progress)
     if tree is not None:
         tree_info = {"nodes": tree.num_nodes, "depth": tree.depth(), **tree.info}
-    theta = train_bias(problem, alpha=alpha)
+    theta = train_bias(problem, alpha=settings.alpha)
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
@@ -278,9 +286,7 @@ def run_benchmark(
                     theta=theta,
                     tree=tree,
                     seed=seed + k,
-                    eta=eta,
-                    alpha=alpha,
-                    pseudo_count=pseudo_count,
+                    settings=settings,
                     max_checks=max_checks,
                 )
                 checks.append(result.num_checks)
@@ -289,16 +295,16 @@ def run_benchmark(
                     failed.append(k)
                 bar.update(1)
             results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
-    settings = {
+    run_settings = {
         "seed": seed,
-        "eta": eta,
-        "pseudo_count": pseudo_count,
-        "alpha": alpha,
+        "eta": settings.eta,
+        "pseudo_count": settings.pseudo_count,
+        "alpha": settings.alpha,
         "max_worlds": max_worlds,
         "max_checks": max_checks,
     }
     return BenchmarkResult(
-        problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, settings
+        problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, run_settings
     )
 
 

@@ -15,18 +15,13 @@ from pathlib import Path
 from typing import Any
 
 from drd_planner import __version__
+from drd_planner.bench.extras import require_extra
 from drd_planner.bench.learning_curve import DEFAULT_SIZES, TrainingCurve, training_size_curve
-from drd_planner.bench.plots import (
-    FIG3_POLICIES,
-    has_vertex_xy,
-    plot_checked_edges,
-    plot_normalised_costs,
-    plot_training_curve,
-)
 from drd_planner.bench.report import full_report
 from drd_planner.bench.runner import (
     DEFAULT_POLICIES,
     BenchmarkResult,
+    PolicySettings,
     available_policies,
     benchmark_json,
     check_policy_names,
@@ -42,6 +37,7 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.switch_threshold import (
     DEFAULT_PSEUDO_COUNTS,
     SwitchThresholdChoice,
+    ValidationGrid,
     select_switch_threshold,
 )
 from drd_planner.core.tree import DecisionTree, build_tree
@@ -66,7 +62,8 @@ class SuiteOptions:
         max_checks: per-episode check cap (None: none); capped episodes count as failures.
         tree_options: keyword arguments for :func:`drd_planner.core.tree.build_tree`.
         reference, tie_subset, resamples: Table-1 statistics settings (see :mod:`drd_planner.bench.stats`).
-        figures: folder for the figures, or None for none.
+        figures: folder for the figures, or None for none; figures need the ``plots`` extra (matplotlib),
+            checked when the options are made (:class:`~drd_planner.bench.extras.MissingExtraError`).
         training_sizes: training-set sizes of the checks-vs-training-size figure (empty: no such figure).
         figure_world: position in the test list of the world drawn in the checked-edges figure.
     """
@@ -85,6 +82,11 @@ class SuiteOptions:
     figures: Path | None = None
     training_sizes: tuple[int, ...] = DEFAULT_SIZES
     figure_world: int = 0
+
+    def __post_init__(self) -> None:
+        """Fail early, naming the extra, when figures are asked for without matplotlib."""
+        if self.figures is not None:
+            require_extra("plots", "drd bench --figures")
 
 
 @dataclass(frozen=True)
@@ -172,9 +174,7 @@ def run_dataset(
         policies=options.policies,
         tree=tree,
         seed=options.seed,
-        eta=eta,
-        alpha=options.alpha,
-        pseudo_count=kappa,
+        settings=PolicySettings(eta, options.alpha, kappa),
         max_worlds=options.max_worlds,
         max_checks=options.max_checks,
         progress=progress,
@@ -212,34 +212,27 @@ def resolve_leaf(
     if not _needs_tree(options) or (options.eta is not None and fixed_kappa):
         eta = DEFAULT_ETA if options.eta is None else options.eta
         return eta, options.pseudo_counts[0] if fixed_kappa else None, None
-    expand = float(options.tree_options.get("expand_threshold", 0.05))
     choice = select_switch_threshold(
         problem,
-        candidates=None if options.eta is None else (options.eta,),
-        pseudo_counts=options.pseudo_counts,
+        ValidationGrid.around(options.eta, options.pseudo_counts, options.tree_options, alpha=options.alpha),
         seed=options.seed,
-        alpha=options.alpha,
-        expand_threshold=expand,
-        tree_options=options.tree_options,
         max_worlds=options.max_worlds,
         progress=progress,
     )
     return choice.eta, choice.pseudo_count, choice
 
 
-def _eta(options: SuiteOptions) -> float:
-    """``options.eta`` after :func:`resolve_leaf` (never None there)."""
-    return DEFAULT_ETA if options.eta is None else options.eta
-
-
-def _kappa(options: SuiteOptions) -> float | None:
-    """The leaf's kappa after :func:`resolve_leaf` (one candidate left)."""
-    return options.pseudo_counts[0] if options.pseudo_counts else None
+def _settings(options: SuiteOptions) -> PolicySettings:
+    """The policy settings after :func:`resolve_leaf` (eta set, one kappa candidate left)."""
+    eta = DEFAULT_ETA if options.eta is None else options.eta
+    return PolicySettings(eta, options.alpha, options.pseudo_counts[0] if options.pseudo_counts else None)
 
 
 def _checked_edges_figure(
     problem: Problem, result: BenchmarkResult, tree: DecisionTree, options: SuiteOptions, notes: list[str]
 ) -> list[Path]:
+    from drd_planner.bench.plots import FIG3_POLICIES, has_vertex_xy, plot_checked_edges
+
     assert options.figures is not None
     if not has_vertex_xy(problem):
         notes.append(f"{problem.name}: no vertex coordinates, checked-edges figure skipped")
@@ -257,9 +250,7 @@ def _checked_edges_figure(
             theta=theta,
             tree=tree,
             seed=options.seed + k,
-            eta=_eta(options),
-            alpha=options.alpha,
-            pseudo_count=_kappa(options),
+            settings=_settings(options),
             max_checks=options.max_checks,
         )
         for name in available_policies(FIG3_POLICIES)
@@ -285,11 +276,11 @@ def _training_figure(
         sizes=sizes,
         seed=options.seed,
         max_worlds=options.max_worlds,
-        eta=_eta(options),
-        alpha=options.alpha,
-        pseudo_count=_kappa(options),
+        settings=_settings(options),
         tree_options=options.tree_options,
     )
+    from drd_planner.bench.plots import plot_training_curve
+
     figures += plot_training_curve(curve, options.figures / f"training_size_{problem.name}")
     return curve
 
@@ -298,6 +289,8 @@ def costs_figure(runs: Sequence[DatasetRun], options: SuiteOptions) -> list[Path
     """The normalised-cost figure over every run that has Table-1 statistics (none: nothing written)."""
     if options.figures is None:
         return []
+    from drd_planner.bench.plots import plot_normalised_costs
+
     tables = {run.result.dataset: run.table for run in runs if run.table is not None}
     if not tables:
         return []

@@ -20,6 +20,7 @@ ECD (Welsh-Powell greedy colouring of the overlap graph), w_k = 1/2 (T^2 - Q - s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -213,17 +214,7 @@ class DirectSelector:
         if act.size == 0:
             return None
         weights = self._prior[act]
-        if regions is None:
-            atom_ids, local = np.unique(self._atom_of[act], return_inverse=True)
-            members = self._atom_regions[atom_ids]  # (S, m)
-            null_ecd = self._null_ecd
-        else:
-            if self._colour is not None:
-                raise ProblemError("region subsets (IncDRD) cannot be combined with colouring")
-            cols = np.asarray(regions, dtype=np.int64)
-            members, local = np.unique(self._R[np.ix_(act, cols)], axis=0, return_inverse=True)
-            null_ecd = bool((~members.any(axis=1)).any())
-        local = np.asarray(local).ravel()
+        members, local, null_ecd = self._atoms(act, regions)
         num_atoms = members.shape[0]
         mass = np.bincount(local, weights=weights, minlength=num_atoms).astype(np.float64)  # c, (S,)
         total = float(mass.sum())
@@ -233,15 +224,7 @@ class DirectSelector:
             groups.null_count and self._is_zero(np.array([w0_now]), total)[0]
         ):
             return None
-        # Informative tests: the active worlds disagree.
-        # Only the candidate columns are gathered (a node's candidates are one path's edges, X has all).
-        cand_cols = None
-        if candidates is not None:
-            cand_cols = np.flatnonzero(np.isin(self._candidates, np.asarray(candidates, dtype=np.int64)))
-        x_act = self._Xc[act] if cand_cols is None else self._Xc[np.ix_(act, cand_cols)]
-        free_count = x_act.sum(axis=0)
-        split_cols = np.flatnonzero((free_count > 0) & (free_count < act.size))
-        informative = split_cols if cand_cols is None else cand_cols[split_cols]
+        x_act, split_cols, informative = self._informative(act, candidates)
         if informative.size == 0:
             return None
         xi = x_act[:, split_cols].astype(self._dtype)
@@ -250,28 +233,7 @@ class DirectSelector:
         )
         c1 = np.asarray(onehot @ xi)  # (S, Ti) mass of atom s with x_t = 1
         c0 = mass.astype(self._dtype)[:, None] - c1
-        log_remaining = []
-        k = informative.size
-        for cx in (c0, c1):
-            stacked = np.empty((num_atoms, 2 * k), dtype=self._dtype)  # [C_x | C_x o C_x]
-            stacked[:, :k] = cx
-            np.multiply(cx, cx, out=stacked[:, k:])
-            tx = cx.sum(axis=0, dtype=np.float64)
-            qx = stacked[:, k:].sum(axis=0, dtype=np.float64)
-            w0_x = 0.5 * (tx * tx - qx)
-            with np.errstate(divide="ignore"):
-                lx = np.zeros(informative.size)
-                if groups.members is not None:
-                    wx = self._group_weights(stacked, groups, tx, qx)
-                    if not self._exact:  # exact integer weights are already exactly zero
-                        wx = np.where(self._is_zero(wx, tx), 0.0, wx)
-                    mult = groups.multiplicity
-                    lx += mult @ np.log(wx) - float(mult @ np.log(w_now))
-                if groups.null_count:
-                    w0z = np.where(self._is_zero(w0_x, tx), 0.0, w0_x)
-                    lx += groups.null_count * (np.log(w0z) - np.log(w0_now))
-            log_remaining.append((tx, lx))
-        (t0, l0), (t1, l1) = log_remaining
+        (t0, l0), (t1, l1) = (self._log_remaining(cx, groups, w_now, w0_now) for cx in (c0, c1))
         with np.errstate(divide="ignore"):
             log_p0 = np.log(t0 / total)
             log_p1 = np.log(t1 / total)
@@ -282,6 +244,68 @@ class DirectSelector:
             float(-np.expm1(log_expected[best]) / self._costs[self._candidates[informative[best]]]),
             float(log_expected[best]),
         )
+
+    def _atoms(self, act: IntArray, regions: npt.ArrayLike | None) -> tuple[BoolArray, IntArray, bool]:
+        """((S, m) region membership of the active atoms, (k,) atom of each active world, null ECD).
+
+        With ``regions`` (IncDRD) atoms are taken over the restricted membership of the active worlds.
+        """
+        if regions is None:
+            atom_ids, local = np.unique(self._atom_of[act], return_inverse=True)
+            members = self._atom_regions[atom_ids]  # (S, m)
+            null_ecd = self._null_ecd
+        else:
+            if self._colour is not None:
+                raise ProblemError("region subsets (IncDRD) cannot be combined with colouring")
+            cols = np.asarray(regions, dtype=np.int64)
+            members, local = np.unique(self._R[np.ix_(act, cols)], axis=0, return_inverse=True)
+            null_ecd = bool((~members.any(axis=1)).any())
+        return members, np.asarray(local).ravel(), null_ecd
+
+    def _informative(
+        self, act: IntArray, candidates: npt.ArrayLike | None
+    ) -> tuple[npt.NDArray[Any], IntArray, IntArray]:
+        """(gathered outcome columns of the active worlds, split columns among them, informative tests).
+
+        Informative tests are those the active worlds disagree on; only the candidate columns are
+        gathered (a node's candidates are one path's edges, X has all). Tests are indices into the
+        candidate edges.
+        """
+        cand_cols = None
+        if candidates is not None:
+            cand_cols = np.flatnonzero(np.isin(self._candidates, np.asarray(candidates, dtype=np.int64)))
+        x_act = self._Xc[act] if cand_cols is None else self._Xc[np.ix_(act, cand_cols)]
+        free_count = x_act.sum(axis=0)
+        split_cols = np.flatnonzero((free_count > 0) & (free_count < act.size))
+        informative = split_cols if cand_cols is None else cand_cols[split_cols]
+        return x_act, split_cols, informative
+
+    def _log_remaining(
+        self, cx: npt.NDArray[Any], groups: _EcdGroups, w_now: FloatArray, w0_now: float
+    ) -> tuple[FloatArray, FloatArray]:
+        """((T,) mass of outcome x per test, (T,) log of the ECD weight left after it over the weight now).
+
+        ``cx``: (S, T) mass of each active atom with outcome x of each informative test.
+        """
+        num_atoms, k = cx.shape
+        stacked = np.empty((num_atoms, 2 * k), dtype=self._dtype)  # [C_x | C_x o C_x]
+        stacked[:, :k] = cx
+        np.multiply(cx, cx, out=stacked[:, k:])
+        tx = cx.sum(axis=0, dtype=np.float64)
+        qx = stacked[:, k:].sum(axis=0, dtype=np.float64)
+        w0_x = 0.5 * (tx * tx - qx)
+        with np.errstate(divide="ignore"):
+            lx = np.zeros(k)
+            if groups.members is not None:
+                wx = self._group_weights(stacked, groups, tx, qx)
+                if not self._exact:  # exact integer weights are already exactly zero
+                    wx = np.where(self._is_zero(wx, tx), 0.0, wx)
+                mult = groups.multiplicity
+                lx += mult @ np.log(wx) - float(mult @ np.log(w_now))
+            if groups.null_count:
+                w0z = np.where(self._is_zero(w0_x, tx), 0.0, w0_x)
+                lx += groups.null_count * (np.log(w0z) - np.log(w0_now))
+        return tx, lx
 
     def _groups(self, members: BoolArray, null_ecd: bool) -> _EcdGroups:
         """The ECD problems over the active atoms ``members`` (S, m).

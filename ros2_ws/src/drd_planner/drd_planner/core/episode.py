@@ -216,92 +216,131 @@ def run_episode(
         PolicyError: the policy chose an edge outside the graph or one already checked.
         UnverifiedPathError: never, unless the bookkeeping itself is broken (a last safety net).
     """
-    costs = np.asarray(edge_costs, dtype=np.float64)
-    graph_policy = policy if isinstance(policy, GraphPathPolicy) else None
-    library_stops = graph_policy is None or graph_policy.stops_on_library_path
-    if library is None and library_stops:
-        raise PolicyError(f"policy {policy.name} stops on library paths, so its episode needs a library")
-    num_edges = costs.size if library is None else library.num_edges
-    progress = _LibraryProgress(library) if library is not None else None
-    limit = max_checks
-    if graph_policy is not None and graph_policy.max_checks is not None:
-        limit = graph_policy.max_checks if limit is None else min(limit, graph_policy.max_checks)
-    outcome: dict[int, bool] = {}
-    for edge, free in (known or {}).items():
-        outcome[int(edge)] = bool(free)
-        if progress is not None:
-            progress.record(int(edge), bool(free))
-    log: list[CheckRecord] = []
-    own_path: IntArray | None = None
-    status = EpisodeStatus.POLICY_GAVE_UP
-    settled = False
-    if progress is not None and library_stops and outcome:  # earlier checks may settle the library
-        if progress.proven_path(costs) is not None:
-            status, settled = EpisodeStatus.PATH_FOUND, True
-        elif progress.all_blocked():
-            status, settled = EpisodeStatus.NO_FREE_PATH, True
-    while not settled:
-        t0 = time.perf_counter()  # a graph policy's re-planning in proposed_path() is selection time
-        if graph_policy is not None:
-            proposed = graph_policy.proposed_path()
+    episode = _Episode(library, edge_costs, policy, oracle, max_checks, known)
+    status = episode.settled_by_known()
+    if status is None:
+        status = episode.run(deadline)
+    return episode.result(status)
+
+
+class _Episode:
+    """The state of one :func:`run_episode`: the outcomes so far, the check log and the library progress."""
+
+    def __init__(
+        self,
+        library: PathLibrary | None,
+        edge_costs: npt.ArrayLike,
+        policy: Policy,
+        oracle: EdgeOracle,
+        max_checks: int | None,
+        known: Mapping[int, bool] | None,
+    ) -> None:
+        """See :func:`run_episode`; records the ``known`` outcomes (PolicyError: no library to stop on)."""
+        self.costs = np.asarray(edge_costs, dtype=np.float64)
+        self.policy = policy
+        self.oracle = oracle
+        self.graph_policy = policy if isinstance(policy, GraphPathPolicy) else None
+        self.library_stops = self.graph_policy is None or self.graph_policy.stops_on_library_path
+        if library is None and self.library_stops:
+            raise PolicyError(f"policy {policy.name} stops on library paths, so its episode needs a library")
+        self.library = library
+        self.num_edges = self.costs.size if library is None else library.num_edges
+        self.progress = _LibraryProgress(library) if library is not None else None
+        self.limit = max_checks
+        if self.graph_policy is not None and self.graph_policy.max_checks is not None:
+            cap = self.graph_policy.max_checks
+            self.limit = cap if self.limit is None else min(self.limit, cap)
+        self.outcome: dict[int, bool] = {}
+        for edge, free in (known or {}).items():
+            self.outcome[int(edge)] = bool(free)
+            if self.progress is not None:
+                self.progress.record(int(edge), bool(free))
+        self.log: list[CheckRecord] = []
+        self.own_path: IntArray | None = None
+
+    def settled_by_known(self) -> EpisodeStatus | None:
+        """PATH_FOUND or NO_FREE_PATH when the earlier checks already settle the library, else None."""
+        if self.progress is None or not self.library_stops or not self.outcome:
+            return None
+        if self.progress.proven_path(self.costs) is not None:
+            return EpisodeStatus.PATH_FOUND
+        if self.progress.all_blocked():
+            return EpisodeStatus.NO_FREE_PATH
+        return None
+
+    def run(self, deadline: float | None) -> EpisodeStatus:
+        """Select, check and observe until one of the stopping rules of :func:`run_episode` applies."""
+        while True:
+            t0 = time.perf_counter()  # a graph policy's re-planning in proposed_path() is selection time
+            status = self._stop_before_selection(t0, deadline)
+            if status is not None:
+                return status
+            choice = self.policy.select()
+            t1 = time.perf_counter()
+            if choice is None:
+                return EpisodeStatus.POLICY_GAVE_UP
+            status = self._check(int(choice), t0, t1)
+            if status is not None:
+                return status
+
+    def _stop_before_selection(self, t0: float, deadline: float | None) -> EpisodeStatus | None:
+        """The graph policy's own path rules, then the check cap, then the deadline."""
+        if self.graph_policy is not None:
+            proposed = self.graph_policy.proposed_path()
             if proposed is None:
-                status = EpisodeStatus.NO_FREE_PATH
-                break
-            if all(outcome.get(int(e)) is True for e in proposed):
-                own_path = np.array(proposed, dtype=np.int64)
-                status = EpisodeStatus.PATH_FOUND
-                break
-        if limit is not None and len(log) >= limit:
-            status = EpisodeStatus.MAX_CHECKS
-            break
+                return EpisodeStatus.NO_FREE_PATH
+            if all(self.outcome.get(int(e)) is True for e in proposed):
+                self.own_path = np.array(proposed, dtype=np.int64)
+                return EpisodeStatus.PATH_FOUND
+        if self.limit is not None and len(self.log) >= self.limit:
+            return EpisodeStatus.MAX_CHECKS
         if deadline is not None and t0 >= deadline:
-            status = EpisodeStatus.TIME_BUDGET
-            break
-        choice = policy.select()
-        t1 = time.perf_counter()
-        if choice is None:
-            status = EpisodeStatus.POLICY_GAVE_UP
-            break
-        edge = int(choice)
-        if not 0 <= edge < num_edges:
-            raise PolicyError(f"policy {policy.name} chose edge {edge}, outside [0, {num_edges})")
-        if edge in outcome:
-            raise PolicyError(f"policy {policy.name} chose edge {edge} a second time")
-        free = bool(oracle.check(edge))
+            return EpisodeStatus.TIME_BUDGET
+        return None
+
+    def _check(self, edge: int, t0: float, t1: float) -> EpisodeStatus | None:
+        """Check ``edge`` (chosen between ``t0`` and ``t1``), log it, tell the policy; the status if it ends."""
+        if not 0 <= edge < self.num_edges:
+            raise PolicyError(f"policy {self.policy.name} chose edge {edge}, outside [0, {self.num_edges})")
+        if edge in self.outcome:
+            raise PolicyError(f"policy {self.policy.name} chose edge {edge} a second time")
+        free = bool(self.oracle.check(edge))
         t2 = time.perf_counter()
-        outcome[edge] = free
-        log.append(CheckRecord(len(log), edge, free, policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
-        policy.observe(edge, free)
-        if progress is None or not library_stops:
-            if progress is not None:
-                progress.record(edge, free)
-            continue
+        self.outcome[edge] = free
+        self.log.append(
+            CheckRecord(len(self.log), edge, free, self.policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3)
+        )
+        self.policy.observe(edge, free)
+        progress = self.progress
+        if progress is None:
+            return None
         progress.record(edge, free)
-        if free and progress.proven_path(costs) is not None:
-            status = EpisodeStatus.PATH_FOUND
-            break
+        if not self.library_stops:
+            return None
+        if free and progress.proven_path(self.costs) is not None:
+            return EpisodeStatus.PATH_FOUND
         if not free and progress.all_blocked():
-            status = EpisodeStatus.NO_FREE_PATH
-            break
-    path_index: int | None = None
-    path_edges: IntArray | None = None
-    if own_path is not None:
-        path_edges = own_path
-    elif status is EpisodeStatus.PATH_FOUND and progress is not None and library is not None:
-        path_index = progress.proven_path(costs)
-        if path_index is not None:
-            path_edges = library.path_edges[path_index]
-    if path_edges is not None:
-        verify_path(path_edges, outcome)
-    evidence = None
-    if (
-        status is EpisodeStatus.NO_FREE_PATH
-        and progress is not None
-        and library_stops
-        and progress.all_blocked()
-    ):
-        evidence = progress.blocker.copy()
-    return EpisodeResult(tuple(log), status, path_index, path_edges, evidence)
+            return EpisodeStatus.NO_FREE_PATH
+        return None
+
+    def result(self, status: EpisodeStatus) -> EpisodeResult:
+        """The episode's result; the returned path is verified against the outcomes (the safety net)."""
+        path_index: int | None = None
+        path_edges: IntArray | None = None
+        progress = self.progress
+        if self.own_path is not None:
+            path_edges = self.own_path
+        elif status is EpisodeStatus.PATH_FOUND and progress is not None and self.library is not None:
+            path_index = progress.proven_path(self.costs)
+            if path_index is not None:
+                path_edges = self.library.path_edges[path_index]
+        if path_edges is not None:
+            verify_path(path_edges, self.outcome)
+        evidence = None
+        if status is EpisodeStatus.NO_FREE_PATH and progress is not None and self.library_stops:
+            if progress.all_blocked():
+                evidence = progress.blocker.copy()
+        return EpisodeResult(tuple(self.log), status, path_index, path_edges, evidence)
 
 
 def verify_path(path_edges: Sequence[int] | IntArray, outcome: dict[int, bool]) -> None:

@@ -25,6 +25,7 @@ around it instead of exploring the other end's large region: it is the graph sta
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -141,6 +142,23 @@ def bisection_position(checked: BoolArray) -> int:
     return int(np.argmax(dist))
 
 
+@dataclass(frozen=True)
+class LazySPSettings:
+    """How :class:`LazySP` picks edges and when it gives up.
+
+    Attributes:
+        selector: one of :data:`SELECTORS`.
+        max_checks: check budget the runner enforces (None: unlimited).
+        nsamps: sampled graphs per selection (``weightsamp`` only).
+        seed: seed of the sampler (``weightsamp`` only; the other selectors are deterministic).
+    """
+
+    selector: str = "forward"
+    max_checks: int | None = DEFAULT_MAX_CHECKS
+    nsamps: int = DEFAULT_WEIGHTSAMP_NSAMPS
+    seed: int = 0
+
+
 class LazySP:
     """LazySP on the full graph, a :class:`drd_planner.core.episode.GraphPathPolicy`.
 
@@ -148,10 +166,7 @@ class LazySP:
         graph: the explicit graph (one edge id per test; undirected edges are traversable both ways).
         start: start vertex.
         goal: goal vertex.
-        selector: one of :data:`SELECTORS`.
-        max_checks: check budget the runner enforces (None: unlimited).
-        nsamps: sampled graphs per selection (``weightsamp`` only).
-        seed: seed of the sampler (``weightsamp`` only; the other selectors are deterministic).
+        settings: selector, check budget and WeightSamp sampling (None: :class:`LazySPSettings` defaults).
         name: registry name (default ``lazysp`` or ``lazysp_<selector>``).
         edge_weights: (E,) finite non-negative weights of the edges in the shortest-path search
             (default: the graph's lengths). Checked-free edges keep them, blocked ones are deleted.
@@ -165,16 +180,15 @@ class LazySP:
         graph: ExplicitGraph,
         start: int,
         goal: int,
+        settings: LazySPSettings | None = None,
         *,
-        selector: str = "forward",
-        max_checks: int | None = DEFAULT_MAX_CHECKS,
-        nsamps: int = DEFAULT_WEIGHTSAMP_NSAMPS,
-        seed: int = 0,
         name: str | None = None,
         edge_weights: npt.ArrayLike | None = None,
         observations: Mapping[int, bool] | None = None,
         stage: str = "lazysp",
     ) -> None:
+        settings = settings or LazySPSettings()
+        selector, nsamps = settings.selector, settings.nsamps
         if selector not in SELECTORS:
             raise ProblemError(f"unknown LazySP selector {selector!r}; known: {', '.join(SELECTORS)}")
         for label, vertex in (("start", start), ("goal", goal)):
@@ -193,9 +207,9 @@ class LazySP:
         self._start = int(start)
         self._goal = int(goal)
         self._selector = selector
-        self._max_checks = max_checks
+        self._max_checks = settings.max_checks
         self._nsamps = int(nsamps)
-        self._rng = np.random.default_rng(seed)
+        self._rng = np.random.default_rng(settings.seed)
         self._name = name or lazysp_name(selector)
         self._outcome = np.full(graph.num_edges, _UNKNOWN, dtype=np.int8)
         self._weights = self._lengths.copy()  # lazy weights: inf once checked blocked

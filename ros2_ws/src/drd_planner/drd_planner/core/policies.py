@@ -18,7 +18,7 @@ from drd_planner.core.baselines import LazySPSet, MaxTally, MVoI, RandomEdge, Se
 from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.lazysp import SELECTORS, LazySP, lazysp_name
+from drd_planner.core.lazysp import SELECTORS, LazySP, LazySPSettings, lazysp_name
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import ConsistentWorldsBias
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree, TreeNodes
@@ -336,7 +336,7 @@ def _lazysp(selector: str) -> PolicyFactory:
         graph = _need_graph(ctx)
         if ctx.start is None or ctx.goal is None:
             raise ProblemError("lazysp needs the start and goal vertices (PolicyContext.start/goal)")
-        return LazySP(graph, ctx.start, ctx.goal, selector=selector, seed=ctx.seed)
+        return LazySP(graph, ctx.start, ctx.goal, LazySPSettings(selector=selector, seed=ctx.seed))
 
     return make
 

@@ -27,10 +27,11 @@ from typing import Any
 
 import numpy as np
 
+from drd_planner.arrays import IntArray
 from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import DEFAULT_ALPHA, DirectBisectPolicy
 from drd_planner.core.problem import Problem
-from drd_planner.core.tree import build_tree
+from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import ProblemError
 from drd_planner.progress import Progress
 
@@ -113,16 +114,54 @@ def _order(item: tuple[tuple[float, float | None], float]) -> tuple[float, float
     return (eta, -1.0 if kappa is None else kappa)
 
 
+@dataclass(frozen=True)
+class ValidationGrid:
+    """The eta x kappa candidates a validation tries, and how its policy and tree are set up.
+
+    Attributes:
+        candidates: thresholds to try, each in (0, 1] (None: :data:`DEFAULT_ETA_CANDIDATES`).
+        pseudo_counts: leaf posterior pseudo-counts to try (None: the fixed leaf bias).
+        alpha: data weight of the leaf bias.
+        expand_threshold: the tree's expansion threshold (as for the final tree).
+        tree_options: further keyword arguments of :func:`drd_planner.core.tree.build_tree`
+            (candidates, IncDRD, colouring), the same as for the final tree, so the validation
+            tree is built the way the tree that will use eta is.
+    """
+
+    candidates: Sequence[float] | None = None
+    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS
+    alpha: float = DEFAULT_ALPHA
+    expand_threshold: float = 0.05
+    tree_options: Mapping[str, Any] | None = None
+
+    @classmethod
+    def around(
+        cls,
+        eta: float | None,
+        pseudo_counts: Sequence[float | None],
+        tree_options: Mapping[str, Any],
+        *,
+        alpha: float = DEFAULT_ALPHA,
+    ) -> ValidationGrid:
+        """The grid of a run whose eta is given (only that one is tried) or open (None: the defaults).
+
+        The tree's expansion threshold is ``tree_options``' ``expand_threshold`` (0.05 when absent).
+        """
+        return cls(
+            candidates=None if eta is None else (eta,),
+            pseudo_counts=pseudo_counts,
+            alpha=alpha,
+            expand_threshold=float(tree_options.get("expand_threshold", 0.05)),
+            tree_options=tree_options,
+        )
+
+
 def select_switch_threshold(
     problem: Problem,
+    grid: ValidationGrid | None = None,
     *,
-    candidates: Sequence[float] | None = None,
     validation_fraction: float = DEFAULT_VALIDATION_FRACTION,
     seed: int = 0,
-    alpha: float = DEFAULT_ALPHA,
-    expand_threshold: float = 0.05,
-    tree_options: Mapping[str, Any] | None = None,
-    pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS,
     max_worlds: int | None = None,
     progress: bool | None = False,
 ) -> SwitchThresholdChoice:
@@ -130,15 +169,9 @@ def select_switch_threshold(
 
     Args:
         problem: a problem with a world database; only its training worlds are used.
-        candidates: thresholds to try, each in (0, 1] (None: :data:`DEFAULT_ETA_CANDIDATES`).
+        grid: the candidates and the policy and tree settings (None: :class:`ValidationGrid` defaults).
         validation_fraction: share of the training worlds held out (at least one world).
         seed: seeds the hold-out draw.
-        alpha: data weight of the leaf bias.
-        expand_threshold: the tree's expansion threshold (as for the final tree).
-        tree_options: further keyword arguments of :func:`drd_planner.core.tree.build_tree`
-            (candidates, IncDRD, colouring), the same as for the final tree, so the validation
-            tree is built the way the tree that will use eta is.
-        pseudo_counts: leaf posterior pseudo-counts to try (None: the fixed leaf bias).
         max_worlds: hold out at most this many worlds (a quick run; None: the validation fraction).
         progress: report the episodes on stderr (:class:`drd_planner.progress.Progress`; False: silent).
 
@@ -147,16 +180,8 @@ def select_switch_threshold(
             positive, ``max_worlds`` below 1, or no feasible training world.
     """
     t0 = time.perf_counter()
-    if candidates is None:
-        candidates = DEFAULT_ETA_CANDIDATES
-    cands = sorted({float(c) for c in candidates})
-    if not cands or cands[0] <= 0.0 or cands[-1] > 1.0:
-        raise ProblemError(f"eta candidates must be non-empty and lie in (0, 1]; got {list(candidates)}")
-    kappas = sorted(
-        {None if k is None else float(k) for k in pseudo_counts}, key=lambda k: -1.0 if k is None else k
-    )
-    if not kappas or any(k is not None and not (k > 0 and np.isfinite(k)) for k in kappas):
-        raise ProblemError(f"pseudo-counts must be non-empty, each None or > 0; got {list(pseudo_counts)}")
+    grid = grid or ValidationGrid()
+    cands, kappas = _checked_candidates(grid)
     if not 0.0 < validation_fraction < 1.0:
         raise ProblemError(f"validation_fraction must lie in (0, 1); got {validation_fraction}")
     worlds = problem.require_worlds()
@@ -171,9 +196,52 @@ def select_switch_threshold(
     held_out = np.sort(rng.choice(feasible, size=k, replace=False))
     fit = np.setdiff1d(train, held_out)
     sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held_out))
-    options = {k: v for k, v in (tree_options or {}).items() if k not in ("expand_threshold", "progress")}
-    tree = build_tree(sub, expand_threshold=expand_threshold, progress=False, **options)
+    options = {
+        k: v for k, v in (grid.tree_options or {}).items() if k not in ("expand_threshold", "progress")
+    }
+    tree = build_tree(sub, expand_threshold=grid.expand_threshold, progress=False, **options)
+    means = _mean_checks(problem, tree, (cands, kappas), held_out, alpha=grid.alpha, progress=progress)
+    best = min(means.values())
+    tied = [k for k, v in means.items() if v <= best + 1e-12]
+    eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
+    return SwitchThresholdChoice(
+        eta, kappa, means, tuple(int(h) for h in held_out), seconds=time.perf_counter() - t0
+    )
+
+
+def _checked_candidates(grid: ValidationGrid) -> tuple[list[float], list[float | None]]:
+    """The grid's eta candidates (sorted, distinct) and kappas (None first, then increasing).
+
+    Raises:
+        ProblemError: no eta candidate, one outside (0, 1], no kappa, or a kappa that is not positive.
+    """
+    candidates = DEFAULT_ETA_CANDIDATES if grid.candidates is None else grid.candidates
+    cands = sorted({float(c) for c in candidates})
+    if not cands or cands[0] <= 0.0 or cands[-1] > 1.0:
+        raise ProblemError(f"eta candidates must be non-empty and lie in (0, 1]; got {list(candidates)}")
+    kappas = sorted(
+        {None if k is None else float(k) for k in grid.pseudo_counts}, key=lambda k: -1.0 if k is None else k
+    )
+    if not kappas or any(k is not None and not (k > 0 and np.isfinite(k)) for k in kappas):
+        raise ProblemError(
+            f"pseudo-counts must be non-empty, each None or > 0; got {list(grid.pseudo_counts)}"
+        )
+    return cands, kappas
+
+
+def _mean_checks(
+    problem: Problem,
+    tree: DecisionTree,
+    grid: tuple[list[float], list[float | None]],
+    held_out: IntArray,
+    *,
+    alpha: float,
+    progress: bool | None,
+) -> dict[tuple[float, float | None], float]:
+    """(eta, kappa) -> mean checks of ``direct_bisect`` with ``tree`` over the ``held_out`` world rows."""
+    worlds = problem.require_worlds()
     costs = problem.edge_costs
+    cands, kappas = grid
     means: dict[tuple[float, float | None], float] = {}
     total_episodes = len(cands) * len(kappas) * held_out.size
     with Progress(
@@ -190,9 +258,4 @@ def select_switch_threshold(
                     total += result.num_checks
                     bar.update(1)
                 means[(eta, kappa)] = total / held_out.size
-    best = min(means.values())
-    tied = [k for k, v in means.items() if v <= best + 1e-12]
-    eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
-    return SwitchThresholdChoice(
-        eta, kappa, means, tuple(int(h) for h in held_out), seconds=time.perf_counter() - t0
-    )
+    return means

@@ -188,128 +188,176 @@ def build_tree(
     train = worlds.train_ids
     if train.size == 0:
         raise ProblemError("cannot build a decision tree without training worlds")
-    X = worlds.X[train]
-    R = worlds.R[train]
-    prior = None if worlds.prior is None else worlds.prior[train]
-    weights = np.ones(train.size) if prior is None else prior
-    total = float(weights.sum())
-    selector = DirectSelector(X, R, problem.edge_costs, prior=prior, colouring=colouring)
-    lib_edges = problem.library.library_edges
-    x_lib = X[:, lib_edges].astype(np.float64)
-    r_float = R.astype(np.float64)
-
-    edges: list[int] = []
-    children: list[list[int]] = []
-    actives: list[IntArray] = []
-    parents: list[int] = []
-    subsets: list[IntArray | None] = []
-    latched: list[int] = []
-    queue: deque[int] = deque()
-
-    def add_node(active: IntArray, parent: int, subset: IntArray | None, latch: int) -> int:
-        edges.append(NO_EDGE)
-        children.append([NO_CHILD, NO_CHILD])
-        actives.append(active)
-        parents.append(parent)
-        subsets.append(subset)
-        latched.append(latch)
-        return len(edges) - 1
-
-    def checked_on_branch(node: int) -> set[int]:
-        done: set[int] = set()
-        while parents[node] >= 0:
-            node = parents[node]
-            done.add(edges[node])
-        return done
-
-    def choose(node: int) -> int | None:
-        active = actives[node]
-        if top_regions is None:
-            return direct_node_edge(
-                selector, active, weights, r_float, problem.library, max_prob_region=max_prob_region
-            )
-        latch = latched[node]
-        if latch < 0:
-            subset = subsets[node]
-            if subset is None or not R[np.ix_(active, subset)].any():
-                subset = greedy_cover_regions(R[active], weights[active], top_regions)
-                subsets[node] = subset
-            if subset.size == 0:
-                return None
-            choice = selector.select(active, regions=subset)
-            if choice is not None:
-                return choice.edge
-            certified = subset[R[np.ix_(active, subset)].all(axis=0)]
-            if certified.size == 0:
-                return None
-            latch = int(certified[0])
-            latched[node] = latch
-        done = checked_on_branch(node)
-        todo = [int(e) for e in problem.library.path_edges[latch] if int(e) not in done]
-        return todo[0] if todo else None
-
+    builder = _TreeBuilder(
+        problem, colouring=colouring, top_regions=top_regions, max_prob_region=max_prob_region
+    )
     t0 = time.perf_counter()
-    queue.append(add_node(np.arange(train.size, dtype=np.int64), -1, None, -1))
-    expanded = 0
-    with tqdm(
-        desc="DiRECt tree", unit="node", disable=progress is False if progress is not None else None
-    ) as bar:
-        while queue:
-            node = queue.popleft()
-            active = actives[node]
-            edge = choose(node)
-            bar.update(1)
-            if edge is None:
-                continue
-            if len(edges) + 2 > max_nodes:
-                raise ProblemError(f"decision tree exceeds max_nodes={max_nodes}")
-            expanded += 1
-            edges[node] = edge
-            outcome = X[active, edge]
-            for x in (0, 1):
-                child_active = active[outcome == bool(x)]
-                child = add_node(child_active, node, subsets[node], latched[node] if x else -1)
-                children[node][x] = child
-                if float(weights[child_active].sum()) / total >= expand_threshold:
-                    queue.append(child)
+    expanded = builder.expand(expand_threshold=expand_threshold, max_nodes=max_nodes, progress=progress)
     build_s = time.perf_counter() - t0
-
-    n_nodes = len(edges)
-    num_active = np.array([a.size for a in actives], dtype=np.int32)
-    active_fraction = np.array([weights[a].sum() / total for a in actives], dtype=np.float64)
-    free_fraction = np.full((n_nodes, lib_edges.size), 0.5, dtype=np.float32)
-    best_path = np.full(n_nodes, -1, dtype=np.int32)
-    for node, active in enumerate(actives):
-        if active.size:
-            free_fraction[node], best_path[node] = node_summary(
-                weights[active], x_lib[active], r_float[active]
-            )
     info = {
         "expand_threshold": expand_threshold,
         "colouring": colouring,
         "top_regions": top_regions,
         "max_prob_region": max_prob_region,
         "num_train_worlds": int(train.size),
-        "num_ecds": selector.num_ecds,
-        "null_ecd": selector.has_null_ecd,
+        "num_ecds": builder.selector.num_ecds,
+        "null_ecd": builder.selector.has_null_ecd,
         "expanded_nodes": expanded,
         "build_seconds": build_s,
-        "matmul_flops": selector.matmul_flops,
+        "matmul_flops": builder.selector.matmul_flops,
     }
-    return DecisionTree(
-        edge=np.array(edges, dtype=np.int32),
-        children=np.array(children, dtype=np.int32).reshape(-1, 2),
-        num_active=num_active,
-        active_fraction=active_fraction,
-        library_edges=lib_edges,
-        free_fraction=free_fraction,
-        best_path=best_path,
-        num_edges=problem.num_edges,
-        num_paths=problem.num_paths,
-        info=info,
-        world_free=np.ascontiguousarray(X[:, lib_edges], dtype=bool),
-        world_weights=None if prior is None else np.asarray(prior, dtype=np.float64),
-    )
+    return builder.tree(info)
+
+
+class _TreeBuilder:
+    """The growing tree of :func:`build_tree`: per node its edge, children, consistent worlds and parent.
+
+    With ``top_regions`` (IncDRD) a node also carries its region subset and the latched region (-1: none).
+    """
+
+    def __init__(
+        self, problem: Problem, *, colouring: bool, top_regions: int | None, max_prob_region: bool
+    ) -> None:
+        """Prepare the training worlds of ``problem`` and DiRECt's selector (see :func:`build_tree`)."""
+        worlds = problem.require_worlds()
+        train = worlds.train_ids
+        self.problem = problem
+        self.top_regions = top_regions
+        self.max_prob_region = max_prob_region
+        self.X = worlds.X[train]
+        self.R = worlds.R[train]
+        self.prior = None if worlds.prior is None else worlds.prior[train]
+        self.weights = np.ones(train.size) if self.prior is None else self.prior
+        self.total = float(self.weights.sum())
+        self.selector = DirectSelector(
+            self.X, self.R, problem.edge_costs, prior=self.prior, colouring=colouring
+        )
+        self.r_float = self.R.astype(np.float64)
+        self.edges: list[int] = []
+        self.children: list[list[int]] = []
+        self.actives: list[IntArray] = []
+        self.parents: list[int] = []
+        self.subsets: list[IntArray | None] = []
+        self.latched: list[int] = []
+
+    def add_node(self, active: IntArray, parent: int, subset: IntArray | None, latch: int) -> int:
+        """Append a leaf with the (k,) consistent training worlds ``active``; return its index."""
+        self.edges.append(NO_EDGE)
+        self.children.append([NO_CHILD, NO_CHILD])
+        self.actives.append(active)
+        self.parents.append(parent)
+        self.subsets.append(subset)
+        self.latched.append(latch)
+        return len(self.edges) - 1
+
+    def checked_on_branch(self, node: int) -> set[int]:
+        """The edges checked on the way from the root to ``node``."""
+        done: set[int] = set()
+        while self.parents[node] >= 0:
+            node = self.parents[node]
+            done.add(self.edges[node])
+        return done
+
+    def choose(self, node: int) -> int | None:
+        """The edge ``node`` checks, or None when it stays a leaf."""
+        if self.top_regions is None:
+            return direct_node_edge(
+                self.selector,
+                self.actives[node],
+                self.weights,
+                self.r_float,
+                self.problem.library,
+                max_prob_region=self.max_prob_region,
+            )
+        return self._choose_incdrd(node, self.top_regions)
+
+    def _choose_incdrd(self, node: int, top_regions: int) -> int | None:
+        """IncDRD: DiRECt on ``top_regions`` greedy-cover regions, then the latched region's edges in order."""
+        active = self.actives[node]
+        R = self.R
+        latch = self.latched[node]
+        if latch < 0:
+            subset = self.subsets[node]
+            if subset is None or not R[np.ix_(active, subset)].any():
+                subset = greedy_cover_regions(R[active], self.weights[active], top_regions)
+                self.subsets[node] = subset
+            if subset.size == 0:
+                return None
+            choice = self.selector.select(active, regions=subset)
+            if choice is not None:
+                return choice.edge
+            certified = subset[R[np.ix_(active, subset)].all(axis=0)]
+            if certified.size == 0:
+                return None
+            latch = int(certified[0])
+            self.latched[node] = latch
+        done = self.checked_on_branch(node)
+        todo = [int(e) for e in self.problem.library.path_edges[latch] if int(e) not in done]
+        return todo[0] if todo else None
+
+    def expand(self, *, expand_threshold: float, max_nodes: int, progress: bool | None) -> int:
+        """Grow the tree breadth-first from the root; return the number of expanded nodes."""
+        queue: deque[int] = deque()
+        queue.append(self.add_node(np.arange(self.X.shape[0], dtype=np.int64), -1, None, -1))
+        expanded = 0
+        with tqdm(
+            desc="DiRECt tree", unit="node", disable=progress is False if progress is not None else None
+        ) as bar:
+            while queue:
+                node = queue.popleft()
+                edge = self.choose(node)
+                bar.update(1)
+                if edge is None:
+                    continue
+                if len(self.edges) + 2 > max_nodes:
+                    raise ProblemError(f"decision tree exceeds max_nodes={max_nodes}")
+                expanded += 1
+                self.edges[node] = edge
+                queue.extend(self._split(node, edge, expand_threshold))
+        return expanded
+
+    def _split(self, node: int, edge: int, expand_threshold: float) -> list[int]:
+        """Add ``node``'s children for the outcomes of ``edge``; return those heavy enough to expand."""
+        active = self.actives[node]
+        outcome = self.X[active, edge]
+        heavy = []
+        for x in (0, 1):
+            child_active = active[outcome == bool(x)]
+            child = self.add_node(child_active, node, self.subsets[node], self.latched[node] if x else -1)
+            self.children[node][x] = child
+            if float(self.weights[child_active].sum()) / self.total >= expand_threshold:
+                heavy.append(child)
+        return heavy
+
+    def tree(self, info: dict[str, Any]) -> DecisionTree:
+        """The finished :class:`DecisionTree` with per-node summaries and the build ``info``."""
+        lib_edges = self.problem.library.library_edges
+        x_lib = self.X[:, lib_edges].astype(np.float64)
+        weights, total = self.weights, self.total
+        n_nodes = len(self.edges)
+        num_active = np.array([a.size for a in self.actives], dtype=np.int32)
+        active_fraction = np.array([weights[a].sum() / total for a in self.actives], dtype=np.float64)
+        free_fraction = np.full((n_nodes, lib_edges.size), 0.5, dtype=np.float32)
+        best_path = np.full(n_nodes, -1, dtype=np.int32)
+        for node, active in enumerate(self.actives):
+            if active.size:
+                free_fraction[node], best_path[node] = node_summary(
+                    weights[active], x_lib[active], self.r_float[active]
+                )
+        return DecisionTree(
+            edge=np.array(self.edges, dtype=np.int32),
+            children=np.array(self.children, dtype=np.int32).reshape(-1, 2),
+            num_active=num_active,
+            active_fraction=active_fraction,
+            library_edges=lib_edges,
+            free_fraction=free_fraction,
+            best_path=best_path,
+            num_edges=self.problem.num_edges,
+            num_paths=self.problem.num_paths,
+            info=info,
+            world_free=np.ascontiguousarray(self.X[:, lib_edges], dtype=bool),
+            world_weights=None if self.prior is None else np.asarray(self.prior, dtype=np.float64),
+        )
 
 
 def direct_node_edge(

@@ -227,16 +227,7 @@ def check_tree_arrays(
             raise _fail(f"tree {name} has shape {a[name].shape}, expected ({n},)")
     if edge.min() < -1 or edge.max() >= num_edges:
         raise _fail(f"tree node edges do not index the graph's {num_edges} edges")
-    if children.shape != (n, 2) or children.min() < -1 or children.max() >= n:
-        raise _fail("tree node children do not index the node table")
-    ids = np.arange(n)[:, None]
-    if np.any((children != -1) & (children <= ids)):
-        raise _fail("tree node children must come after their parent (the tree would loop)")
-    used = children[children != -1]
-    if np.unique(used).size != used.size:
-        raise _fail("a tree node children entry names a node that has another parent")
-    if np.any((edge == -1)[:, None] & (children != -1)):
-        raise _fail("a tree leaf (no edge) has children")
+    _check_children(children, edge)
     best = a["node_best_path"]
     if best.min() < -1 or best.max() >= num_paths:
         raise _fail(f"tree best paths do not index the library's {num_paths} paths")
@@ -249,6 +240,21 @@ def check_tree_arrays(
     if a["free_fraction"].shape != (n, lib.size):
         raise _fail(f"the leaf bias table has shape {a['free_fraction'].shape}, expected ({n}, {lib.size})")
     _finite_within(a["free_fraction"], "the leaf bias table", 0.0, 1.0)
+
+
+def _check_children(children: npt.NDArray[Any], edge: npt.NDArray[Any]) -> None:
+    """(n, 2) child ids (-1: none) form a tree over the n nodes: each child after its parent, one parent each."""
+    n = edge.shape[0]
+    if children.shape != (n, 2) or children.min() < -1 or children.max() >= n:
+        raise _fail("tree node children do not index the node table")
+    ids = np.arange(n)[:, None]
+    if np.any((children != -1) & (children <= ids)):
+        raise _fail("tree node children must come after their parent (the tree would loop)")
+    used = children[children != -1]
+    if np.unique(used).size != used.size:
+        raise _fail("a tree node children entry names a node that has another parent")
+    if np.any((edge == -1)[:, None] & (children != -1)):
+        raise _fail("a tree leaf (no edge) has children")
 
 
 def check_bits(bits: npt.NDArray[np.uint8], rows: int, cols: int, name: str) -> None:

@@ -15,18 +15,17 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shlex
-import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from drd_planner.argtypes import bounded_float, bounded_int
+from drd_planner.command_errors import run_command
 from drd_planner.core.problem import Problem
 from drd_planner.domains.base import DOMAIN_CLASSES
-from drd_planner.exceptions import DatasetError, DrdError
+from drd_planner.exceptions import DatasetError
 
 __all__ = [
     "add_build_dataset_parser",
@@ -37,7 +36,6 @@ __all__ = [
     "main",
     "parse_domain_spec",
     "problem_domain",
-    "recreate_command",
 ]
 
 
@@ -78,35 +76,6 @@ def parse_domain_spec(text: str | None) -> dict[str, Any] | None:
     return spec
 
 
-def recreate_command(
-    *,
-    domain: str,
-    world_model: str,
-    num_worlds: int,
-    seed: int,
-    domain_spec: Mapping[str, Any] | None = None,
-    domain_factory: str | None = None,
-    max_paths: int = 500,
-    test_fraction: float = 0.1,
-    k: int = 5,
-) -> str:
-    """A ``drd build-dataset`` command line that recreates a dataset: only content-affecting options.
-
-    ``--out``, ``--workers``, ``--scheduler`` and ``--chunk-size`` are left out, since they do not change
-    the file's contents, so a dataset's bytes do not depend on how it was computed.
-    """
-    argv = ["drd", "build-dataset", "--domain", domain, "--world-model", world_model]
-    argv += ["--worlds", str(num_worlds), "--seed", str(seed), "--max-paths", str(max_paths)]
-    argv += ["--test-fraction", repr(float(test_fraction))]
-    if k != 5:
-        argv += ["--k", str(k)]
-    if domain_spec:
-        argv += ["--domain-spec", json.dumps(dict(domain_spec), sort_keys=True)]
-    if domain_factory:
-        argv += ["--domain-factory", domain_factory]
-    return shlex.join(argv)
-
-
 def cmd_build_dataset(args: argparse.Namespace) -> int:
     """``drd build-dataset``: sample worlds, check every edge in parallel, build library/R/split, save.
 
@@ -114,39 +83,30 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
         DrdError: any user-triggered failure (the caller prints one line and exits 2).
     """
     from drd_planner.data.dataset_builder import build_dataset
+    from drd_planner.data.dataset_options import BuildOptions, DatasetRecipe
 
-    spec = parse_domain_spec(args.domain_spec)
     workers = args.workers if args.workers is not None else default_workers()
-    command = recreate_command(
+    recipe = DatasetRecipe(
         domain=args.domain,
         world_model=args.world_model,
         num_worlds=args.worlds,
         seed=args.seed,
-        domain_spec=spec,
+        domain_spec=parse_domain_spec(args.domain_spec),
         domain_factory=args.domain_factory,
-        max_paths=args.max_paths,
-        test_fraction=args.test_fraction,
-        k=args.k,
-    )
-    report = build_dataset(
-        args.out,
-        domain=args.domain,
-        world_model=args.world_model,
-        num_worlds=args.worlds,
-        seed=args.seed,
-        domain_spec=spec,
-        domain_factory=args.domain_factory,
-        workers=workers,
-        scheduler=args.scheduler,
-        chunk_size=args.chunk_size,
         k=args.k,
         max_paths=args.max_paths,
         test_fraction=args.test_fraction,
         include_trajectories=not args.no_trajectories,
+    )
+    options = BuildOptions(
+        workers=workers,
+        scheduler=args.scheduler,
+        chunk_size=args.chunk_size,
         max_chunks=args.max_chunks,
         keep_parts=args.keep_parts,
-        command=command,
+        command=recipe.command(),
     )
+    report = build_dataset(args.out, recipe, options)
     where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{workers} local worker(s)"
     done = report.resumed_chunks + report.evaluated_chunks
     if not report.complete or report.dataset is None:
@@ -242,18 +202,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="drd", description="drd_planner dataset tools")
     sub = parser.add_subparsers(dest="command", required=True)
     add_build_dataset_parser(sub)
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args))
-    except DrdError as exc:
-        print(f"drd: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(
-            "drd: interrupted (finished chunks are kept; run the same command again to resume)",
-            file=sys.stderr,
-        )
-        return 130
+    return run_command(
+        parser.parse_args(argv),
+        interrupted="drd: interrupted (finished chunks are kept; run the same command again to resume)",
+    )
 
 
 if __name__ == "__main__":

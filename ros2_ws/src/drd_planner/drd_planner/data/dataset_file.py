@@ -43,7 +43,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
-from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
+from drd_planner.data.npz_format import NpzFormat
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.safe_npz import refusing
 from drd_planner.exceptions import DatasetError, DrdError
@@ -59,6 +59,7 @@ __all__ = [
 
 FORMAT_NAME = "drd_planner.dataset"
 FORMAT_VERSION = 1
+_FORMAT = NpzFormat(FORMAT_NAME, FORMAT_VERSION, DatasetError, "dataset file")
 
 
 _REQUIRED = {
@@ -130,6 +131,29 @@ class Dataset:
     software_version: str = __version__
 
     def __post_init__(self) -> None:
+        self._check_endpoints()
+        x, r = self._checked_outcomes()
+        n = x.shape[0]
+        train, test = _checked_ids("train", self.train_ids, n), _checked_ids("test", self.test_ids, n)
+        if np.intersect1d(train, test).size:
+            raise DatasetError("train and test worlds overlap")
+        costs = _checked_costs(self.edge_costs, self.graph.num_edges)
+        seeds = _checked_seeds(self.world_seeds, n)
+        self._check_vertex_paths()
+        traj = self._checked_trajectories()
+        object.__setattr__(self, "X", x)
+        object.__setattr__(self, "R", r)
+        object.__setattr__(self, "train_ids", train)
+        object.__setattr__(self, "test_ids", test)
+        object.__setattr__(self, "edge_costs", costs)
+        object.__setattr__(self, "world_seeds", seeds)
+        object.__setattr__(self, "edge_trajectories", traj)
+        object.__setattr__(self, "start", int(self.start))
+        object.__setattr__(self, "goal", int(self.goal))
+        object.__setattr__(self, "seed", int(self.seed))
+
+    def _check_endpoints(self) -> None:
+        """The library indexes the graph's edges; start and goal are distinct vertices of the graph."""
         graph, num_edges = self.graph, self.graph.num_edges
         if self.library.num_edges != num_edges:
             raise DatasetError(f"library indexes {self.library.num_edges} edges, graph has {num_edges}")
@@ -138,6 +162,10 @@ class Dataset:
                 raise DatasetError(f"{name} vertex {v} outside [0, {graph.num_vertices})")
         if int(self.start) == int(self.goal):
             raise DatasetError(f"start and goal are the same vertex ({self.start})")
+
+    def _checked_outcomes(self) -> tuple[BoolArray, BoolArray]:
+        """X (n, E) and R (n, m) as bool arrays, R consistent with X and the library."""
+        num_edges = self.graph.num_edges
         x, r = np.asarray(self.X), np.asarray(self.R)
         if x.dtype != np.bool_ or x.ndim != 2 or x.shape[1] != num_edges:
             raise DatasetError(f"X must be bool (worlds, {num_edges}), got {x.dtype} {x.shape}")
@@ -146,37 +174,7 @@ class Dataset:
             raise DatasetError(f"R must be bool ({n}, {self.library.num_paths}), got {r.dtype} {r.shape}")
         if not np.array_equal(self.library.valid_paths(x), r):
             raise DatasetError("R does not match X and the library (R[h, i] = all edges of path i free)")
-        ids = {}
-        for name, raw in (("train", self.train_ids), ("test", self.test_ids)):
-            arr = np.asarray(raw)
-            if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
-                raise DatasetError(f"{name} ids must be a 1-D integer array")
-            arr = arr.astype(np.int64)
-            if arr.size and (arr[0] < 0 or arr[-1] >= n or np.any(np.diff(arr) <= 0)):
-                raise DatasetError(f"{name} ids must be sorted, distinct and in [0, {n})")
-            ids[name] = arr
-        if np.intersect1d(ids["train"], ids["test"]).size:
-            raise DatasetError("train and test worlds overlap")
-        costs = np.asarray(self.edge_costs, dtype=np.float64)
-        if costs.shape != (num_edges,) or not np.all(np.isfinite(costs)) or np.any(costs <= 0):
-            raise DatasetError(f"edge costs must be ({num_edges},) finite and positive")
-        seeds = np.asarray(self.world_seeds)
-        if seeds.shape != (n,) or (seeds.size and not np.issubdtype(seeds.dtype, np.integer)):
-            raise DatasetError(f"world seeds must be ({n},) integers, got {seeds.dtype} {seeds.shape}")
-        if seeds.size and seeds.min() < 0:
-            raise DatasetError("world seeds must be non-negative")
-        self._check_vertex_paths()
-        traj = self._checked_trajectories()
-        object.__setattr__(self, "X", x)
-        object.__setattr__(self, "R", r)
-        object.__setattr__(self, "train_ids", ids["train"])
-        object.__setattr__(self, "test_ids", ids["test"])
-        object.__setattr__(self, "edge_costs", costs)
-        object.__setattr__(self, "world_seeds", seeds.astype(np.int64))
-        object.__setattr__(self, "edge_trajectories", traj)
-        object.__setattr__(self, "start", int(self.start))
-        object.__setattr__(self, "goal", int(self.goal))
-        object.__setattr__(self, "seed", int(self.seed))
+        return x, r
 
     def _check_vertex_paths(self) -> None:
         vpaths = self.library.vertex_paths
@@ -232,6 +230,35 @@ class Dataset:
         )
 
 
+def _checked_ids(name: str, raw: npt.ArrayLike, n: int) -> IntArray:
+    """``raw`` world ids as sorted, distinct int64 ids in [0, n) (``name`` is "train" or "test")."""
+    arr = np.asarray(raw)
+    if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
+        raise DatasetError(f"{name} ids must be a 1-D integer array")
+    arr = arr.astype(np.int64)
+    if arr.size and (arr[0] < 0 or arr[-1] >= n or np.any(np.diff(arr) <= 0)):
+        raise DatasetError(f"{name} ids must be sorted, distinct and in [0, {n})")
+    return arr
+
+
+def _checked_costs(raw: npt.ArrayLike, num_edges: int) -> FloatArray:
+    """(E,) finite positive float64 edge check costs."""
+    costs = np.asarray(raw, dtype=np.float64)
+    if costs.shape != (num_edges,) or not np.all(np.isfinite(costs)) or np.any(costs <= 0):
+        raise DatasetError(f"edge costs must be ({num_edges},) finite and positive")
+    return costs
+
+
+def _checked_seeds(raw: npt.ArrayLike, n: int) -> IntArray:
+    """(n,) non-negative int64 world seeds."""
+    seeds = np.asarray(raw)
+    if seeds.shape != (n,) or (seeds.size and not np.issubdtype(seeds.dtype, np.integer)):
+        raise DatasetError(f"world seeds must be ({n},) integers, got {seeds.dtype} {seeds.shape}")
+    if seeds.size and seeds.min() < 0:
+        raise DatasetError("world seeds must be non-negative")
+    return seeds.astype(np.int64)
+
+
 def save_dataset(path: str | Path, dataset: Dataset) -> Path:
     """Write ``dataset`` to ``path`` (compressed ``.npz``; byte-identical for equal datasets).
 
@@ -278,14 +305,7 @@ def save_dataset(path: str | Path, dataset: Dataset) -> Path:
         "start": ds.start,
         "goal": ds.goal,
     }
-    return write_checked_npz(
-        path,
-        format_name=FORMAT_NAME,
-        format_version=FORMAT_VERSION,
-        header=header,
-        arrays=arrays,
-        error=DatasetError,
-    )
+    return _FORMAT.write(path, header, arrays)
 
 
 def load_dataset(path: str | Path) -> Dataset:
@@ -296,9 +316,7 @@ def load_dataset(path: str | Path) -> Dataset:
             unexpected arrays or dtypes, or inconsistent contents; the message says which.
     """
     src = Path(path)
-    header, arrays = read_checked_npz(
-        src, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, error=DatasetError, what="dataset file"
-    )
+    header, arrays = _FORMAT.read(src)
     missing = [k for k in _REQUIRED if k not in arrays]
     if missing:
         raise DatasetError(f"{src} lacks required arrays: {', '.join(missing)}")

@@ -24,7 +24,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.arrays import IntArray
+from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
@@ -173,6 +173,48 @@ def merge_directions(raw: RawGraph) -> tuple[IntArray, IntArray]:
     return np.array(keep, dtype=np.int64), np.array(partner, dtype=np.int64)
 
 
+def _merged_outcomes(
+    path: Path, num_rows: int, keep: IntArray, partner: IntArray, merge: Literal["or", "and"]
+) -> BoolArray:
+    """X (n, E) of the merged edges: stored rows ``keep``, each merged with its ``partner`` row (-1: none).
+
+    Raises:
+        DatasetError: the stored matrix is not (n, num_rows) zeros and ones.
+    """
+    x_raw = load_mat_variable(path, "coll_check_results")
+    if x_raw.ndim != 2 or x_raw.shape[1] != num_rows:
+        raise DatasetError(f"{path}: expected worlds x {num_rows} columns, got {x_raw.shape}")
+    if not np.isin(x_raw, (0, 1)).all():
+        raise DatasetError(f"{path}: entries must be 0 or 1")
+    x_raw = x_raw.astype(bool)
+    x = x_raw[:, keep]
+    paired = partner >= 0
+    if paired.any():
+        other = x_raw[:, partner[paired]]
+        x[:, paired] = (x[:, paired] | other) if merge == "or" else (x[:, paired] & other)
+    return x
+
+
+def _read_library(path: Path, graph: ExplicitGraph) -> PathLibrary:
+    """The library of ``path_library.dat`` (1-based vertex paths) on ``graph``."""
+    vertex_paths = _read_vertex_paths(path, graph.num_vertices)
+    try:
+        edge_paths = tuple(graph.vertex_path_to_edges(p) for p in vertex_paths)
+        return PathLibrary(edge_paths, graph.num_edges, tuple(vertex_paths))
+    except ProblemError as exc:
+        raise DatasetError(f"{path}: {exc}") from exc
+
+
+def _stored_r_mismatches(stored: Path, r: BoolArray) -> int | None:
+    """How many entries of the stored R differ from ``r`` (None when the folder has no stored R)."""
+    if not stored.is_file():
+        return None
+    r_stored = load_mat_variable(stored, "world_library_assignment")
+    if r_stored.shape != r.shape:
+        raise DatasetError(f"{stored}: expected {r.shape} (worlds x paths), got {r_stored.shape}")
+    return int((r_stored.astype(bool) != r).sum())
+
+
 def load_gccd_folder(folder: str | Path, *, merge: Literal["or", "and"] = "or") -> Problem:
     """Load an authors'-format dataset folder as a :class:`Problem` (unit edge costs).
 
@@ -187,19 +229,8 @@ def load_gccd_folder(folder: str | Path, *, merge: Literal["or", "and"] = "or") 
         raise DatasetError(f"{root}: missing file(s): {', '.join(missing)}")
     raw = read_graph_txt(root / "graph.txt")
     keep, partner = merge_directions(raw)
-    x_raw = load_mat_variable(root / "coll_check_results.mat", "coll_check_results")
-    if x_raw.ndim != 2 or x_raw.shape[1] != raw.parents.size:
-        raise DatasetError(
-            f"{root / 'coll_check_results.mat'}: expected worlds x {raw.parents.size} columns, got {x_raw.shape}"
-        )
-    if not np.isin(x_raw, (0, 1)).all():
-        raise DatasetError(f"{root / 'coll_check_results.mat'}: entries must be 0 or 1")
-    x_raw = x_raw.astype(bool)
-    x = x_raw[:, keep]
+    x = _merged_outcomes(root / "coll_check_results.mat", raw.parents.size, keep, partner, merge)
     paired = partner >= 0
-    if paired.any():
-        other = x_raw[:, partner[paired]]
-        x[:, paired] = (x[:, paired] | other) if merge == "or" else (x[:, paired] & other)
     one_way = int((~paired).sum())
     directed = not paired.any()
     edges = np.stack([raw.parents[keep], raw.children[keep]], axis=1)
@@ -210,21 +241,10 @@ def load_gccd_folder(folder: str | Path, *, merge: Literal["or", "and"] = "or") 
         raise DatasetError(f"{root / 'graph.txt'}: {exc}") from exc
     start = _read_int(root / "start_idx.dat") - 1
     goal = _read_int(root / "goal_idx.dat") - 1
-    vertex_paths = _read_vertex_paths(root / "path_library.dat", raw.num_vertices)
-    try:
-        edge_paths = tuple(graph.vertex_path_to_edges(p) for p in vertex_paths)
-        library = PathLibrary(edge_paths, graph.num_edges, tuple(vertex_paths))
-    except ProblemError as exc:
-        raise DatasetError(f"{root / 'path_library.dat'}: {exc}") from exc
+    library = _read_library(root / "path_library.dat", graph)
     n = x.shape[0]
     r = library.valid_paths(x)
-    stored_r_mismatch: int | None = None
-    stored = root / "world_library_assignment.mat"
-    if stored.is_file():
-        r_stored = load_mat_variable(stored, "world_library_assignment")
-        if r_stored.shape != r.shape:
-            raise DatasetError(f"{stored}: expected {r.shape} (worlds x paths), got {r_stored.shape}")
-        stored_r_mismatch = int((r_stored.astype(bool) != r).sum())
+    stored_r_mismatch = _stored_r_mismatches(root / "world_library_assignment.mat", r)
     train = _read_ids(root / "train_id.mat", "train_id", n)
     test = _read_ids(root / "test_id.mat", "test_id", n)
     try:

@@ -17,7 +17,9 @@ import hashlib
 import json
 import os
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +36,14 @@ from drd_planner.data.safe_npz import (
 )
 from drd_planner.exceptions import DrdError
 
-__all__ = ["array_digest", "payload_digest", "read_checked_npz", "write_checked_npz"]
+__all__ = [
+    "NpzFormat",
+    "array_digest",
+    "building_for_domain",
+    "payload_digest",
+    "read_checked_npz",
+    "write_checked_npz",
+]
 
 _ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
 _DIGEST_FIELDS = ("array_sha256", "payload_sha256")
@@ -172,3 +181,75 @@ def read_checked_npz(
         if payload_digest(digests, header) != header.get("payload_sha256"):
             raise error(f"{src} is corrupt: payload checksum mismatch (header fields were changed)")
     return header, contents
+
+
+@contextmanager
+def building_for_domain(
+    src: Path, header: Mapping[str, Any], *, error: type[DrdError], expected_domain: str | None
+) -> Iterator[None]:
+    """Around building the object a verified file holds: its header's ``domain`` checked first.
+
+    Args:
+        src: the file (for messages).
+        header: its verified header.
+        error: exception class raised on any refusal.
+        expected_domain: the domain the file must be built for (None: any).
+
+    Raises:
+        error: built for another domain (on entry), or the block raised a ``DrdError``, ``KeyError``,
+            ``TypeError``, ``ValueError``, ``IndexError`` or ``OverflowError`` (the file is inconsistent);
+            the message names the file.
+    """
+    domain = header.get("domain")
+    if expected_domain is not None and domain != expected_domain:
+        raise error(f"{src} was built for domain {short(domain, 60)!r}, not {expected_domain!r}")
+    try:
+        yield
+    except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+        raise error(f"{src} is inconsistent: {short(exc, 400)}") from exc
+
+
+@dataclass(frozen=True)
+class NpzFormat:
+    """One file format in this layout: its name, the version written and read, its error and its kind.
+
+    Attributes:
+        name: ``header["format"]``.
+        version: the version written (and read, unless ``readable`` is given).
+        error: the exception class of every refusal.
+        what: the file kind for messages ("dataset file", ...).
+        readable: the versions read (empty: ``version`` only).
+    """
+
+    name: str
+    version: int
+    error: type[DrdError]
+    what: str
+    readable: tuple[int, ...] = ()
+
+    def write(
+        self, path: str | Path, header: Mapping[str, Any], arrays: Mapping[str, npt.NDArray[Any]]
+    ) -> Path:
+        """:func:`write_checked_npz` in this format; returns the path written."""
+        return write_checked_npz(
+            path,
+            format_name=self.name,
+            format_version=self.version,
+            header=header,
+            arrays=arrays,
+            error=self.error,
+        )
+
+    def read(
+        self, path: str | Path, limits: NpzLimits = DEFAULT_LIMITS
+    ) -> tuple[dict[str, Any], dict[str, npt.NDArray[Any]]]:
+        """:func:`read_checked_npz` in this format: ``(header, arrays)``."""
+        versions = self.readable or (self.version,)
+        return read_checked_npz(
+            path,
+            format_name=self.name,
+            format_version=versions,
+            error=self.error,
+            what=self.what,
+            limits=limits,
+        )

@@ -22,9 +22,6 @@ Version 1 files still load; they have no training worlds, so their leaf bias sta
 
 from __future__ import annotations
 
-import io
-import itertools
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -51,15 +48,17 @@ from drd_planner.data.content_checks import (
     header_number,
     header_text,
 )
-from drd_planner.data.npz_format import array_digest, payload_digest, read_checked_npz
+from drd_planner.data.npz_format import NpzFormat, building_for_domain
+from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.safe_npz import refusing, short
 from drd_planner.data.spec_limits import check_domain_spec
-from drd_planner.exceptions import DrdError, TreeFileError
+from drd_planner.exceptions import TreeFileError
 
 FORMAT_NAME = "drd_planner.tree"
 FORMAT_VERSION = 2
 #: Versions this build reads.
 READABLE_VERSIONS = (1, 2)
+_FORMAT = NpzFormat(FORMAT_NAME, FORMAT_VERSION, TreeFileError, "tree file", READABLE_VERSIONS)
 
 _REQUIRED = {
     "edges": np.int64,
@@ -111,11 +110,6 @@ class TreeBundle:
     provenance: dict[str, Any] = field(default_factory=dict)
 
 
-def _concat(seqs: tuple[npt.NDArray[np.int64], ...]) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    offsets = np.concatenate([[0], np.cumsum([s.size for s in seqs])]).astype(np.int64)
-    return np.concatenate(seqs).astype(np.int64), offsets
-
-
 def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
     """Write ``bundle`` to ``path`` (``.npz``); returns the path written."""
     problem, tree = bundle.problem, bundle.tree
@@ -134,22 +128,19 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         "library_edges": tree.library_edges,
         "free_fraction": tree.free_fraction,
     }
-    arrays["path_edges"], arrays["path_offsets"] = _concat(problem.library.path_edges)
+    arrays["path_edges"], arrays["path_offsets"] = pack_ragged(problem.library.path_edges, np.int64)
     if graph.vertex_states is not None:
         arrays["vertex_states"] = graph.vertex_states
     if problem.library.vertex_paths is not None:
-        arrays["vertex_paths"], arrays["vertex_offsets"] = _concat(problem.library.vertex_paths)
+        arrays["vertex_paths"], arrays["vertex_offsets"] = pack_ragged(problem.library.vertex_paths, np.int64)
     if tree.world_free is not None:
         arrays["world_free_bits"] = np.packbits(tree.world_free, axis=1)
         if tree.world_weights is not None:
             arrays["world_weights"] = tree.world_weights
     elif bundle.pseudo_count is not None:
         raise TreeFileError("a posterior leaf (pseudo_count) needs a tree that carries its training worlds")
-    arrays = {k: np.ascontiguousarray(v, dtype=({**_REQUIRED, **_OPTIONAL})[k]) for k, v in arrays.items()}
-    digests = {k: array_digest(k, v) for k, v in arrays.items()}
+    arrays = {k: np.ascontiguousarray(v, dtype=ARRAY_DTYPES[k]) for k, v in arrays.items()}
     header = {
-        "format": FORMAT_NAME,
-        "format_version": FORMAT_VERSION,
         "software_version": __version__,
         "domain": bundle.domain,
         "name": problem.name,
@@ -164,17 +155,8 @@ def save_tree(path: str | Path, bundle: TreeBundle) -> Path:
         "tree_info": tree.info,
         "problem_metadata": problem.metadata,
         "provenance": bundle.provenance,
-        "array_sha256": digests,
     }
-    header = json.loads(json.dumps(header, sort_keys=True))  # exactly what a reader will see
-    header["payload_sha256"] = payload_digest(digests, header)
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    header_bytes = np.frombuffer(json.dumps(header, sort_keys=True).encode(), dtype=np.uint8)
-    buffer = io.BytesIO()
-    np.savez_compressed(buffer, header=header_bytes, **arrays)  # type: ignore[arg-type]
-    out.write_bytes(buffer.getvalue())
-    return out
+    return _FORMAT.write(path, header, arrays)
 
 
 def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBundle:
@@ -191,9 +173,7 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
             inconsistent; the message names the file and what is wrong. Nothing else escapes.
     """
     src = Path(path)
-    header, contents = read_checked_npz(
-        src, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS, error=TreeFileError, what="tree file"
-    )
+    header, contents = _FORMAT.read(src)
     with refusing(TreeFileError, src, "tree file"):
         missing = [k for k in _REQUIRED if k not in contents]
         if missing:
@@ -205,13 +185,8 @@ def load_tree(path: str | Path, *, expected_domain: str | None = None) -> TreeBu
         for a, b in (("vertex_paths", "vertex_offsets"), ("world_weights", "world_free_bits")):
             if a in contents and b not in contents:
                 raise TreeFileError(f"{src}: array {a!r} needs {b!r}")
-        domain = header.get("domain")
-        if expected_domain is not None and domain != expected_domain:
-            raise TreeFileError(f"{src} was built for domain {short(domain, 60)!r}, not {expected_domain!r}")
-        try:
+        with building_for_domain(src, header, error=TreeFileError, expected_domain=expected_domain):
             return _bundle_from(contents, header)
-        except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
-            raise TreeFileError(f"{src} is inconsistent: {short(exc, 400)}") from exc
 
 
 def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
@@ -237,37 +212,65 @@ def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
         )
 
 
-def _split(flat: npt.NDArray[np.int64], offsets: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
-    if (
-        offsets.ndim != 1
-        or offsets.size < 2
-        or offsets[0] != 0
-        or offsets[-1] != flat.size
-        or np.any(np.diff(offsets) < 0)
-    ):
-        raise ValueError("path offsets do not partition the concatenated paths")
-    return tuple(flat[a:b] for a, b in itertools.pairwise(offsets.tolist()))
+def checked_graph(header: dict[str, Any], c: dict[str, npt.NDArray[Any]], domain_spec: Any) -> ExplicitGraph:
+    """The graph of a tree or prior file, its header fields, arrays and domain spec checked first.
 
+    ``header`` holds ``num_vertices``, ``directed`` and ``domain``; ``c`` the arrays ``edges`` (E, 2),
+    ``lengths`` (E,), ``costs`` (E,) and optionally ``vertex_states`` (V, d).
 
-def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> TreeBundle:
+    Raises:
+        ValueError, DrdError: a header field or an array out of range, or a domain spec beyond budget.
+    """
     num_vertices = header_int(header, "num_vertices", low=1, high=MAX_VERTICES)
     directed = header.get("directed")
     if not isinstance(directed, bool):
-        raise ValueError(f"header field 'directed' must be true or false, got {directed!r}")
-    metadata = header_dict(header, "problem_metadata")
+        raise ValueError(f"header field 'directed' must be true or false, got {short(directed, 40)}")
     domain = header_text(header, "domain")
-    check_graph_arrays(c["edges"], c["lengths"], c["costs"], c.get("vertex_states"), num_vertices)
+    edges, lengths, states = c["edges"], c["lengths"], c.get("vertex_states")
+    check_graph_arrays(edges, lengths, c["costs"], states, num_vertices)
     check_domain_spec(
-        domain,
-        metadata.get("domain_spec"),
-        num_edges=int(c["edges"].shape[0]),
-        mean_edge_length=float(c["lengths"].mean()),
+        domain, domain_spec, num_edges=int(edges.shape[0]), mean_edge_length=float(lengths.mean())
     )
-    graph = ExplicitGraph(c["edges"], c["lengths"], num_vertices, directed, c.get("vertex_states"))
-    path_edges = _split(c["path_edges"], c["path_offsets"])
+    return ExplicitGraph(edges, lengths, num_vertices, directed, states)
+
+
+def decision_tree(
+    a: dict[str, npt.NDArray[Any]],
+    library: PathLibrary,
+    info: dict[str, Any],
+    world_free: npt.NDArray[np.bool_] | None,
+    world_weights: npt.NDArray[np.float64] | None,
+) -> DecisionTree:
+    """The decision tree of the node arrays ``a`` (``node_*``, ``library_edges``, ``free_fraction``).
+
+    Check the arrays first with :func:`~drd_planner.data.content_checks.check_tree_arrays`.
+    """
+    return DecisionTree(
+        edge=a["node_edge"],
+        children=a["node_children"],
+        num_active=a["node_num_active"],
+        active_fraction=a["node_active_fraction"],
+        library_edges=a["library_edges"],
+        free_fraction=a["free_fraction"],
+        best_path=a["node_best_path"],
+        num_edges=library.num_edges,
+        num_paths=library.num_paths,
+        info=info,
+        world_free=world_free,
+        world_weights=world_weights,
+    )
+
+
+def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> TreeBundle:
+    metadata = header_dict(header, "problem_metadata")
+    graph = checked_graph(header, c, metadata.get("domain_spec"))
+    num_vertices = graph.num_vertices
+    path_edges = unpack_ragged(c["path_edges"], c["path_offsets"], None, "path", TreeFileError)
     vertex_paths = None
     if "vertex_paths" in c:
-        vertex_paths = _split(c["vertex_paths"], c["vertex_offsets"])
+        vertex_paths = unpack_ragged(
+            c["vertex_paths"], c["vertex_offsets"], None, "vertex path", TreeFileError
+        )
     library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
     start = header_int(header, "start", low=0, high=num_vertices - 1)
     goal = header_int(header, "goal", low=0, high=num_vertices - 1)
@@ -282,19 +285,8 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
         metadata=dict(metadata),
     )
     check_tree_arrays(c, graph.num_edges, library.num_paths, library.library_edges)
-    tree = DecisionTree(
-        edge=c["node_edge"],
-        children=c["node_children"],
-        num_active=c["node_num_active"],
-        active_fraction=c["node_active_fraction"],
-        library_edges=c["library_edges"],
-        free_fraction=c["free_fraction"],
-        best_path=c["node_best_path"],
-        num_edges=graph.num_edges,
-        num_paths=library.num_paths,
-        info=header_dict(header, "tree_info"),
-        world_free=_world_free(c, header),
-        world_weights=c.get("world_weights"),
+    tree = decision_tree(
+        c, library, header_dict(header, "tree_info"), _world_free(c, header), c.get("world_weights")
     )
     kappa = header_number(header, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True)
     if kappa is not None and tree.world_free is None:
@@ -302,7 +294,7 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
     return TreeBundle(
         problem=problem,
         tree=tree,
-        domain=domain,
+        domain=header_text(header, "domain"),
         eta=header_fraction(header, "eta"),
         alpha=header_fraction(header, "alpha"),
         pseudo_count=kappa,

@@ -1,6 +1,6 @@
 """Why an arm configuration fails the static test, in words (for errors about a start or goal).
 
-:func:`drd_planner.domains.arm.statically_valid` answers yes or no for many configurations at once;
+:func:`drd_planner.domains.arm_roadmap.statically_valid` answers yes or no for many configurations at once;
 :func:`static_problems` says, for one configuration, which of its three checks failed and what to
 change: the joint limits (which joint, its value and range), self-collision (which two links touch) or
 the floor (which link reaches how low, and the ``floor_z`` parameter that sets the floor).

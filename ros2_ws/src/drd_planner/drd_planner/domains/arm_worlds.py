@@ -1,6 +1,6 @@
 """Seeded world models of the arm domain, and worlds from MoveIt planning scenes.
 
-A world is a tuple of posed primitives (:class:`~drd_planner.data.moveit_scene.ScenePrimitive`) in the
+A world is a tuple of posed primitives (:class:`~drd_planner.geometry.moveit_scene.ScenePrimitive`) in the
 robot's root frame (z up, the robot base at the origin, "in front" = +x). Models:
 
 - ``"clutter"``: 4-9 boxes (edges 0.05-0.25 m) and cylinders (radius 0.02-0.08 m, length 0.1-0.4 m),
@@ -29,8 +29,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drd_planner.arrays import FloatArray
-from drd_planner.data.moveit_scene import ScenePrimitive, parse_planning_scene, read_planning_scene
 from drd_planner.exceptions import ProblemError
+from drd_planner.geometry.moveit_scene import ScenePrimitive, parse_planning_scene, read_planning_scene
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Cylinder, Pose
 
@@ -118,7 +118,7 @@ def world_from_planning_scene(source: str | Path, *, is_text: bool = False) -> A
 
     Raises:
         GeometryError: the scene has something the importer cannot represent (see
-            :mod:`drd_planner.data.moveit_scene`).
+            :mod:`drd_planner.geometry.moveit_scene`).
     """
     primitives = parse_planning_scene(str(source)) if is_text else read_planning_scene(source)
     return ArmWorld(obstacles=primitives, model="moveit", seed=None)

@@ -1,18 +1,27 @@
-"""Shortest Dubins paths between planar poses and their sampling at a fixed arc-length spacing.
+"""Dubins curves: shortest paths of bounded curvature between planar poses, and their sampling.
 
-A Dubins path joins two poses (x, y, heading) by at most three segments: left arcs (L) and right arcs
-(R) of the turning radius and straight lines (S). The shortest of the six words LSL, RSR, LSR, RSL,
-RLR, LRL is optimal (Dubins 1957). Word lengths use the closed forms of Shkel & Lumelsky (2001) in
-coordinates scaled by the turning radius; every candidate is integrated and kept only if it really ends
-at the goal pose, so a wrong closed form can never produce a wrong path.
+A Dubins path joins two poses (x, y, heading) with at most three segments, each a left arc (L), a
+right arc (R) of the turning radius, or a straight line (S). Of the six candidate words (LSL, RSR,
+LSR, RSL, RLR, LRL) the shortest is optimal (Dubins 1957). The word lengths are the closed forms of
+Shkel & Lumelsky (2001) in coordinates normalised by the turning radius (one function per word in
+:data:`_WORD_SOLVERS`); every candidate is integrated and kept only if it really ends at the goal pose,
+so a wrong closed form can never produce a wrong path.
 
-Units: positions and lengths in the caller's length unit, headings in radians counter-clockwise from +x.
+Heading convention: headings are radians counter-clockwise from +x, and every path carries the range
+its caller works in (:data:`HeadingRange`): ``"signed"`` wraps headings to [-pi, pi) (the helicopter
+lattice, the query connector), ``"unsigned"`` to [0, 2 pi) (the SE(2) lattice). The range decides how
+the chord direction is expressed when the relative angles are formed and how sampled headings are
+wrapped; both users get exactly the numbers they got from their former, separate implementations.
+
+Units: positions and lengths in the caller's length unit (metres for the helicopter), headings in radians.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Literal, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -20,162 +29,255 @@ import numpy.typing as npt
 from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import ProblemError
 
-Pose = tuple[float, float, float]
+__all__ = ["DubinsPath", "HeadingRange", "dubins_path", "wrap_angle"]
 
-__all__ = ["DubinsPath", "shortest_dubins_path"]
+HeadingRange = Literal["signed", "unsigned"]
+"""Where headings are wrapped: ``"signed"`` to [-pi, pi), ``"unsigned"`` to [0, 2 pi)."""
+
+Pose = tuple[float, float, float]
+_Params = tuple[float, float, float]
 
 _TWO_PI = 2.0 * math.pi
-_END_TOL = 1e-9  # relative end-pose tolerance (times the path scale) for accepting a word
-_ROOT_TOL = 1e-10  # tangent cases: tiny negative squares / cosines beyond 1 from rounding still count
-_CURVATURE = {"L": 1.0, "S": 0.0, "R": -1.0}
+_EPS = 1e-9  # tolerance of the normalised word equations (tangent cases)
+_WORDS: tuple[str, ...] = ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL")
+
+
+def wrap_angle(angle: npt.ArrayLike, headings: HeadingRange = "signed") -> FloatArray:
+    """Angles (any shape, radians) wrapped to [-pi, pi) (``"signed"``) or [0, 2 pi) (``"unsigned"``)."""
+    a = np.asarray(angle, dtype=np.float64)
+    if headings == "unsigned":
+        return np.asarray(np.mod(a, _TWO_PI), dtype=np.float64)
+    return np.asarray(np.mod(a + math.pi, _TWO_PI) - math.pi, dtype=np.float64)
 
 
 def _mod2pi(angle: float) -> float:
-    """``angle`` in [0, 2 pi), with values within 1e-12 of a full turn mapped to 0."""
+    """``angle`` in [0, 2 pi); values within 1e-9 of a full turn snap to 0 (no spurious loops)."""
     out = math.fmod(angle, _TWO_PI)
     if out < 0.0:
         out += _TWO_PI
-    return 0.0 if _TWO_PI - out < 1e-12 else out
+    return 0.0 if out > _TWO_PI - 1e-9 else out
 
 
 @dataclass(frozen=True)
 class DubinsPath:
-    """A Dubins path: a start pose, a three-letter word and the three segment lengths.
+    """One Dubins path.
 
     Attributes:
-        start: (x, y, heading) start pose.
-        word: e.g. ``"LSL"``; letter i is the type of segment i.
-        segments: the three segment lengths (length unit, >= 0).
+        start: (x, y, heading rad) of the first pose.
+        word: three letters from "LRS", e.g. "LSR"; letter i is the type of segment i.
+        segments: lengths of the three segments (arc lengths for L and R; length unit, >= 0).
         radius: turning radius (length unit, > 0).
+        headings: the range sampled headings are wrapped to.
     """
 
     start: Pose
     word: str
     segments: tuple[float, float, float]
     radius: float
+    headings: HeadingRange = "signed"
 
     @property
     def length(self) -> float:
         """Total length (length unit)."""
         return float(sum(self.segments))
 
-    def poses_at(self, s: npt.ArrayLike) -> FloatArray:
-        """Poses at arc lengths ``s`` (K,) in [0, length]: (K, 3) x, y, heading (heading in [0, 2 pi))."""
+    @property
+    def turning(self) -> float:
+        """Total absolute heading change along the path, radians."""
+        return float(
+            sum(seg / self.radius for kind, seg in zip(self.word, self.segments, strict=True) if kind != "S")
+        )
+
+    def sample(self, s: npt.ArrayLike) -> FloatArray:
+        """Poses at arc lengths ``s`` (n,) in [0, length]: (n, 3) as x, y, heading (wrapped, see ``headings``)."""
         arc = np.clip(np.asarray(s, dtype=np.float64).ravel(), 0.0, self.length)
         out = np.empty((arc.size, 3), dtype=np.float64)
         x, y, h = self.start
-        offset = 0.0
-        for letter, seg in zip(self.word, self.segments, strict=True):
-            end = offset + seg
-            mask = (arc >= offset) & (arc <= end)
-            out[mask] = _advance(x, y, h, letter, arc[mask] - offset, self.radius)
-            x, y, h = (float(v) for v in _advance(x, y, h, letter, np.array([seg]), self.radius)[0])
-            offset = end
-        out[:, 2] = np.mod(out[:, 2], _TWO_PI)
+        done = 0.0
+        remaining = np.ones(arc.size, dtype=bool)
+        for index, (kind, seg) in enumerate(zip(self.word, self.segments, strict=True)):
+            last = index == 2
+            sel = remaining & ((arc <= done + seg) | last)
+            local = arc[sel] - done
+            px, py, ph = _advance(x, y, h, kind, local, self.radius)
+            out[sel, 0], out[sel, 1], out[sel, 2] = px, py, ph
+            remaining &= ~sel
+            ex, ey, eh = _advance(x, y, h, kind, np.array([seg]), self.radius)
+            x, y, h = float(ex[0]), float(ey[0]), float(eh[0])
+            done += seg
+        out[:, 2] = wrap_angle(out[:, 2], self.headings)
         return out
 
-    def end_pose(self) -> FloatArray:
-        """(3,) pose at the end of the path."""
-        return np.asarray(self.poses_at(np.array([self.length]))[0], dtype=np.float64)
-
-    def sample(self, spacing: float) -> FloatArray:
+    def sample_evenly(self, spacing: float) -> FloatArray:
         """(K, 3) poses at K = ceil(length / spacing) + 1 evenly spaced arc lengths, both ends included.
 
         Consecutive samples are at most ``spacing`` apart along the path (and so in the plane).
+
+        Raises:
+            ProblemError: non-positive spacing.
         """
         if not spacing > 0:
             raise ProblemError(f"sample spacing must be positive, got {spacing}")
         count = max(2, math.ceil(self.length / spacing - 1e-9) + 1)
-        return self.poses_at(np.linspace(0.0, self.length, count))
+        return self.sample(np.linspace(0.0, self.length, count))
+
+    def end(self) -> Pose:
+        """The final pose (x, y, heading wrapped to the path's range)."""
+        x, y, h = self.sample(np.array([self.length]))[0]
+        return float(x), float(y), float(h)
 
 
-def _advance(x: float, y: float, h: float, letter: str, s: FloatArray, radius: float) -> FloatArray:
-    """(K, 3) poses after moving ``s`` (K,) along one segment of type ``letter`` from (x, y, h)."""
-    k = _CURVATURE[letter]
-    if k == 0.0:
-        return np.stack([x + s * math.cos(h), y + s * math.sin(h), np.full(s.shape, h)], axis=1)
-    turn = k * s / radius
-    hs = h + turn
-    px = x + k * radius * (np.sin(hs) - math.sin(h))
-    py = y - k * radius * (np.cos(hs) - math.cos(h))
-    return np.stack([px, py, hs], axis=1)
+def _advance(
+    x: float, y: float, h: float, kind: str, s: FloatArray, radius: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Poses after moving ``s`` (n,) along one segment of type ``kind`` from (x, y, h); headings unwrapped."""
+    if kind == "S":
+        return x + s * math.cos(h), y + s * math.sin(h), np.full(s.shape, h)
+    sign = 1.0 if kind == "L" else -1.0
+    h1 = h + sign * s / radius
+    px = x + sign * radius * (np.sin(h1) - math.sin(h))
+    py = y - sign * radius * (np.cos(h1) - math.cos(h))
+    return px, py, h1
 
 
-def _word_parameters(word: str, a: float, b: float, d: float) -> tuple[float, float, float] | None:
-    """Normalised segment lengths (t, p, q) of ``word`` or None when it does not exist (Shkel & Lumelsky)."""
-    sa, sb, ca, cb = math.sin(a), math.sin(b), math.cos(a), math.cos(b)
-    cab = math.cos(a - b)
-    if word == "LSL":
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
-        if p2 < -_ROOT_TOL:
-            return None
-        tmp = math.atan2(cb - ca, d + sa - sb)
-        return _mod2pi(-a + tmp), math.sqrt(max(p2, 0.0)), _mod2pi(b - tmp)
-    if word == "RSR":
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
-        if p2 < -_ROOT_TOL:
-            return None
-        tmp = math.atan2(ca - cb, d - sa + sb)
-        return _mod2pi(a - tmp), math.sqrt(max(p2, 0.0)), _mod2pi(-b + tmp)
-    if word == "LSR":
-        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
-        if p2 < -_ROOT_TOL:
-            return None
-        p = math.sqrt(max(p2, 0.0))
-        tmp = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
-        return _mod2pi(-a + tmp), p, _mod2pi(-b + tmp)
-    if word == "RSL":
-        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
-        if p2 < -_ROOT_TOL:
-            return None
-        p = math.sqrt(max(p2, 0.0))
-        tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
-        return _mod2pi(a - tmp), p, _mod2pi(b - tmp)
-    if word == "RLR":
-        c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
-        if abs(c) > 1.0 + _ROOT_TOL:
-            return None
-        p = _mod2pi(_TWO_PI - math.acos(max(-1.0, min(1.0, c))))
-        t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
-        return t, p, _mod2pi(a - b - t + p)
-    # LRL
-    c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
-    if abs(c) > 1.0 + _ROOT_TOL:
+class _Relative(NamedTuple):
+    """The normalised problem: start and end headings relative to the chord, and the chord length / radius."""
+
+    a: float
+    b: float
+    d: float
+    sa: float
+    sb: float
+    ca: float
+    cb: float
+    cab: float
+
+    @classmethod
+    def of(cls, a: float, b: float, d: float) -> _Relative:
+        """The problem with its sines and cosines."""
+        return cls(a, b, d, math.sin(a), math.sin(b), math.cos(a), math.cos(b), math.cos(a - b))
+
+
+def _lsl(r: _Relative) -> _Params | None:
+    p2 = 2.0 + r.d * r.d - 2.0 * r.cab + 2.0 * r.d * (r.sa - r.sb)
+    if p2 < -_EPS:
         return None
-    p = _mod2pi(_TWO_PI - math.acos(max(-1.0, min(1.0, c))))
-    t = _mod2pi(-a - math.atan2(ca - cb, d + sa - sb) + p / 2.0)
-    return t, p, _mod2pi(b - a - t + p)
+    tmp = math.atan2(r.cb - r.ca, r.d + r.sa - r.sb)
+    return _mod2pi(-r.a + tmp), math.sqrt(max(p2, 0.0)), _mod2pi(r.b - tmp)
 
 
-def shortest_dubins_path(start: Pose, goal: Pose, radius: float) -> DubinsPath:
-    """The shortest Dubins path from ``start`` to ``goal`` (x, y, heading) with turning ``radius``.
+def _rsr(r: _Relative) -> _Params | None:
+    p2 = 2.0 + r.d * r.d - 2.0 * r.cab + 2.0 * r.d * (r.sb - r.sa)
+    if p2 < -_EPS:
+        return None
+    tmp = math.atan2(r.ca - r.cb, r.d - r.sa + r.sb)
+    return _mod2pi(r.a - tmp), math.sqrt(max(p2, 0.0)), _mod2pi(-r.b + tmp)
+
+
+def _lsr(r: _Relative) -> _Params | None:
+    p2 = -2.0 + r.d * r.d + 2.0 * r.cab + 2.0 * r.d * (r.sa + r.sb)
+    if p2 < -_EPS:
+        return None
+    p = math.sqrt(max(p2, 0.0))
+    tmp = math.atan2(-r.ca - r.cb, r.d + r.sa + r.sb) - math.atan2(-2.0, p)
+    return _mod2pi(-r.a + tmp), p, _mod2pi(-r.b + tmp)
+
+
+def _rsl(r: _Relative) -> _Params | None:
+    p2 = -2.0 + r.d * r.d + 2.0 * r.cab - 2.0 * r.d * (r.sa + r.sb)
+    if p2 < -_EPS:
+        return None
+    p = math.sqrt(max(p2, 0.0))
+    tmp = math.atan2(r.ca + r.cb, r.d - r.sa - r.sb) - math.atan2(2.0, p)
+    return _mod2pi(r.a - tmp), p, _mod2pi(r.b - tmp)
+
+
+def _middle_arc(cosine: float) -> float | None:
+    """The normalised middle arc of RLR/LRL from its cosine, or None when the word does not exist."""
+    if abs(cosine) > 1.0 + _EPS:
+        return None
+    return _mod2pi(_TWO_PI - math.acos(min(max(cosine, -1.0), 1.0)))
+
+
+def _rlr(r: _Relative) -> _Params | None:
+    p = _middle_arc((6.0 - r.d * r.d + 2.0 * r.cab + 2.0 * r.d * (r.sa - r.sb)) / 8.0)
+    if p is None:
+        return None
+    t = _mod2pi(r.a - math.atan2(r.ca - r.cb, r.d - r.sa + r.sb) + p / 2.0)
+    return t, p, _mod2pi(r.a - r.b - t + p)
+
+
+def _lrl(r: _Relative) -> _Params | None:
+    p = _middle_arc((6.0 - r.d * r.d + 2.0 * r.cab + 2.0 * r.d * (r.sb - r.sa)) / 8.0)
+    if p is None:
+        return None
+    t = _mod2pi(-r.a - math.atan2(r.ca - r.cb, r.d + r.sa - r.sb) + p / 2.0)
+    return t, p, _mod2pi(r.b - r.a - t + p)
+
+
+#: The closed form of each word: normalised (t, p, q) segment lengths, or None when the word has no solution.
+_WORD_SOLVERS: dict[str, Callable[[_Relative], _Params | None]] = {
+    "LSL": _lsl,
+    "RSR": _rsr,
+    "LSR": _lsr,
+    "RSL": _rsl,
+    "RLR": _rlr,
+    "LRL": _lrl,
+}
+
+
+def _word_params(word: str, a: float, b: float, d: float) -> _Params | None:
+    """Normalised (t, p, q) of one word for relative headings ``a``, ``b`` and chord ``d`` (radii), or None."""
+    return _WORD_SOLVERS[word](_Relative.of(a, b, d))
+
+
+def _check_input(start: Pose, end: Pose, radius: float) -> None:
+    """Raise ProblemError for a non-positive or non-finite radius or non-finite poses."""
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
+    if not all(math.isfinite(v) for v in (*start, *end)):
+        raise ProblemError(f"Dubins poses must be finite, got {start} and {end}")
+
+
+def dubins_path(start: Pose, end: Pose, *, radius: float, headings: HeadingRange = "signed") -> DubinsPath:
+    """The shortest Dubins path from ``start`` to ``end``.
+
+    Args:
+        start: (x, y, heading rad).
+        end: (x, y, heading rad).
+        radius: turning radius (length unit, > 0).
+        headings: the caller's heading range: the chord direction is taken in it and the path samples
+            headings wrapped to it.
+
+    Returns:
+        The shortest of the six words whose sampled end pose matches ``end`` (1e-6 times max(1, radius)
+        in position, 1e-6 rad in heading).
 
     Raises:
-        ProblemError: non-positive radius or non-finite poses.
+        ProblemError: non-positive or non-finite radius or poses.
     """
-    if not radius > 0 or not math.isfinite(radius):
-        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
-    if not all(math.isfinite(v) for v in (*start, *goal)):
-        raise ProblemError(f"Dubins poses must be finite, got {start} -> {goal}")
-    dx, dy = goal[0] - start[0], goal[1] - start[1]
+    _check_input(start, end, radius)
+    dx, dy = end[0] - start[0], end[1] - start[1]
     d = math.hypot(dx, dy) / radius
-    theta = _mod2pi(math.atan2(dy, dx)) if d > 0 else 0.0
-    a, b = _mod2pi(start[2] - theta), _mod2pi(goal[2] - theta)
-    target = np.array([goal[0], goal[1]])
-    scale = max(radius, math.hypot(dx, dy))
+    chord = math.atan2(dy, dx) if d > 0.0 else 0.0
+    if headings == "unsigned":
+        chord = _mod2pi(chord)
+    a, b = _mod2pi(start[2] - chord), _mod2pi(end[2] - chord)
+    first = (float(start[0]), float(start[1]), float(start[2]))
     best: DubinsPath | None = None
-    for word in ("LSL", "RSR", "LSR", "RSL", "RLR", "LRL"):
-        params = _word_parameters(word, a, b, d)
+    for word in _WORDS:
+        params = _word_params(word, a, b, d)
         if params is None:
             continue
-        segs = (params[0] * radius, params[1] * radius, params[2] * radius)
-        path = DubinsPath((float(start[0]), float(start[1]), float(start[2])), word, segs, float(radius))
-        end = path.end_pose()
-        heading_err = abs(math.remainder(float(end[2]) - goal[2], _TWO_PI))
-        if np.abs(end[:2] - target).max() > _END_TOL * scale or heading_err > 1e-9:
-            continue
-        if best is None or path.length < best.length - 1e-12:
+        segments = (params[0] * radius, params[1] * radius, params[2] * radius)
+        path = DubinsPath(first, word, segments, float(radius), headings)
+        ex, ey, eh = path.end()
+        ok = (
+            math.hypot(ex - end[0], ey - end[1]) < 1e-6 * max(1.0, radius)
+            and abs(float(wrap_angle(eh - end[2]))) < 1e-6
+        )
+        if ok and (best is None or path.length < best.length - 1e-12):
             best = path
-    if best is None:  # pragma: no cover - some word always exists for finite poses
-        raise ProblemError(f"no Dubins path from {start} to {goal}")
+    if best is None:  # cannot happen for finite input: RSR/LSL always exist
+        raise ProblemError(f"no Dubins path from {start} to {end}")
     return best

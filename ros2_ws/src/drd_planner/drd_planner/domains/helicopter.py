@@ -7,69 +7,52 @@ Pieces (one concept per module):
   each with optional no-fly zones) and the scene of a world;
 - :mod:`~drd_planner.domains.helicopter_checker`: the sphere-sweep edge checker the node also uses.
 
-The spec (JSON-able, see :meth:`HelicopterDomain.spec`)::
+- :mod:`~drd_planner.domains.helicopter_spec`: the spec (:class:`HelicopterParams`).
 
-    {"lattice": {...LatticeParams...}, "vehicle_radius": 5.0, "margin": 2.0, "terrain_cell": 10.0,
-     "world_margin": 100.0, "wire_segments": 8, "models": {"wires": {...}, "canyon": {...}, "terrain": {...}}}
+The sweep model (:meth:`HelicopterDomain.sweep_spheres`, for re-checking plans after a map update): the
+vehicle sphere at every trajectory sample, grown by half a sample step.
 
 Units: metres and radians (degrees where a name says ``_deg``).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.graph import ExplicitGraph
+from drd_planner.domains.base import LatticeMembers
 from drd_planner.domains.helicopter_checker import HelicopterChecker, obstacle_boxes
 from drd_planner.domains.helicopter_lattice import HelicopterLattice, LatticeParams, build_lattice
 from drd_planner.domains.helicopter_params import params_to_dict
+from drd_planner.domains.helicopter_spec import HelicopterParams
 from drd_planner.domains.helicopter_worlds import (
     WORLD_MODELS,
     HelicopterWorld,
     ModelParams,
     WorldFrame,
     generate_world,
-    model_params_from_dict,
     world_parts,
     world_scene,
 )
+from drd_planner.domains.online import BOX_SLACK, EdgeSource, OnlineDefaults, PositionGoals, SweepSpheres
+from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import ProblemError
+from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 
-__all__ = ["HelicopterDomain"]
-
-_SPEC_KEYS = (
-    "lattice",
-    "vehicle_radius",
-    "margin",
-    "terrain_cell",
-    "world_margin",
-    "wire_segments",
-    "models",
-)
+__all__ = ["HelicopterDomain", "HelicopterParams"]
 
 
-def _number(spec: Mapping[str, Any], key: str, default: float, *, low: float, strict: bool) -> float:
-    value = spec.get(key, default)
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ProblemError(f"helicopter spec {key!r} must be a number, got {value!r}") from None
-    ok = math.isfinite(number) and (number > low if strict else number >= low)
-    if not ok:
-        raise ProblemError(
-            f"helicopter spec {key!r} must be finite and {'>' if strict else '>='} {low}, got {value!r}"
-        )
-    return number
+class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
+    """Helicopter planning domain (implements :class:`drd_planner.domains.online.OnlineDomain`).
 
-
-class HelicopterDomain:
-    """Helicopter planning domain (implements :class:`drd_planner.domains.base.Domain`).
+    The graph is the directed lattice (:attr:`lattice`, its trajectories and primitives), ``vertex_states``
+    (V, 4) = x, y, z (m), heading (rad); the start vertex is (start x, start y, start level, heading 0), the
+    goal vertex (goal x, goal y, goal level, heading 0).
 
     Args:
         lattice: lattice parameters (default :class:`LatticeParams`).
@@ -97,100 +80,67 @@ class HelicopterDomain:
         wire_segments: int | None = 8,
         models: Mapping[str, ModelParams | Mapping[str, Any]] | None = None,
     ) -> None:
-        spec = {
-            "vehicle_radius": vehicle_radius,
-            "margin": margin,
-            "terrain_cell": terrain_cell,
-            "world_margin": world_margin,
-        }
-        self._radius = _number(spec, "vehicle_radius", 5.0, low=0.0, strict=True)
-        self._margin = _number(spec, "margin", 2.0, low=0.0, strict=False)
-        self._terrain_cell = _number(spec, "terrain_cell", 10.0, low=0.0, strict=True)
-        self._world_margin = _number(spec, "world_margin", 100.0, low=0.0, strict=False)
-        if wire_segments is not None and (
-            isinstance(wire_segments, bool)
-            or not isinstance(wire_segments, (int, np.integer))
-            or wire_segments < 1
-        ):
-            raise ProblemError(
-                f"helicopter spec 'wire_segments' must be an integer >= 1 or null, got {wire_segments!r}"
+        self._init(
+            HelicopterParams(
+                lattice=lattice or LatticeParams(),
+                vehicle_radius=vehicle_radius,
+                margin=margin,
+                terrain_cell=terrain_cell,
+                world_margin=world_margin,
+                wire_segments=wire_segments,
+                models=dict(models or {}),
             )
-        self._wire_segments = None if wire_segments is None else int(wire_segments)
-        self._lattice = build_lattice(lattice or LatticeParams())
-        params = self._lattice.params
-        if params.sample_spacing > self._radius + 1e-12:
-            raise ProblemError(
-                f"lattice sample_spacing {params.sample_spacing} m exceeds the vehicle radius {self._radius} m; "
-                "samples must be at most one radius apart"
-            )
-        given = dict(models or {})
-        unknown = sorted(set(given) - set(WORLD_MODELS))
-        if unknown:
-            raise ProblemError(f"unknown helicopter world models {unknown}; known: {list(WORLD_MODELS)}")
-        self._models: dict[str, ModelParams] = {}
-        for name in WORLD_MODELS:
-            value = given.get(name)
-            if value is None or isinstance(value, Mapping):
-                self._models[name] = model_params_from_dict(name, dict(value or {}))
-            else:
-                self._models[name] = model_params_from_dict(name, params_to_dict(value))
+        )
+
+    def _init(self, params: HelicopterParams) -> None:
+        self._params = params
+        self._radius = params.vehicle_radius
+        self._margin = params.margin
+        self._wire_segments = params.wire_segments
+        self._lattice = build_lattice(params.lattice)
         states = self._lattice.graph.vertex_states
         assert states is not None
         keep = tuple(
             (float(states[i, 0]), float(states[i, 1]), float(states[i, 2])) for i in (self.start, self.goal)
         )
+        lattice = self._lattice.params
         self._frame = WorldFrame(
-            x_range=params.x_range,
-            y_range=params.y_range,
-            margin=self._world_margin,
-            cell_size=self._terrain_cell,
+            x_range=lattice.x_range,
+            y_range=lattice.y_range,
+            margin=params.world_margin,
+            cell_size=params.terrain_cell,
             keep_clear=keep,
             clearance=self._radius + self._margin,
-            lowest_level=params.z_levels[0],
+            lowest_level=lattice.z_levels[0],
         )
 
     # ------------------------------------------------------------------------------------------------
     # Spec
 
     @classmethod
+    def from_params(cls, params: HelicopterParams) -> HelicopterDomain:
+        """The domain of validated parameters."""
+        domain = cls.__new__(cls)
+        domain._init(params)
+        return domain
+
+    @classmethod
     def from_spec(cls, spec: Mapping[str, Any]) -> HelicopterDomain:
         """The domain of a (partial) spec dict; missing keys take the defaults.
 
         Raises:
-            ProblemError: unknown keys or invalid values.
+            ProblemError: unknown keys (the valid ones named) or invalid values.
         """
-        if not isinstance(spec, Mapping):
-            raise ProblemError(f"helicopter spec must be a dict, got {type(spec).__name__}")
-        unknown = sorted(set(spec) - set(_SPEC_KEYS))
-        if unknown:
-            raise ProblemError(f"unknown helicopter spec keys {unknown}; known: {list(_SPEC_KEYS)}")
-        lattice = spec.get("lattice")
-        if lattice is not None and not isinstance(lattice, Mapping):
-            raise ProblemError(f"helicopter spec 'lattice' must be a dict, got {type(lattice).__name__}")
-        models = spec.get("models")
-        if models is not None and not isinstance(models, Mapping):
-            raise ProblemError(f"helicopter spec 'models' must be a dict, got {type(models).__name__}")
-        return cls(
-            lattice=LatticeParams.from_dict(dict(lattice or {})),
-            vehicle_radius=_number(spec, "vehicle_radius", 5.0, low=0.0, strict=True),
-            margin=_number(spec, "margin", 2.0, low=0.0, strict=False),
-            terrain_cell=_number(spec, "terrain_cell", 10.0, low=0.0, strict=True),
-            world_margin=_number(spec, "world_margin", 100.0, low=0.0, strict=False),
-            wire_segments=spec.get("wire_segments", 8),
-            models=dict(models or {}),
-        )
+        return cls.from_params(HelicopterParams.from_spec(spec))
 
     def spec(self) -> dict[str, Any]:
         """The full JSON-able spec (defaults filled in); ``from_spec(spec())`` rebuilds an equal domain."""
-        return {
-            "lattice": self._lattice.params.to_dict(),
-            "vehicle_radius": self._radius,
-            "margin": self._margin,
-            "terrain_cell": self._terrain_cell,
-            "world_margin": self._world_margin,
-            "wire_segments": self._wire_segments,
-            "models": {name: params_to_dict(p) for name, p in self._models.items()},
-        }
+        return self._params.to_spec()
+
+    @property
+    def params(self) -> HelicopterParams:
+        """The domain's parameters."""
+        return self._params
 
     # ------------------------------------------------------------------------------------------------
     # Domain protocol
@@ -199,26 +149,6 @@ class HelicopterDomain:
     def name(self) -> str:
         """``"helicopter"``."""
         return "helicopter"
-
-    @property
-    def lattice(self) -> HelicopterLattice:
-        """The lattice (graph, trajectories, primitives)."""
-        return self._lattice
-
-    @property
-    def graph(self) -> ExplicitGraph:
-        """The directed lattice graph; ``vertex_states`` (V, 4) = x, y, z (m), heading (rad)."""
-        return self._lattice.graph
-
-    @property
-    def start(self) -> int:
-        """Start vertex: (start x, start y, start level, heading 0)."""
-        return self._lattice.start
-
-    @property
-    def goal(self) -> int:
-        """Goal vertex: (goal x, goal y, goal level, heading 0)."""
-        return self._lattice.goal
 
     @property
     def world_models(self) -> tuple[str, ...]:
@@ -242,11 +172,11 @@ class HelicopterDomain:
 
     def model_params(self, model: str) -> ModelParams:
         """The parameter record of world model ``model``."""
-        if model not in self._models:
-            raise ProblemError(
-                f"unknown helicopter world model {model!r}; choose one of {', '.join(WORLD_MODELS)}"
-            )
-        return self._models[model]
+        return self._params.model(model)
+
+    def world_model_params(self, model: str) -> dict[str, Any]:
+        """The parameters of world model ``model`` as a JSON-able dict."""
+        return params_to_dict(self.model_params(model))
 
     def make_world(self, model: str, seed: int) -> HelicopterWorld:
         """World ``seed`` of ``model`` (same arguments, same world)."""
@@ -296,8 +226,56 @@ class HelicopterDomain:
                 "mean": float(counts.mean()),
                 "max": int(counts.max()),
             },
-            "terrain_cell_m": self._terrain_cell,
+            "terrain_cell_m": self._params.terrain_cell,
             "terrain_surface": "two triangles per grid cell",
             "wire_segments": self._wire_segments,
             "wire_model": "parabolic sag, capsule chain containing the wire",
         }
+
+    # ------------------------------------------------------------------------------------------------
+    # Online domain
+
+    @property
+    def periodic_dims(self) -> tuple[int, ...]:
+        """(3,): the heading (rad)."""
+        return (3,)
+
+    @property
+    def position_goals(self) -> PositionGoals:
+        """``"pose"``: a goal position and yaw are the state (x, y, z, heading)."""
+        return "pose"
+
+    @property
+    def has_sweep_model(self) -> bool:
+        """True."""
+        return True
+
+    def state_from_position(self, xyz: npt.ArrayLike, yaw: float) -> FloatArray:
+        """(4,) the state at ``xyz`` (m) with heading ``yaw`` (rad, wrapped to [-pi, pi)).
+
+        Raises:
+            PlanningError: the position is not three finite numbers, or the yaw is not finite.
+        """
+        return state_from_pose(xyz, yaw)
+
+    def scene_checker(self, scene: Scene, robot: RobotModel | None = None) -> HelicopterChecker:
+        """The edge checker of a ready scene (``robot`` is ignored: no arm)."""
+        return self.checker(scene)
+
+    def sweep_spheres(
+        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
+    ) -> SweepSpheres:
+        """Per edge: the (K, 3) trajectory samples and (K,) reach = vehicle radius + half a sample step.
+
+        The samples are spaced by at most ``lattice.params.sample_spacing`` metres of arc length (the
+        longest chord between two samples is taken too, in case a trajectory was sampled otherwise), so
+        every point of the flown curve lies within half a step of a sample.
+        """
+        spacing = float(self._lattice.params.sample_spacing)
+        out = []
+        for e in edges:
+            xyz = np.array(source.edge_states(int(e))[:, :3], dtype=np.float64)
+            chord = float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).max()) if xyz.shape[0] > 1 else 0.0
+            reach = self._radius + 0.5 * max(spacing, chord) + BOX_SLACK
+            out.append((xyz, np.full(xyz.shape[0], reach)))
+        return out

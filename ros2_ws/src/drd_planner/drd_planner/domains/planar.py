@@ -7,7 +7,8 @@ moving_wall, baffle, maze, bugtrap; :mod:`drd_planner.domains.planar_worlds`, AL
 is a union of axis-aligned rectangles, so boxes represent them without approximation.
 
 :class:`PlanarDomain` is the :class:`drd_planner.domains.base.Domain` of the dataset builder;
-:func:`make_planar_problem` builds a complete small problem for ``drd demo`` and the tests.
+:func:`drd_planner.data.planar_problem.make_planar_problem` builds a complete small problem for ``drd demo``
+and the tests.
 
 Units: the unit square; lengths are Euclidean distances in the same unit.
 """
@@ -15,9 +16,9 @@ Units: the unit square; lengths are Euclidean distances in the same unit.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
-from typing import Any
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
@@ -27,9 +28,8 @@ from scipy.spatial import cKDTree
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.problem import Problem
-from drd_planner.core.worlds import WorldDatabase
-from drd_planner.data.library_builder import build_path_library, split_worlds
+from drd_planner.domains.online import OnlineDefaults
+from drd_planner.domains.params import SpecParams
 from drd_planner.domains.planar_worlds import (
     PLANAR_VARIANT,
     WORLD_MODELS,
@@ -47,7 +47,6 @@ __all__ = [
     "PlanarChecker",
     "PlanarDomain",
     "edge_free_matrix",
-    "make_planar_problem",
     "one_wall_patterns",
     "random_geometric_graph",
     "rgg_radius",
@@ -300,7 +299,7 @@ def _int_field(name: str, value: object, minimum: int) -> int:
 
 
 @dataclass(frozen=True)
-class PlanarDomain:
+class PlanarDomain(SpecParams, OnlineDefaults):
     """The planar domain: a seeded random geometric graph in the unit square and box worlds.
 
     Graph: :func:`random_geometric_graph` (``num_vertices`` points, radius :func:`rgg_radius` with ``eta``,
@@ -314,6 +313,8 @@ class PlanarDomain:
         pattern_seed: seed of the fixed slot-pattern lists shared by all worlds of ``one_wall`` / ``two_wall``.
         keep_clear: keep random squares off the start and goal vertices (the authors did not).
     """
+
+    SPEC_LABEL: ClassVar[str] = "planar"
 
     num_vertices: int = 100
     seed: int = 0
@@ -334,22 +335,9 @@ class PlanarDomain:
         built = random_geometric_graph(self.num_vertices, seed=self.seed, eta=self.eta)
         object.__setattr__(self, "_built", built)
 
-    @classmethod
-    def from_spec(cls, spec: Mapping[str, Any]) -> PlanarDomain:
-        """Build from :meth:`spec` output (missing keys take their defaults).
-
-        Raises:
-            ProblemError: unknown keys or invalid values.
-        """
-        allowed = {f.name for f in fields(cls) if f.init}
-        unknown = sorted(set(spec) - allowed)
-        if unknown:
-            raise ProblemError(f"planar domain: unknown spec keys {unknown}; known: {sorted(allowed)}")
-        return cls(**dict(spec))
-
     def spec(self) -> dict[str, Any]:
-        """JSON-able parameters; ``PlanarDomain.from_spec(d.spec()) == d``."""
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.init}
+        """JSON-able parameters (tuples as lists); ``PlanarDomain.from_spec(d.spec()) == d``."""
+        return self.to_spec()
 
     @property
     def name(self) -> str:
@@ -413,76 +401,3 @@ class PlanarDomain:
             "pattern_seed": self.pattern_seed,
             "keep_clear": self.keep_clear,
         }
-
-
-# --------------------------------------------------------------------------------------------------
-# Problem
-
-
-def make_planar_problem(
-    *,
-    num_vertices: int = 100,
-    model: str = "one_wall",
-    num_worlds: int = 300,
-    max_paths: int = 100,
-    seed: int = 0,
-    test_fraction: float = 0.1,
-    eta: float = 1.0,
-    k: int = 5,
-) -> Problem:
-    """A complete self-generated planar problem (graph, worlds, X, library, R, split), unit check costs.
-
-    The graph comes from :func:`random_geometric_graph` with ``seed``; the worlds, the library subsample and
-    the split use seeds derived from ``seed`` (recorded in the metadata), so the same arguments always give
-    identical arrays. Random squares are kept off the start and goal vertices.
-
-    Args:
-        num_vertices: RGG vertex count N.
-        model: world model (see :data:`WORLD_MODELS`).
-        num_worlds: n sampled worlds.
-        max_paths: library size cap m.
-        seed: master seed.
-        test_fraction: share of worlds held out (drawn among worlds with a valid library path).
-        eta: RGG radius multiplier.
-        k: Yen's k per world.
-
-    Raises:
-        ProblemError: bad arguments, start/goal disconnected, or no world has a start-goal path.
-    """
-    graph, start, goal = random_geometric_graph(num_vertices, seed=seed, eta=eta)
-    world_seed, library_seed, split_seed = (int(s) for s in np.random.SeedSequence(seed).generate_state(3))
-    states = graph.vertex_states
-    assert states is not None
-    keep_clear = states[[start, goal]]
-    boxes = sample_worlds(model, num_worlds, seed=world_seed, keep_clear=keep_clear)
-    x = edge_free_matrix(graph, boxes)
-    library = build_path_library(graph, x, start, goal, k=k, max_paths=max_paths, seed=library_seed)
-    r = library.valid_paths(x)
-    train, test = split_worlds(r, test_fraction=test_fraction, seed=split_seed)
-    metadata: dict[str, Any] = {
-        "domain": "planar",
-        "world_model": model,
-        "seed": seed,
-        "num_vertices": num_vertices,
-        "eta": eta,
-        "radius": rgg_radius(num_vertices, eta=eta),
-        "num_worlds": num_worlds,
-        "k": k,
-        "max_paths": max_paths,
-        "test_fraction": test_fraction,
-        "world_seed": world_seed,
-        "library_seed": library_seed,
-        "split_seed": split_seed,
-        "keep_clear": keep_clear.tolist(),
-        "solvable_worlds": int(r.any(axis=1).sum()),
-    }
-    return Problem(
-        name=f"planar_{model}_N{num_vertices}_seed{seed}",
-        library=library,
-        edge_costs=np.ones(graph.num_edges),
-        graph=graph,
-        start=start,
-        goal=goal,
-        worlds=WorldDatabase(x, r, train, test),
-        metadata=metadata,
-    )

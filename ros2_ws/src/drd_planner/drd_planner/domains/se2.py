@@ -31,16 +31,19 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
-from typing import Any
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.domains.dubins import shortest_dubins_path
+from drd_planner.domains.base import LatticeMembers
+from drd_planner.domains.dubins import dubins_path
+from drd_planner.domains.online import OnlineDefaults
+from drd_planner.domains.params import SpecParams
 from drd_planner.domains.planar import validate_edge_ids
 from drd_planner.domains.planar_worlds import SE2_VARIANT, WORLD_MODELS, as_boxes, generate_world
 from drd_planner.exceptions import ProblemError
@@ -106,8 +109,8 @@ def lattice_primitives(*, spacing: float, turning_radius: float, waypoint_spacin
             dx, dy = _rotate_quarter(mdx, mdy, h // 2)
             h2 = (h + mdh) % HEADINGS
             goal = (dx * spacing, dy * spacing, h2 * HEADING_STEP)
-            path = shortest_dubins_path((0.0, 0.0, h * HEADING_STEP), goal, turning_radius)
-            pts = path.sample(waypoint_spacing)
+            path = dubins_path((0.0, 0.0, h * HEADING_STEP), goal, radius=turning_radius, headings="unsigned")
+            pts = path.sample_evenly(waypoint_spacing)
             pts[0] = (0.0, 0.0, h * HEADING_STEP)
             pts[-1] = goal
             out.append(Primitive(h, (dx, dy), h2, path.length, pts))
@@ -317,8 +320,12 @@ def _number_field(name: str, value: object) -> float:
 
 
 @dataclass(frozen=True)
-class Se2Domain:
+class Se2Domain(SpecParams, LatticeMembers[Se2Lattice], OnlineDefaults):
     """The SE(2) domain: the Dubins state lattice and the box worlds with SE(2) parameters.
+
+    The graph is the directed lattice (:attr:`lattice`, its primitives and the primitive of every edge),
+    ``vertex_states`` (V, 3) = (x, y, heading rad); the start vertex (0) is the vertex of ``start_state``,
+    the goal vertex the vertex of ``goal_state``.
 
     Attributes:
         spacing: xy lattice spacing (0.05).
@@ -330,6 +337,8 @@ class Se2Domain:
         pattern_seed: seed of the fixed slot-pattern lists of ``one_wall`` / ``two_wall``.
         keep_clear: keep random squares off the start and goal positions (the authors did not).
     """
+
+    SPEC_LABEL: ClassVar[str] = "se2"
 
     spacing: float = 0.05
     turning_radius: float = 0.099
@@ -371,52 +380,14 @@ class Se2Domain:
         )
         object.__setattr__(self, "_lattice", lattice)
 
-    @classmethod
-    def from_spec(cls, spec: Mapping[str, Any]) -> Se2Domain:
-        """Build from :meth:`spec` output (missing keys take their defaults).
-
-        Raises:
-            ProblemError: unknown keys or invalid values.
-        """
-        allowed = {f.name for f in fields(cls) if f.init}
-        unknown = sorted(set(spec) - allowed)
-        if unknown:
-            raise ProblemError(f"SE(2) domain: unknown spec keys {unknown}; known: {sorted(allowed)}")
-        return cls(**dict(spec))
-
     def spec(self) -> dict[str, Any]:
         """JSON-able parameters (tuples as lists); ``Se2Domain.from_spec(d.spec()) == d``."""
-        out: dict[str, Any] = {}
-        for f in fields(self):
-            if f.init:
-                v = getattr(self, f.name)
-                out[f.name] = list(v) if isinstance(v, tuple) else v
-        return out
+        return self.to_spec()
 
     @property
     def name(self) -> str:
         """``"se2"``."""
         return "se2"
-
-    @property
-    def lattice(self) -> Se2Lattice:
-        """The lattice (graph, primitives, primitive of every edge)."""
-        return self._lattice
-
-    @property
-    def graph(self) -> ExplicitGraph:
-        """The directed lattice graph; ``vertex_states`` (V, 3) are (x, y, heading rad)."""
-        return self._lattice.graph
-
-    @property
-    def start(self) -> int:
-        """Start vertex id (0, the vertex of ``start_state``)."""
-        return self._lattice.start
-
-    @property
-    def goal(self) -> int:
-        """Goal vertex id (the vertex of ``goal_state``)."""
-        return self._lattice.goal
 
     @property
     def world_models(self) -> tuple[str, ...]:

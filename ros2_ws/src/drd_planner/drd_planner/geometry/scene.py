@@ -17,7 +17,7 @@ sphere/obstacle pairs FCL must decide, and the narrowphase stops at the first hi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import fcl
@@ -26,20 +26,18 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.aabb import boxes_overlap_box, shape_aabb, spheres_overlap_aabbs
-from drd_planner.geometry.fcl_queries import first_hit, pair_collides, pair_distance
+from drd_planner.geometry.aabb import boxes_overlap_box, shape_aabb
+from drd_planner.geometry.fcl_queries import first_hit, pair_distance
 from drd_planner.geometry.ordering import bisection_rank
 from drd_planner.geometry.pose import Pose, as_points
 from drd_planner.geometry.shapes import Capsule, Shape, Sphere, TriangleMesh, make_fcl_geometry, shape_point
 from drd_planner.geometry.solid import ClosedMesh, closed_mesh
+from drd_planner.geometry.sphere_query import PackedObstacles, SphereCache, sphere_hits
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.terrain_collider import TerrainCollider
 from drd_planner.geometry.wires import Wire
 
 __all__ = ["Scene"]
-
-#: Most cached FCL sphere objects (one per distinct query radius) before the cache is emptied.
-_SPHERE_CACHE_SIZE = 4096
 
 
 @dataclass
@@ -63,17 +61,6 @@ class _Entry:
     shared: bool = False  # its parts (FCL objects) also belong to another scene: never move them in place
 
 
-@dataclass
-class _Packed:
-    """Flat arrays of every non-terrain part (index n), then the terrain tiles (index n_obstacles + t)."""
-
-    objs: list[fcl.CollisionObject]
-    lo: FloatArray
-    hi: FloatArray
-    points: FloatArray
-    solids: list[tuple[int, ClosedMesh]] = field(default_factory=list)
-
-
 class Scene:
     """Named obstacles and terrain with fast collision queries.
 
@@ -92,9 +79,9 @@ class Scene:
         self._manager: fcl.DynamicAABBTreeCollisionManager | None = None  # built by the first collides()
         self._manager_dirty = False
         self._version = 0
-        self._packed: _Packed | None = None
+        self._packed: PackedObstacles | None = None
         self._counter = 0
-        self._spheres: dict[float, fcl.CollisionObject] = {}
+        self._spheres = SphereCache()
 
     # ------------------------------------------------------------------------------------------------
     # State
@@ -272,43 +259,16 @@ class Scene:
         """
         if not isinstance(pose, Pose):
             raise GeometryError(f"pose must be a Pose, got {type(pose).__name__}")
-        margin = self._margin
-        inflatable = isinstance(shape, Sphere | Capsule)
-        query_shape: Shape = shape
-        if margin > 0.0 and isinstance(shape, Sphere):
-            query_shape = Sphere(shape.radius + margin)
-        elif margin > 0.0 and isinstance(shape, Capsule):
-            query_shape = Capsule(shape.radius + margin, shape.length)
-        query = fcl.CollisionObject(make_fcl_geometry(query_shape), pose.to_fcl())
-        if self._manager is None:  # only this query needs the broadphase: built on first use
-            self._manager = fcl.DynamicAABBTreeCollisionManager()
-            self._manager.registerObjects([p.obj for e in self._entries.values() for p in e.parts])
-            self._manager_dirty = True
-        if self._manager_dirty:
-            self._manager.update()
-            self._manager_dirty = False
-        if first_hit(self._manager, query).hit:
+        query = fcl.CollisionObject(make_fcl_geometry(self._inflated(shape)), pose.to_fcl())
+        if first_hit(self._broadphase(), query).hit:
             return True
         packed = self._pack()
         lo, hi = shape_aabb(shape, pose)
-        near = boxes_overlap_box(lo - margin, hi + margin, packed.lo, packed.hi)
-        tiles = self._terrain_tiles(lo - margin, hi + margin)
-        if margin > 0.0 and not inflatable:
-            for n in np.concatenate([near, tiles]).tolist():
-                if pair_distance(query, packed.objs[n]) < margin:
-                    return True
-        point = shape_point(shape, pose)[None]
-        if self._terrain is not None and bool(self._terrain.below(point)[0]):
+        lo, hi = lo - self._margin, hi + self._margin
+        near = boxes_overlap_box(lo, hi, packed.lo, packed.hi)
+        if self._within_margin(shape, query, np.concatenate([near, self._terrain_tiles(lo, hi)])):
             return True
-        near_set = set(near.tolist())
-        for index, solid in packed.solids:
-            if index in near_set and bool(solid.contains(point)[0]):
-                return True
-        if isinstance(shape, TriangleMesh) and near.size:
-            own = closed_mesh(shape, pose)
-            if own is not None and bool(own.contains(packed.points[near]).any()):
-                return True
-        return False
+        return self._inside_something(shape, pose, near)
 
     def spheres_collide(self, centres: npt.ArrayLike, radii: npt.ArrayLike | float) -> bool:
         """Whether any of the spheres is blocked (stops at the first blocked sphere).
@@ -364,56 +324,59 @@ class Scene:
 
         Pairs are decided in increasing ``rank`` of their sphere (index order when None).
         """
-        hit = np.zeros(centres.shape[0], dtype=bool)
-        if centres.shape[0] == 0:
-            return hit
-        packed = self._pack()
-        terrain = self._terrain
-        ks, ns = spheres_overlap_aabbs(centres, radii, packed.lo, packed.hi)
-        if terrain is not None:
-            below, tk, tt = terrain.classify(centres, radii)
-            if below.any():
-                hit |= below
-                if first:
-                    return hit
-            if tk.size:
-                ks = np.concatenate([ks, tk])
-                ns = np.concatenate([ns, tt + packed.lo.shape[0]])
-        if ks.size:
-            order = np.argsort(ks if rank is None else rank[ks], kind="stable")
-            ks, ns = ks[order], ns[order]
-            objs = packed.objs
-            current = -1
-            sphere = None
-            for k, n in zip(ks.tolist(), ns.tolist(), strict=True):
-                if hit[k]:
-                    continue
-                if k != current:
-                    sphere = self._sphere_object(float(radii[k]))
-                    sphere.setTranslation(centres[k])
-                    current = k
-                if pair_collides(sphere, objs[n]):
-                    hit[k] = True
-                    if first:
-                        return hit
-        for index, solid in packed.solids:
-            inside_candidates = ks[(ns == index) & ~hit[ks]]
-            if inside_candidates.size:
-                inside = inside_candidates[solid.contains(centres[inside_candidates])]
-                hit[inside] = True
-                if first and inside.size:
-                    return hit
-        return hit
+        return sphere_hits(self._pack(), self._terrain, self._spheres, (centres, radii), rank, first=first)
 
-    def _sphere_object(self, radius: float) -> fcl.CollisionObject:
-        """The cached FCL sphere object of ``radius`` metres (its position is set by the caller)."""
-        obj = self._spheres.get(radius)
-        if obj is None:
-            if len(self._spheres) >= _SPHERE_CACHE_SIZE:
-                self._spheres.clear()
-            obj = fcl.CollisionObject(fcl.Sphere(radius), fcl.Transform())
-            self._spheres[radius] = obj
-        return obj
+    def _inflated(self, shape: Shape) -> Shape:
+        """``shape`` grown by the margin when it is a sphere or capsule (FCL then decides the margin exactly)."""
+        if self._margin > 0.0 and isinstance(shape, Sphere):
+            return Sphere(shape.radius + self._margin)
+        if self._margin > 0.0 and isinstance(shape, Capsule):
+            return Capsule(shape.radius + self._margin, shape.length)
+        return shape
+
+    def _broadphase(self) -> fcl.DynamicAABBTreeCollisionManager:
+        """FCL's broadphase of every obstacle part, built on first use and updated after changes."""
+        if self._manager is None:  # only collides() needs the broadphase: built on first use
+            self._manager = fcl.DynamicAABBTreeCollisionManager()
+            self._manager.registerObjects([p.obj for e in self._entries.values() for p in e.parts])
+            self._manager_dirty = True
+        if self._manager_dirty:
+            self._manager.update()
+            self._manager_dirty = False
+        return self._manager
+
+    def _within_margin(self, shape: Shape, query: fcl.CollisionObject, candidates: IntArray) -> bool:
+        """Whether a shape that :meth:`_inflated` cannot grow is closer than the margin to a candidate part.
+
+        Args:
+            shape: the query shape (spheres and capsules were inflated already: always False for them).
+            query: its FCL object.
+            candidates: packed indices of the obstacle parts and terrain tiles near it.
+        """
+        if self._margin <= 0.0 or isinstance(shape, Sphere | Capsule):
+            return False
+        objs = self._pack().objs
+        return any(pair_distance(query, objs[n]) < self._margin for n in candidates.tolist())
+
+    def _inside_something(self, shape: Shape, pose: Pose, near: IntArray) -> bool:
+        """Whether ``shape`` at ``pose`` is under the terrain, inside a closed mesh, or holds a near obstacle.
+
+        Args:
+            shape: the query shape.
+            pose: its pose.
+            near: packed indices of the obstacle parts whose margin-grown AABB overlaps the shape's.
+        """
+        packed = self._pack()
+        point = shape_point(shape, pose)[None]
+        if self._terrain is not None and bool(self._terrain.below(point)[0]):
+            return True
+        near_set = set(near.tolist())
+        if any(index in near_set and bool(solid.contains(point)[0]) for index, solid in packed.solids):
+            return True
+        if isinstance(shape, TriangleMesh) and near.size:
+            own = closed_mesh(shape, pose)
+            return own is not None and bool(own.contains(packed.points[near]).any())
+        return False
 
     def _radii(self, radii: npt.ArrayLike | float, count: int) -> FloatArray:
         """(count,) radii plus the margin; GeometryError unless each radius is finite and > 0."""
@@ -439,7 +402,7 @@ class Scene:
         tiles: IntArray = boxes_overlap_box(lo, hi, tile_lo, tile_hi) + offset
         return tiles
 
-    def _pack(self) -> _Packed:
+    def _pack(self) -> PackedObstacles:
         """The flat obstacle arrays, rebuilt after changes."""
         if self._packed is not None:
             return self._packed
@@ -447,7 +410,7 @@ class Scene:
         objs = [part.obj for part in parts]
         if self._terrain is not None:
             objs.extend(self._terrain.objects)
-        packed = _Packed(
+        packed = PackedObstacles(
             objs=objs,
             lo=np.array([p.lo for p in parts]).reshape(-1, 3),
             hi=np.array([p.hi for p in parts]).reshape(-1, 3),

@@ -337,6 +337,33 @@ def read_esri_ascii(path: str | Path) -> Heightfield:
         lines = file.read_text(encoding="ascii").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise GeometryError(f"cannot read ESRI ASCII grid {file}: {exc}") from exc
+    header, first_data = _read_esri_header(file, lines)
+    origin = _esri_origin(file, header)
+    rows, cols = int(header["nrows"]), int(header["ncols"])
+    if rows != header["nrows"] or cols != header["ncols"] or rows < 2 or cols < 2:
+        raise GeometryError(
+            f"{file}: nrows and ncols must be integers >= 2, got {header['nrows']}, {header['ncols']}"
+        )
+    try:
+        values = np.array(" ".join(lines[first_data:]).split(), dtype=np.float64)
+    except ValueError as exc:
+        raise GeometryError(f"{file}: grid values must be numbers: {exc}") from exc
+    if values.size != rows * cols:
+        raise GeometryError(f"{file}: expected nrows * ncols = {rows * cols} values, found {values.size}")
+    grid = values.reshape(rows, cols)[::-1]
+    if "nodata_value" in header:
+        grid = np.where(grid == header["nodata_value"], np.nan, grid)
+    return Heightfield(origin, header["cellsize"], grid)
+
+
+def _read_esri_header(file: Path, lines: list[str]) -> tuple[dict[str, float], int]:
+    """The header of an ESRI ASCII grid's ``lines`` (keys lower-cased) and the index of its first data line.
+
+    The header ends at the first non-blank line that does not start with a letter.
+
+    Raises:
+        GeometryError: an unknown or malformed header line, or a missing ``ncols``, ``nrows`` or ``cellsize``.
+    """
     header: dict[str, float] = {}
     first_data = len(lines)
     for number, line in enumerate(lines):
@@ -358,6 +385,15 @@ def read_esri_ascii(path: str | Path) -> Heightfield:
     for required in ("ncols", "nrows", "cellsize"):
         if required not in header:
             raise GeometryError(f"{file}: ESRI ASCII header lacks {required}")
+    return header, first_data
+
+
+def _esri_origin(file: Path, header: dict[str, float]) -> list[float]:
+    """``[x, y]`` of grid point [0, 0] from the header's ``*llcorner`` (half a cell out) or ``*llcenter``.
+
+    Raises:
+        GeometryError: an axis has both or neither of its corner and centre keys.
+    """
     origin: list[float] = []
     for axis in ("x", "y"):
         corner, centre = header.get(f"{axis}llcorner"), header.get(f"{axis}llcenter")
@@ -366,21 +402,7 @@ def read_esri_ascii(path: str | Path) -> Heightfield:
                 f"{file}: ESRI ASCII header needs exactly one of {axis}llcorner, {axis}llcenter"
             )
         origin.append(corner + header["cellsize"] / 2.0 if corner is not None else float(centre or 0.0))
-    rows, cols = int(header["nrows"]), int(header["ncols"])
-    if rows != header["nrows"] or cols != header["ncols"] or rows < 2 or cols < 2:
-        raise GeometryError(
-            f"{file}: nrows and ncols must be integers >= 2, got {header['nrows']}, {header['ncols']}"
-        )
-    try:
-        values = np.array(" ".join(lines[first_data:]).split(), dtype=np.float64)
-    except ValueError as exc:
-        raise GeometryError(f"{file}: grid values must be numbers: {exc}") from exc
-    if values.size != rows * cols:
-        raise GeometryError(f"{file}: expected nrows * ncols = {rows * cols} values, found {values.size}")
-    grid = values.reshape(rows, cols)[::-1]
-    if "nodata_value" in header:
-        grid = np.where(grid == header["nodata_value"], np.nan, grid)
-    return Heightfield(origin, header["cellsize"], grid)
+    return origin
 
 
 def _as_xy(xy: npt.ArrayLike) -> FloatArray:

@@ -309,21 +309,14 @@ def _default_chain(robot: Any, parent_joint: dict[str, Any]) -> list[Any]:
     return next(iter(tied.values()))[:prefix]
 
 
-def parse_urdf_chain(urdf: str, *, tip_link: str | None = None) -> KinematicChain:
-    """The serial chain of a URDF given as a string.
-
-    Args:
-        urdf: URDF XML text.
-        tip_link: the chain's tip; by default the end of the longest movable-joint path from the root
-            (the common part when several tie, so that gripper fingers are not part of the chain).
+def _chain_joints(
+    robot: Any, children: dict[str, list[Any]], parent_joint: dict[str, Any], tip_link: str | None
+) -> list[Any]:
+    """The chain's movable joints, root first: up to ``tip_link``, or the default chain when it is None.
 
     Raises:
-        GeometryError: malformed XML, not a URDF, broken link tree, unsupported joint types, missing
-            limits, no movable joint, an unknown tip link, or a mimic joint on the chain.
+        GeometryError: an unknown tip link, no movable joint, or a mimic joint on the chain.
     """
-    model = _load_yourdfpy(urdf)
-    robot = model.robot
-    root, children, parent_joint = _tree(robot)
     if tip_link is None:
         chain_joints = _default_chain(robot, parent_joint)
     else:
@@ -335,17 +328,21 @@ def parse_urdf_chain(urdf: str, *, tip_link: str | None = None) -> KinematicChai
     for joint in chain_joints:
         if joint.mimic is not None:
             raise GeometryError(f"chain joint {joint.name!r} mimics another joint; not supported")
-    index = {joint.name: i + 1 for i, joint in enumerate(chain_joints)}
-    dof = len(chain_joints)
-    origins = np.zeros((dof, 4, 4))
-    axes = np.zeros((dof, 3))
-    lower = np.zeros(dof)
-    upper = np.zeros(dof)
-    types: list[str] = []
-    for i, joint in enumerate(chain_joints):
-        axes[i] = _unit_axis(joint)
-        lower[i], upper[i] = _limits(joint)
-        types.append("prismatic" if joint.type == "prismatic" else "revolute")
+    return chain_joints
+
+
+def _place_links(
+    root: str, children: dict[str, list[Any]], index: dict[str, int], origins: FloatArray
+) -> tuple[dict[str, int], dict[str, FloatArray]]:
+    """Walk the link tree from ``root``: each link's chain frame and its (4, 4) offset in that frame.
+
+    Chain joints (``index``: joint name -> 1-based frame) start a new frame and write their placement into
+    ``origins`` ((dof, 4, 4), filled in place); other movable joints are fixed at the value nearest 0 within
+    their limits.
+
+    Raises:
+        GeometryError: a chain joint does not follow the previous one.
+    """
     frame_of: dict[str, int] = {root: 0}
     offset_of: dict[str, FloatArray] = {root: np.eye(4)}
     stack = [root]
@@ -369,6 +366,37 @@ def parse_urdf_chain(urdf: str, *, tip_link: str | None = None) -> KinematicChai
                 frame_of[joint.child] = frame_of[parent]
                 offset_of[joint.child] = placed
             stack.append(joint.child)
+    return frame_of, offset_of
+
+
+def parse_urdf_chain(urdf: str, *, tip_link: str | None = None) -> KinematicChain:
+    """The serial chain of a URDF given as a string.
+
+    Args:
+        urdf: URDF XML text.
+        tip_link: the chain's tip; by default the end of the longest movable-joint path from the root
+            (the common part when several tie, so that gripper fingers are not part of the chain).
+
+    Raises:
+        GeometryError: malformed XML, not a URDF, broken link tree, unsupported joint types, missing
+            limits, no movable joint, an unknown tip link, or a mimic joint on the chain.
+    """
+    model = _load_yourdfpy(urdf)
+    robot = model.robot
+    root, children, parent_joint = _tree(robot)
+    chain_joints = _chain_joints(robot, children, parent_joint, tip_link)
+    index = {joint.name: i + 1 for i, joint in enumerate(chain_joints)}
+    dof = len(chain_joints)
+    origins = np.zeros((dof, 4, 4))
+    axes = np.zeros((dof, 3))
+    lower = np.zeros(dof)
+    upper = np.zeros(dof)
+    types: list[str] = []
+    for i, joint in enumerate(chain_joints):
+        axes[i] = _unit_axis(joint)
+        lower[i], upper[i] = _limits(joint)
+        types.append("prismatic" if joint.type == "prismatic" else "revolute")
+    frame_of, offset_of = _place_links(root, children, index, origins)
     link_names = tuple(link.name for link in robot.links)
     return KinematicChain(
         robot_name=str(robot.name),

@@ -170,7 +170,7 @@ class DubinsConnector:
 
     def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
         """Dubins motions to (or from) the nearest vertices within reach that the climb limit allows."""
-        from drd_planner.domains.helicopter_dubins import dubins_path
+        from drd_planner.domains.dubins import dubins_path
 
         states = _vertex_states(graph)
         if states.shape[1] != 4 or state.shape != (4,):

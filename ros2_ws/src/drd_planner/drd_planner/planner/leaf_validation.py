@@ -36,6 +36,7 @@ from drd_planner.core.switch_threshold import (
     DEFAULT_ETA_CANDIDATES,
     DEFAULT_PSEUDO_COUNTS,
     SwitchThresholdChoice,
+    ValidationGrid,
     select_switch_threshold,
 )
 from drd_planner.exceptions import ProblemError
@@ -178,16 +179,9 @@ def tree_leaf_from_options(
     """
     if eta is not None and len(pseudo_counts) == 1:
         return None, "its own eta and kappa: the prior's (given)"
-    expand = float(tree_options.get("expand_threshold", 0.05))
     try:
         choice = select_switch_threshold(
-            problem,
-            candidates=None if eta is None else (eta,),
-            pseudo_counts=pseudo_counts,
-            seed=seed,
-            expand_threshold=expand,
-            tree_options=tree_options,
-            progress=progress,
+            problem, ValidationGrid.around(eta, pseudo_counts, tree_options), seed=seed, progress=progress
         )
     except ProblemError as exc:  # e.g. fewer than two training worlds with a free path for this query
         return None, f"its own eta and kappa: the prior's (not validated on this query: {exc})"

@@ -29,7 +29,7 @@ import numpy as np
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
-from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, lazysp_name
+from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.exceptions import ProblemError
@@ -45,7 +45,7 @@ from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
 from drd_planner.planner.query_library import query_library, vertex_sequence
 from drd_planner.planner.query_model import QueryModel
-from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, PlanTimings
+from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, library_stage, plan_timings
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
@@ -270,35 +270,20 @@ class Planner:
             ProblemError: an unknown policy, or a budget that is not positive.
         """
         t_begin = time.perf_counter()
-        if policy not in PLAN_POLICIES:
-            raise ProblemError(f"unknown planning policy {policy!r}; known: {', '.join(PLAN_POLICIES)}")
-        if max_checks is not None and max_checks < 1:
-            raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
-        if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
-            raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")
+        _check_plan_arguments(policy, max_checks, time_budget_s)
         deadline = None if time_budget_s is None else t_begin + float(time_budget_s)
         try:
-            s = self._endpoints.snap(start, "start")
-            g = self._endpoints.snap(goal, "goal")
-            if isinstance(s, int) and isinstance(g, int) and s == g:
-                return self._trivial(s, t_begin)
-            if not (isinstance(s, int) and isinstance(g, int)):
-                self._require_connector()
-                if not isinstance(oracle, MotionOracle):
-                    raise QueryError(
-                        "an off-graph start or goal is joined by new motions, and this oracle cannot check "
-                        "them (it needs check_motion(states)); give vertex ids or states within the snap "
-                        f"tolerance {self.snap_tolerance:.4g}"
-                    )
-            model = self.query_model(s, g)
+            resolved = self._resolve(start, goal, oracle)
         except QueryError as exc:
-            return PlanResult(PlanStatus.REFUSED, str(exc), timings=_timings((), 0.0, t_begin))
+            return PlanResult(PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin))
+        if isinstance(resolved, int):
+            return self._trivial(resolved, t_begin)
+        model = resolved
         if model.query.connected:
             oracle = MotionDispatch(oracle, model.query.motions)  # type: ignore[arg-type]
         t_model = time.perf_counter() - t_begin
         checks: list[CheckRecord] = []
         known: dict[int, bool] = {}
-        episode: EpisodeResult | None = None
         if model.library is not None:
             lib_policy = POLICIES[policy](self._context(model, policy, seed))
             episode = run_episode(
@@ -312,11 +297,39 @@ class Planner:
             checks.extend(episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
             if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
-                return self._found(
-                    model, episode.path_edges, checks, _library_stage(checks), t_model, t_begin
-                )
+                return self._found(model, episode.path_edges, checks, library_stage(checks), t_model, t_begin)
             if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
                 return self._exhausted(model, episode.status, checks, t_model, t_begin)
+        return self._plan_on_graph(model, oracle, known, checks, max_checks, deadline, (t_model, t_begin))
+
+    def _resolve(self, start: Endpoint, goal: Endpoint, oracle: EdgeOracle) -> QueryModel | int:
+        """The query's model, or the one vertex when start and goal snap to it (QueryError: refused)."""
+        s = self._endpoints.snap(start, "start")
+        g = self._endpoints.snap(goal, "goal")
+        if isinstance(s, int) and isinstance(g, int) and s == g:
+            return s
+        if not (isinstance(s, int) and isinstance(g, int)):
+            self._require_connector()
+            if not isinstance(oracle, MotionOracle):
+                raise QueryError(
+                    "an off-graph start or goal is joined by new motions, and this oracle cannot check "
+                    "them (it needs check_motion(states)); give vertex ids or states within the snap "
+                    f"tolerance {self.snap_tolerance:.4g}"
+                )
+        return self.query_model(s, g)
+
+    def _plan_on_graph(
+        self,
+        model: QueryModel,
+        oracle: EdgeOracle,
+        known: dict[int, bool],
+        checks: list[CheckRecord],
+        max_checks: int | None,
+        deadline: float | None,
+        times: tuple[float, float],
+    ) -> PlanResult:
+        """The graph stage after the library: its result, or why no path was proven."""
+        t_model, t_begin = times
         budget = None if max_checks is None else max_checks - len(checks)
         if budget is not None and budget <= 0:
             return self._exhausted(model, EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin)
@@ -376,8 +389,7 @@ class Planner:
             query.graph,
             model.start,
             model.goal,
-            selector=FALLBACK_SELECTOR,
-            max_checks=None,
+            LazySPSettings(selector=FALLBACK_SELECTOR, max_checks=None),
             edge_weights=fallback_edge_weights(query.graph, theta),
             observations=known,
             stage="graph",
@@ -395,7 +407,7 @@ class Planner:
             vertex,
             vertices=np.array([vertex], dtype=np.int64),
             stage=PlanStage.TRIVIAL,
-            timings=_timings((), 0.0, t_begin),
+            timings=plan_timings((), 0.0, t_begin),
         )
 
     def _found(
@@ -422,7 +434,7 @@ class Planner:
             stage=stage,
             query=model.label,
             library_size=0 if model.library is None else model.library.num_paths,
-            timings=_timings(checks, t_model, t_begin),
+            timings=plan_timings(checks, t_model, t_begin),
             new_states=model.query.new_states,
             motions={e: model.query.motions[e] for e in edges.tolist() if e in model.query.motions},
         )
@@ -457,7 +469,7 @@ def _unproven(
         checks=tuple(checks),
         query=model.label,
         library_size=0 if model.library is None else model.library.num_paths,
-        timings=_timings(checks, t_model, t_begin),
+        timings=plan_timings(checks, t_model, t_begin),
     )
 
 
@@ -466,21 +478,11 @@ def _cache_key(endpoint: int | FloatArray) -> object:
     return endpoint if isinstance(endpoint, int) else np.asarray(endpoint, dtype=np.float64).tobytes()
 
 
-def _library_stage(checks: list[CheckRecord]) -> PlanStage:
-    last = checks[-1].stage if checks else ""
-    if last == "tree":
-        return PlanStage.TREE
-    if last == "bisect":
-        return PlanStage.BISECT
-    return PlanStage.LIBRARY
-
-
-def _timings(
-    checks: list[CheckRecord] | tuple[CheckRecord, ...], library_s: float, t_begin: float
-) -> PlanTimings:
-    return PlanTimings(
-        library_s=library_s,
-        selection_s=sum(c.select_ms for c in checks) / 1e3,
-        checks_s=sum(c.check_ms for c in checks) / 1e3,
-        total_s=time.perf_counter() - t_begin,
-    )
+def _check_plan_arguments(policy: str, max_checks: int | None, time_budget_s: float | None) -> None:
+    """ProblemError for an unknown policy or a budget that is not positive."""
+    if policy not in PLAN_POLICIES:
+        raise ProblemError(f"unknown planning policy {policy!r}; known: {', '.join(PLAN_POLICIES)}")
+    if max_checks is not None and max_checks < 1:
+        raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
+    if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
+        raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")

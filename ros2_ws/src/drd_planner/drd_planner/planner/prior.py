@@ -11,7 +11,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypedDict
+
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
 
 import numpy as np
 
@@ -121,23 +124,35 @@ class WorldPrior:
             raise ProblemError(f"edge costs must be ({num_edges},) finite and positive")
         object.__setattr__(self, "edge_costs", costs)
         if self.worlds is not None:
-            x = np.asarray(self.worlds, dtype=bool)
-            if x.ndim != 2 or x.shape[1] != num_edges or x.shape[0] == 0:
-                raise ProblemError(f"prior worlds must be (n >= 1, {num_edges}) booleans, got {x.shape}")
-            object.__setattr__(self, "worlds", x)
-            if self.world_weights is not None:
-                w = np.asarray(self.world_weights, dtype=np.float64)
-                if w.shape != (x.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
-                    raise ProblemError(f"world weights must be ({x.shape[0]},) finite and positive")
-                object.__setattr__(self, "world_weights", w)
+            self._check_worlds(num_edges)
         elif not self.trees:
             raise ProblemError("a prior without training worlds over every edge needs a precomputed tree")
+        self._check_settings()
+        self._check_trees(num_edges)
+
+    def _check_worlds(self, num_edges: int) -> None:
+        """Validate (and convert) the (n, E) training worlds and their (n,) weights."""
+        x = np.asarray(self.worlds, dtype=bool)
+        if x.ndim != 2 or x.shape[1] != num_edges or x.shape[0] == 0:
+            raise ProblemError(f"prior worlds must be (n >= 1, {num_edges}) booleans, got {x.shape}")
+        object.__setattr__(self, "worlds", x)
+        if self.world_weights is not None:
+            w = np.asarray(self.world_weights, dtype=np.float64)
+            if w.shape != (x.shape[0],) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+                raise ProblemError(f"world weights must be ({x.shape[0]},) finite and positive")
+            object.__setattr__(self, "world_weights", w)
+
+    def _check_settings(self) -> None:
+        """Validate eta, alpha, the pseudo-count and the library size."""
         if not 0.0 < self.eta <= 1.0 or not 0.0 < self.alpha <= 1.0:
             raise ProblemError(f"eta and alpha must lie in (0, 1]; got {self.eta} and {self.alpha}")
         if self.pseudo_count is not None and not (np.isfinite(self.pseudo_count) and self.pseudo_count > 0):
             raise ProblemError(f"pseudo_count must be a positive number of worlds, got {self.pseudo_count}")
         if self.max_paths < 1:
             raise ProblemError(f"max_paths must be at least 1, got {self.max_paths}")
+
+    def _check_trees(self, num_edges: int) -> None:
+        """Validate the precomputed trees: one per query, endpoints in the graph, built for this graph."""
         seen: set[tuple[int, int]] = set()
         for qt in self.trees:
             key = (qt.start, qt.goal)
@@ -201,18 +216,24 @@ class WorldPrior:
         )
 
 
+class PriorOptions(TypedDict, total=False):
+    """Optional settings of :func:`prior_from_problem` (the :class:`WorldPrior` fields of the same names)."""
+
+    eta: float
+    alpha: float
+    pseudo_count: float | None
+    max_paths: int
+    library_seed: int
+    edge_trajectories: tuple[FloatArray, ...] | None
+    provenance: dict[str, Any] | None
+
+
 def prior_from_problem(
     problem: Problem,
     *,
     domain: str,
     trees: tuple[QueryTree, ...] = (),
-    eta: float = DEFAULT_ETA,
-    alpha: float = DEFAULT_ALPHA,
-    pseudo_count: float | None = None,
-    max_paths: int = DEFAULT_MAX_PATHS,
-    library_seed: int = 0,
-    edge_trajectories: tuple[FloatArray, ...] | None = None,
-    provenance: dict[str, Any] | None = None,
+    **options: Unpack[PriorOptions],
 ) -> WorldPrior:
     """The prior of a problem's training worlds (its test worlds stay out: they are for benchmarks)."""
     worlds = problem.require_worlds()
@@ -231,13 +252,13 @@ def prior_from_problem(
         worlds=worlds.X[train],
         world_weights=weights,
         trees=trees,
-        eta=eta,
-        alpha=alpha,
-        pseudo_count=pseudo_count,
-        max_paths=max_paths,
-        library_seed=library_seed,
+        eta=options.get("eta", DEFAULT_ETA),
+        alpha=options.get("alpha", DEFAULT_ALPHA),
+        pseudo_count=options.get("pseudo_count"),
+        max_paths=options.get("max_paths", DEFAULT_MAX_PATHS),
+        library_seed=options.get("library_seed", 0),
         domain_spec=dict(meta.get("domain_spec") or {}),
         check_metadata=dict(meta.get("check_metadata") or {}),
-        edge_trajectories=edge_trajectories,
-        provenance=dict(provenance or {}),
+        edge_trajectories=options.get("edge_trajectories"),
+        provenance=dict(options.get("provenance") or {}),
     )

@@ -45,13 +45,10 @@ import numpy.typing as npt
 from drd_planner import __version__
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.tree import DecisionTree
 from drd_planner.data.content_checks import (
     MAX_COORDINATE_M,
-    MAX_VERTICES,
     MAX_WORLD_OUTCOMES,
     check_bits,
-    check_graph_arrays,
     check_tree_arrays,
     check_walks,
     header_dict,
@@ -60,7 +57,7 @@ from drd_planner.data.content_checks import (
     header_number,
     header_text,
 )
-from drd_planner.data.npz_format import read_checked_npz, write_checked_npz
+from drd_planner.data.npz_format import building_for_domain, read_checked_npz, write_checked_npz
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.safe_npz import (
     MAX_JSON_INT,
@@ -70,10 +67,9 @@ from drd_planner.data.safe_npz import (
     refusing,
     short,
 )
-from drd_planner.data.spec_limits import check_domain_spec
 from drd_planner.data.tree_file import ARRAY_DTYPES as TREE_DTYPES
 from drd_planner.data.tree_file import FORMAT_NAME as TREE_FORMAT_NAME
-from drd_planner.data.tree_file import MAX_PSEUDO_COUNT, TreeBundle, load_tree
+from drd_planner.data.tree_file import MAX_PSEUDO_COUNT, TreeBundle, checked_graph, decision_tree, load_tree
 from drd_planner.exceptions import DrdError, PriorFileError
 from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior
 
@@ -215,13 +211,8 @@ def load_prior(path: str | Path, *, expected_domain: str | None = None) -> World
         src, format_name=FORMAT_NAME, format_version=READ_VERSIONS, error=PriorFileError, what=_WHAT
     )
     with refusing(PriorFileError, src, _WHAT):
-        domain = header.get("domain")
-        if expected_domain is not None and domain != expected_domain:
-            raise PriorFileError(f"{src} was built for domain {short(domain, 60)!r}, not {expected_domain!r}")
-        try:
+        with building_for_domain(src, header, error=PriorFileError, expected_domain=expected_domain):
             return _prior_from(header, arrays)
-        except (DrdError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
-            raise PriorFileError(f"{src} is inconsistent: {short(exc, 400)}") from exc
 
 
 def _array(arrays: dict[str, npt.NDArray[Any]], name: str, dtype: npt.DTypeLike) -> npt.NDArray[Any]:
@@ -236,19 +227,12 @@ def _array(arrays: dict[str, npt.NDArray[Any]], name: str, dtype: npt.DTypeLike)
 
 
 def _prior_from(header: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> WorldPrior:
-    num_vertices = header_int(header, "num_vertices", low=1, high=MAX_VERTICES)
-    directed = header.get("directed")
-    if not isinstance(directed, bool):
-        raise PriorFileError(f"header field 'directed' must be true or false, got {short(directed, 40)}")
     domain = header_text(header, "domain")
     spec = header_dict(header, "domain_spec")
-    edges = _array(arrays, "edges", np.int64)
-    lengths = _array(arrays, "lengths", np.float64)
-    costs = _array(arrays, "costs", np.float64)
-    states = _array(arrays, "vertex_states", np.float64) if "vertex_states" in arrays else None
-    check_graph_arrays(edges, lengths, costs, states, num_vertices)
-    check_domain_spec(domain, spec, num_edges=int(edges.shape[0]), mean_edge_length=float(lengths.mean()))
-    graph = ExplicitGraph(edges, lengths, num_vertices, directed, states)
+    names = ("edges", "lengths", "costs", *(("vertex_states",) if "vertex_states" in arrays else ()))
+    graph_arrays = {name: _array(arrays, name, TREE_DTYPES[name]) for name in names}
+    costs = graph_arrays["costs"]
+    graph = checked_graph(header, graph_arrays, spec)
     num_edges = graph.num_edges
     n = header_int(header, "num_worlds", low=1, high=MAX_WORLD_OUTCOMES)
     bits = _array(arrays, "worlds_bits", np.uint8)
@@ -322,21 +306,8 @@ def _tree_from(
         leaf = _leaf_from(entry.get("leaf"))
     except DrdError as exc:
         raise PriorFileError(f"tree {i}: {exc}") from exc
-    lib_edges = a["library_edges"]
-    tree = DecisionTree(
-        edge=a["node_edge"],
-        children=a["node_children"],
-        num_active=a["node_num_active"],
-        active_fraction=a["node_active_fraction"],
-        library_edges=lib_edges,
-        free_fraction=a["free_fraction"],
-        best_path=a["node_best_path"],
-        num_edges=graph.num_edges,
-        num_paths=m,
-        info=header_dict(entry, "info"),
-        world_free=np.ascontiguousarray(worlds[:, lib_edges]),
-        world_weights=weights,
-    )
+    world_free = np.ascontiguousarray(worlds[:, a["library_edges"]])
+    tree = decision_tree(a, library, header_dict(entry, "info"), world_free, weights)
     return QueryTree(name, start, goal, library, tree, leaf)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
@@ -118,3 +119,25 @@ class PlanResult:
         if not self.found:
             raise PlanningError(f"{self.status.value}: {self.reason}")
         return self
+
+
+def library_stage(checks: list[CheckRecord]) -> PlanStage:
+    """The stage that proved a library path: the stage of the last check (tree, BiSECt or library)."""
+    last = checks[-1].stage if checks else ""
+    if last == "tree":
+        return PlanStage.TREE
+    if last == "bisect":
+        return PlanStage.BISECT
+    return PlanStage.LIBRARY
+
+
+def plan_timings(
+    checks: list[CheckRecord] | tuple[CheckRecord, ...], library_s: float, t_begin: float
+) -> PlanTimings:
+    """The timings of a plan from its checks, the library time and its start (``time.perf_counter``)."""
+    return PlanTimings(
+        library_s=library_s,
+        selection_s=sum(c.select_ms for c in checks) / 1e3,
+        checks_s=sum(c.check_ms for c in checks) / 1e3,
+        total_s=time.perf_counter() - t_begin,
+    )

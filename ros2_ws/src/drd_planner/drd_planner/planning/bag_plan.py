@@ -10,27 +10,115 @@ generator's self-check and the replay tests agree with the node by construction.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from drd_msgs_py.bags import BagMaps, BagMessage, BagRequest, maps_at_request, topic_base
+from drd_msgs_py.bags import BagMessage, BagRequest, request_at, topic_base
 from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.obstacles import Obstacle
 from drd_planner.arrays import FloatArray
-from drd_planner.exceptions import PlanningError
+from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
+from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.requests import (
-    Goal,
-    goal_endpoint,
-    goal_from_pose,
-    joint_vector,
-    start_from_odometry,
-)
+from drd_planner.planning.requests import Goal, goal_endpoint, read_goal, read_robot_state
 
 #: The node's defaults of ``goal_tolerance`` (m) and ``joint_tolerance`` (rad).
 GOAL_TOLERANCE_M = 1.0
 JOINT_TOLERANCE_RAD = 0.05
 
-__all__ = ["BagPlan", "plan_bag_request", "request_goal", "robot_state_at"]
+__all__ = [
+    "BagMaps",
+    "BagPlan",
+    "maps_at_request",
+    "maps_until",
+    "plan_bag_request",
+    "request_goal",
+    "robot_state_at",
+]
+
+
+@dataclass(frozen=True)
+class BagMaps:
+    """The maps in force at some point of a bag.
+
+    Attributes:
+        snapshot: the planner's map snapshot (version = accepted map messages that changed it).
+        robot_description: the latest ``robot_description`` text (None: none in the bag so far).
+        refused: one line per map message the planner would refuse (and ignore).
+        applied: how many map messages were accepted.
+        obstacles: the named obstacles behind ``snapshot.obstacles`` (key ``ns/id``), as their markers gave them.
+    """
+
+    snapshot: MapSnapshot
+    robot_description: str | None = None
+    refused: tuple[str, ...] = ()
+    applied: int = 0
+    obstacles: dict[str, Obstacle] = field(default_factory=dict)
+
+
+def _apply_maps(
+    messages: Sequence[BagMessage], *, frame_id: str, margin: float, robot_loader: RobotLoader | None
+) -> BagMaps:
+    """The maps after the map messages of ``messages``, applied by a :class:`MapStore` as the node does."""
+    store = MapStore(frame_id=frame_id, margin=margin, robot_loader=robot_loader)
+    refused: list[str] = []
+    applied = 0
+    for m in messages:
+        base = topic_base(m.topic)
+        if base not in MAP_SOURCES:
+            continue
+        try:
+            store.apply(base, m.message)
+        except (MessageError, DrdError) as exc:
+            refused.append(f"{base} at {m.time_ns} ns refused: {exc}")
+            continue
+        applied += 1
+    return BagMaps(store.snapshot, store.robot_description, tuple(refused), applied, dict(store.obstacles))
+
+
+def maps_until(
+    messages: Sequence[BagMessage],
+    time_ns: int,
+    *,
+    frame_id: str,
+    margin: float,
+    robot_loader: RobotLoader | None = None,
+) -> BagMaps:
+    """The maps after every map message at or before ``time_ns`` (time-ordered ``messages``).
+
+    Args:
+        messages: the bag's decoded messages in time order (:func:`drd_msgs_py.bags.read_bag`).
+        time_ns: bag time, inclusive.
+        frame_id: the planning frame (maps in another frame are refused, as by the node).
+        margin: collision margin of the snapshot (metres; the session's ``margin``).
+        robot_loader: turns a ``robot_description`` URDF into the snapshot's robot (a session's
+            ``robot_loader``); None keeps only the text.
+    """
+    upto = [m for m in messages if m.time_ns <= time_ns]
+    return _apply_maps(upto, frame_id=frame_id, margin=margin, robot_loader=robot_loader)
+
+
+def maps_at_request(
+    messages: Sequence[BagMessage],
+    index: int,
+    *,
+    frame_id: str,
+    margin: float,
+    robot_loader: RobotLoader | None = None,
+) -> tuple[BagMaps, BagRequest]:
+    """The maps in force when the ``index``-th (0-based) request arrives, and that request.
+
+    Every map message before the request in bag order counts (arguments as :func:`maps_until`).
+
+    Raises:
+        BagError: the bag has no request ``index`` (the text says how many it has).
+    """
+    request = request_at(messages, index)
+    maps = _apply_maps(
+        messages[: request.position], frame_id=frame_id, margin=margin, robot_loader=robot_loader
+    )
+    return maps, request
 
 
 @dataclass(frozen=True)
@@ -59,12 +147,9 @@ def request_goal(session: QuerySession, request: BagRequest, frame: str) -> Goal
 
     Raises:
         MessageError: a pose in another frame or not finite, or joints the prior does not plan for.
+        PlanningError: ``goal_joints`` without an arm prior.
     """
-    if request.kind == "goal_joints":
-        if not session.is_arm:
-            raise MessageError("goal_joints needs an arm prior")
-        return Goal(joints=joint_vector(request.message, session.joint_names, "goal_joints"))
-    return goal_from_pose(request.message, frame, "goal_pose")
+    return read_goal(request.kind, request.message, [session], frame)
 
 
 def robot_state_at(
@@ -83,12 +168,12 @@ def robot_state_at(
         if topic_base(m.topic) != topic:
             continue
         try:
-            if session.is_arm:
-                state = joint_vector(m.message, session.joint_names, "joint_states")
-            else:
-                state = start_from_odometry(m.message, frame)
+            read = read_robot_state(topic, m.message, [session], frame)
         except MessageError as exc:
             notes.append(f"{m.topic} refused: {exc}")
+            continue
+        if read is not None:
+            state = read[1]
     return state, tuple(notes)
 
 
@@ -113,7 +198,7 @@ def plan_bag_request(
         PlanningError: no robot state before the request, or no maps yet.
     """
     maps, request = maps_at_request(
-        messages, index, frame_id=frame, margin=session.margin, robot_from_description=session.robot_loader
+        messages, index, frame_id=frame, margin=session.margin, robot_loader=session.robot_loader
     )
     goal = request_goal(session, request, frame)
     state, notes = robot_state_at(session, messages[: request.position], request.time_ns, frame)

@@ -7,24 +7,32 @@ Shared by :class:`~drd_planner.planning.session.PlanningSession` (one tree) and
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
-from drd_planner.exceptions import DrdError
+from drd_planner.domains.base import EdgeChecker, domain_from_spec
+from drd_planner.domains.online import OnlineDomain
+from drd_planner.exceptions import DrdError, PlanningError
+from drd_planner.geometry.robot import RobotModel
 from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.replan import SweepBoxCache
 
-__all__ = ["SnapshotCheckers", "domain_from_stored_spec", "state_positions", "straight_edge_states"]
+__all__ = [
+    "DomainSession",
+    "SnapshotCheckers",
+    "domain_from_stored_spec",
+    "state_positions",
+    "straight_edge_states",
+]
 
 
 def domain_from_stored_spec(
     domain_name: str, spec: Mapping[str, Any], *, label: str, error: type[DrdError]
-) -> Domain:
+) -> OnlineDomain[Any]:
     """The domain a file's stored spec builds; any failure is one ``error`` naming ``label``.
 
     A spec the file checks let through may still fail deep in a domain's constructor with any
@@ -41,26 +49,23 @@ def domain_from_stored_spec(
 
 
 def state_positions(
-    domain: Domain, states: npt.ArrayLike, dim: int, snapshot: MapSnapshot | None
+    domain: OnlineDomain[Any], states: npt.ArrayLike, dim: int, snapshot: MapSnapshot | None
 ) -> FloatArray:
     """(K, 3) positions (m, planning frame) of (K, ``dim``) states: x, y, z, or the arm's end effector.
 
     The arm uses ``snapshot.robot`` when the snapshot carries a ``robot_description``.
     """
     q = np.asarray(states, dtype=np.float64).reshape(-1, dim)
-    if isinstance(domain, ArmDomain):
-        robot = snapshot.robot if snapshot is not None else None
-        return domain.end_effector_positions(q, robot)
-    return np.array(q[:, :3], dtype=np.float64)
+    return domain.positions(q, snapshot.robot if snapshot is not None else None)
 
 
-def straight_edge_states(domain: Domain, a: npt.ArrayLike, b: npt.ArrayLike) -> FloatArray:
+def straight_edge_states(domain: OnlineDomain[Any], a: npt.ArrayLike, b: npt.ArrayLike) -> FloatArray:
     """(K, d) states of the straight edge from state ``a`` to state ``b``.
 
     No coordinate moves more than the domain's check resolution per step (one step without one).
     """
     start, end = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    resolution = float(getattr(domain, "resolution", 0.0))
+    resolution = float(domain.resolution)
     steps = max(1, int(np.ceil(np.max(np.abs(end - start)) / resolution))) if resolution > 0 else 1
     return np.asarray(start + np.linspace(0.0, 1.0, steps + 1)[:, None] * (end - start), dtype=np.float64)
 
@@ -72,7 +77,7 @@ class SnapshotCheckers:
     next snapshot never tears a planning thread's.
     """
 
-    def __init__(self, domain: Domain) -> None:
+    def __init__(self, domain: OnlineDomain[Any]) -> None:
         self._domain = domain
         self._prepared: tuple[MapSnapshot, EdgeChecker] | None = None
 
@@ -81,11 +86,7 @@ class SnapshotCheckers:
         prepared = self._prepared
         if prepared is not None and prepared[0] is snapshot:
             return prepared[1]
-        checker: EdgeChecker
-        if isinstance(self._domain, ArmDomain) and snapshot.robot is not None:
-            checker = self._domain.checker(snapshot.scene, robot=snapshot.robot)
-        else:
-            checker = self._domain.checker(snapshot.scene)
+        checker = self._domain.scene_checker(snapshot.scene, snapshot.robot)
         self._prepared = (snapshot, checker)
         return checker
 
@@ -99,3 +100,78 @@ class SnapshotCheckers:
         t0 = time.perf_counter()
         self.checker(snapshot)
         return time.perf_counter() - t0
+
+
+class DomainSession:
+    """What a planning session reads of its domain on snapshots; the base of both session classes.
+
+    Args:
+        domain: the session's domain.
+        name: a label for logs (the file stem).
+    """
+
+    def __init__(self, domain: OnlineDomain[Any], name: str) -> None:
+        self._domain = domain
+        self._name = name
+        self._checkers = SnapshotCheckers(domain)
+        self._sweep_boxes = SweepBoxCache()
+        self._cache_snapshot: MapSnapshot | None = None
+        self._cache: dict[int, bool] = {}
+
+    @property
+    def name(self) -> str:
+        """The label given at construction."""
+        return self._name
+
+    @property
+    def domain(self) -> OnlineDomain[Any]:
+        """The rebuilt domain."""
+        return self._domain
+
+    @property
+    def margin(self) -> float:
+        """Collision margin of the domain (metres); snapshots for this session use it."""
+        return float(self._domain.margin)
+
+    @property
+    def is_arm(self) -> bool:
+        """Whether the session plans in an arm's joint space (states are joint angles)."""
+        return bool(self._domain.joint_names)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The arm's chain joint names, root to tip (empty for other domains)."""
+        return self._domain.joint_names
+
+    @property
+    def robot_loader(self) -> Callable[[str], RobotModel] | None:
+        """Turns a ``robot_description`` URDF into the snapshot's robot (the arm), or None."""
+        return self._domain.robot_loader()
+
+    @property
+    def sweep_boxes(self) -> SweepBoxCache:
+        """The sweep boxes of this session's edges (:mod:`~drd_planner.planning.replan`)."""
+        return self._sweep_boxes
+
+    def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
+        """The domain's edge checker on ``snapshot`` (kept for the latest snapshot, see :meth:`prepare`)."""
+        return self._checkers.checker(snapshot)
+
+    def prepare(self, snapshot: MapSnapshot) -> float:
+        """Build ``snapshot``'s FCL scene and checker now; the seconds taken (0.0 for a snapshot without maps).
+
+        The node calls this when a map arrives, so a request on that map starts checking at once.
+        """
+        return self._checkers.prepare(snapshot)
+
+    def _outcomes(self, snapshot: MapSnapshot) -> dict[int, bool]:
+        """The check outcomes cached for ``snapshot`` (a new cache for another snapshot object).
+
+        Raises:
+            PlanningError: the snapshot has no terrain and no obstacles yet (no maps).
+        """
+        if not snapshot.has_maps:
+            raise PlanningError("no maps received yet: refusing to plan on an empty world")
+        if snapshot is not self._cache_snapshot:  # the cache belongs to one snapshot object, not a number
+            self._cache_snapshot, self._cache = snapshot, {}
+        return self._cache

@@ -3,7 +3,8 @@
 A map message that is valid syntax can still cost more than a planner can pay: a terrain's FCL tiles take about
 1.2 KiB of memory per cell, a 100 000-marker scene seconds to build, a robot description with thousands of
 links a quadratic self-collision table. The converters (:func:`drd_msgs_py.terrain.heightfield_from_cloud`,
-:func:`drd_msgs_py.obstacles.obstacle_update`, :meth:`drd_planner.domains.arm.ArmDomain.robot_from_description`)
+:func:`drd_msgs_py.obstacles.obstacle_update`, whose message limits :class:`MapLimits` extends, and
+:meth:`drd_planner.domains.arm.ArmDomain.robot_from_description`)
 take a :class:`MapLimits` (keyword ``limits``) and refuse a message beyond one of them from its header or counts,
 before they decode or copy its payload, with an error that names the limit, its value and the parameter::
 
@@ -24,8 +25,8 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar, cast
 
 import numpy as np
-import numpy.typing as npt
 
+from drd_msgs_py.limits import MessageLimits
 from drd_planner.exceptions import ParameterError
 from drd_planner.geometry.terrain import UNKNOWN_CHOICES, Unknown
 
@@ -42,59 +43,13 @@ def _doc(text: str) -> Any:
 
 
 @dataclass(frozen=True)
-class MapLimits:
+class MapLimits(MessageLimits):
     """Limits on map messages and the treatment of unknown terrain; field names are node parameter names.
 
+    The message-size fields come from :class:`drd_msgs_py.limits.MessageLimits` (the converters take a
+    ``MapLimits`` as their limits); this class adds the robot-description limits and ``unknown_terrain``.
     Construction validates (:meth:`validate`): counts are positive integers, sizes finite positive floats.
     """
-
-    max_message_bytes: int = field(
-        default=32 * 2**20,
-        metadata=_doc(
-            "bytes: largest payload of one map message (terrain cloud data, robot_description text)"
-        ),
-    )
-    """Bytes: the largest payload of one map message (a terrain cloud's ``data``, a ``robot_description``)."""
-
-    max_terrain_cells: int = field(
-        default=250_000,
-        metadata=_doc("grid points: most rows x cols of a terrain cloud (about 1.2 KiB of memory each)"),
-    )
-    """Grid points: the most ``height x width`` of a terrain cloud; each costs about 1.2 KiB of FCL tiles."""
-
-    min_terrain_cell_size: float = field(
-        default=0.05,
-        metadata=_doc(
-            "metres: smallest terrain grid spacing (query cost grows with (vehicle reach / cell)^2)"
-        ),
-    )
-    """Metres: the smallest terrain grid spacing; a query's cost grows with (vehicle reach / cell size)^2."""
-
-    max_coordinate: float = field(
-        default=1e6,
-        metadata=_doc("metres: largest |x|, |y|, |z| of any map coordinate (terrain, robot description)"),
-    )
-    """Metres: the largest absolute coordinate accepted in a map (terrain points, robot joint and sphere origins)."""
-
-    max_markers: int = field(
-        default=10_000,
-        metadata=_doc("obstacles: most markers in one MarkerArray and most obstacles in the obstacle map"),
-    )
-    """Obstacles: the most markers in one MarkerArray, and the most obstacles in the map after applying it."""
-
-    max_line_points: int = field(
-        default=100_000,
-        metadata=_doc(
-            "points: most LINE_STRIP points (one capsule per segment) in one MarkerArray and in the map"
-        ),
-    )
-    """Points: the most LINE_STRIP points (one capsule per segment) in one MarkerArray and in the whole map."""
-
-    max_mesh_triangles: int = field(
-        default=100_000,
-        metadata=_doc("triangles: most TRIANGLE_LIST triangles in one MarkerArray and in the map"),
-    )
-    """Triangles: the most TRIANGLE_LIST triangles in one MarkerArray and in the whole map."""
 
     max_robot_links: int = field(
         default=512,
@@ -151,18 +106,19 @@ class MapLimits:
         if name not in kinds:
             raise ParameterError(f"{name!r} is not a map limit; limits: {', '.join(kinds)}")
         if name == "unknown_terrain":
-            if value not in UNKNOWN_TERRAIN_CHOICES:
-                return f"must be one of {', '.join(map(repr, UNKNOWN_TERRAIN_CHOICES))}, got {value!r}"
-            return None
+            ok = value in UNKNOWN_TERRAIN_CHOICES
+            return (
+                None
+                if ok
+                else f"must be one of {', '.join(map(repr, UNKNOWN_TERRAIN_CHOICES))}, got {value!r}"
+            )
         if kinds[name] == "int":
-            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0:
-                return f"must be an integer > 0, got {value!r}"
-            return None
+            ok = bool(not isinstance(value, bool) and isinstance(value, int | np.integer) and value > 0)
+            return None if ok else f"must be an integer > 0, got {value!r}"
         if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
             return f"must be a number > 0, got {value!r}"
-        if not (math.isfinite(float(value)) and float(value) > 0.0):
-            return f"must be finite and > 0, got {value!r}"
-        return None
+        ok = math.isfinite(float(value)) and float(value) > 0.0
+        return None if ok else f"must be finite and > 0, got {value!r}"
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> MapLimits:
@@ -198,23 +154,6 @@ class MapLimits:
     def unknown(self) -> UnknownTerrain:
         """:attr:`unknown_terrain` typed as :data:`UnknownTerrain`."""
         return cast(UnknownTerrain, self.unknown_terrain)
-
-    def refusal(self, name: str, what: str, *, side: str = "over") -> str:
-        """``"<what>, over the limit <name> = <value> (parameter <name>)"`` (``side`` "under" for minimums)."""
-        return f"{what}, {side} the limit {name} = {getattr(self, name)} (parameter {name})"
-
-    def coordinate_problem(self, values: npt.ArrayLike, what: str) -> str | None:
-        """Why ``values`` (metres, any shape; NaN allowed and skipped) are not map coordinates, or None.
-
-        A coordinate must be finite (NaN is left to the caller) and at most :attr:`max_coordinate` in absolute value.
-        """
-        array = np.asarray(values, dtype=np.float64)
-        if array.size == 0:
-            return None
-        biggest = float(np.nanmax(np.abs(array))) if not np.isnan(array).all() else 0.0
-        if biggest > self.max_coordinate:
-            return self.refusal("max_coordinate", f"{what} reach {biggest:.6g} m in absolute value")
-        return None
 
 
 MapLimits.DEFAULT = MapLimits()

@@ -24,7 +24,6 @@ query when there is one, DiRECt online otherwise, the graph fallback when the li
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,9 +31,6 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray, IntArray
-from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker
-from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.exceptions import PlanningError, ProblemError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver
@@ -42,7 +38,7 @@ from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
 from drd_planner.planner.result import PlanStatus
-from drd_planner.planning.domain_view import SnapshotCheckers, state_positions, straight_edge_states
+from drd_planner.planning.domain_view import DomainSession, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_support import (
     DEFAULT_MOTIONS_KEPT,
@@ -50,7 +46,6 @@ from drd_planner.planning.query_support import (
     SnapshotOracle,
     join_pieces,
     rebuild_domain,
-    state_from_pose,
 )
 from drd_planner.planning.session import PlanResult, SessionCheck
 
@@ -89,7 +84,7 @@ _STATUS = {
 }
 
 
-class QuerySession:
+class QuerySession(DomainSession):
     """Plans any query of one world prior on map snapshots (see the module docstring).
 
     Args:
@@ -122,31 +117,20 @@ class QuerySession:
         motions_kept: int = DEFAULT_MOTIONS_KEPT,
     ) -> None:
         domain = rebuild_domain(prior, name)
+        super().__init__(domain, name)
         self._prior = prior
-        self._domain = domain
-        self._name = name
         self.set_budgets(max_checks, time_budget_s)
         self._planner = Planner(prior, cache_size=cache_size, snap_tolerance=snap_tolerance)
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=self._planner.snap_tolerance)
         self._num_edges = prior.graph.num_edges
         self._motions = MotionRegistry(self._num_edges, capacity=motions_kept)
         self._trajectories = domain.edge_trajectories()
-        self._cache_snapshot: MapSnapshot | None = None
-        self._cache: dict[int, bool] = {}
-        # The checker of the latest snapshot asked for, as one (snapshot, checker) pair: replacing the
-        # tuple is atomic, so a map thread preparing the next snapshot never tears a planning thread's.
-        self._checkers = SnapshotCheckers(self._domain)
         self._tool_positions: tuple[RobotModel | None, FloatArray] | None = None
         for qt in prior.trees[:cache_size]:  # first use costs ~80 ms (bias, query graph): pay it here
             self._planner.query_model(qt.start, qt.goal)
 
     # ------------------------------------------------------------------------------------------------
     # What the node reads
-
-    @property
-    def name(self) -> str:
-        """The label given at construction."""
-        return self._name
 
     @property
     def prior(self) -> WorldPrior:
@@ -157,31 +141,6 @@ class QuerySession:
     def planner(self) -> Planner:
         """The planner over the prior."""
         return self._planner
-
-    @property
-    def domain(self) -> Domain:
-        """The rebuilt domain."""
-        return self._domain
-
-    @property
-    def margin(self) -> float:
-        """Collision margin of the domain (metres); snapshots for this session use it."""
-        return float(getattr(self._domain, "margin", 0.0))
-
-    @property
-    def is_arm(self) -> bool:
-        """Whether the prior plans in an arm's joint space (states are joint angles)."""
-        return isinstance(self._domain, ArmDomain)
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The arm's chain joint names, root to tip (empty for other domains)."""
-        return self._domain.robot.chain.joint_names if isinstance(self._domain, ArmDomain) else ()
-
-    @property
-    def robot_loader(self) -> Callable[[str], Any] | None:
-        """Turns a ``robot_description`` URDF into the snapshot's robot (the arm), or None."""
-        return self._domain.robot_from_description if isinstance(self._domain, ArmDomain) else None
 
     @property
     def state_dim(self) -> int:
@@ -291,9 +250,10 @@ class QuerySession:
             PlanningError: a malformed position, no vertex within ``tolerance`` (the distance and the
                 tolerance named), or a domain without position goals.
         """
-        if isinstance(self._domain, HelicopterDomain):
-            return state_from_pose(xyz, yaw)
-        if not isinstance(self._domain, ArmDomain):
+        goals = self._domain.position_goals
+        if goals == "pose":
+            return self._domain.state_from_position(xyz, yaw)
+        if goals != "vertex":
             raise PlanningError(f"{self._name}: the {self._domain.name} domain has no position goals")
         want = np.asarray(xyz, dtype=np.float64).ravel()
         if want.shape != (3,) or not np.all(np.isfinite(want)):
@@ -326,14 +286,6 @@ class QuerySession:
     # ------------------------------------------------------------------------------------------------
     # Planning
 
-    def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot`` (kept for the latest snapshot, see :meth:`prepare`)."""
-        return self._checkers.checker(snapshot)
-
-    def prepare(self, snapshot: MapSnapshot) -> float:
-        """Build ``snapshot``'s FCL scene and checker now; the seconds taken (0.0 for a snapshot without maps)."""
-        return self._checkers.prepare(snapshot)
-
     def plan(
         self, snapshot: MapSnapshot, start: Endpoint, goal: Endpoint, *, seed: int = 0
     ) -> QueryPlanResult:
@@ -348,12 +300,9 @@ class QuerySession:
             PlanningError: the snapshot has no terrain and no obstacles yet (no maps).
             UnverifiedPathError: never, unless the bookkeeping is broken (then nothing is returned).
         """
-        if not snapshot.has_maps:
-            raise PlanningError("no maps received yet: refusing to plan on an empty world")
         t0 = time.perf_counter()
-        if snapshot is not self._cache_snapshot:  # the cache belongs to one snapshot object, not a number
-            self._cache_snapshot, self._cache = snapshot, {}
-        oracle = SnapshotOracle(self.checker(snapshot), self._cache, self._motions)
+        cache = self._outcomes(snapshot)
+        oracle = SnapshotOracle(self.checker(snapshot), cache, self._motions)
         t_prepared = time.perf_counter()
         result = self._planner.plan(
             start, goal, oracle, seed=seed, max_checks=self._max_checks, time_budget_s=self._time_budget_s
@@ -485,8 +434,7 @@ class QuerySession:
             path.append(sid)
         if not pieces:  # start and goal are one vertex
             return (), self._endpoint_state(vertices[0], result)[None, :]
-        periodic = (3,) if isinstance(self._domain, HelicopterDomain) else ()
-        return tuple(path), join_pieces(pieces, dim=self.state_dim, periodic=periodic)
+        return tuple(path), join_pieces(pieces, dim=self.state_dim, periodic=self._domain.periodic_dims)
 
     def _endpoint_state(self, vertex: int, result: PlannerResult) -> FloatArray:
         state = result.new_states.get(vertex)

@@ -15,12 +15,15 @@ import math
 import time
 from collections import OrderedDict
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.domains.base import EdgeChecker
+from drd_planner.domains.online import OnlineDomain
+from drd_planner.domains.pose_states import wrap_angle
 from drd_planner.exceptions import PlanningError, PriorFileError, UnverifiedPathError
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planning.domain_view import domain_from_stored_spec
@@ -29,11 +32,6 @@ from drd_planner.planning.domain_view import domain_from_stored_spec
 DEFAULT_MOTIONS_KEPT = 1024
 #: How far (state units) consecutive pieces of a dense path may be apart where they meet.
 JOIN_TOLERANCE = 1e-6
-
-
-def wrap_angle(angle: float) -> float:
-    """``angle`` (rad) wrapped to [-pi, pi)."""
-    return float((angle + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 def yaw_from_quaternion(xyzw: npt.ArrayLike) -> float:
@@ -49,20 +47,6 @@ def yaw_from_quaternion(xyzw: npt.ArrayLike) -> float:
         )
     x, y, z, w = q / np.linalg.norm(q)
     return wrap_angle(math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
-
-
-def state_from_pose(position: npt.ArrayLike, yaw: float) -> FloatArray:
-    """(4,) helicopter state (x, y, z in metres, heading in rad in [-pi, pi)) of a position and a yaw.
-
-    Raises:
-        PlanningError: the position is not three finite numbers, or the yaw is not finite.
-    """
-    xyz = np.asarray(position, dtype=np.float64).ravel()
-    if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
-        raise PlanningError(f"a position must be three finite numbers (m), got {xyz.tolist()}")
-    if not math.isfinite(float(yaw)):
-        raise PlanningError(f"a yaw must be a finite angle (rad), got {yaw}")
-    return np.array([xyz[0], xyz[1], xyz[2], wrap_angle(float(yaw))], dtype=np.float64)
 
 
 class MotionRegistry:
@@ -173,7 +157,7 @@ class SnapshotOracle:
         return self._answer(motion, lambda: bool(check_motion(states)))
 
 
-def rebuild_domain(prior: WorldPrior, name: str) -> Domain:
+def rebuild_domain(prior: WorldPrior, name: str) -> OnlineDomain[Any]:
     """The prior's domain rebuilt from its stored spec, after checking it builds the prior's graph.
 
     Raises:
@@ -188,7 +172,7 @@ def rebuild_domain(prior: WorldPrior, name: str) -> Domain:
     return domain
 
 
-def same_graph(domain: Domain, prior: WorldPrior) -> bool:
+def same_graph(domain: OnlineDomain[Any], prior: WorldPrior) -> bool:
     """Whether the domain's graph is the prior's (edges, lengths, direction and vertex states)."""
     ours, theirs = domain.graph, prior.graph
     if (

@@ -16,7 +16,8 @@ the snapshots and one of its grown spheres touches that AABB.
 
 1. Both checkers decide an edge from its sampled spheres only, each inflated by the scene margin
    (:class:`~drd_planner.domains.helicopter_checker.HelicopterChecker`,
-   :class:`~drd_planner.domains.arm.ArmEdgeChecker`).
+   :class:`~drd_planner.domains.arm_checker.ArmEdgeChecker`); the domains' sweep models
+   (:meth:`~drd_planner.domains.online.OnlineDomain.sweep_spheres`) place the same spheres.
 2. The scene (:class:`~drd_planner.geometry.scene.Scene`) decides each sphere against each part on its own
    (an FCL pair test, or "centre inside a closed mesh", both only for parts whose AABB overlaps the
    sphere's AABB) and against the terrain (FCL tiles and "centre under the surface"). Parts do not
@@ -36,8 +37,8 @@ several updates in between, the difference between the plan's snapshot and the n
 
 The growth by half a sample step (every point of the continuous motion between two samples lies within
 half the path length between them of one of the two) makes the affected set conservative for the swept
-volume of the continuous motion too, not only for the sampled check. Boxes are cached per session
-(without the margin, which is added per query) and computed only for the edges asked; the spheres are
+volume of the continuous motion too, not only for the sampled check. Boxes are cached per session in its
+:class:`SweepBoxCache` (without the margin, which is added per query) and computed only for the edges asked; the spheres are
 recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
 ones) count every plan edge as affected.
 
@@ -54,31 +55,54 @@ motion is never skipped because its geometry is unknown.
 from __future__ import annotations
 
 import time
-import weakref
 from collections import Counter
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker
-from drd_planner.domains.helicopter import HelicopterDomain
+from drd_planner.domains.base import EdgeChecker
+from drd_planner.domains.online import BOX_SLACK, OnlineDomain
 from drd_planner.exceptions import PlanningError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.shapes import Shape
 from drd_planner.planning.map_state import MapSnapshot, changed_parts, obstacle_boxes
 
+#: Arm models (``robot_description`` versions) whose boxes one session keeps; the oldest is dropped first.
+MAX_CACHED_ROBOTS = 4
+
+#: ``(lo, hi)``, each (3,) metres, without margin.
+Box = tuple[FloatArray, FloatArray]
+
+
+class SweepBoxCache:
+    """A session's sweep boxes: per arm model (None: the domain's own), edge id -> box without the margin.
+
+    Boxes of at most :data:`MAX_CACHED_ROBOTS` arm models are kept; the oldest model is dropped first.
+    """
+
+    def __init__(self) -> None:
+        self._boxes: dict[RobotModel | None, dict[int, Box]] = {}
+
+    def boxes(self, robot: RobotModel | None) -> dict[int, Box]:
+        """The (mutable) boxes of one arm model, made room for when new."""
+        if robot not in self._boxes and len(self._boxes) >= MAX_CACHED_ROBOTS:
+            self._boxes.pop(next(iter(self._boxes)))
+        return self._boxes.setdefault(robot, {})
+
+    def edges(self, robot: RobotModel | None = None) -> frozenset[int]:
+        """Edge ids whose box is kept for an arm model."""
+        return frozenset(self._boxes.get(robot, {}))
+
 
 class ReplanSession(Protocol):
     """What re-checking reads of a session.
 
     A :class:`~drd_planner.planning.session.PlanningSession` or a
-    :class:`~drd_planner.planning.query_session.QuerySession`; a session with motion edges also has
-    ``motion_states(edge) -> (K, D) states or None``.
+    :class:`~drd_planner.planning.query_session.QuerySession`.
     """
 
     @property
@@ -87,8 +111,13 @@ class ReplanSession(Protocol):
         ...
 
     @property
-    def domain(self) -> Domain:
-        """The domain (graph, robot or lattice)."""
+    def domain(self) -> OnlineDomain[Any]:
+        """The domain (graph, robot or lattice, and its sweep model)."""
+        ...
+
+    @property
+    def sweep_boxes(self) -> SweepBoxCache:
+        """The session's sweep boxes."""
         ...
 
     @property
@@ -100,6 +129,10 @@ class ReplanSession(Protocol):
         """(K, D) states along an edge, tail first."""
         ...
 
+    def motion_states(self, edge: int) -> FloatArray | None:
+        """(K, D) states of a motion edge id the session knows; None for graph edges and unknown ids."""
+        ...
+
     def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
         """The edge checker of a snapshot."""
         ...
@@ -107,26 +140,16 @@ class ReplanSession(Protocol):
 
 __all__ = [
     "BOX_SLACK",
+    "MAX_CACHED_ROBOTS",
     "RecheckResult",
     "ReplanSession",
+    "SweepBoxCache",
     "affected_edges",
     "cached_sweep_edges",
     "differing_parts",
     "edge_sweep_boxes",
     "recheck_plan",
 ]
-
-#: Metres added to every sweep box on top of the geometric bound (floating-point slack of FCL's tests).
-BOX_SLACK = 1e-6
-
-#: Per session, per arm model (None: the domain's own): edge id -> (lo, hi), each (3,) metres, without margin.
-_BOXES: weakref.WeakKeyDictionary[
-    ReplanSession, dict[RobotModel | None, dict[int, tuple[FloatArray, FloatArray]]]
-] = weakref.WeakKeyDictionary()
-#: Arm models (``robot_description`` versions) whose boxes one session keeps; the oldest is dropped first.
-MAX_CACHED_ROBOTS = 4
-#: Per arm robot model: (D, S) bound on how fast each sphere centre moves per unit of each joint (m/rad).
-_ARM_RATES: weakref.WeakKeyDictionary[RobotModel, FloatArray] = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True)
@@ -170,8 +193,7 @@ def _motion_states(session: ReplanSession, edge: int) -> FloatArray | None:
     """(K, D) states of a motion edge the session knows (None: a graph edge, or no such motion)."""
     if edge < session.domain.graph.num_edges:
         return None
-    lookup = getattr(session, "motion_states", None)
-    return None if lookup is None else lookup(edge)
+    return session.motion_states(edge)
 
 
 def _edge_ids(session: ReplanSession, edges: Iterable[int]) -> list[int]:
@@ -189,94 +211,6 @@ def _edge_ids(session: ReplanSession, edges: Iterable[int]) -> list[int]:
     return out
 
 
-def _helicopter_spheres(
-    session: ReplanSession, domain: HelicopterDomain, edges: list[int]
-) -> list[tuple[FloatArray, FloatArray]]:
-    """Per edge: the (K, 3) trajectory samples and (K,) reach = vehicle radius + half a sample step.
-
-    The samples are spaced by at most ``lattice.params.sample_spacing`` metres of arc length (the
-    longest chord between two samples is taken too, in case a trajectory was sampled otherwise), so every
-    point of the flown curve lies within half a step of a sample.
-    """
-    spacing = float(domain.lattice.params.sample_spacing)
-    out = []
-    for e in edges:
-        xyz = np.array(session.edge_states(e)[:, :3], dtype=np.float64)
-        chord = float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).max()) if xyz.shape[0] > 1 else 0.0
-        reach = domain.vehicle_radius + 0.5 * max(spacing, chord) + BOX_SLACK
-        out.append((xyz, np.full(xyz.shape[0], reach)))
-    return out
-
-
-def _arm_rates(robot: RobotModel) -> FloatArray:
-    """(D, S) upper bounds (m per rad, or m per m for prismatic joints) on each sphere centre's speed.
-
-    Joint k turns everything on moving frames k + 1 .. D about an axis through frame k + 1's origin, so a
-    centre moves at most its distance from that origin per radian; that distance is bounded, whatever the
-    other joints do, by the joint-origin offsets along the chain (plus the prismatic travel within the
-    limits) and the sphere's offset in its own frame. A prismatic joint moves a centre 1 m per m.
-    """
-    cached = _ARM_RATES.get(robot)
-    if cached is not None:
-        return cached
-    chain, spheres = robot.chain, robot.spheres
-    prismatic = np.array([t == "prismatic" for t in chain.joint_types])
-    travel = np.where(prismatic, np.maximum(np.abs(chain.lower), np.abs(chain.upper)), 0.0)
-    link = np.linalg.norm(chain.joint_origins[:, :3, 3], axis=1) + travel  # frame j -> j + 1 offset bound
-    own = np.linalg.norm(spheres.centres, axis=1)
-    rates = np.zeros((chain.dof, spheres.count))
-    for s, frame in enumerate(spheres.frame_index.tolist()):
-        for k in range(frame):  # joints 0 .. frame - 1 move frame `frame`
-            rates[k, s] = 1.0 if prismatic[k] else float(link[k + 1 : frame].sum() + own[s])
-    _ARM_RATES[robot] = rates
-    return rates
-
-
-def _arm_spheres(
-    session: ReplanSession, domain: ArmDomain, edges: list[int], robot: RobotModel | None
-) -> list[tuple[FloatArray, FloatArray]]:
-    """Per edge: (M, 3) centres and (M,) reach of every robot sphere at every checked configuration.
-
-    The configurations are those :class:`~drd_planner.domains.arm.ArmEdgeChecker` tests (both end
-    vertices and the interior samples of ``domain.samples``; the base spheres are in every one); the
-    reach of a sphere is its radius plus half the distance it can move in one sample step
-    (:func:`_arm_rates` times the edge's joint step). A motion edge's configurations are its own samples
-    (what ``check_motion`` tests), its joint step the largest per joint between two of them.
-    """
-    graph, samples = domain.graph, domain.samples
-    robot = robot if robot is not None else domain.robot
-    states = graph.vertex_states
-    if states is None:
-        raise PlanningError("the arm graph has no vertex states")
-    rates = _arm_rates(robot)
-    radii = robot.spheres.radii
-    blocks: list[FloatArray] = []
-    reaches: list[FloatArray] = []
-    for e in edges:
-        motion = _motion_states(session, e)
-        if motion is not None:
-            q = np.asarray(motion, dtype=np.float64)
-            step = np.abs(np.diff(q, axis=0)).max(axis=0) if q.shape[0] > 1 else np.zeros(q.shape[1])
-            blocks.append(q)
-            reaches.append(np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, q.shape[0]))
-            continue
-        u, v = (int(x) for x in graph.edges[e])
-        interior = samples.configurations(graph, e)
-        blocks.append(np.concatenate([states[[u, v]], interior]))
-        step = np.abs(states[v] - states[u]) / (
-            interior.shape[0] + 1
-        )  # fractions are k / n, n = interior + 1
-        reaches.append(np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, interior.shape[0] + 2))
-    centres = robot.sphere_centres(np.concatenate(blocks))  # (sum of counts, S, 3): one batched FK
-    out = []
-    start = 0
-    for block, reach in zip(blocks, reaches, strict=True):
-        count = block.shape[0]
-        out.append((centres[start : start + count].reshape(-1, 3), reach))
-        start += count
-    return out
-
-
 def _sweep_spheres(
     session: ReplanSession, edges: list[int], robot: RobotModel | None
 ) -> list[tuple[FloatArray, FloatArray]]:
@@ -288,15 +222,9 @@ def _sweep_spheres(
         PlanningError: the domain has no sweep model.
     """
     domain = session.domain
-    if isinstance(domain, HelicopterDomain):
-        return _helicopter_spheres(session, domain, edges)
-    if isinstance(domain, ArmDomain):
-        return _arm_spheres(session, domain, edges, robot)
-    raise PlanningError(f"{session.name}: no sweep model for the {domain.name} domain")
-
-
-def _supports_sweep(session: ReplanSession) -> bool:
-    return isinstance(session.domain, HelicopterDomain | ArmDomain)
+    if not domain.has_sweep_model:
+        raise PlanningError(f"{session.name}: no sweep model for the {domain.name} domain")
+    return domain.sweep_spheres(session, edges, robot)
 
 
 def edge_sweep_boxes(
@@ -328,11 +256,8 @@ def edge_sweep_boxes(
     pad = session.margin if margin is None else float(margin)
     if not (np.isfinite(pad) and pad >= 0.0):
         raise PlanningError(f"margin must be finite and >= 0 m, got {margin!r}")
-    model = robot if isinstance(session.domain, ArmDomain) and robot is not session.domain.robot else None
-    per_robot = _BOXES.setdefault(session, {})
-    if model not in per_robot and len(per_robot) >= MAX_CACHED_ROBOTS:
-        per_robot.pop(next(iter(per_robot)))
-    cache = per_robot.setdefault(model, {})
+    model = session.domain.sweep_robot(robot)
+    cache = session.sweep_boxes.boxes(model)
     todo = sorted({e for e in ids if e not in cache})
     if todo:
         for e, (centres, reach) in zip(todo, _sweep_spheres(session, todo, model), strict=True):
@@ -346,7 +271,7 @@ def edge_sweep_boxes(
 
 def cached_sweep_edges(session: ReplanSession, robot: RobotModel | None = None) -> frozenset[int]:
     """Edge ids whose sweep box the session's cache holds for an arm model (for diagnostics and tests)."""
-    return frozenset(_BOXES.get(session, {}).get(robot, {}))
+    return session.sweep_boxes.edges(robot)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -417,7 +342,7 @@ def _affected(
         return ordered, "terrain, margin or arm model changed"
     if not parts or not ordered:
         return (), ""
-    if not _supports_sweep(session):
+    if not session.domain.has_sweep_model:
         return ordered, f"no sweep model for the {session.domain.name} domain"
     part_lo, part_hi = obstacle_boxes(parts)
     lo, hi = edge_sweep_boxes(session, ordered, margin=new.margin, robot=new.robot)
@@ -425,10 +350,7 @@ def _affected(
     candidates = [i for i in range(len(ordered)) if near[i].any()]
     if not refine or not candidates:
         return tuple(ordered[i] for i in candidates), ""
-    robot = (
-        new.robot if isinstance(session.domain, ArmDomain) and new.robot is not session.domain.robot else None
-    )
-    spheres = _sweep_spheres(session, [ordered[i] for i in candidates], robot)
+    spheres = _sweep_spheres(session, [ordered[i] for i in candidates], session.domain.sweep_robot(new.robot))
     hits = [
         ordered[i]
         for i, (centres, reach) in zip(candidates, spheres, strict=True)

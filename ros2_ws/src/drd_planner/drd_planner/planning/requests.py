@@ -28,11 +28,15 @@ import numpy as np
 
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import pose_from_msg
+from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
+from drd_planner.domains.pose_states import state_from_pose, wrap_angle
+from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
+from drd_planner.planning.map_intake import pose_of
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
-from drd_planner.planning.query_support import state_from_pose, wrap_angle, yaw_from_quaternion
+from drd_planner.planning.query_support import yaw_from_quaternion
 
 __all__ = [
     "Goal",
@@ -41,6 +45,8 @@ __all__ = [
     "goal_from_pose",
     "joint_vector",
     "pick_session",
+    "read_goal",
+    "read_robot_state",
     "start_from_odometry",
 ]
 
@@ -72,7 +78,7 @@ def goal_from_pose(msg: Any, frame: str, what: str = "goal") -> Goal:
     got = str(msg.header.frame_id)
     if got != frame:
         raise MessageError(f"{what} is in frame {got[:80]!r}; the planner works in {frame!r}")
-    pose = pose_from_msg(msg.pose, what)
+    pose = pose_of(pose_from_msg(msg.pose, what))
     return Goal(
         position=np.array(pose.position, dtype=np.float64), yaw=yaw_from_quaternion(pose.quaternion_xyzw)
     )
@@ -83,7 +89,7 @@ def start_from_odometry(msg: Any, frame: str) -> FloatArray:
     got = str(msg.header.frame_id)
     if got != frame:
         raise MessageError(f"odometry is in frame {got[:80]!r}; the planner works in {frame!r}")
-    pose = pose_from_msg(msg.pose.pose, "odometry pose")
+    pose = pose_of(pose_from_msg(msg.pose.pose, "odometry pose"))
     return state_from_pose(pose.position, yaw_from_quaternion(pose.quaternion_xyzw))
 
 
@@ -102,6 +108,43 @@ def joint_vector(msg: Any, joint_names: Sequence[str], what: str = "joint state"
     if not np.all(np.isfinite(q)):
         raise MessageError(f"{what}: joint positions must be finite")
     return q
+
+
+def _arm(sessions: Sequence[QuerySession]) -> QuerySession | None:
+    return next((s for s in sessions if s.is_arm), None)
+
+
+def read_goal(topic: str, msg: Any, sessions: Sequence[QuerySession], frame: str) -> Goal:
+    """The :class:`Goal` of a ``goal_pose`` (PoseStamped) or ``goal_joints`` (JointState) message.
+
+    The one goal parser of the node, the bag tools and ``drd plan --bag``; ``topic`` may carry a namespace.
+
+    Raises:
+        MessageError: a pose in another frame or not finite, joints the arm prior does not plan for.
+        PlanningError: ``goal_joints`` without an arm prior.
+    """
+    if topic_base(topic) == "goal_joints":
+        arm = _arm(sessions)
+        if arm is None:
+            raise PlanningError("no arm prior is loaded")
+        return Goal(joints=joint_vector(msg, arm.joint_names, "goal_joints"))
+    return goal_from_pose(msg, frame, "goal_pose")
+
+
+def read_robot_state(
+    topic: str, msg: Any, sessions: Sequence[QuerySession], frame: str
+) -> tuple[bool, FloatArray] | None:
+    """(is_arm, state) of an ``odom`` (helicopter: x, y, z m, yaw rad) or ``joint_states`` (arm, rad) message.
+
+    None: a ``joint_states`` message while no arm prior is loaded (a helicopter stack's joints are not ours).
+
+    Raises:
+        MessageError: a pose in another frame or not finite; joints missing, repeated or not finite.
+    """
+    if topic_base(topic) == "joint_states":
+        arm = _arm(sessions)
+        return None if arm is None else (True, joint_vector(msg, arm.joint_names, "joint_states"))
+    return False, start_from_odometry(msg, frame)
 
 
 def ambiguity(sessions: Sequence[QuerySession]) -> str | None:

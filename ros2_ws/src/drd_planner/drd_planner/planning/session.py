@@ -22,11 +22,10 @@ from drd_planner.arrays import FloatArray
 from drd_planner.core.episode import EpisodeStatus, run_episode
 from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.data.tree_file import TreeBundle
-from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.domains.base import EdgeChecker
 from drd_planner.exceptions import PlanningError, TreeFileError, UnverifiedPathError
 from drd_planner.planning.domain_view import (
-    SnapshotCheckers,
+    DomainSession,
     domain_from_stored_spec,
     state_positions,
     straight_edge_states,
@@ -120,7 +119,7 @@ class _CachingOracle:
         return free
 
 
-class PlanningSession:
+class PlanningSession(DomainSession):
     """Plans with one tree bundle on map snapshots.
 
     Args:
@@ -160,16 +159,12 @@ class PlanningSession:
             or (domain.start, domain.goal) != (bundle.problem.start, bundle.problem.goal)
         ):
             raise TreeFileError(f"{name}: the stored graph does not match the graph of its domain spec")
+        super().__init__(domain, name)
         self._bundle = bundle
-        self._domain = domain
-        self._name = name
         self._max_checks = max_checks
         self._goal_tolerance = goal_tolerance
         self._joint_tolerance = joint_tolerance
         self._trajectories = domain.edge_trajectories()
-        self._cache_snapshot: MapSnapshot | None = None
-        self._cache: dict[int, bool] = {}
-        self._checkers = SnapshotCheckers(domain)
         root = bundle.tree.bias(0, alpha=bundle.alpha)
         self._context = PolicyContext(
             bundle.problem.library,
@@ -183,16 +178,6 @@ class PlanningSession:
         )
 
     @property
-    def name(self) -> str:
-        """The label given at construction."""
-        return self._name
-
-    @property
-    def domain(self) -> Domain:
-        """The rebuilt domain."""
-        return self._domain
-
-    @property
     def bundle(self) -> TreeBundle:
         """The tree bundle."""
         return self._bundle
@@ -200,11 +185,6 @@ class PlanningSession:
     def library_edges(self) -> npt.NDArray[np.int64]:
         """Edge ids of the tree's library (sorted, each once)."""
         return np.asarray(self._bundle.problem.library.library_edges, dtype=np.int64)
-
-    @property
-    def margin(self) -> float:
-        """Collision margin of the domain (metres); snapshots for this session use it."""
-        return float(getattr(self._domain, "margin", 0.0))
 
     def vertex_state(self, vertex: int) -> FloatArray:
         """(d,) state of a graph vertex (x, y, z, heading for the helicopter; joints for the arm)."""
@@ -217,16 +197,6 @@ class PlanningSession:
     def goal_state(self) -> FloatArray:
         """(d,) the tree's goal state."""
         return self.vertex_state(self._domain.goal)
-
-    @property
-    def is_arm(self) -> bool:
-        """Whether the tree plans in an arm's joint space (states are joint angles)."""
-        return isinstance(self._domain, ArmDomain)
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """The arm's chain joint names, root to tip (empty for other domains)."""
-        return self._domain.robot.chain.joint_names if isinstance(self._domain, ArmDomain) else ()
 
     def positions(self, states: npt.ArrayLike, snapshot: MapSnapshot | None = None) -> FloatArray:
         """(K, 3) positions (m, planning frame) of (K, d) states: x, y, z, or the arm's end effector.
@@ -261,6 +231,10 @@ class PlanningSession:
         u, v = self._domain.graph.edges[edge]
         return straight_edge_states(self._domain, self.vertex_state(int(u)), self.vertex_state(int(v)))
 
+    def motion_states(self, edge: int) -> FloatArray | None:
+        """None: a tree session plans on its graph's edges only (no motions off it)."""
+        return None
+
     def path_vertices(self, edges: npt.ArrayLike) -> list[int]:
         """Vertex ids along a path of edges from the start (undirected edges may be walked backwards)."""
         graph_edges = self._domain.graph.edges
@@ -282,18 +256,6 @@ class PlanningSession:
             return np.zeros((0, 3))
         return np.concatenate([rows[0]] + [r[1:] for r in rows[1:]])
 
-    def checker(self, snapshot: MapSnapshot) -> EdgeChecker:
-        """The domain's edge checker on ``snapshot`` (kept for the latest snapshot, see :meth:`prepare`)."""
-        return self._checkers.checker(snapshot)
-
-    def prepare(self, snapshot: MapSnapshot) -> float:
-        """Build ``snapshot``'s FCL scene and this tree's checker on it now; returns the seconds taken.
-
-        The node calls this when a map arrives, so a request on that map starts checking at once.
-        A snapshot with no maps yet is not prepared (0.0).
-        """
-        return self._checkers.prepare(snapshot)
-
     def plan(self, snapshot: MapSnapshot, *, seed: int = 0, checker: EdgeChecker | None = None) -> PlanResult:
         """Serve one request on ``snapshot`` (see the module docstring).
 
@@ -306,12 +268,9 @@ class PlanningSession:
             PlanningError: the snapshot has no terrain and no obstacles yet (no maps).
             UnverifiedPathError: never, unless the bookkeeping is broken (then nothing is returned).
         """
-        if not snapshot.has_maps:
-            raise PlanningError("no maps received yet: refusing to plan on an empty world")
         t0 = time.perf_counter()
-        if snapshot is not self._cache_snapshot:  # the cache belongs to one snapshot object, not a number
-            self._cache_snapshot, self._cache = snapshot, {}
-        oracle = _CachingOracle(checker or self.checker(snapshot), self._cache)
+        cache = self._outcomes(snapshot)
+        oracle = _CachingOracle(checker or self.checker(snapshot), cache)
         t_episode = time.perf_counter()
         context = dataclasses.replace(self._context, seed=seed)
         policy = POLICIES["direct_bisect"](context)

@@ -27,9 +27,10 @@ from rclpy.parameter import Parameter
 from drd_msgs_py.bags import bag_frame, open_bag, read_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_planner.exceptions import DrdError
+from drd_planner.planning.service import PlanRecord
 from drd_planner.planning.shipped import resolve_bag_path
-from drd_planner.ros.node import PlannerNode, PlanRecord
-from drd_planner.ros.replay import replay_bag
+from drd_planner.ros.node import PlannerNode
+from drd_planner.ros.replay import ReplayOptions, replay_bag
 
 __all__ = ["main", "print_record"]
 
@@ -121,9 +122,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         record = args.out / "outputs.mcap"
         print(f"replaying {bag_path} into the planner node (frame {frame!r}, tree {node.sessions[0].name})")
-        summary = replay_bag(
-            bag, context=context, nodes=[node], record=record, overwrite=True, rate=args.rate
-        )
+        options = ReplayOptions(record=record, overwrite=True, rate=args.rate)
+        summary = replay_bag(bag, context=context, nodes=[node], options=options)
         print(
             f"published {len(summary.published)} bag messages; recorded "
             + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))

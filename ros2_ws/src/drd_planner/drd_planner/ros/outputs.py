@@ -162,7 +162,7 @@ class PlannerOutputs:
     ) -> Any:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); returns the Path."""
         if session.is_arm:
-            seconds = float(getattr(session.domain, "resolution", 0.05)) / TRAJECTORY_JOINT_SPEED
+            seconds = float(session.domain.resolution) / TRAJECTORY_JOINT_SPEED
             self._trajectory.publish(
                 joint_trajectory_message(
                     session.joint_names,

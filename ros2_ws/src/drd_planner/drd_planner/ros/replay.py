@@ -2,7 +2,8 @@
 
 Library use (in-process, e.g. a test or the main job running a :class:`PlannerNode` in the same executor)::
 
-    summary = replay_bag("bags/heli_wires.mcap", context=ctx, nodes=[planner], record=tmp / "out.mcap")
+    options = ReplayOptions(record=tmp / "out.mcap")
+    summary = replay_bag("bags/heli_wires.mcap", context=ctx, nodes=[planner], options=options)
 
 :func:`replay_bag` publishes every message of the bag as the raw CDR bytes stored in it (rclpy's
 ``Publisher.publish(bytes)``; nothing is re-encoded) on a publisher whose QoS is the one the bag offers
@@ -57,7 +58,16 @@ from drd_planner.argtypes import bounded_float
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.shipped import resolve_bag_path
 
-__all__ = ["OUTPUT_TOPICS", "Published", "ReplayError", "ReplaySummary", "main", "rclpy_qos", "replay_bag"]
+__all__ = [
+    "OUTPUT_TOPICS",
+    "Published",
+    "ReplayError",
+    "ReplayOptions",
+    "ReplaySummary",
+    "main",
+    "rclpy_qos",
+    "replay_bag",
+]
 
 #: What the planner publishes (names relative to its namespace, as in DESIGN.md section 6) -> type.
 OUTPUT_TOPICS: dict[str, str] = {
@@ -206,27 +216,11 @@ def _resolve(topic: str, namespace: str | None) -> str:
 # Replay
 
 
-def replay_bag(
-    bag: str | Path | BagContents,
-    *,
-    context: Any = None,
-    nodes: Sequence[Any] = (),
-    record: str | Path | None = None,
-    overwrite: bool = False,
-    rate: float = 1.0,
-    settle: float = 2.0,
-    wait: float = 5.0,
-    namespace: str | None = None,
-    log: Callable[[str], None] | None = None,
-    require_listener: bool = False,
-) -> ReplaySummary:
-    """Publish a bag with its timing while spinning ``nodes``, record the planner's outputs (module docstring).
+@dataclass(frozen=True)
+class ReplayOptions:
+    """How :func:`replay_bag` plays a bag.
 
-    Args:
-        bag: a bag path, or one already read with :func:`~drd_msgs_py.bags.open_bag`.
-        context: the rclpy context (initialized; None: the default one).
-        nodes: nodes to spin in the same executor (e.g. a configured and active PlannerNode); they
-            must not be spun elsewhere meanwhile. They are removed from the executor afterwards, not destroyed.
+    Attributes:
         record: the MCAP file for the outputs (None: do not record).
         overwrite: replace an existing ``record`` file.
         rate: playback speed factor (> 0; 2 plays twice as fast).
@@ -239,127 +233,202 @@ def replay_bag(
             bag topic has a subscriber: no planner is running there.
 
     Raises:
-        ReplayError: ``require_listener`` and nobody subscribes to any of the bag's topics.
-        BagError: an unreadable bag, or ``record`` exists and ``overwrite`` is False.
         ValueError: ``rate``, ``settle`` or ``wait`` out of range.
     """
-    if not (math.isfinite(rate) and rate > 0):
-        raise ValueError(f"rate must be a finite number > 0, got {rate}")
-    if not (math.isfinite(settle) and settle >= 0 and math.isfinite(wait) and wait >= 0):
-        raise ValueError(f"settle and wait must be finite and >= 0 s, got {settle}, {wait}")
-    contents = bag if isinstance(bag, BagContents) else open_bag(bag)
-    out = Path(record) if record is not None else None
-    if out is not None and out.exists() and not overwrite:
-        raise BagError(f"{out} exists already (not overwriting)")
-    say = log or (lambda _line: None)
-    classes = RclpyMessages()
-    started = time.monotonic()
-    node = rclpy.create_node("drd_replay", context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    for extra in nodes:
-        executor.add_node(extra)
-    start_ns = contents.messages[0].time_ns if contents.messages else 0
-    timeline = _Timeline(start_ns, rate)
-    recorded: list[RawMessage] = []
 
-    try:
-        publishers = {}
-        for name, info in contents.topics.items():
-            resolved = _resolve(name, namespace)
+    record: str | Path | None = None
+    overwrite: bool = False
+    rate: float = 1.0
+    settle: float = 2.0
+    wait: float = 5.0
+    namespace: str | None = None
+    log: Callable[[str], None] | None = None
+    require_listener: bool = False
+
+    def __post_init__(self) -> None:
+        rate, settle, wait = self.rate, self.settle, self.wait
+        if not (math.isfinite(rate) and rate > 0):
+            raise ValueError(f"rate must be a finite number > 0, got {rate}")
+        if not (math.isfinite(settle) and settle >= 0 and math.isfinite(wait) and wait >= 0):
+            raise ValueError(f"settle and wait must be finite and >= 0 s, got {settle}, {wait}")
+
+    def say(self, line: str) -> None:
+        """Pass one progress line to :attr:`log`."""
+        if self.log is not None:
+            self.log(line)
+
+
+class _Replayer:
+    """The replay node, its executor, publishers and recording subscriptions (one replay)."""
+
+    def __init__(
+        self, contents: BagContents, context: Any, nodes: Sequence[Any], options: ReplayOptions
+    ) -> None:
+        self.contents, self.options, self.nodes = contents, options, nodes
+        self.node = rclpy.create_node("drd_replay", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        for extra in nodes:
+            self.executor.add_node(extra)
+        self.start_ns = contents.messages[0].time_ns if contents.messages else 0
+        self.timeline = _Timeline(self.start_ns, options.rate)
+        self.recorded: list[RawMessage] = []
+        self.publishers: dict[str, Any] = {}
+        self.subscriptions: dict[str, Any] = {}
+
+    def close(self) -> None:
+        """Take the given nodes out of the executor (they are not destroyed) and destroy the replay node."""
+        for extra in self.nodes:
+            self.executor.remove_node(extra)
+        self.executor.remove_node(self.node)
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin the executor for ``seconds`` of wall time."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=_SPIN_S)
+
+    def open_publishers(self, classes: RclpyMessages) -> None:
+        """One publisher per bag topic, with the QoS the bag offers for it."""
+        for name, info in self.contents.topics.items():
             try:
                 cls = classes.message_class(info.msgtype)
             except MessageError as exc:
-                raise BagError(f"{contents.path}: topic {name}: {exc}") from exc
-            publishers[name] = node.create_publisher(
-                cls, resolved, rclpy_qos(next(iter(info.qos), None), name)
+                raise BagError(f"{self.contents.path}: topic {name}: {exc}") from exc
+            self.publishers[name] = self.node.create_publisher(
+                cls, _resolve(name, self.options.namespace), rclpy_qos(next(iter(info.qos), None), name)
             )
-        subscriptions = {}
+
+    def open_recorders(self, classes: RclpyMessages) -> None:
+        """Raw subscriptions to the planner's outputs, stamped on the bag's timeline."""
+        for output, msgtype in OUTPUT_TOPICS.items():
+            resolved = output if output.startswith("/") else _resolve(output, self.options.namespace or "/")
+
+            def keep(data: bytes, topic: str = resolved, kind: str = msgtype) -> None:
+                self.recorded.append(RawMessage(topic, kind, self.timeline.now_ns(), bytes(data)))
+
+            profile = QoSProfile(depth=RECORD_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
+            self.subscriptions[resolved] = self.node.create_subscription(
+                classes.message_class(msgtype), resolved, keep, profile, raw=True
+            )
+
+    def wait_for_peers(self) -> list[str]:
+        """Spin until every bag topic has a subscriber and every output a publisher, or ``wait`` s passed.
+
+        Returns the bag topics still without a subscriber.
+
+        Raises:
+            ReplayError: ``require_listener`` and no bag topic has a subscriber.
+        """
+        options = self.options
+        deadline = time.monotonic() + options.wait
+        while True:
+            unmatched = [p.topic_name for p in self.publishers.values() if p.get_subscription_count() == 0]
+            silent = [t for t, s in self.subscriptions.items() if s.get_publisher_count() == 0]
+            if (not unmatched and not silent) or time.monotonic() >= deadline:
+                break
+            self.executor.spin_once(timeout_sec=_SPIN_S)
+        if options.require_listener and self.publishers and len(unmatched) == len(self.publishers):
+            raise ReplayError(
+                f"no node subscribes to any of the bag's topics ({', '.join(sorted(unmatched))}) after "
+                f"{options.wait:g} s: start the planner first (planner_node --ros-args -p autostart:=true ...) "
+                "or check --namespace and ROS_DOMAIN_ID"
+            )
+        for topic in unmatched:
+            options.say(f"  no subscriber on {topic} after {options.wait:g} s; publishing anyway")
+        # A publisher counts a subscriber before that subscriber has matched the publisher in turn;
+        # a volatile message sent in between is dropped (seen with the odometry at time 0).
+        self.spin_for(_MATCH_GRACE_S)
+        return unmatched
+
+    def play(self) -> list[Published]:
+        """Publish every message at its bag time divided by ``rate``, spinning in between."""
+        published: list[Published] = []
+        t0 = self.timeline.start()
+        for raw in self.contents.messages:
+            due = t0 + (raw.time_ns - self.start_ns) / 1e9 / self.options.rate
+            while (left := due - time.monotonic()) > 0:
+                self.executor.spin_once(timeout_sec=min(left, 0.05))
+            sent = self.timeline.now_ns()
+            publisher = self.publishers[raw.topic]
+            publisher.publish(raw.data)
+            late = max(0.0, time.monotonic() - due)
+            published.append(Published(publisher.topic_name, raw.msgtype, raw.time_ns, sent, late))
+            self.options.say(
+                f"  +{(raw.time_ns - self.start_ns) / 1e9:6.2f} s  {publisher.topic_name} ({raw.msgtype})"
+            )
+        return published
+
+    def write(self, out: Path) -> Path:
+        """Write the recorded outputs with the QoS their publishers offer."""
+        qos_out = {topic: _offered_qos(self.node, topic) for topic in self.subscriptions}
+        return write_raw_bag(out, self.recorded, qos=qos_out, overwrite=self.options.overwrite)
+
+
+def replay_bag(
+    bag: str | Path | BagContents,
+    *,
+    context: Any = None,
+    nodes: Sequence[Any] = (),
+    options: ReplayOptions | None = None,
+) -> ReplaySummary:
+    """Publish a bag with its timing while spinning ``nodes``, record the planner's outputs (module docstring).
+
+    Args:
+        bag: a bag path, or one already read with :func:`~drd_msgs_py.bags.open_bag`.
+        context: the rclpy context (initialized; None: the default one).
+        nodes: nodes to spin in the same executor (e.g. a configured and active PlannerNode); they
+            must not be spun elsewhere meanwhile. They are removed from the executor afterwards, not destroyed.
+        options: how to play and record (:class:`ReplayOptions`; None: its defaults).
+
+    Raises:
+        ReplayError: ``require_listener`` and nobody subscribes to any of the bag's topics.
+        BagError: an unreadable bag, or ``record`` exists and ``overwrite`` is False.
+    """
+    options = options or ReplayOptions()
+    contents = bag if isinstance(bag, BagContents) else open_bag(bag)
+    out = Path(options.record) if options.record is not None else None
+    if out is not None and out.exists() and not options.overwrite:
+        raise BagError(f"{out} exists already (not overwriting)")
+    classes = RclpyMessages()
+    started = time.monotonic()
+    replayer = _Replayer(contents, context, nodes, options)
+    try:
+        replayer.open_publishers(classes)
         if out is not None:
-            for output, msgtype in OUTPUT_TOPICS.items():
-                resolved = output if output.startswith("/") else _resolve(output, namespace or "/")
-
-                def keep(data: bytes, topic: str = resolved, kind: str = msgtype) -> None:
-                    recorded.append(RawMessage(topic, kind, timeline.now_ns(), bytes(data)))
-
-                profile = QoSProfile(depth=RECORD_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
-                subscriptions[resolved] = node.create_subscription(
-                    classes.message_class(msgtype), resolved, keep, profile, raw=True
-                )
-        say(
+            replayer.open_recorders(classes)
+        options.say(
             f"replaying {contents.path}: {len(contents.messages)} messages on {len(contents.topics)} topics "
-            f"over {contents.duration_ns / 1e9:.2f} s at rate {rate:g}"
+            f"over {contents.duration_ns / 1e9:.2f} s at rate {options.rate:g}"
         )
         published: list[Published] = []
-        interrupted = False
         unmatched: list[str] = []
+        interrupted = False
         try:
-            deadline = time.monotonic() + wait
-            while True:
-                unmatched = [
-                    publishers[n].topic_name
-                    for n in publishers
-                    if publishers[n].get_subscription_count() == 0
-                ]
-                silent = [t for t, s in subscriptions.items() if s.get_publisher_count() == 0]
-                if (not unmatched and not silent) or time.monotonic() >= deadline:
-                    break
-                executor.spin_once(timeout_sec=_SPIN_S)
-            if require_listener and publishers and len(unmatched) == len(publishers):
-                raise ReplayError(
-                    f"no node subscribes to any of the bag's topics ({', '.join(sorted(unmatched))}) after "
-                    f"{wait:g} s: start the planner first (planner_node --ros-args -p autostart:=true ...) "
-                    "or check --namespace and ROS_DOMAIN_ID"
-                )
-            for topic in unmatched:
-                say(f"  no subscriber on {topic} after {wait:g} s; publishing anyway")
-            # A publisher counts a subscriber before that subscriber has matched the publisher in turn;
-            # a volatile message sent in between is dropped (seen with the odometry at time 0).
-            grace = time.monotonic() + _MATCH_GRACE_S
-            while time.monotonic() < grace:
-                executor.spin_once(timeout_sec=_SPIN_S)
-            t0 = timeline.start()
-            for raw in contents.messages:
-                due = t0 + (raw.time_ns - start_ns) / 1e9 / rate
-                while (left := due - time.monotonic()) > 0:
-                    executor.spin_once(timeout_sec=min(left, 0.05))
-                sent = timeline.now_ns()
-                publishers[raw.topic].publish(raw.data)
-                late = max(0.0, time.monotonic() - due)
-                topic = publishers[raw.topic].topic_name
-                published.append(Published(topic, raw.msgtype, raw.time_ns, sent, late))
-                say(
-                    f"  +{(raw.time_ns - start_ns) / 1e9:6.2f} s  {publishers[raw.topic].topic_name} ({raw.msgtype})"
-                )
-            end = time.monotonic() + settle
-            while time.monotonic() < end:
-                executor.spin_once(timeout_sec=_SPIN_S)
+            unmatched = replayer.wait_for_peers()
+            published = replayer.play()
+            replayer.spin_for(options.settle)
         except KeyboardInterrupt:
             interrupted = True
-            say("  interrupted: writing what was recorded so far")
-        written = None
-        if out is not None:
-            qos_out = {topic: _offered_qos(node, topic) for topic in subscriptions}
-            written = write_raw_bag(out, recorded, qos=qos_out, overwrite=overwrite)
+            options.say("  interrupted: writing what was recorded so far")
+        written = replayer.write(out) if out is not None else None
         summary = ReplaySummary(
             contents.path,
             tuple(published),
-            tuple(recorded),
+            tuple(replayer.recorded),
             written,
             tuple(unmatched),
             time.monotonic() - started,
             interrupted,
         )
     finally:
-        for extra in nodes:
-            executor.remove_node(extra)
-        executor.remove_node(node)
-        executor.shutdown()
-        node.destroy_node()
+        replayer.close()
     counts = ", ".join(f"{t} {n}" for t, n in sorted(summary.recorded_per_topic.items())) or "nothing"
-    say(f"published {len(summary.published)} messages; recorded {counts}")
+    options.say(f"published {len(summary.published)} messages; recorded {counts}")
     if written is not None:
-        say(f"wrote {written}")
+        options.say(f"wrote {written}")
     return summary
 
 
@@ -406,8 +475,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     rclpy.init()
     try:
-        summary = replay_bag(
-            contents,
+        options = ReplayOptions(
             record=args.record,
             overwrite=args.overwrite,
             rate=args.rate,
@@ -417,6 +485,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             log=lambda line: print(line, flush=True),
             require_listener=True,
         )
+        summary = replay_bag(contents, options=options)
     except (MessageError, DrdError) as exc:
         print(f"drd_replay: error: {exc}", file=sys.stderr)
         return 2

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from conftest import SHARED_DATA
 
-from drd_planner.data.moveit_scene import parse_planning_scene, read_planning_scene
 from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.moveit_scene import parse_planning_scene, read_planning_scene
 from drd_planner.geometry.shapes import Box, Cylinder, Sphere
 
 MBM = SHARED_DATA / "mbm"

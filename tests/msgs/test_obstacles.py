@@ -1,4 +1,4 @@
-"""MarkerArray <-> obstacles: round trips, exact geometry, and every refusal."""
+"""MarkerArray <-> marker shapes (plain data): round trips, exact values, and every refusal."""
 
 from __future__ import annotations
 
@@ -10,29 +10,28 @@ import pytest
 
 import drd_msgs_py.obstacles as obstacles_module
 from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.limits import MessageLimits
 from drd_msgs_py.obstacles import CUBE, LINE_STRIP, markers_from_obstacles, obstacle_update
-from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.scene import Scene
-from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
-from drd_planner.geometry.wires import Wire
-from drd_planner.planning.map_limits import MapLimits
+from drd_msgs_py.shapes import BoxData, CylinderData, LineStripData, MeshData, PoseData, SphereData
 
 FRAME = "map"
+TET = MeshData(
+    np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64),
+    np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]], dtype=np.int64),
+)
+#: A sagging wire's polyline (5 knots, 4 m of sag in the middle) in the message frame.
+WIRE = np.array([[0, 0, 30], [25, 0, 27], [50, 0, 26], [75, 0, 27], [100, 0, 30]], dtype=np.float64)
 
 
 def _world(msgs: Any) -> Any:
     yaw = math.radians(30)
-    tet = TriangleMesh(
-        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
-    )
-    wire = Wire([0, 0, 30], [100, 0, 30], sag=4.0, diameter=0.05)
     return markers_from_obstacles(
         [
-            ("box/1", Box((2, 3, 4)), Pose((1, 2, 3), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2)))),
-            ("ball/2", Sphere(1.5), Pose((5, 5, 5))),
-            ("nofly/3", Cylinder(50.0, 200.0), Pose((300, 0, 100))),
-            ("mesh/4", tet, Pose((-5, 0, 0))),
-            ("wire/5", wire.points(5), 0.05),
+            ("box/1", BoxData((2, 3, 4)), PoseData((1, 2, 3), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2)))),
+            ("ball/2", SphereData(1.5), PoseData((5, 5, 5))),
+            ("nofly/3", CylinderData(50.0, 200.0), PoseData((300, 0, 100))),
+            ("mesh/4", TET, PoseData((-5, 0, 0))),
+            ("wire/5", LineStripData(WIRE, 0.05), PoseData()),
         ],
         frame_id=FRAME,
         stamp=(12, 5),
@@ -45,29 +44,21 @@ def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
     assert update.operations[0] == ("clear", "")
     assert [k for op, k in update.operations[1:]] == ["box/1", "ball/2", "nofly/3", "mesh/4", "wire/5"]
     obs = update.apply({})
-    ((box, pose),) = obs["box/1"].parts
-    assert box == Box((2, 3, 4))
-    np.testing.assert_allclose(pose.position, (1, 2, 3))
-    assert obs["ball/2"].parts[0][0] == Sphere(1.5)
-    assert obs["nofly/3"].parts[0][0] == Cylinder(50.0, 200.0)
-    mesh = obs["mesh/4"].parts[0][0]
-    assert isinstance(mesh, TriangleMesh) and mesh.faces.shape == (4, 3)
-    chain = obs["wire/5"].parts
-    assert len(chain) == 4 and all(
-        isinstance(s, Capsule) and s.radius == pytest.approx(0.025) for s, _ in chain
+    box = obs["box/1"]
+    assert box.shape == BoxData((2.0, 3.0, 4.0)) and box.kind == "CUBE" and box.label == "marker 1 (box/1)"
+    np.testing.assert_allclose(box.pose.position, (1, 2, 3))
+    np.testing.assert_allclose(
+        box.pose.quaternion_xyzw, (0, 0, math.sin(math.radians(15)), math.cos(math.radians(15)))
     )
-
-
-def test_wire_capsules_touch_what_the_wire_touches(msgs: Any) -> None:
-    update = obstacle_update(_world(msgs), frame_id=FRAME)
-    scene = Scene()
-    for key, obstacle in update.apply({}).items():
-        for k, (shape, pose) in enumerate(obstacle.parts):
-            scene.add(shape, pose, name=f"{key}#{k}")
-    # The polyline's third knot is at x = 50, z = 30 - 4 (full sag): a small sphere there hits.
-    assert scene.spheres_collide([[50.0, 0.0, 26.0]], 0.1)
-    assert not scene.spheres_collide([[50.0, 0.0, 28.0]], 0.1)  # above the sagging middle
-    assert scene.spheres_collide([[300.0, 0.0, 100.0]], 1.0)  # inside the no-fly cylinder (a solid)
+    assert obs["ball/2"].shape == SphereData(1.5)
+    assert obs["nofly/3"].shape == CylinderData(50.0, 200.0)
+    mesh = obs["mesh/4"].shape
+    assert isinstance(mesh, MeshData) and mesh.faces.shape == (4, 3) and obs["mesh/4"].points == 12
+    np.testing.assert_array_equal(mesh.vertices, TET.vertices[TET.faces.reshape(-1)])
+    wire = obs["wire/5"].shape
+    assert isinstance(wire, LineStripData) and wire.diameter == pytest.approx(0.05)
+    np.testing.assert_allclose(wire.points, WIRE, atol=1e-12)
+    assert obs["wire/5"].pose == PoseData() and obs["wire/5"].points == 5
 
 
 def test_delete_and_delete_all_apply_in_order(msgs: Any) -> None:
@@ -178,7 +169,7 @@ def test_a_lone_deleteall_in_a_foreign_frame_is_refused(msgs: Any) -> None:
 
 def _cubes(msgs: Any, count: int, *, ns: str = "box") -> Any:
     return markers_from_obstacles(
-        [(f"{ns}/{k}", Box((1, 1, 1)), Pose((3.0 * k, 0, 0))) for k in range(count)],
+        [(f"{ns}/{k}", BoxData((1, 1, 1)), PoseData((3.0 * k, 0, 0))) for k in range(count)],
         frame_id=FRAME,
         msgs=msgs,
         delete_all_first=False,
@@ -192,7 +183,7 @@ def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
         raise AssertionError("a shape was built before the limits were checked")
 
     monkeypatch.setattr(obstacles_module, "_obstacle", no_shapes)
-    small = MapLimits(max_markers=4, max_line_points=4, max_mesh_triangles=3)
+    small = MessageLimits(max_markers=4, max_line_points=4, max_mesh_triangles=3)
     with pytest.raises(MessageError) as info:
         obstacle_update(_cubes(msgs, 5), frame_id=FRAME, limits=small)
     assert (
@@ -200,15 +191,21 @@ def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
         == "the MarkerArray has 5 markers, over the limit max_markers = 4 (parameter max_markers)"
     )
     wire = markers_from_obstacles(
-        [("wire/0", np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]], float), 0.1)],
+        [
+            (
+                "wire/0",
+                LineStripData(np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]], float), 0.1),
+                PoseData(),
+            )
+        ],
         frame_id=FRAME,
         msgs=msgs,
     )
     with pytest.raises(MessageError, match=r"5 LINE_STRIP points, over the limit max_line_points = 4 \("):
         obstacle_update(wire, frame_id=FRAME, limits=small)
     rng = np.random.default_rng(1)
-    mesh = TriangleMesh(rng.random((12, 3)), np.arange(12).reshape(4, 3))
-    meshes = markers_from_obstacles([("mesh/0", mesh, Pose())], frame_id=FRAME, msgs=msgs)
+    mesh = MeshData(rng.random((12, 3)), np.arange(12).reshape(4, 3))
+    meshes = markers_from_obstacles([("mesh/0", mesh, PoseData())], frame_id=FRAME, msgs=msgs)
     with pytest.raises(
         MessageError, match="4 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 3"
     ):
@@ -216,7 +213,7 @@ def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
 
 
 def test_a_map_growing_over_a_limit_is_refused_and_kept(msgs: Any) -> None:
-    limits = MapLimits(max_markers=6, max_mesh_triangles=5)
+    limits = MessageLimits(max_markers=6, max_mesh_triangles=5)
     current = obstacle_update(_cubes(msgs, 4), frame_id=FRAME, limits=limits).apply({})
     more = obstacle_update(_cubes(msgs, 3, ns="more"), frame_id=FRAME, limits=limits)
     with pytest.raises(
@@ -225,11 +222,12 @@ def test_a_map_growing_over_a_limit_is_refused_and_kept(msgs: Any) -> None:
         more.apply(current)
     assert len(current) == 4
     assert len(obstacle_update(_cubes(msgs, 2, ns="more"), frame_id=FRAME, limits=limits).apply(current)) == 6
-    tet = TriangleMesh(
-        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+    one = markers_from_obstacles(
+        [("mesh/0", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False
     )
-    one = markers_from_obstacles([("mesh/0", tet, Pose())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
-    two = markers_from_obstacles([("mesh/1", tet, Pose())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
+    two = markers_from_obstacles(
+        [("mesh/1", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False
+    )
     with_mesh = obstacle_update(one, frame_id=FRAME, limits=limits).apply({})
     assert with_mesh["mesh/0"].points == 12
     with pytest.raises(

@@ -1,4 +1,4 @@
-"""Sampled worlds as the messages a map server would send (for bags, demos and tests).
+"""Sampled worlds and collision shapes as the messages a map server would send (for bags, demos and tests).
 
 Helicopter: wires become LINE_STRIPs through the knots of the capsule chain the planner's own scene uses
 (``wire_segments`` capsules per span) with ``scale.x`` the chain's diameter (the wire's plus twice the
@@ -11,17 +11,50 @@ SPHERE marker in the robot's root frame, so the node's scene from them equals ``
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from drd_msgs_py.factory import MessageFactory
-from drd_msgs_py.obstacles import markers_from_obstacles
+from drd_msgs_py.obstacles import MarkerStyle, markers_from_obstacles
 from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_planner.arrays import FloatArray
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.helicopter_worlds import HelicopterWorld
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Shape
+from drd_planner.planning.map_intake import obstacles_data
 
-__all__ = ["arm_world_messages", "helicopter_world_messages"]
+if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
+__all__ = ["arm_world_messages", "helicopter_world_messages", "obstacle_markers"]
+
+
+def obstacle_markers(
+    obstacles: Sequence[tuple[str, Shape | FloatArray, Pose | float]],
+    *,
+    frame_id: str,
+    msgs: MessageFactory,
+    **style: Unpack[MarkerStyle],
+) -> Any:
+    """A MarkerArray of collision shapes (:func:`drd_msgs_py.obstacles.markers_from_obstacles` of their data).
+
+    Args:
+        obstacles: ``(key, shape, pose)`` for Box, Sphere, Cylinder and TriangleMesh, or
+            ``(key, points, diameter)`` with (K >= 2, 3) world points for a wire (LINE_STRIP).
+            Keys look like ``"ns/id"``.
+        frame_id: the frame of every marker.
+        msgs: the message factory (rclpy or rosbags classes).
+        style: ``stamp``, ``delete_all_first`` and ``color`` (:class:`~drd_msgs_py.obstacles.MarkerStyle`),
+            passed on; those left out take the defaults of ``markers_from_obstacles``.
+
+    Raises:
+        GeometryError: a shape with no marker form (a bare Capsule: send it as a two-point LINE_STRIP).
+        MessageError: a key that is not ``ns/id``.
+    """
+    return markers_from_obstacles(obstacles_data(obstacles), frame_id=frame_id, msgs=msgs, **style)
 
 
 def helicopter_world_messages(
@@ -48,7 +81,7 @@ def helicopter_world_messages(
         obstacles.append((f"wire/{i}", np.asarray(wire.points(n + 1)), diameter))
     for k, (_name, shape, pose) in enumerate(world.solids):
         obstacles.append((f"solid/{k}", shape, pose))
-    markers = markers_from_obstacles(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)
+    markers = obstacle_markers(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)
     cloud = cloud_from_heightfield(world.terrain, frame_id=frame_id, stamp=stamp, msgs=msgs)
     return markers, cloud
 
@@ -72,4 +105,4 @@ def arm_world_messages(
         msgs: the message factory (rclpy or rosbags classes).
     """
     obstacles: list[tuple[str, Any, Any]] = [(f"{p.name}/0", p.shape, p.pose) for p in world.obstacles]
-    return markers_from_obstacles(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)
+    return obstacle_markers(obstacles, frame_id=frame_id, stamp=stamp, msgs=msgs)

@@ -124,7 +124,7 @@ def _shape(primitive: Any, where: str) -> Box | Cylinder | Sphere:
 def _nonempty(obj: Mapping[str, Any], key: str) -> bool:
     """Whether ``obj[key]`` is present and not an empty list/mapping/None."""
     value = obj.get(key)
-    return value is not None and value != [] and value != {}
+    return value is not None and value not in ([], {})
 
 
 def _object_primitives(obj: Any, index: int, frames: Sequence[str]) -> list[ScenePrimitive]:

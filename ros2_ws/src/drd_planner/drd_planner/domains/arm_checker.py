@@ -1,0 +1,249 @@
+"""The arm's edge checker: straight joint-space edges sampled at the check resolution, sphere model vs scene.
+
+The end vertices of an edge are checked first (cached per world), then the interior samples in bisection
+order, stopping at the first sphere that meets an obstacle (the scene's margin included). Forward
+kinematics is batched over all samples of an edge, and in :meth:`ArmEdgeChecker.check_many` over all
+samples of many edges at once. Each sample is tested in two levels through the scene API: one bounding
+sphere per link first, then the spheres of the links whose bounding sphere touches something.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.domains.arm_roadmap import EdgeSamples, graph_states
+from drd_planner.domains.arm_robot import ROBOT_MODELS, RobotLoader
+from drd_planner.exceptions import ProblemError
+from drd_planner.geometry.robot import RobotModel
+from drd_planner.geometry.scene import Scene
+
+__all__ = ["CHECK_BLOCK", "ArmEdgeChecker", "check_arm_edge"]
+
+#: Interpolated configurations per forward-kinematics block in :meth:`ArmEdgeChecker.check_many`.
+CHECK_BLOCK = 4096
+
+
+class ArmEdgeChecker:
+    """Checks the edges of a joint-space graph against one collision scene.
+
+    Answers are cached: asking for an edge twice costs nothing the second time.
+
+    Args:
+        robot: the robot (FK and spheres).
+        graph: the roadmap; ``vertex_states`` (V, D) in radians.
+        scene: obstacles; its margin inflates every robot sphere.
+        resolution: max joint step between samples (rad); ignored when ``samples`` is given.
+        samples: precomputed :class:`EdgeSamples` of ``graph`` (shared between checkers of one domain).
+        self_collision: also test self-collision of every sample (needed only for graphs not built by
+            :func:`build_roadmap`, which already excludes self-colliding edges).
+    """
+
+    def __init__(
+        self,
+        *,
+        robot: RobotModel,
+        graph: ExplicitGraph,
+        scene: Scene,
+        resolution: float = 0.05,
+        samples: EdgeSamples | None = None,
+        self_collision: bool = False,
+    ) -> None:
+        states = graph_states(graph)
+        if states.shape[1] != robot.dof:
+            raise ProblemError(f"graph states have {states.shape[1]} joints, the robot {robot.dof}")
+        self.robot = robot
+        self.graph = graph
+        self.scene = scene
+        self.samples = samples if samples is not None else EdgeSamples.of_graph(graph, resolution)
+        self.self_collision = self_collision
+        self._states = states
+        self._fixed = np.nonzero(robot.spheres.frame_index == 0)[0]
+        self._moving_groups = np.nonzero(robot.groups.frame_index > 0)[0]
+        self._group_radii = robot.groups.radii[self._moving_groups]
+        self._edge_state = np.zeros(graph.num_edges, dtype=np.int8)  # 0 unknown, 1 free, -1 blocked
+        self._vertex_state = np.zeros(graph.num_vertices, dtype=np.int8)
+        self._base_free: bool | None = None
+        self.configurations_checked = 0
+
+    # ----------------------------------------------------------------------------------------------
+
+    def _edge_ids(self, edges: npt.ArrayLike) -> IntArray:
+        """Validated (K,) edge ids."""
+        ids = np.asarray(edges, dtype=np.int64).reshape(-1)
+        if ids.size and (ids.min() < 0 or ids.max() >= self.graph.num_edges):
+            raise ProblemError(f"edge ids must lie in [0, {self.graph.num_edges})")
+        return ids
+
+    def _base_is_free(self) -> bool:
+        """Whether the spheres fixed to the root link (the same in every configuration) are free."""
+        if self._base_free is None:
+            if self._fixed.size == 0:
+                self._base_free = True
+            else:
+                centres = self.robot.sphere_centres(self._states[:1])[0, self._fixed]
+                self._base_free = not self.scene.spheres_collide(
+                    centres, self.robot.spheres.radii[self._fixed]
+                )
+        return self._base_free
+
+    def _candidates(self, q: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
+        """Spheres of (N, D) ``q`` whose link's bounding sphere touches the scene (first hierarchy level).
+
+        Returns:
+            ``(config, sphere, centres)``: for each of the C candidate spheres its configuration (row of
+            ``q``), sphere index and (C, 3) centre (m), ordered by configuration.
+        """
+        self.configurations_checked += q.shape[0]
+        frames = self.robot.fk.frames(q)
+        groups = self.robot.group_centres_from_frames(frames)[:, self._moving_groups]
+        radii = np.broadcast_to(self._group_radii, groups.shape[:2]).reshape(-1)
+        near = self.scene.spheres_collide_mask(groups.reshape(-1, 3), radii).reshape(groups.shape[:2])
+        rows, which = np.nonzero(near)
+        if rows.size == 0:
+            empty = np.zeros(0, dtype=np.int64)
+            return empty, empty, np.zeros((0, 3))
+        position, sphere = self.robot.groups.expand(self._moving_groups[which])
+        config = rows[position]
+        configs, row_of = np.unique(config, return_inverse=True)
+        centres = self.robot.sphere_centres_from_frames(frames[configs])[row_of, sphere]
+        return config, sphere, centres
+
+    def _blocked_configs(self, q: FloatArray) -> BoolArray:
+        """(N,) True where a configuration's moving spheres hit the scene (or it self-collides)."""
+        config, sphere, centres = self._candidates(q)
+        blocked = np.zeros(q.shape[0], dtype=bool)
+        if config.size:
+            hits = self.scene.spheres_collide_mask(centres, self.robot.spheres.radii[sphere])
+            blocked[config[hits]] = True
+        if self.self_collision:
+            blocked |= self.robot.self_collision(q)
+        return blocked
+
+    def _vertices_free(self, vertices: IntArray) -> BoolArray:
+        """(K,) whether each vertex configuration is free (cached)."""
+        unknown = np.unique(vertices[self._vertex_state[vertices] == 0])
+        if unknown.size:
+            blocked = self._blocked_configs(self._states[unknown])
+            self._vertex_state[unknown] = np.where(blocked, -1, 1)
+        out: BoolArray = self._vertex_state[vertices] > 0
+        return out
+
+    def _interior_free(self, edge: int) -> bool:
+        """Whether the interior samples of one edge are free, in bisection order with early exit."""
+        q = self.samples.configurations(self.graph, edge)
+        if q.shape[0] == 0:
+            return True
+        if self.self_collision and bool(self.robot.self_collision(q).any()):
+            return False
+        _, sphere, centres = self._candidates(q)
+        return not (sphere.size and self.scene.spheres_collide(centres, self.robot.spheres.radii[sphere]))
+
+    # ----------------------------------------------------------------------------------------------
+
+    def check_motion(self, states: npt.ArrayLike) -> bool:
+        """True when a joint-space motion off the roadmap ((K, D) configurations, radians) is free.
+
+        The samples must be as dense as the roadmap's check resolution (the planner's connector uses it).
+        """
+        q = np.asarray(states, dtype=np.float64)
+        if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != self._states.shape[1] or not np.all(np.isfinite(q)):
+            raise ProblemError(f"a motion must be a finite (K, {self._states.shape[1]}) array, got {q.shape}")
+        return self._base_is_free() and not bool(self._blocked_configs(q).any())
+
+    def check(self, edge: int) -> bool:
+        """True when ``edge`` is free: end vertices first, then interior samples in bisection order."""
+        e = int(self._edge_ids([edge])[0])
+        if self._edge_state[e] == 0:
+            u, v = self.graph.edges[e]
+            free = (
+                self._base_is_free()
+                and bool(self._vertices_free(np.array([u, v])).all())
+                and self._interior_free(e)
+            )
+            self._edge_state[e] = 1 if free else -1
+        return bool(self._edge_state[e] > 0)
+
+    def check_many(self, edges: npt.ArrayLike) -> BoolArray:
+        """(K,) bool free flags of (K,) edge ids; the same answers as :meth:`check`, FK batched over edges."""
+        ids = self._edge_ids(edges)
+        todo = np.unique(ids[self._edge_state[ids] == 0])
+        if todo.size:
+            if not self._base_is_free():
+                self._edge_state[todo] = -1
+            else:
+                ends = self.graph.edges[todo]
+                ends_free = self._vertices_free(ends.reshape(-1)).reshape(-1, 2).all(axis=1)
+                self._edge_state[todo[~ends_free]] = -1
+                self._check_interiors(todo[ends_free])
+        out: BoolArray = self._edge_state[ids] > 0
+        return out
+
+    def _check_interiors(self, edges: IntArray) -> None:
+        """Decide edges whose end vertices are free, FK batched over blocks of samples of many edges."""
+        offsets = self.samples.offsets
+        counts = offsets[edges + 1] - offsets[edges]
+        start = 0
+        while start < edges.shape[0]:
+            stop = start + 1
+            total = int(counts[start])
+            while stop < edges.shape[0] and total + int(counts[stop]) <= CHECK_BLOCK:
+                total += int(counts[stop])
+                stop += 1
+            block = edges[start:stop]
+            sample_ids = np.concatenate([np.arange(offsets[e], offsets[e + 1]) for e in block.tolist()])
+            owner = np.repeat(np.arange(block.shape[0]), counts[start:stop])
+            u = self._states[self.graph.edges[block[owner], 0]]
+            v = self._states[self.graph.edges[block[owner], 1]]
+            q = u + self.samples.fractions[sample_ids][:, None] * (v - u)
+            blocked = self._blocked_configs(q) if q.shape[0] else np.zeros(0, dtype=bool)
+            hits = np.bincount(owner[blocked], minlength=block.shape[0])
+            self._edge_state[block] = np.where(hits > 0, -1, 1)
+            start = stop
+
+
+def check_arm_edge(
+    *,
+    urdf: str,
+    scene: Scene,
+    graph: ExplicitGraph,
+    edge: int,
+    resolution: float = 0.05,
+    sphere_urdf: str | None = None,
+    srdf: str | None = None,
+    loader: RobotLoader = ROBOT_MODELS,
+) -> bool:
+    """Whether one roadmap edge is free for the robot of a URDF string in ``scene`` (node-facing).
+
+    Self-collision of every sample is tested as well (the graph may come from anywhere). The robot model
+    is kept by ``loader`` per description text, so repeated calls only pay for the check.
+
+    Args:
+        urdf: URDF text (``robot_description``).
+        scene: obstacles (its margin applies).
+        graph: joint-space roadmap with (V, D) ``vertex_states`` in radians.
+        edge: the edge id.
+        resolution: max joint step between samples (rad).
+        sphere_urdf: spherized URDF text when ``urdf`` has mesh collisions.
+        srdf: SRDF text (self-collision exclusions).
+        loader: where the robot model is built and kept.
+
+    Raises:
+        GeometryError: invalid descriptions.
+        ProblemError: bad edge id or graph.
+    """
+    robot = loader.model(urdf, sphere_urdf, srdf)
+    edge_graph = ExplicitGraph(
+        graph.edges[[edge]] if 0 <= edge < graph.num_edges else graph.edges[:0],
+        graph.lengths[[edge]] if 0 <= edge < graph.num_edges else graph.lengths[:0],
+        graph.num_vertices,
+        vertex_states=graph.vertex_states,
+    )
+    if edge_graph.num_edges != 1:
+        raise ProblemError(f"edge id {edge} is not in [0, {graph.num_edges})")
+    checker = ArmEdgeChecker(
+        robot=robot, graph=edge_graph, scene=scene, resolution=resolution, self_collision=True
+    )
+    return checker.check(0)

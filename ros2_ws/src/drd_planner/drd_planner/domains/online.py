@@ -1,0 +1,243 @@
+"""The online side of a domain: what a planning session, the re-checker and the node need of it.
+
+:class:`OnlineDomain` extends the offline :class:`~drd_planner.domains.base.Domain` (graph, worlds, checker of
+a world) with what planning on map snapshots needs: the collision margin and check resolution, what a state
+is (joint vector or pose, periodic coordinates), positions of states, the checker of a ready scene (with an
+arm model from ``robot_description``), position goals, and the *sweep model* that bounds the space an edge's
+check can touch (for re-checking only the plan edges a map update can reach,
+:mod:`drd_planner.planning.replan`).
+
+:class:`OnlineDefaults` implements the members for a domain whose states start with positions and that has
+no sweep model and no arm (the planar and SE(2) domains); the helicopter and the arm override what they add.
+No code outside ``domains/`` asks which concrete domain it holds: it asks this interface.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.arrays import FloatArray
+from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.exceptions import PlanningError
+from drd_planner.geometry.robot import RobotModel
+from drd_planner.geometry.scene import Scene
+
+__all__ = [
+    "BOX_SLACK",
+    "EdgeSource",
+    "OnlineDefaults",
+    "OnlineDomain",
+    "PositionGoals",
+    "SweepSpheres",
+]
+
+if TYPE_CHECKING:
+    from typing_extensions import TypeVar
+
+    W = TypeVar("W", default=Any)
+else:
+    from typing import TypeVar
+
+    W = TypeVar("W")
+
+#: Metres added to every sweep sphere on top of the geometric bound (floating-point slack of FCL's tests).
+BOX_SLACK = 1e-6
+
+#: Per edge: ``(centres (M, 3), reach (M,))`` in metres, without the scene margin.
+SweepSpheres = list[tuple[FloatArray, FloatArray]]
+
+#: How a goal given as a position becomes a state: ``"pose"`` (the state is the position and a heading),
+#: ``"vertex"`` (the vertex whose position is nearest), ``"none"`` (the domain has no position goals).
+PositionGoals = Literal["pose", "vertex", "none"]
+
+
+class EdgeSource(Protocol):
+    """Where a sweep model reads an edge's states: a planning session (graph edges and its motions)."""
+
+    def edge_states(self, edge: int) -> FloatArray:
+        """(K, D) states along a graph edge or a motion the session knows, tail first."""
+        ...
+
+    def motion_states(self, edge: int) -> FloatArray | None:
+        """(K, D) states of a motion edge id (>= E) the session knows; None for graph edges and unknown ids."""
+        ...
+
+
+@runtime_checkable
+class OnlineDomain(Domain[W], Protocol[W]):
+    """A domain a planning session serves on map snapshots (see the module docstring)."""
+
+    @classmethod
+    def from_spec(cls, spec: Mapping[str, Any], /) -> OnlineDomain[Any]:
+        """The domain of ``spec``; ProblemError on unknown keys (naming the valid ones) or bad values."""
+        ...
+
+    @property
+    def margin(self) -> float:
+        """Collision margin in metres (the scenes of snapshots for this domain use it)."""
+        ...
+
+    @property
+    def resolution(self) -> float:
+        """Largest coordinate step between the checked samples of a straight edge (0: edges are stored)."""
+        ...
+
+    @property
+    def robot(self) -> RobotModel | None:
+        """The arm model the roadmap was built for (None: no arm)."""
+        ...
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The arm's chain joint names, root to tip, when states are joint vectors (else empty)."""
+        ...
+
+    @property
+    def vehicle_radius(self) -> float:
+        """Radius (m) of the vehicle sphere checked at each state's position, without the margin (0: none)."""
+        ...
+
+    @property
+    def periodic_dims(self) -> tuple[int, ...]:
+        """State dimensions that are angles (rad), compared modulo 2 pi (the helicopter's heading: (3,))."""
+        ...
+
+    @property
+    def position_goals(self) -> PositionGoals:
+        """How a goal position becomes a state (see :data:`PositionGoals`)."""
+        ...
+
+    @property
+    def has_sweep_model(self) -> bool:
+        """Whether :meth:`sweep_spheres` bounds what an edge's check touches (else every edge is affected)."""
+        ...
+
+    def positions(self, states: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
+        """(K, 3) positions (m, planning frame) of (K, D) states (the arm: its tool point with ``robot``)."""
+        ...
+
+    def scene_checker(self, scene: Scene, robot: RobotModel | None = None) -> EdgeChecker:
+        """The edge checker of a ready scene (its own margin), with another arm model when given."""
+        ...
+
+    def state_from_position(self, xyz: npt.ArrayLike, yaw: float) -> FloatArray:
+        """(D,) the state of a goal position (m) and yaw (rad) when :attr:`position_goals` is ``"pose"``."""
+        ...
+
+    def world_model_params(self, model: str) -> dict[str, Any]:
+        """The JSON-able parameters of world model ``model`` (``{}`` when the spec holds none)."""
+        ...
+
+    def robot_loader(self) -> Callable[[str], RobotModel] | None:
+        """Turns a ``robot_description`` URDF into an arm model for snapshots (None: no arm)."""
+        ...
+
+    def sweep_robot(self, robot: RobotModel | None) -> RobotModel | None:
+        """The arm model a sweep must use for a snapshot's ``robot`` (None: the domain's own)."""
+        ...
+
+    def sweep_spheres(
+        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
+    ) -> SweepSpheres:
+        """Per edge the spheres its check places, each grown by half a sample step (no margin).
+
+        Raises:
+            PlanningError: the domain has no sweep model.
+        """
+        ...
+
+
+class OnlineDefaults:
+    """Online members of a domain whose states start with positions, with no arm and no sweep model.
+
+    The planar and SE(2) domains use these as they are; the helicopter and the arm override some.
+    """
+
+    @property
+    def name(self) -> str:
+        """The registry name (each domain defines it)."""
+        raise NotImplementedError
+
+    @property
+    def margin(self) -> float:
+        """No margin (0.0)."""
+        return 0.0
+
+    @property
+    def resolution(self) -> float:
+        """0.0: no straight-edge sampling."""
+        return 0.0
+
+    @property
+    def robot(self) -> RobotModel | None:
+        """None: no arm."""
+        return None
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Empty: states are not joint vectors."""
+        return ()
+
+    @property
+    def vehicle_radius(self) -> float:
+        """0.0: a point robot."""
+        return 0.0
+
+    @property
+    def periodic_dims(self) -> tuple[int, ...]:
+        """None."""
+        return ()
+
+    @property
+    def position_goals(self) -> PositionGoals:
+        """``"none"``."""
+        return "none"
+
+    @property
+    def has_sweep_model(self) -> bool:
+        """False."""
+        return False
+
+    def positions(self, states: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
+        """The first three columns of (K, D) states (fewer when D < 3)."""
+        q = np.asarray(states, dtype=np.float64)
+        return np.array(q[:, :3], dtype=np.float64)
+
+    def scene_checker(self, scene: Scene, robot: RobotModel | None = None) -> EdgeChecker:
+        """``self.checker(scene)``."""
+        checker: EdgeChecker = self.checker(scene)  # type: ignore[attr-defined]
+        return checker
+
+    def robot_loader(self) -> Callable[[str], RobotModel] | None:
+        """None: no arm."""
+        return None
+
+    def state_from_position(self, xyz: npt.ArrayLike, yaw: float) -> FloatArray:
+        """Refused: states are not poses.
+
+        Raises:
+            PlanningError: always.
+        """
+        raise PlanningError(f"the {self.name} domain has no position goals")
+
+    def world_model_params(self, model: str) -> dict[str, Any]:
+        """No world model parameters beyond the spec: ``{}``."""
+        return {}
+
+    def sweep_robot(self, robot: RobotModel | None) -> RobotModel | None:
+        """None: no arm."""
+        return None
+
+    def sweep_spheres(
+        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
+    ) -> SweepSpheres:
+        """Refused: no sweep model.
+
+        Raises:
+            PlanningError: always.
+        """
+        raise PlanningError(f"no sweep model for the {self.name} domain")

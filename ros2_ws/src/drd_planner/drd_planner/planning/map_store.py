@@ -1,0 +1,131 @@
+"""The one map store: map messages in, versioned :class:`~drd_planner.planning.map_state.MapSnapshot` out.
+
+The planner node, the bag tools and ``drd plan --bag`` all apply map messages (rclpy or rosbags alike)
+through a :class:`MapStore`, so they hold the same maps after the same messages:
+
+- ``obstacles`` (MarkerArray): :func:`drd_msgs_py.obstacles.obstacle_update` validates the whole array, the new
+  markers become collision parts (:mod:`~drd_planner.planning.map_intake`), and the update is applied to the
+  obstacle map (ADD replaces ``ns/id``, DELETE removes it, DELETEALL clears); obstacles the update does not
+  touch keep their parts objects, so a snapshot's scene rebuilds only what changed;
+- ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits);
+- ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
+  (an arm prior), else the text is only kept.
+
+Each accepted message makes the next snapshot version; a refused one raises
+(:class:`~drd_msgs_py.exceptions.MessageError` or :class:`~drd_planner.exceptions.DrdError`, the text says
+why) and leaves the maps as they were. Every snapshot of one store shares the store's scene cache.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from drd_msgs_py.obstacles import Obstacle, obstacle_update
+from drd_msgs_py.topics import topic_base
+from drd_planner.geometry.robot import RobotModel
+from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
+from drd_planner.planning.map_limits import MapLimits
+from drd_planner.planning.map_state import MapSnapshot, Parts
+
+__all__ = ["MAP_SOURCES", "MapStore", "RobotLoader"]
+
+#: Turns a ``robot_description`` URDF into an arm model (limits applied by whoever made it).
+RobotLoader = Callable[[str], RobotModel]
+#: The map topics (base names) a store applies.
+MAP_SOURCES = ("obstacles", "terrain", "robot_description")
+
+
+class MapStore:
+    """The maps a planner holds: the current snapshot, the obstacle map behind it, the latest robot description.
+
+    Args:
+        frame_id: the planning frame (maps in another frame are refused).
+        margin: collision margin of the snapshots' scenes, metres.
+        limits: size limits of map messages, and how unknown terrain counts.
+        robot_loader: turns a ``robot_description`` into the snapshot's arm; None: the text is only kept.
+    """
+
+    def __init__(
+        self,
+        *,
+        frame_id: str,
+        margin: float = 0.0,
+        limits: MapLimits = MapLimits.DEFAULT,
+        robot_loader: RobotLoader | None = None,
+    ) -> None:
+        self.frame_id = frame_id
+        self.limits = limits
+        self._robot_loader = robot_loader
+        self._snapshot = MapSnapshot(0, margin=margin)
+        self._obstacles: dict[str, Obstacle] = {}
+        self._parts: dict[str, Parts] = {}
+        self._description: str | None = None
+
+    @property
+    def snapshot(self) -> MapSnapshot:
+        """The maps after the last accepted message."""
+        return self._snapshot
+
+    @property
+    def obstacles(self) -> Mapping[str, Obstacle]:
+        """The obstacle map as its markers gave it (key ``ns/id``)."""
+        return dict(self._obstacles)
+
+    @property
+    def robot_description(self) -> str | None:
+        """The latest accepted ``robot_description`` text (None: none yet)."""
+        return self._description
+
+    @property
+    def has_robot_loader(self) -> bool:
+        """Whether a ``robot_description`` changes the snapshot's arm (an arm prior is loaded)."""
+        return self._robot_loader is not None
+
+    def apply(self, topic: str, msg: Any) -> MapSnapshot | None:
+        """Apply a message of map topic ``topic`` (any namespace); the new snapshot, or None if ignored.
+
+        A message of another topic, or a ``robot_description`` without a robot loader (its text is kept),
+        leaves the snapshot as it is and gives None.
+
+        Raises:
+            MessageError: a malformed message or one over a limit (maps unchanged).
+            DrdError: a shape, terrain or robot description the planner's geometry refuses (maps unchanged).
+        """
+        base = topic_base(topic)
+        if base == "obstacles":
+            return self.apply_obstacles(msg)
+        if base == "terrain":
+            return self.apply_terrain(msg)
+        if base == "robot_description":
+            return self.apply_robot_description(str(msg.data))
+        return None
+
+    def apply_obstacles(self, msg: Any) -> MapSnapshot:
+        """Apply a MarkerArray (see the module docstring); the new snapshot."""
+        update = obstacle_update(msg, frame_id=self.frame_id, limits=self.limits)
+        added = {key: obstacle_parts(o) for key, o in update.obstacles.items()}
+        obstacles = update.apply(self._obstacles)  # refuses a map that grows beyond a limit
+        self._parts = {
+            key: added[key] if o is update.obstacles.get(key) else self._parts[key]
+            for key, o in obstacles.items()
+        }
+        self._obstacles = obstacles
+        self._snapshot = self._snapshot.with_obstacles(self._parts)
+        return self._snapshot
+
+    def apply_terrain(self, msg: Any) -> MapSnapshot:
+        """Apply a terrain cloud; the new snapshot."""
+        terrain = terrain_from_cloud(msg, frame_id=self.frame_id, limits=self.limits)
+        self._snapshot = self._snapshot.with_terrain(terrain)
+        return self._snapshot
+
+    def apply_robot_description(self, text: str) -> MapSnapshot | None:
+        """Apply a URDF: the new snapshot with its arm, or None without a robot loader (the text is kept)."""
+        if self._robot_loader is None:
+            self._description = text
+            return None
+        robot = self._robot_loader(text)
+        self._description = text
+        self._snapshot = self._snapshot.with_robot(robot)
+        return self._snapshot

@@ -1,0 +1,115 @@
+"""How the node sends out what its planner service produces: plans, check logs, summaries, errors, logs.
+
+:class:`NodeReporter` is the node's :class:`~drd_planner.planning.service.ServiceOutputs`: a served request
+goes out as ``plan`` (and ``joint_trajectory``) first, then the check log, the markers and last the summary
+on ``/diagnostics``; a plan kept after a map update gets a ``map update`` status; errors go to the node's
+error report (log, ``/diagnostics``, :attr:`PlannerNode.errors`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from drd_planner.planning.map_state import MapSnapshot
+from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.replan import RecheckResult
+from drd_planner.planning.service import PlanRecord
+from drd_planner.planning.session import PlanResult
+from drd_planner.ros.guard import shorten
+from drd_planner.ros.outputs import PlannerOutputs, plan_summary_values
+from drd_planner.ros.status import LastPlan
+
+__all__ = ["NodeReporter"]
+
+
+class NodeReporter:
+    """The node's outputs of the planner service (see the module docstring).
+
+    Args:
+        logger: the node's logger.
+        outputs: the node's publishers.
+        report_error: the node's error report, ``(text, topic)``.
+    """
+
+    def __init__(
+        self, logger: Any, outputs: PlannerOutputs, report_error: Callable[[str, str], None]
+    ) -> None:
+        self._logger = logger
+        self._out = outputs
+        self._report_error = report_error
+        self.last_plan: LastPlan | None = None
+
+    def error(self, text: str, topic: str = "plan") -> None:
+        """Report an error under the status ``topic``."""
+        self._report_error(text, topic)
+
+    def info(self, text: str) -> None:
+        """Log a line."""
+        self._logger.info(text)
+
+    def warning(self, text: str) -> None:
+        """Log a warning (cut to the error length)."""
+        self._logger.warning(shorten(text))
+
+    def result(
+        self, record: PlanRecord, *, wait_s: float, publish: Callable[[tuple[int, int]], Any | None]
+    ) -> Any | None:
+        """Publish a result: ``plan`` (and ``joint_trajectory``) first, then the rest.
+
+        After the plan come the check log, the markers and last the summary. Its timing values
+        (seconds): ``check_s``, ``selection_s``, ``policy_s``, ``prepare_s`` and ``total_s`` of the plan
+        (:class:`PlanResult`), ``wait_s`` (request taken -> served), ``plan_messaging_s`` (building and
+        publishing ``plan``/``joint_trajectory``) and ``messaging_s`` (all messages before the summary).
+        """
+        session, result, snapshot, extra = record.session, record.result, record.snapshot, record.request
+        assert snapshot is not None  # the newest record keeps its snapshot
+        started = time.perf_counter()
+        stamp = self._out.stamp()
+        path = publish(stamp)
+        plan_messaging_s = time.perf_counter() - started
+        self._out.checks(result, stamp)
+        self._out.markers(session, result, snapshot, stamp)
+        values = plan_summary_values(
+            result,
+            extra,
+            wait_s=wait_s,
+            plan_messaging_s=plan_messaging_s,
+            messaging_s=time.perf_counter() - started,
+        )
+        self.last_plan = LastPlan(str(result.status), str(extra.get("request", "request")), time.monotonic())
+        self._out.status("plan", ok=result.ok, message=result.message, values=values, stamp=stamp)
+        if result.ok:
+            self._logger.info(f"{result.tree}: {result.message}")
+        else:
+            self._logger.warning(f"{result.tree}: {result.message}; nothing published on plan")
+        return path
+
+    def plan(
+        self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+    ) -> tuple[Any, bool]:
+        """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); it is out there if active."""
+        return self._out.plan(session, result, snapshot, stamp), self._out.active
+
+    def kept(self, session: QuerySession, outcome: RecheckResult, snapshot: MapSnapshot) -> None:
+        """The ``map update`` status of a plan that stays free on ``snapshot``."""
+        self._out.status(
+            "map update",
+            ok=True,
+            message=outcome.reason,
+            values={
+                "tree": session.name,
+                "map_version": snapshot.version,
+                "affected": len(outcome.affected),
+                "rechecked": len(outcome.rechecked),
+                "check_s": f"{outcome.total_check_ms / 1e3:.6f}",
+                "selection_s": f"{outcome.select_ms / 1e3:.6f}",
+                "result": "plan_kept",
+            },
+        )
+        self._logger.info(outcome.reason)
+
+    def withdraw(self, session: QuerySession) -> None:
+        """Publish an empty ``plan`` (and ``joint_trajectory``)."""
+        self._out.withdraw(session)

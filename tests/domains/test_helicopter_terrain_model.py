@@ -1,0 +1,55 @@
+"""Tests of the terrain world model's grid cache (the model's draws are tested in test_helicopter_worlds)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drd_planner.domains.helicopter_terrain_model import TerrainGrids, TerrainModel
+from drd_planner.domains.helicopter_world_frame import WorldFrame
+from drd_planner.domains.helicopter_world_params import TerrainParams
+from drd_planner.exceptions import ProblemError
+
+
+def _grid(path: Path, value: float, size: int = 60) -> Path:
+    yy, xx = np.mgrid[0:size, 0:size]
+    heights = value + 20.0 * np.sin(xx / 5.0) * np.cos(yy / 7.0)
+    rows = "\n".join(" ".join(f"{v:.3f}" for v in row) for row in heights)
+    path.write_text(
+        f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii"
+    )
+    return path
+
+
+def test_grids_are_read_once_per_file_version(tmp_path: Path) -> None:
+    grids = TerrainGrids(size=1)
+    a = _grid(tmp_path / "a.asc", 100.0)
+    first = grids.load(a)
+    assert grids.load(a) is first and len(grids) == 1
+    _grid(a, 200.0)
+    os.utime(a, ns=(first_ns := a.stat().st_mtime_ns + 10**9, first_ns))
+    second = grids.load(a)
+    assert second is not first and second.heights.mean() > first.heights.mean()
+    grids.load(_grid(tmp_path / "b.asc", 0.0))
+    assert len(grids) == 1  # the least recently used grid went
+    with pytest.raises(ProblemError, match="not found"):
+        grids.load(tmp_path / "missing.asc")
+    (tmp_path / "bad.asc").write_text("ncols 2\n", encoding="ascii")
+    with pytest.raises(ProblemError, match="cannot use terrain grid"):
+        grids.load(tmp_path / "bad.asc")
+    with pytest.raises(ValueError, match="at least one grid"):
+        TerrainGrids(size=0)
+
+
+def test_model_draws_through_its_cache(tmp_path: Path) -> None:
+    path = _grid(tmp_path / "hills.asc", 300.0, size=120)
+    model = TerrainModel()
+    frame = WorldFrame((0.0, 300.0), (-100.0, 100.0), 50.0, 25.0, ((0.0, 0.0, 65.0),), 6.0, 40.0)
+    params = TerrainParams(path=str(path), metres_per_cell=(5.0, 8.0), nofly=0)
+    one = model.draw(np.random.default_rng(3), params, frame)
+    two = model.draw(np.random.default_rng(3), params, frame)
+    assert np.array_equal(one.terrain.heights, two.terrain.heights) and one.info == two.info
+    assert len(model.grids) == 1 and one.wires == () and one.solids == ()

@@ -1,0 +1,149 @@
+"""The one map store: messages applied as the node applies them, refusals leave the maps, bag maps at requests."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, write_bag
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import RosbagsMessages, header
+from drd_msgs_py.obstacles import obstacle_update
+from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_planner.exceptions import DrdError
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Box, Cylinder, Sphere
+from drd_planner.geometry.terrain import Heightfield
+from drd_planner.planning.bag_plan import maps_at_request, maps_until
+from drd_planner.planning.map_intake import obstacle_parts
+from drd_planner.planning.map_limits import MapLimits
+from drd_planner.planning.map_store import MapStore
+from drd_planner.planning.world_messages import obstacle_markers
+
+T0 = 1_000_000_000_000
+SEC = 10**9
+
+
+@pytest.fixture
+def rb() -> RosbagsMessages:
+    return RosbagsMessages(jazzy_typestore())
+
+
+def _stamp(t: int) -> tuple[int, int]:
+    return t // SEC, t % SEC
+
+
+def _terrain(rb: RosbagsMessages, t: int) -> BagMessage:
+    rng = np.random.default_rng(3)
+    field = Heightfield((-50.0, -40.0), 10.0, rng.uniform(0.0, 20.0, size=(6, 9)))
+    cloud = cloud_from_heightfield(field, frame_id="map", stamp=_stamp(t), msgs=rb)
+    return BagMessage("/terrain", "sensor_msgs/msg/PointCloud2", t, cloud)
+
+
+def _obstacles(rb: RosbagsMessages, t: int, extra: bool = False, frame: str = "map") -> BagMessage:
+    items: list[tuple[str, Any, Any]] = [
+        ("tower/0", Cylinder(2.0, 60.0), Pose((10.0, 0.0, 30.0))),
+        ("nofly/1", Box((40.0, 30.0, 200.0)), Pose((-20.0, 10.0, 100.0))),
+        ("wire/2", np.array([[0.0, -30.0, 40.0], [0.0, 0.0, 35.0], [0.0, 30.0, 40.0]]), 0.1),
+    ]
+    if extra:
+        items.append(("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0))))
+    markers = obstacle_markers(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
+    return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
+
+
+def _goal(rb: RosbagsMessages, t: int, xyz: tuple[float, float, float]) -> BagMessage:
+    pose = rb(
+        "geometry_msgs/msg/Pose",
+        position=rb("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
+        orientation=rb("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=1.0),
+    )
+    msg = rb("geometry_msgs/msg/PoseStamped", header=header(rb, "map", _stamp(t)), pose=pose)
+    return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", t, msg)
+
+
+def _scenario(rb: RosbagsMessages) -> list[BagMessage]:
+    """Maps at 0, a request at 0.5 s, a refused map (wrong frame) at 1 s, an update at 1.5 s, a request at 2.5 s."""
+    return [
+        _terrain(rb, T0),
+        _obstacles(rb, T0),
+        _goal(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
+        _obstacles(rb, T0 + SEC, extra=True, frame="odom"),
+        _obstacles(rb, T0 + 3 * SEC // 2, extra=True),
+        _goal(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
+    ]
+
+
+def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp_path: Path) -> None:
+    messages = read_bag(write_bag(tmp_path / "m.mcap", _scenario(rb)))
+    assert len(bag_requests(messages)) == 2
+    first, req0 = maps_at_request(messages, 0, frame_id="map", margin=2.0)
+    assert (req0.index, req0.position) == (0, 2)
+    snap = first.snapshot
+    assert snap.version == 2 and snap.margin == 2.0 and first.applied == 2 and not first.refused
+    expected = obstacle_update(_obstacles(rb, T0).message, frame_id="map").apply({})
+    assert set(snap.obstacles) == set(expected) == set(first.obstacles) == {"tower/0", "nofly/1", "wire/2"}
+    assert all(snap.obstacles[k] == obstacle_parts(expected[k]) for k in expected)
+    assert snap.terrain is not None and snap.terrain.shape == (6, 9)
+    # The wrong-frame update is refused (map unchanged, version not bumped); the next one is applied.
+    second, _ = maps_at_request(messages, 1, frame_id="map", margin=2.0)
+    assert second.snapshot.version == 3 and len(second.refused) == 1 and "frame 'odom'" in second.refused[0]
+    assert set(second.snapshot.obstacles) == {"tower/0", "nofly/1", "wire/2", "new_obstacle/0"}
+    # The new sphere is really in the scene at request 1 and not at request 0.
+    probe = (np.array([[5.0, 5.0, 50.0]]), np.array([0.5]))
+    assert second.snapshot.scene.spheres_collide(*probe) and not snap.scene.spheres_collide(*probe)
+    # maps_until is inclusive in time and agrees with maps_at_request.
+    until = maps_until(messages, T0 + 3 * SEC // 2, frame_id="map", margin=2.0)
+    assert until.snapshot.version == 3 and set(until.snapshot.obstacles) == set(second.snapshot.obstacles)
+    assert maps_until(messages, T0 + 3 * SEC // 2 - 1, frame_id="map", margin=2.0).snapshot.version == 2
+    # A planner in another frame refuses every map.
+    other, _ = maps_at_request(messages, 0, frame_id="odom", margin=0.0)
+    assert other.snapshot.version == 0 and len(other.refused) == 2
+
+
+def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) -> None:
+    text = BagMessage(
+        "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
+    )
+    messages = [text, _obstacles(rb, T0), _goal(rb, T0 + 1, (0.0, 0.0, 0.0))]
+    plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
+    assert (
+        plain.robot_description == "<robot/>" and plain.snapshot.version == 1 and plain.snapshot.robot is None
+    )
+
+    def refuse(_urdf: str) -> Any:
+        raise DrdError("no such robot")
+
+    refused, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0, robot_loader=refuse)
+    assert refused.snapshot.version == 1 and "robot_description" in refused.refused[0]
+
+
+def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: RosbagsMessages) -> None:
+    store = MapStore(frame_id="map", margin=1.0, limits=MapLimits(max_markers=4))
+    first = store.apply("/obstacles", _obstacles(rb, T0).message)
+    assert first is not None and first.version == 1 and first.margin == 1.0
+    update = obstacle_markers(
+        [("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0)))],
+        frame_id="map",
+        msgs=rb,
+        delete_all_first=False,
+    )
+    second = store.apply_obstacles(update)
+    assert second.obstacles["tower/0"] is first.obstacles["tower/0"]  # not rebuilt: the scene reuses it
+    assert second.cache is first.cache  # one scene cache per store
+    more = obstacle_markers(
+        [("more/0", Sphere(1.0), Pose())], frame_id="map", msgs=rb, delete_all_first=False
+    )
+    with pytest.raises(MessageError, match="max_markers = 4"):
+        store.apply_obstacles(more)
+    assert store.snapshot is second and set(store.obstacles) == set(second.obstacles)
+    with pytest.raises(MessageError, match="frame 'odom'"):
+        store.apply("obstacles", _obstacles(rb, T0, frame="odom").message)
+    terrain = store.apply("terrain", _terrain(rb, T0).message)
+    assert terrain is not None and terrain.version == 3 and terrain.terrain is not None
+    assert store.apply("goal_pose", _goal(rb, T0, (0.0, 0.0, 0.0)).message) is None
+    assert store.apply("robot_description", rb("std_msgs/msg/String", data="<robot/>")) is None
+    assert store.robot_description == "<robot/>" and not store.has_robot_loader

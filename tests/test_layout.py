@@ -1,0 +1,125 @@
+"""The package's structure rules (issue 17), checked so that they stay true.
+
+- every module has a test file that mirrors it, or a row of the README's table names the test file that
+  exercises it and says why it has none of its own;
+- no module is over 500 lines;
+- ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
+- no code in ``planning/``, ``ros/``, ``planner/`` or ``cli.py`` asks which concrete domain it holds.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SRC = REPO / "ros2_ws" / "src"
+PACKAGES = {
+    "drd_planner": SRC / "drd_planner" / "drd_planner",
+    "drd_msgs_py": SRC / "drd_msgs_py" / "drd_msgs_py",
+}
+MAX_LINES = 500
+CONCRETE_DOMAINS = ("ArmDomain", "HelicopterDomain", "Se2Domain", "PlanarDomain")
+
+
+def _modules() -> list[tuple[str, Path]]:
+    """(dotted name, path) of every module of both packages except ``__init__``."""
+    found = []
+    for package, root in PACKAGES.items():
+        for path in sorted(root.rglob("*.py")):
+            if path.name != "__init__.py":
+                dotted = ".".join((package, *path.relative_to(root).with_suffix("").parts))
+                found.append((dotted, path))
+    return found
+
+
+def _mirrored_test(dotted: str) -> list[Path]:
+    """The test files that mirror module ``dotted``: ``tests/<sub>/test_<name>.py`` or ``test_<name>_*.py``.
+
+    A ``test_<name>_<more>.py`` that is the exact mirror of another module ``<name>_<more>`` is that module's.
+    """
+    parts = dotted.split(".")
+    folder = REPO / "tests" / ("msgs" if parts[0] == "drd_msgs_py" else "") / Path(*parts[1:-1])
+    package_folder = PACKAGES[parts[0]] / Path(*parts[1:-1])
+    siblings = {path.stem for path in package_folder.glob("*.py")}
+    candidates = [folder / f"test_{parts[-1]}.py", *folder.glob(f"test_{parts[-1]}_*.py")]
+    return sorted(
+        path
+        for path in candidates
+        if path.is_file()
+        and (path.stem == f"test_{parts[-1]}" or path.stem.removeprefix("test_") not in siblings)
+    )
+
+
+def _readme_table() -> dict[str, str]:
+    """Module -> test file from the README's table of modules tested through other test files."""
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    section = text.split("### Which test exercises which module", 1)[1].split("\n#", 1)[0]
+    rows = re.findall(r"^\| `([\w.]+)` \| `(tests/[\w/]+\.py)` \| \S", section, flags=re.MULTILINE)
+    return dict(rows)
+
+
+def _imports(path: Path) -> set[str]:
+    """Every module name ``path`` imports (absolute imports, at any depth)."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+    return names
+
+
+@pytest.mark.parametrize(("dotted", "path"), _modules(), ids=[d for d, _ in _modules()])
+def test_every_module_has_a_test_that_exercises_it(dotted: str, path: Path) -> None:
+    if _mirrored_test(dotted):
+        return
+    table = _readme_table()
+    assert dotted in table, f"{dotted} has no tests/.../test_{path.stem}.py and no row in the README's table"
+    assert (REPO / table[dotted]).is_file(), (
+        f"README names {table[dotted]} for {dotted}, which does not exist"
+    )
+
+
+def test_the_readme_table_names_only_modules_without_a_mirrored_test() -> None:
+    modules = {dotted for dotted, _ in _modules()}
+    for dotted in _readme_table():
+        assert dotted in modules, f"README's test table names {dotted}, which is not a module"
+        assert not _mirrored_test(dotted), f"{dotted} has a mirrored test file; drop its README row"
+
+
+@pytest.mark.parametrize(("dotted", "path"), _modules(), ids=[d for d, _ in _modules()])
+def test_no_module_is_over_500_lines(dotted: str, path: Path) -> None:
+    lines = len(path.read_text(encoding="utf-8").splitlines())
+    assert lines <= MAX_LINES, f"{dotted} has {lines} lines; split it by concept"
+
+
+def test_drd_msgs_py_imports_nothing_from_drd_planner() -> None:
+    for path in PACKAGES["drd_msgs_py"].rglob("*.py"):
+        bad = sorted(n for n in _imports(path) if n.split(".")[0] == "drd_planner")
+        assert not bad, f"{path.relative_to(REPO)} imports {bad}"
+
+
+def test_domains_import_nothing_from_data() -> None:
+    for path in (PACKAGES["drd_planner"] / "domains").rglob("*.py"):
+        bad = sorted(n for n in _imports(path) if n.startswith("drd_planner.data"))
+        assert not bad, f"{path.relative_to(REPO)} imports {bad}"
+
+
+def test_the_online_side_never_asks_for_a_concrete_domain() -> None:
+    root = PACKAGES["drd_planner"]
+    files = [
+        *(root / "planning").rglob("*.py"),
+        *(root / "ros").rglob("*.py"),
+        *(root / "planner").rglob("*.py"),
+    ]
+    for path in [*files, root / "cli.py"]:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Name) and node.id in CONCRETE_DOMAINS:
+                pytest.fail(
+                    f"{path.relative_to(REPO)}:{node.lineno} names {node.id}; ask the OnlineDomain instead"
+                )
