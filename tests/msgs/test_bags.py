@@ -5,10 +5,10 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
+from bag_messages import SEC, T0, goal_message, obstacles_message, stamp, terrain_message
 from conftest import REPO_ROOT, SHARED_DATA
 from rosbags.interfaces import QosDurability, QosReliability
 
@@ -25,14 +25,7 @@ from drd_msgs_py.bags import (
     write_bag,
 )
 from drd_msgs_py.factory import RosbagsMessages, header
-from drd_msgs_py.terrain import cloud_from_heightfield
-from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Box, Cylinder, Sphere
-from drd_planner.geometry.terrain import Heightfield
-from drd_planner.planning.world_messages import obstacle_markers
 
-T0 = 1_000_000_000_000
-SEC = 10**9
 JOINTS = [f"panda_joint{i}" for i in range(1, 8)]
 
 
@@ -41,43 +34,10 @@ def rb() -> RosbagsMessages:
     return RosbagsMessages(jazzy_typestore())
 
 
-def _stamp(t: int) -> tuple[int, int]:
-    return t // SEC, t % SEC
-
-
-def _terrain(rb: RosbagsMessages, t: int) -> BagMessage:
-    rng = np.random.default_rng(3)
-    field = Heightfield((-50.0, -40.0), 10.0, rng.uniform(0.0, 20.0, size=(6, 9)))
-    cloud = cloud_from_heightfield(field, frame_id="map", stamp=_stamp(t), msgs=rb)
-    return BagMessage("/terrain", "sensor_msgs/msg/PointCloud2", t, cloud)
-
-
-def _obstacles(rb: RosbagsMessages, t: int, extra: bool = False, frame: str = "map") -> BagMessage:
-    items: list[tuple[str, Any, Any]] = [
-        ("tower/0", Cylinder(2.0, 60.0), Pose((10.0, 0.0, 30.0))),
-        ("nofly/1", Box((40.0, 30.0, 200.0)), Pose((-20.0, 10.0, 100.0))),
-        ("wire/2", np.array([[0.0, -30.0, 40.0], [0.0, 0.0, 35.0], [0.0, 30.0, 40.0]]), 0.1),
-    ]
-    if extra:
-        items.append(("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0))))
-    markers = obstacle_markers(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
-    return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
-
-
-def _goal(rb: RosbagsMessages, t: int, xyz: tuple[float, float, float], frame: str = "map") -> BagMessage:
-    pose = rb(
-        "geometry_msgs/msg/Pose",
-        position=rb("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
-        orientation=rb("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=1.0),
-    )
-    msg = rb("geometry_msgs/msg/PoseStamped", header=header(rb, frame, _stamp(t)), pose=pose)
-    return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", t, msg)
-
-
 def _joints(rb: RosbagsMessages, t: int, names: list[str], q: list[float]) -> BagMessage:
     msg = rb(
         "sensor_msgs/msg/JointState",
-        header=header(rb, "", _stamp(t)),
+        header=header(rb, "", stamp(t)),
         name=names,
         position=np.asarray(q, dtype=np.float64),
     )
@@ -87,12 +47,12 @@ def _joints(rb: RosbagsMessages, t: int, names: list[str], q: list[float]) -> Ba
 def _scenario(rb: RosbagsMessages) -> list[BagMessage]:
     """Maps at 0, a request at 0.5 s, a refused map (wrong frame) at 1 s, an update at 1.5 s, a request at 2.5 s."""
     return [
-        _terrain(rb, T0),
-        _obstacles(rb, T0),
-        _goal(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
-        _obstacles(rb, T0 + SEC, extra=True, frame="odom"),
-        _obstacles(rb, T0 + 3 * SEC // 2, extra=True),
-        _goal(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
+        terrain_message(rb, T0),
+        obstacles_message(rb, T0),
+        goal_message(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
+        obstacles_message(rb, T0 + SEC, extra=True, frame="odom"),
+        obstacles_message(rb, T0 + 3 * SEC // 2, extra=True),
+        goal_message(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
     ]
 
 

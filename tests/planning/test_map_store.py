@@ -7,24 +7,20 @@ from typing import Any
 
 import numpy as np
 import pytest
+from bag_messages import SEC, T0, goal_message, obstacles_message, terrain_message
 
 from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, write_bag
 from drd_msgs_py.exceptions import MessageError
-from drd_msgs_py.factory import RosbagsMessages, header
+from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.obstacles import obstacle_update
-from drd_msgs_py.terrain import cloud_from_heightfield
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Box, Cylinder, Sphere
-from drd_planner.geometry.terrain import Heightfield
+from drd_planner.geometry.shapes import Sphere
 from drd_planner.planning.bag_plan import maps_at_request, maps_until
 from drd_planner.planning.map_intake import obstacle_parts
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_store import MapStore
 from drd_planner.planning.world_messages import obstacle_markers
-
-T0 = 1_000_000_000_000
-SEC = 10**9
 
 
 @pytest.fixture
@@ -32,48 +28,15 @@ def rb() -> RosbagsMessages:
     return RosbagsMessages(jazzy_typestore())
 
 
-def _stamp(t: int) -> tuple[int, int]:
-    return t // SEC, t % SEC
-
-
-def _terrain(rb: RosbagsMessages, t: int) -> BagMessage:
-    rng = np.random.default_rng(3)
-    field = Heightfield((-50.0, -40.0), 10.0, rng.uniform(0.0, 20.0, size=(6, 9)))
-    cloud = cloud_from_heightfield(field, frame_id="map", stamp=_stamp(t), msgs=rb)
-    return BagMessage("/terrain", "sensor_msgs/msg/PointCloud2", t, cloud)
-
-
-def _obstacles(rb: RosbagsMessages, t: int, extra: bool = False, frame: str = "map") -> BagMessage:
-    items: list[tuple[str, Any, Any]] = [
-        ("tower/0", Cylinder(2.0, 60.0), Pose((10.0, 0.0, 30.0))),
-        ("nofly/1", Box((40.0, 30.0, 200.0)), Pose((-20.0, 10.0, 100.0))),
-        ("wire/2", np.array([[0.0, -30.0, 40.0], [0.0, 0.0, 35.0], [0.0, 30.0, 40.0]]), 0.1),
-    ]
-    if extra:
-        items.append(("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0))))
-    markers = obstacle_markers(items, frame_id=frame, stamp=_stamp(t), msgs=rb)
-    return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
-
-
-def _goal(rb: RosbagsMessages, t: int, xyz: tuple[float, float, float]) -> BagMessage:
-    pose = rb(
-        "geometry_msgs/msg/Pose",
-        position=rb("geometry_msgs/msg/Point", x=xyz[0], y=xyz[1], z=xyz[2]),
-        orientation=rb("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=0.0, w=1.0),
-    )
-    msg = rb("geometry_msgs/msg/PoseStamped", header=header(rb, "map", _stamp(t)), pose=pose)
-    return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", t, msg)
-
-
 def _scenario(rb: RosbagsMessages) -> list[BagMessage]:
     """Maps at 0, a request at 0.5 s, a refused map (wrong frame) at 1 s, an update at 1.5 s, a request at 2.5 s."""
     return [
-        _terrain(rb, T0),
-        _obstacles(rb, T0),
-        _goal(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
-        _obstacles(rb, T0 + SEC, extra=True, frame="odom"),
-        _obstacles(rb, T0 + 3 * SEC // 2, extra=True),
-        _goal(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
+        terrain_message(rb, T0),
+        obstacles_message(rb, T0),
+        goal_message(rb, T0 + SEC // 2, (100.0, 0.0, 40.0)),
+        obstacles_message(rb, T0 + SEC, extra=True, frame="odom"),
+        obstacles_message(rb, T0 + 3 * SEC // 2, extra=True),
+        goal_message(rb, T0 + 5 * SEC // 2, (100.0, 0.0, 40.0)),
     ]
 
 
@@ -84,7 +47,7 @@ def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp
     assert (req0.index, req0.position) == (0, 2)
     snap = first.snapshot
     assert snap.version == 2 and snap.margin == 2.0 and first.applied == 2 and not first.refused
-    expected = obstacle_update(_obstacles(rb, T0).message, frame_id="map").apply({})
+    expected = obstacle_update(obstacles_message(rb, T0).message, frame_id="map").apply({})
     assert set(snap.obstacles) == set(expected) == set(first.obstacles) == {"tower/0", "nofly/1", "wire/2"}
     assert all(snap.obstacles[k] == obstacle_parts(expected[k]) for k in expected)
     assert snap.terrain is not None and snap.terrain.shape == (6, 9)
@@ -108,7 +71,7 @@ def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) ->
     text = BagMessage(
         "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
     )
-    messages = [text, _obstacles(rb, T0), _goal(rb, T0 + 1, (0.0, 0.0, 0.0))]
+    messages = [text, obstacles_message(rb, T0), goal_message(rb, T0 + 1, (0.0, 0.0, 0.0))]
     plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
     assert (
         plain.robot_description == "<robot/>" and plain.snapshot.version == 1 and plain.snapshot.robot is None
@@ -123,7 +86,7 @@ def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) ->
 
 def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: RosbagsMessages) -> None:
     store = MapStore(frame_id="map", margin=1.0, limits=MapLimits(max_markers=4))
-    first = store.apply("/obstacles", _obstacles(rb, T0).message)
+    first = store.apply("/obstacles", obstacles_message(rb, T0).message)
     assert first is not None and first.version == 1 and first.margin == 1.0
     update = obstacle_markers(
         [("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0)))],
@@ -141,9 +104,9 @@ def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: Ro
         store.apply_obstacles(more)
     assert store.snapshot is second and set(store.obstacles) == set(second.obstacles)
     with pytest.raises(MessageError, match="frame 'odom'"):
-        store.apply("obstacles", _obstacles(rb, T0, frame="odom").message)
-    terrain = store.apply("terrain", _terrain(rb, T0).message)
+        store.apply("obstacles", obstacles_message(rb, T0, frame="odom").message)
+    terrain = store.apply("terrain", terrain_message(rb, T0).message)
     assert terrain is not None and terrain.version == 3 and terrain.terrain is not None
-    assert store.apply("goal_pose", _goal(rb, T0, (0.0, 0.0, 0.0)).message) is None
+    assert store.apply("goal_pose", goal_message(rb, T0, (0.0, 0.0, 0.0)).message) is None
     assert store.apply("robot_description", rb("std_msgs/msg/String", data="<robot/>")) is None
     assert store.robot_description == "<robot/>" and not store.has_robot_loader
