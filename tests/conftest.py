@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -38,3 +39,16 @@ def msgs(request: pytest.FixtureRequest) -> object:
         return RosbagsMessages(get_typestore(Stores.ROS2_JAZZY))
     pytest.importorskip("visualization_msgs.msg", reason="rclpy message wheels not installed")
     return RclpyMessages()
+
+
+@pytest.fixture(scope="module")
+def small_arm() -> Any:
+    """A 60-sample, 5-neighbour Panda roadmap domain (seed 3); skips when the shared Panda model is absent."""
+    if not (SHARED_DATA / "panda" / "panda_spherized.urdf").is_file():
+        pytest.skip("shared Panda model not present")
+    from drd_planner.domains.arm import ArmDomain
+    from drd_planner.domains.base import domain_from_spec
+
+    built = domain_from_spec("arm", {"num_samples": 60, "k": 5, "seed": 3})
+    assert isinstance(built, ArmDomain)
+    return built

@@ -8,7 +8,6 @@ import pytest
 from conftest import SHARED_DATA
 
 from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import ProblemError
 from drd_planner.planning.map_limits import MapLimits
 
@@ -16,12 +15,8 @@ PANDA = SHARED_DATA / "panda"
 
 
 @pytest.fixture(scope="module")
-def domain() -> ArmDomain:
-    if not (PANDA / "panda_spherized.urdf").is_file():
-        pytest.skip(f"shared Panda model {PANDA} not present (set DRD_SHARED_DATA)")
-    built = domain_from_spec("arm", {"num_samples": 60, "k": 5, "seed": 3})
-    assert isinstance(built, ArmDomain)
-    return built
+def domain(small_arm: ArmDomain) -> ArmDomain:
+    return small_arm
 
 
 def _with_extra_links(urdf: str, count: int) -> str:

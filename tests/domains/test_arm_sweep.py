@@ -4,23 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
 
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.arm_sweep import sphere_rates
-from drd_planner.domains.base import domain_from_spec
 from drd_planner.domains.online import OnlineDomain
-
-PANDA = SHARED_DATA / "panda"
 
 
 @pytest.fixture(scope="module")
-def domain() -> ArmDomain:
-    if not (PANDA / "panda_spherized.urdf").is_file():
-        pytest.skip("shared Panda model not present")
-    built = domain_from_spec("arm", {"num_samples": 60, "k": 5, "seed": 3})
-    assert isinstance(built, ArmDomain)
-    return built
+def domain(small_arm: ArmDomain) -> ArmDomain:
+    return small_arm
 
 
 def test_rates_bound_how_fast_each_sphere_moves(domain: ArmDomain) -> None:

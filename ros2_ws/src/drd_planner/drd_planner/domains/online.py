@@ -14,6 +14,7 @@ No code outside ``domains/`` asks which concrete domain it holds: it asks this i
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
@@ -151,16 +152,16 @@ class OnlineDomain(Domain[W], Protocol[W]):
         ...
 
 
-class OnlineDefaults:
+class OnlineDefaults(ABC):
     """Online members of a domain whose states start with positions, with no arm and no sweep model.
 
     The planar and SE(2) domains use these as they are; the helicopter and the arm override some.
     """
 
     @property
+    @abstractmethod
     def name(self) -> str:
         """The registry name (each domain defines it)."""
-        raise NotImplementedError
 
     @property
     def margin(self) -> float:
