@@ -70,6 +70,8 @@ ARM_SPHERE_RADIUS = 0.04
 PLAN_SEED = 0
 #: Candidate goals of request 2 tried (in a seeded order of the graph's vertices).
 GOAL_TRIES = 200
+#: The helicopter bags: bag name -> the world model its prior ``trees/<name>.npz`` was built for.
+HELI_BAGS: dict[str, str] = {"heli_wires": "wires"}
 
 
 @dataclass
@@ -271,15 +273,18 @@ def _first_plan(session: QuerySession, base: list[BagMessage], frame: str, msgs:
     return _plan(session, messages, 0, frame).result
 
 
-def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scenario:
-    """The helicopter Wires bag (prior ``trees/heli_wires.npz``, world model ``wires``, frame ``map``)."""
-    session = QuerySession(load_prior(REPO / "trees" / "heli_wires.npz"), name="heli_wires")
+def heli_scenario(
+    msgs: RosbagsMessages, *, first_seed: int, tries: int, name: str = "heli_wires"
+) -> Scenario:
+    """A helicopter bag (prior ``trees/<name>.npz``, its world model :data:`HELI_BAGS` ``[name]``, frame ``map``)."""
+    model = HELI_BAGS[name]
+    session = QuerySession(load_prior(REPO / "trees" / f"{name}.npz"), name=name)
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     segments = domain.spec()["wire_segments"]
     frame = "map"
     for seed in range(first_seed, first_seed + tries):
-        world = domain.make_world("wires", seed)
+        world = domain.make_world(model, seed)
         t0, t1 = _ns(MAPS_S), _ns(UPDATE_S)
         markers, cloud = helicopter_world_messages(
             world, wire_segments=segments, frame_id=frame, stamp=_stamp(t0), msgs=msgs
@@ -309,7 +314,7 @@ def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int) -> Scen
             messages = [*base, BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t1, update)]
             if not _edge_blocked(session, messages, t1, frame, edge):
                 continue
-            scenario = _finish("heli_wires", seed, session, frame, messages, edge, msgs)
+            scenario = _finish(name, seed, session, frame, messages, edge, msgs)
             if scenario is not None:
                 scenario = _tour(scenario, session, msgs)
             if scenario is not None:
@@ -416,7 +421,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point (see the module docstring); errors print one line and exit 2."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out-dir", default=str(REPO / "bags"), help="folder of the bags (default: bags/)")
-    parser.add_argument("--only", choices=("heli", "arm"), help="write one of the two bags")
+    parser.add_argument(
+        "--only", choices=("heli", "arm", *HELI_BAGS), help="write one bag (heli: every helicopter bag)"
+    )
     parser.add_argument(
         "--robot-description", metavar="URDF_FILE", help="add /robot_description (this URDF) to the arm bag"
     )
@@ -433,14 +440,17 @@ def main(argv: list[str] | None = None) -> int:
             except OSError as exc:
                 raise DrdError(f"cannot read --robot-description {args.robot_description}: {exc}") from exc
         jobs = []
-        if args.only in (None, "heli"):
-            jobs.append(
-                (
-                    "heli_wires",
-                    "map",
-                    lambda: heli_scenario(msgs, first_seed=args.first_seed, tries=args.tries),
+        for heli in HELI_BAGS:
+            if args.only in (None, "heli", heli):
+                jobs.append(
+                    (
+                        heli,
+                        "map",
+                        lambda heli=heli: heli_scenario(
+                            msgs, first_seed=args.first_seed, tries=args.tries, name=heli
+                        ),
+                    )
                 )
-            )
         if args.only in (None, "arm"):
             jobs.append(
                 (

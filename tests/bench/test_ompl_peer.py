@@ -15,19 +15,23 @@ from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.bench.ompl_peer import (
     SKIP_MESSAGE,
+    LiveWorlds,
     OmplPeerError,
     coords_unusable,
     embed_vertices,
     ompl_available,
     read_worker_results,
     run_ompl_lazyprm,
+    run_ompl_lazyprm_live,
     verify_path,
 )
+from drd_planner.bench.world_recipes import seeded_recipes
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.problem import Problem
 from drd_planner.core.worlds import WorldDatabase
 from drd_planner.data.gccd import load_gccd_folder
+from drd_planner.domains.arm import ArmDomain
 from drd_planner.exceptions import DrdError
 
 # Two routes from 0 to 3: the short one over vertex 1, the long one over vertex 2.
@@ -244,3 +248,38 @@ def test_benchmark_reports_the_peer_as_policy_ompl_lazyprm(capsys: pytest.Captur
     assert stats.checks == direct["checks"]
     assert stats.failures == direct["failures"]
     assert len(stats.select_ms) >= len(stats.checks)
+
+
+# --- live checkers ----------------------------------------------------------------------------------
+
+
+def test_live_mode_answers_with_the_domains_own_checker(small_arm: ArmDomain) -> None:
+    require_ompl()
+    graph = small_arm.graph
+    recipes = (*seeded_recipes("clutter", [2, 3]), *seeded_recipes("table_clutter", [2]))
+    result = run_ompl_lazyprm_live(
+        graph, 0, 1, LiveWorlds("arm", small_arm.spec(), recipes), time_limit_s=20.0
+    )
+    assert [w["label"] for w in result["worlds"]] == [r.label for r in recipes]
+    for block, recipe in zip(result["worlds"], recipes, strict=True):
+        here = small_arm.checker(recipe.make(small_arm))
+        asked = block["checked_edges"]
+        assert block["checked_free"] == [here.check(e) for e in asked]  # the worker's checker is ours
+        assert block["checks"] == len(set(asked)) and block["wall_s"] >= block["check_s"] > 0
+        if block["success"]:
+            assert set(block["path_edges"]) <= {
+                e for e, f in zip(asked, block["checked_free"], strict=True) if f
+            }
+        else:
+            assert not block["ompl_solved"] or block["failure_reason"]
+    assert any(w["success"] for w in result["worlds"])
+
+
+def test_live_mode_refuses_another_roadmap(small_arm: ArmDomain) -> None:
+    require_ompl()
+    spec = {**small_arm.spec(), "seed": small_arm.spec()["seed"] + 1}
+    live = LiveWorlds("arm", spec, tuple(seeded_recipes("clutter", [2])))
+    with pytest.raises(OmplPeerError, match="live domain's graph"):
+        run_ompl_lazyprm_live(small_arm.graph, 0, 1, live, time_limit_s=5.0)
+    with pytest.raises(OmplPeerError, match="goal vertex 999 outside"):
+        run_ompl_lazyprm_live(small_arm.graph, 0, 999, live, time_limit_s=5.0)

@@ -384,3 +384,28 @@ def test_unreachable_scheduler_is_refused(tmp_path: Path, monkeypatch: pytest.Mo
     monkeypatch.setattr(schedulers, "DASK_CONNECT_TIMEOUT_S", 1.0)
     with pytest.raises(DatasetError, match=r"cannot connect to the Dask scheduler at 'tcp://127\.0\.0\.1:9'"):
         build_grid(tmp_path / "x.npz", scheduler="tcp://127.0.0.1:9", num_worlds=4)
+
+
+# --------------------------------------------------------------------------------------------------
+# The seeded path is untouched by world sources
+
+
+SEEDED_PROVENANCE = {
+    "builder", "command", "domain_factory", "k", "max_paths", "test_fraction", "union_size", "library_seed",
+    "split_seed", "world_seed_rule", "solvable_worlds", "graph_sha256",
+}  # fmt: skip
+
+
+def test_a_seeded_build_records_no_source(reference: Path) -> None:
+    ds = load_dataset(reference)
+    assert set(ds.provenance) == SEEDED_PROVENANCE
+    assert ds.provenance["world_seed_rule"].startswith("SeedSequence(seed, spawn_key=(0, i))")
+
+
+def test_seeded_chunk_tasks_carry_no_source() -> None:
+    from drd_planner.data.dataset_builder import _plan
+
+    recipe = DatasetRecipe("grid_test", "uniform", 10, 7, domain_factory=GRID_FACTORY)
+    plan = _plan(recipe, BuildOptions(chunk_size=4))
+    assert [t.source_json for t in plan.tasks] == [None, None, None] and plan.source is None
+    assert plan.tasks[0].seeds == tuple(int(s) for s in world_seeds(7, 10)[:4])

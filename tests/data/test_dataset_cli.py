@@ -203,3 +203,39 @@ def test_build_dataset_on_planar(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert ds.X.shape == (12, planar.graph.num_edges)
     assert ds.domain == "planar" and ds.world_model == model
     assert ds.check_metadata == json.loads(json.dumps(planar.check_metadata()))
+
+
+# --------------------------------------------------------------------------------------------------
+# --print-spec, and the arguments a build needs
+
+
+def test_print_spec_needs_only_the_domain(capsys: pytest.CaptureFixture[str]) -> None:
+    from drd_planner.domains.spec_docs import spec_help
+
+    assert main(["build-dataset", "--domain", "planar", "--print-spec"]) == 0
+    printed = capsys.readouterr().out
+    assert printed == spec_help("planar") + "\n" and "planar" in printed
+    assert main(["build-dataset", "--domain", "atlantis", "--print-spec"]) == 2
+    assert "unknown domain 'atlantis'" in _one_error_line(capsys.readouterr().err)
+
+
+def test_a_build_still_needs_its_arguments(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["build-dataset", "--domain", "planar", "--world-model", "forest", "--worlds", "3"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert (
+        err.startswith("usage: drd build-dataset")
+        and "the following arguments are required: --seed, --out" in err
+    )
+    with pytest.raises(SystemExit):
+        main(["build-dataset", "--print-spec"])
+    assert "the following arguments are required: --domain" in capsys.readouterr().err
+
+
+def test_a_namespace_not_made_by_the_parser_gets_a_dataset_error(tmp_path: Path) -> None:
+    args = argparse.Namespace(
+        domain="planar", print_spec=False, world_model=None, worlds=None, seed=0, out=str(tmp_path / "x.npz")
+    )
+    with pytest.raises(DatasetError, match="required: --world-model, --worlds"):
+        cmd_build_dataset(args)

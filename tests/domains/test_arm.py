@@ -2,22 +2,25 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import REPO_ROOT, SHARED_DATA
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.arm import DEFAULT_GOAL, DEFAULT_START, ArmDomain, ArmParams
 from drd_planner.domains.arm_checker import ArmEdgeChecker, check_arm_edge
+from drd_planner.domains.arm_params import SCENE_SPEC_DEFAULTS
 from drd_planner.domains.arm_roadmap import EdgeSamples, statically_valid
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.base import EdgeChecker, domain_from_spec
 from drd_planner.exceptions import PlanningError, ProblemError
+from drd_planner.geometry.moveit_request import joint_vector, read_motion_plan_request
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Pose
 
@@ -119,15 +122,18 @@ def test_roadmap_rejects_a_self_colliding_start() -> None:
     [
         (
             {"start": (0.0, 0.3, 0.0, -3.0, 0.0, 0.3, 0.0)},
-            r"^start .*: self-colliding \(panda_link\d touches panda_link\d\)",
+            r"^start .*: self-colliding \(panda_link\d touches panda_link\d\): change start in the arm spec "
+            r"\(--domain-spec\), or exclude the pair in the SRDF \(srdf_path\)$",
         ),
         (
             {"goal": (9.0, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785)},
-            r"^goal .*: outside the joint limits \(panda_joint1 = 9\.000 not in \[",
+            r"^goal .*: outside the joint limits \(panda_joint1 = 9\.000 not in \[-2\.\d+, 2\.\d+\] rad\): change "
+            r"goal in the arm spec \(--domain-spec\)$",
         ),
         (
             {"floor_z": 0.3},
-            r"^start .*: below the floor \(panda_link\d reaches down to z = 0\.\d+ m.*lower floor_z",
+            r"^start .*: below the floor \(a sphere of panda_link\d reaches down to z = 0\.\d+ m, the floor is at "
+            r"floor_z = 0\.3 m\): set floor_z to 0\.\d+ or lower, or null \(no floor test\), in the arm spec",
         ),
     ],
 )
@@ -297,3 +303,82 @@ def test_world_from_moveit_scene(domain: ArmDomain) -> None:
     free = domain.checker(world).check_many(np.arange(domain.graph.num_edges))
     assert free.shape == (domain.graph.num_edges,)
     assert 0 < free.sum() < free.size
+
+
+def test_the_suggested_floor_z_accepts_the_start() -> None:
+    if not PANDA.is_dir():
+        pytest.skip("shared Panda model not present")
+    with pytest.raises(ProblemError) as info:
+        ArmDomain.from_spec({**SMALL, "floor_z": 0.3})
+    found = re.search(r"set floor_z to (-?[\d.]+) or lower", str(info.value))
+    assert found is not None, str(info.value)
+    suggested = float(found.group(1))
+    assert suggested < 0.3
+    built = ArmDomain.from_spec({**SMALL, "floor_z": suggested})
+    assert statically_valid(built.robot, built.graph.vertex_states, floor_z=suggested).all()
+    with pytest.raises(ProblemError, match="below the floor"):  # 1 cm higher refuses the start or goal again
+        ArmDomain.from_spec({**SMALL, "floor_z": suggested + 0.01})
+
+
+def test_extra_states_spec_round_trip(domain: ArmDomain) -> None:
+    states = domain.graph.vertex_states
+    assert states is not None
+    extras = (states[[20, 60]] - 0.01).tolist()
+    built = domain_from_spec("arm", {**SMALL, "extra_states": extras})
+    assert isinstance(built, ArmDomain)
+    assert list(built.extra_vertices) == [2, 3] and list(domain.extra_vertices) == []
+    assert built.graph.vertex_states is not None
+    np.testing.assert_array_equal(built.graph.vertex_states[2:4], extras)
+    spec = built.spec()
+    assert spec["extra_states"] == extras and domain.spec()["extra_states"] == []
+    again = domain_from_spec("arm", json.loads(json.dumps(spec)))
+    assert again.spec() == spec
+    assert np.array_equal(again.graph.edges, built.graph.edges)
+
+
+def test_the_shipped_arm_prior_roadmap_is_rebuilt_byte_for_byte() -> None:
+    path = REPO_ROOT / "trees" / "arm_table_clutter.npz"
+    if not (path.is_file() and PANDA.is_dir()):
+        pytest.skip(f"{path} or the shared Panda model not present")
+    with np.load(path) as stored:
+        header = json.loads(stored["header"].tobytes())
+        edges, lengths, states = stored["edges"], stored["lengths"], stored["vertex_states"]
+    assert "extra_states" not in header["domain_spec"]  # written before the key existed: the default applies
+    built = domain_from_spec("arm", header["domain_spec"])
+    assert built.graph.edges.tobytes() == edges.astype(np.int64).tobytes()
+    assert built.graph.lengths.tobytes() == lengths.tobytes()
+    assert built.graph.vertex_states is not None
+    assert built.graph.vertex_states.tobytes() == states.tobytes()
+
+
+def mbm_states(family: str) -> np.ndarray:
+    """(N, 7) the distinct start and goal states of a MotionBenchMaker family's requests, in file order."""
+    folder = SHARED_DATA / "mbm" / family
+    if not (folder.is_dir() and PANDA.is_dir()):
+        pytest.skip(f"{folder} or the shared Panda model not present")
+    names = ArmDomain(ArmParams(num_samples=10)).joint_names
+    rows = []
+    for path in sorted(folder.glob("request*.yaml")):
+        request = read_motion_plan_request(path)
+        assert request.start is not None
+        rows.append(joint_vector(request.start, names, where=path.name, allow_extra=True))
+        rows.extend(joint_vector(goal, names, where=path.name) for goal in request.goals)
+    _, first = np.unique(np.array(rows), axis=0, return_index=True)
+    return np.array(rows)[np.sort(first)]
+
+
+def test_box_panda_states_need_the_scene_floor_default() -> None:
+    states = mbm_states("box_panda")
+    spec = {"start": states[0].tolist(), "goal": states[1].tolist(), "extra_states": states[2:].tolist()}
+    with pytest.raises(ProblemError) as info:
+        ArmDomain.from_spec({**SMALL, **spec})
+    text = str(info.value)
+    assert text.startswith("goal configuration is not statically valid: below the floor (a sphere of panda_")
+    found = re.search(r"floor_z = (-[\d.]+) passes the floor test of all (\d+) states", text)
+    assert found is not None, text
+    assert int(found.group(2)) == len(states) - 1  # every goal of box_panda reaches below the robot base
+    for floor in (float(found.group(1)), SCENE_SPEC_DEFAULTS["floor_z"]):
+        built = ArmDomain.from_spec({**SMALL, **spec, "floor_z": floor})
+        assert built.graph.vertex_states is not None
+        np.testing.assert_array_equal(built.graph.vertex_states[: len(states)], states)
+        assert list(built.extra_vertices) == list(range(2, len(states)))

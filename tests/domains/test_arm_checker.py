@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from drd_planner.domains.arm import ArmDomain
-from drd_planner.domains.arm_checker import ArmEdgeChecker
+from drd_planner.domains.arm_checker import ArmEdgeChecker, SphereTest
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Pose
@@ -30,3 +30,29 @@ def test_empty_scene_frees_everything_and_a_big_box_blocks_everything(domain: Ar
     assert free.check_motion(states[:2]) and not blocked.check_motion(states[:2])
     with pytest.raises(ProblemError, match="motion"):
         free.check_motion(np.zeros((2, 3)))
+
+
+def test_sphere_model_answers_groups_as_their_rows(domain: ArmDomain) -> None:
+    world = domain.make_world("clutter", 4)
+    model = SphereTest(domain.robot, world.to_scene())
+    edges = list(range(12))
+    q = np.concatenate([domain.samples.configurations(domain.graph, e) for e in edges])
+    owner = np.repeat(
+        np.arange(len(edges)), [len(domain.samples.configurations(domain.graph, e)) for e in edges]
+    )
+    per_row = model.groups_blocked(q, np.arange(len(q)), len(q))
+    expected = [bool(per_row[owner == g].any()) for g in range(len(edges))]
+    assert 0 < sum(expected) < len(edges)  # some of each
+    assert model.groups_blocked(q, owner, len(edges)).tolist() == expected
+    alone = [
+        bool(model.groups_blocked(q[owner == g], np.zeros(int(np.sum(owner == g)), dtype=np.int64), 1)[0])
+        for g in range(len(edges))
+    ]
+    assert alone == expected
+    checker = domain.checker(world)
+    assert isinstance(checker.model, SphereTest)
+    interiors_free = [not b for b in expected]
+    ends_free = checker.check_many(edges)
+    assert all(
+        f <= i for f, i in zip(ends_free.tolist(), interiors_free, strict=True)
+    )  # interior blocked: edge blocked

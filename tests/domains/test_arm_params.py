@@ -25,8 +25,21 @@ def test_defaults_and_normalised_values() -> None:
         ({"resolution": 0.0}, "invalid arm spec: resolution must be finite and > 0"),
         ({"margin": -1.0}, "invalid arm spec: margin must be finite and >= 0"),
         ({"k": "many"}, "invalid arm spec"),
+        ({"extra_states": [0.1, 0.2]}, r"invalid arm spec: extra_states\[0\] must be a list of joint values"),
+        ({"extra_states": [[0.1], "abc"]}, r"extra_states\[1\] must be a list of joint values"),
+        ({"extra_states": [[0.1], [0.2, float("nan")]]}, r"extra_states\[1\] must be finite joint values"),
+        ({"extra_states": 3}, "extra_states must be a list of joint-value lists"),
+        ({"collision_model": "boxes"}, "collision_model must be one of spheres, meshes"),
     ],
 )
 def test_bad_specs(spec: dict[str, object], message: str) -> None:
     with pytest.raises(ProblemError, match=message):
         ArmParams.from_spec(spec)
+
+
+def test_extra_states_are_stored_as_lists_of_floats() -> None:
+    params = ArmParams.from_spec({"extra_states": ((1, 2.5), [0.0, -1.0])})
+    assert params.extra_states == [[1.0, 2.5], [0.0, -1.0]]
+    assert all(isinstance(x, float) for row in params.extra_states for x in row)
+    assert params.to_spec()["extra_states"] == [[1.0, 2.5], [0.0, -1.0]]
+    assert ArmParams().extra_states == [] and ArmParams().to_spec()["extra_states"] == []

@@ -51,3 +51,22 @@ def test_edge_spheres_hold_every_checked_configuration(domain: ArmDomain) -> Non
     assert spheres[1][0].shape == (3 * count, 3)
     np.testing.assert_allclose(spheres[1][0][:count], domain.robot.sphere_centres(motion[:1])[0])
     assert np.all(spheres[1][1] >= np.tile(domain.robot.spheres.radii, 3))
+
+
+def test_under_the_mesh_model_the_sweep_spheres_grow_to_hold_the_meshes(domain: ArmDomain) -> None:
+    from drd_planner.domains.arm import ArmDomain as Arm
+    from drd_planner.domains.arm_params import ArmParams
+
+    meshes = Arm(ArmParams.from_spec({**domain.spec(), "collision_model": "meshes"}))
+
+    class Source:
+        def edge_states(self, edge: int) -> np.ndarray:
+            raise AssertionError("the arm reads graph edges from its roadmap")
+
+        def motion_states(self, edge: int) -> np.ndarray | None:
+            return None
+
+    ((centres, reach),) = domain.sweep_spheres(Source(), [0], None)
+    ((mesh_centres, mesh_reach),) = meshes.sweep_spheres(Source(), [0], None)
+    np.testing.assert_array_equal(mesh_centres, centres)
+    assert np.all(mesh_reach >= reach) and float(np.max(mesh_reach - reach)) > 0.01

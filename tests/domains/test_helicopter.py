@@ -30,7 +30,7 @@ def domain() -> HelicopterDomain:
 def test_registry_builds_the_domain_and_it_implements_the_protocol(domain: HelicopterDomain) -> None:
     assert isinstance(domain, Domain)
     assert domain.name == "helicopter"
-    assert domain.world_models == ("wires", "canyon", "terrain")
+    assert domain.world_models == ("wires", "canyon", "terrain", "corridors")
     checker = domain.checker(domain.make_world("wires", 0))
     assert isinstance(checker, EdgeChecker)
     assert isinstance(checker.check(0), bool)

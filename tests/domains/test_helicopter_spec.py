@@ -21,7 +21,7 @@ def test_default_spec_round_trips_through_json() -> None:
         "wire_segments",
         "models",
     }
-    assert set(spec["models"]) == {"wires", "canyon", "terrain"}
+    assert set(spec["models"]) == {"wires", "canyon", "terrain", "corridors"}
     again = HelicopterParams.from_spec(json.loads(json.dumps(spec)))
     assert again.to_spec() == spec
 

@@ -27,7 +27,7 @@ TERRAIN_FILE = SHARED_DATA / "terrain" / "srtm_front_range_144.asc"
 
 
 def _needs_models(model: str) -> None:
-    if model == "terrain" and not TERRAIN_FILE.is_file():
+    if model in ("terrain", "corridors") and not TERRAIN_FILE.is_file():
         pytest.skip(f"shared elevation model {TERRAIN_FILE} not present (set DRD_SHARED_DATA)")
 
 

@@ -12,7 +12,13 @@ import pytest
 import trimesh
 
 import drd_planner
-from drd_planner.geometry.fcl_queries import FirstHitCallback, first_hit, pair_collides, pair_distance
+from drd_planner.geometry.fcl_queries import (
+    FirstHitCallback,
+    first_hit,
+    pair_collides,
+    pair_contacts,
+    pair_distance,
+)
 
 PACKAGE = Path(drd_planner.__file__).resolve().parent
 GEOMETRY = PACKAGE / "geometry"
@@ -44,9 +50,19 @@ def test_pair_collides_source_builds_fresh_request_and_result() -> None:
     source = (GEOMETRY / "fcl_queries.py").read_text()
     assert "fcl.collide(first, second, fcl.CollisionRequest(), fcl.CollisionResult())" in source
     for path in GEOMETRY.glob("*.py"):
+        if path.name == "fcl_queries.py":
+            continue  # pair_contacts binds its fresh result to read the contacts (tested below)
         text = path.read_text()
-        # No module keeps a CollisionResult around: every construction is inline in a call.
+        # No other module keeps a CollisionResult around: every construction is inline in a call.
         assert not re.search(r"=\s*fcl\.CollisionResult\(", text), path.name
+
+
+def test_pair_contacts_answers_each_pair_afresh() -> None:
+    box = fcl.CollisionObject(fcl.Box(1.0, 1.0, 1.0), fcl.Transform())
+    counts = [len(pair_contacts(box, sphere_at(x), 4)) for x in (0.0, 10.0, 0.9, 1.1)]
+    assert counts[0] >= 1 and counts[1] == 0 and counts[2] >= 1 and counts[3] == 0
+    (deep,) = pair_contacts(box, sphere_at(0.9), 1)
+    assert 0.0 < float(deep.penetration_depth) < 0.2
 
 
 def test_pair_distance() -> None:

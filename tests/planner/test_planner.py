@@ -84,6 +84,16 @@ def test_the_precomputed_tree_serves_its_query(problem: Problem, prior: WorldPri
     assert other.query == "online"
 
 
+def test_a_repeated_online_query_says_its_model_came_from_the_cache(
+    problem: Problem, prior: WorldPrior
+) -> None:
+    planner = Planner(prior)
+    row = problem.require_worlds().X[int(problem.require_worlds().test_ids[0])]
+    first, again = (planner.plan(0, 5, TableOracle(row)) for _ in range(2))
+    assert (first.query_cached, again.query_cached) == (False, True)
+    assert [c.edge for c in first.checks] == [c.edge for c in again.checks]
+
+
 def test_same_seed_same_checks(problem: Problem, prior: WorldPrior) -> None:
     worlds = problem.require_worlds()
     oracle_row = worlds.X[int(worlds.test_ids[2])]

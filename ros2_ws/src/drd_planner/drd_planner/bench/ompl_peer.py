@@ -9,6 +9,11 @@ Scoring per test world: ``checks`` = the number of distinct graph edges LazyPRM 
 validator about (answered from the world's row of X); ``success`` = OMPL reported an exact solution
 **and** the returned vertex sequence is a start-to-goal path of graph edges that are all free in X
 (verified here, independently of OMPL).
+
+:func:`run_ompl_lazyprm_live` runs the same search with a **live checker** instead of X: the worker
+rebuilds the domain from its spec and answers each edge with the domain's edge checker on each world
+(:class:`~drd_planner.bench.world_recipes.WorldRecipe`), timing every answer; a world counts as a success
+only when every edge of the returned path was checked free there by that checker.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.bench.extras import install_hint
+from drd_planner.bench.world_recipes import WorldRecipe
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError, ProblemError
@@ -259,13 +265,30 @@ def _check_problem(problem: Problem, test_ids: Sequence[int]) -> tuple[ExplicitG
     return graph, start, goal, ids
 
 
+def _worker_config(
+    graph: ExplicitGraph, embedded: Embedding, start: int, goal: int, seed: int, time_limit_s: float
+) -> dict[str, Any]:
+    """The worker's settings every run shares: roadmap size, embedding radius, query, seed, time limit (s)."""
+    return {
+        "connect_radius": embedded.connect_radius,
+        "seed": int(seed),
+        "time_limit_s": float(time_limit_s),
+        "num_vertices": graph.num_vertices,
+        "directed": graph.directed,
+        "start": int(start),
+        "goal": int(goal),
+    }
+
+
 def _run_worker(
     graph: ExplicitGraph,
     states: npt.NDArray[np.float64],
     rows: BoolArray,
     config: dict[str, Any],
     timeout_s: float,
+    expected: int | None = None,
 ) -> tuple[list[dict[str, Any]], int]:
+    """Run the worker on one request; ``expected`` worlds (default: one per row of ``rows``)."""
     with tempfile.TemporaryDirectory(prefix="drd_ompl_") as tmp:
         folder = Path(tmp)
         np.savez(folder / "request.npz", edges=graph.edges, lengths=graph.lengths, states=states, X=rows)
@@ -279,7 +302,8 @@ def _run_worker(
             )
         except subprocess.TimeoutExpired:
             raise OmplPeerError(f"OMPL worker did not finish within {timeout_s:.0f} s") from None
-        records = read_worker_results(result, rows.shape[0], proc.returncode, proc.stderr)
+        count = rows.shape[0] if expected is None else expected
+        records = read_worker_results(result, count, proc.returncode, proc.stderr)
         return records, proc.returncode
 
 
@@ -297,6 +321,8 @@ def _world_block(
         "world": record["world"],
         "checks": len(record["checked_edges"]),
         "checked_edges": record["checked_edges"],
+        "checked_free": record.get("checked_free", []),
+        "check_s": record.get("check_s", 0.0),
         "success": success,
         "ompl_solved": record["solved"],
         "ompl_status": record["status"],
@@ -352,16 +378,7 @@ def run_ompl_lazyprm(
         raise OmplPeerError(message)
     embedded = embed_vertices(graph, embedding)
     rows = problem.require_worlds().X[ids]
-    config = {
-        "connect_radius": embedded.connect_radius,
-        "seed": int(seed),
-        "time_limit_s": float(time_limit_s),
-        "num_vertices": graph.num_vertices,
-        "directed": graph.directed,
-        "start": int(start),
-        "goal": int(goal),
-        "world_ids": ids.tolist(),
-    }
+    config = {**_worker_config(graph, embedded, start, goal, seed, time_limit_s), "world_ids": ids.tolist()}
     t0 = time.perf_counter()
     records, returncode = _run_worker(
         graph, embedded.states, rows, config, timeout_s=60.0 + ids.size * (time_limit_s + 5.0)
@@ -385,4 +402,86 @@ def run_ompl_lazyprm(
         "total_wall_s": total,
         "worker_returncode": returncode,
         "worlds": worlds,
+    }
+
+
+@dataclass(frozen=True)
+class LiveWorlds:
+    """The worlds a live run checks: the domain (registry name and JSON-able spec) and the world recipes."""
+
+    domain: str
+    spec: dict[str, Any]
+    worlds: tuple[WorldRecipe, ...]
+
+
+def run_ompl_lazyprm_live(
+    graph: ExplicitGraph,
+    start: int,
+    goal: int,
+    live: LiveWorlds,
+    *,
+    seed: int = 0,
+    time_limit_s: float = 60.0,
+    embedding: EmbeddingName = "auto",
+) -> dict[str, Any]:
+    """Run LazyPRM on ``graph`` once per world, each edge answered by the domain's live edge checker.
+
+    Args:
+        graph: the domain's graph (the worker's domain, rebuilt from ``spec``, must have the same edges).
+        start: start vertex.
+        goal: goal vertex.
+        live: the domain (its spec, e.g. with ``collision_model`` for the arm) and the worlds, all
+            rebuilt in the worker.
+        seed: OMPL's RNG seed.
+        time_limit_s: wall-clock limit of one world's solve, in seconds.
+        embedding: ``auto``, ``coords`` or ``index`` (see :func:`embed_vertices`).
+
+    Returns:
+        ``{"peer", "ompl", "embedding", "domain", "worlds": [per world: label, checks, checked_edges,
+        checked_free, success (OMPL solved and every path edge was checked free), path_edges, wall_s
+        (the solve, checks included), check_s (inside the checker), ...], "total_wall_s"}``.
+
+    Raises:
+        OmplPeerError: OMPL is unavailable, the start or goal is not a vertex, or the worker failed.
+    """
+    available, message = ompl_available()
+    if not available:
+        raise OmplPeerError(message)
+    for label, vertex in (("start", start), ("goal", goal)):
+        if not 0 <= int(vertex) < graph.num_vertices:
+            raise OmplPeerError(f"{label} vertex {vertex} outside [0, {graph.num_vertices})")
+    embedded = embed_vertices(graph, embedding)
+    config = {
+        **_worker_config(graph, embedded, start, goal, seed, time_limit_s),
+        "live": {
+            "domain": live.domain,
+            "spec": dict(live.spec),
+            "worlds": [w.to_json() for w in live.worlds],
+        },
+    }
+    rows = np.zeros((0, graph.num_edges), dtype=bool)
+    t0 = time.perf_counter()
+    records, returncode = _run_worker(
+        graph,
+        embedded.states,
+        rows,
+        config,
+        timeout_s=300.0 + len(live.worlds) * (time_limit_s + 5.0),
+        expected=len(live.worlds),
+    )
+    blocks = []
+    for record, recipe in zip(records, live.worlds, strict=True):
+        row = np.zeros(graph.num_edges, dtype=bool)
+        row[np.asarray(record["checked_edges"], dtype=np.int64)] = np.asarray(
+            record["checked_free"], dtype=bool
+        )
+        blocks.append({"label": recipe.label, **_world_block(record, graph, row, int(start), int(goal))})
+    return {
+        "peer": PEER_NAME,
+        "ompl": message,
+        "embedding": embedded.kind,
+        "domain": live.domain,
+        "worlds": blocks,
+        "total_wall_s": time.perf_counter() - t0,
+        "worker_returncode": returncode,
     }

@@ -6,6 +6,13 @@ lives in this process. It reads a request (``request.npz`` with the graph and th
 each line, then a final ``{"done": true}`` line) and leaves with ``os._exit`` so that no teardown
 runs. ``--probe`` only imports OMPL and prints one JSON line.
 
+**Live mode** (``config["live"]``: a domain name, its spec and a list of
+:class:`~drd_planner.bench.world_recipes.WorldRecipe` dicts): instead of rows of X, the motion validator
+answers each graph edge with the domain's own edge checker on each world, built here from the spec (the
+domain's graph must equal the request's, edge for edge; one edge is checked once, untimed, before the first
+world, so that first use costs fall in no world). Every answer is timed, so a world's ``wall_s`` is
+LazyPRM's time to a path including the collision checks it asked for.
+
 How LazyPRM is made to search exactly our graph:
 
 * The roadmap is handed to ``LazyPRM(PlannerData)``: one vertex per graph vertex (each its own
@@ -33,7 +40,7 @@ import json
 import os
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -43,6 +50,9 @@ import numpy.typing as npt
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
+
+#: Answers whether one graph edge (by id) is free.
+EdgeAnswer = Callable[[int], bool]
 
 
 def _import_ompl() -> tuple[Any, Any, Any]:
@@ -58,12 +68,12 @@ class _Bookkeeper:
 
     def __init__(self, graph: ExplicitGraph) -> None:
         self.graph = graph
-        self.row: npt.NDArray[np.bool_] = np.zeros(graph.num_edges, dtype=bool)
-        self.reset(self.row)
+        self.reset(lambda _edge: False)
 
-    def reset(self, row: npt.NDArray[np.bool_]) -> None:
-        """Start a new world: ``row`` (E,) bool, True where the edge is free."""
-        self.row = row
+    def reset(self, answer: EdgeAnswer) -> None:
+        """Start a new world whose edges ``answer`` decides (True where free)."""
+        self.answer = answer
+        self.check_s = 0.0
         self.checked: dict[int, bool] = {}
         self.motion_calls = 0
         self.connector_calls = 0
@@ -87,7 +97,9 @@ class _Bookkeeper:
             return False
         free = self.checked.get(eid)
         if free is None:
-            free = bool(self.row[eid])
+            t0 = time.perf_counter()
+            free = bool(self.answer(eid))
+            self.check_s += time.perf_counter() - t0
             self.checked[eid] = free
         if not free:
             self.removed += 1
@@ -139,12 +151,46 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
         start_state[k] = float(coords[int(config["start"]), k])
         goal_state[k] = float(coords[int(config["goal"]), k])
     session = _Session(ob, og, si, roadmap, (start_state, goal_state), vertex, book, config)
-    for world, row in zip(config["world_ids"], rows, strict=True):
-        out.write(json.dumps(session.solve(int(world), row)) + "\n")
+    answers = _live_answers(graph, config["live"]) if "live" in config else _table_answers(config, rows)
+    for world, answer in answers:
+        out.write(json.dumps(session.solve(world, answer)) + "\n")
         out.flush()
     out.write(json.dumps({"done": True}) + "\n")
     out.flush()
     del validator, keep_alive  # OMPL held them (the validator, the roadmap's states) until here
+
+
+def _table_answers(config: dict[str, Any], rows: npt.NDArray[np.bool_]) -> Iterator[tuple[int, EdgeAnswer]]:
+    """``(world id, answer)`` per requested world, answered from its (E,) row of X."""
+    for world, row in zip(config["world_ids"], rows, strict=True):
+        yield int(world), _row_answer(row)
+
+
+def _row_answer(row: npt.NDArray[np.bool_]) -> EdgeAnswer:
+    """The answer of one (E,) row of X (True where the edge is free)."""
+
+    def answer(edge: int) -> bool:
+        return bool(row[edge])
+
+    return answer
+
+
+def _live_answers(graph: ExplicitGraph, live: dict[str, Any]) -> Iterator[tuple[int, EdgeAnswer]]:
+    """``(world index, answer)`` per world recipe, answered by the domain's edge checker on that world."""
+    from drd_planner.bench.world_recipes import WorldRecipe
+    from drd_planner.domains.base import domain_from_spec
+
+    domain = domain_from_spec(str(live["domain"]), live.get("spec") or {})
+    own = domain.graph
+    if own.num_edges != graph.num_edges or not np.array_equal(own.edges, graph.edges):
+        raise RuntimeError(
+            f"the live domain's graph ({own.num_edges} edges) is not the request's ({graph.num_edges})"
+        )
+    worlds = [WorldRecipe.from_json(recipe).make(domain) for recipe in live["worlds"]]
+    if worlds and graph.num_edges:  # first use in this process (imports, caches): not in any world's time
+        domain.checker(worlds[0]).check(0)
+    for index, world in enumerate(worlds):
+        yield index, domain.checker(world).check
 
 
 def _space_information(
@@ -210,10 +256,10 @@ class _Session:
     book: _Bookkeeper
     config: dict[str, Any]
 
-    def solve(self, world: int, row: npt.NDArray[np.bool_]) -> dict[str, Any]:
-        """The JSON record of one LazyPRM solve on world ``world`` with its (E,) row of X."""
+    def solve(self, world: int, answer: EdgeAnswer) -> dict[str, Any]:
+        """The JSON record of one LazyPRM solve on world ``world`` whose edges ``answer`` decides."""
         ob, book = self.ob, self.book
-        book.reset(row)
+        book.reset(answer)
         planner = self.og.LazyPRM(self.roadmap)
         planner.setRange(float(self.config["connect_radius"]))
         planner.setMaxNearestNeighbors(1)
@@ -239,6 +285,8 @@ class _Session:
             "solved": bool(solved),
             "path_vertices": self._path_vertices(pdef) if solved else [],
             "checked_edges": list(book.checked),
+            "checked_free": list(book.checked.values()),
+            "check_s": book.check_s,
             "motion_calls": book.motion_calls,
             "connector_calls": book.connector_calls,
             "reverse_rejections": book.reverse_rejections,

@@ -52,17 +52,21 @@ from drd_planner.data.dataset_chunks import (
     save_chunk,
 )
 from drd_planner.data.dataset_file import Dataset, save_dataset
-from drd_planner.data.dataset_options import BuildOptions, DatasetRecipe
+from drd_planner.data.dataset_options import ALL_WORLDS, BuildOptions, DatasetRecipe
 from drd_planner.data.dataset_schedulers import run_tasks
 from drd_planner.data.dataset_worker import PROCESS_DOMAINS, graph_digest
 from drd_planner.data.domain_factory import factory_for, make_domain, world_model_params
 from drd_planner.data.library_builder import split_worlds
 from drd_planner.data.seeding import WORLD_SEED_RULE, library_seed, split_seed, world_seeds
+from drd_planner.data.world_sources import ResolvedSource, resolve_source, source_spec_defaults
 from drd_planner.domains.base import Domain
 from drd_planner.exceptions import DatasetError
 from drd_planner.progress import Progress
 
-__all__ = ["BuildReport", "build_dataset", "library_from_union"]
+__all__ = ["FILE_WORLD_RULE", "BuildReport", "build_dataset", "library_from_union"]
+
+#: How the worlds of a file source are numbered, as recorded in a dataset's provenance.
+FILE_WORLD_RULE = "world h is the h-th world of world_source in file order (world_seeds[h] = h)"
 
 
 def library_from_union(
@@ -138,19 +142,44 @@ class _Plan:
     tasks: tuple[ChunkTask, ...]
     build_key: str
     graph_sha256: str
+    source: ResolvedSource | None = None
+
+
+def _user_spec(recipe: DatasetRecipe) -> dict[str, Any]:
+    """The spec the user gave, under the values the recipe's file source sets for its domain (if any)."""
+    assert isinstance(recipe.domain, str)
+    given = dict(recipe.domain_spec or {})
+    return given if recipe.source is None else {**source_spec_defaults(recipe.source, recipe.domain), **given}
 
 
 def _recipe_domain(recipe: DatasetRecipe) -> Domain:
     """The recipe's domain: built from its name and spec, or the instance it holds."""
     if isinstance(recipe.domain, str):
-        return make_domain(recipe.domain, recipe.domain_spec, factory=recipe.domain_factory)
+        spec = recipe.domain_spec if recipe.source is None else _user_spec(recipe)
+        return make_domain(recipe.domain, spec, factory=recipe.domain_factory)
     if recipe.domain_spec is not None:
         raise DatasetError("give domain_spec only with a domain name, not with a domain instance")
     return recipe.domain
 
 
-def _check_domain(dom: Domain, world_model: str) -> None:
-    if world_model not in dom.world_models:
+def _with_source(recipe: DatasetRecipe, probe: Domain) -> tuple[Domain, ResolvedSource]:
+    """The recipe's file source resolved against ``probe`` (the domain of the user's spec), and the domain.
+
+    The domain is ``probe`` itself, or the domain of the spec the source completes (start, goal, extra states,
+    terrain keys).
+    """
+    assert recipe.source is not None
+    user_spec = _user_spec(recipe) if isinstance(recipe.domain, str) else dict(probe.spec())
+    wanted = None if recipe.num_worlds == ALL_WORLDS else recipe.num_worlds
+    resolved = resolve_source(recipe.source, probe, user_spec, wanted)
+    if resolved.spec is None:
+        return probe, resolved
+    factory = recipe.domain_factory if isinstance(recipe.domain, str) else factory_for(probe, None, True)
+    return make_domain(probe.name, resolved.spec, factory=factory), resolved
+
+
+def _check_domain(dom: Domain, world_model: str | None) -> None:
+    if world_model is not None and world_model not in dom.world_models:
         raise DatasetError(
             f"unknown world model {world_model!r} for domain {dom.name!r}; "
             f"choose one of: {', '.join(dom.world_models)}"
@@ -160,25 +189,35 @@ def _check_domain(dom: Domain, world_model: str) -> None:
 
 
 def _plan(recipe: DatasetRecipe, options: BuildOptions) -> _Plan:
-    dom = _recipe_domain(recipe)
+    dom, source = _recipe_domain(recipe), None
+    if recipe.source is not None:
+        dom, source = _with_source(recipe, dom)
     factory = factory_for(dom, recipe.domain_factory, options.parallel)
     spec_json = _canonical_json(dict(dom.spec()), f"domain {dom.name!r} spec")
-    _check_domain(dom, recipe.world_model)
+    _check_domain(dom, recipe.world_model if source is None or source.seeded else None)
     g_digest = graph_digest(dom.graph)
-    settings = {
+    num_worlds = recipe.num_worlds if source is None else source.num_worlds
+    settings: dict[str, Any] = {
         "domain": dom.name,
         "spec": json.loads(spec_json),
         "factory": factory,
         "world_model": recipe.world_model,
-        "num_worlds": recipe.num_worlds,
+        "num_worlds": num_worlds,
         "seed": recipe.seed,
         "chunk_size": options.chunk_size,
         "k": recipe.k,
         "graph_sha256": g_digest,
         "software_version": __version__,
     }
+    source_json = None
+    if source is not None:
+        source_json = _canonical_json(dict(source.worker_data), "world source")
+        settings["source"] = json.loads(source_json)
     build_key = hashlib.sha256(_canonical_json(settings, "build settings").encode()).hexdigest()
-    seeds = world_seeds(recipe.seed, recipe.num_worlds)
+    if source is None or source.seeded:
+        seeds = world_seeds(recipe.seed, num_worlds)
+    else:
+        seeds = np.arange(num_worlds, dtype=np.int64)
     size = options.chunk_size
     tasks = tuple(
         ChunkTask(
@@ -190,10 +229,11 @@ def _plan(recipe: DatasetRecipe, options: BuildOptions) -> _Plan:
             factory=factory,
             world_model=recipe.world_model,
             k=recipe.k,
+            source_json=source_json,
         )
-        for i, first in enumerate(range(0, recipe.num_worlds, size))
+        for i, first in enumerate(range(0, num_worlds, size))
     )
-    return _Plan(recipe, dom, spec_json, factory, seeds, tasks, build_key, g_digest)
+    return _Plan(recipe, dom, spec_json, factory, seeds, tasks, build_key, g_digest, source)
 
 
 def _finished_chunks(parts: Path, plan: _Plan) -> dict[int, ChunkResult]:
@@ -281,6 +321,13 @@ def _assemble(plan: _Plan, results: Mapping[int, ChunkResult], command: str | No
         "solvable_worlds": int(r.any(axis=1).sum()),
         "graph_sha256": plan.graph_sha256,
     }
+    model_params: dict[str, Any] = {}
+    if plan.source is None or plan.source.seeded:
+        model_params = world_model_params(dom, recipe.world_model)
+    if plan.source is not None:
+        provenance["world_source"] = dict(plan.source.provenance)
+        if not plan.source.seeded:
+            provenance["world_seed_rule"] = FILE_WORLD_RULE
     return Dataset(
         graph=graph,
         start=int(dom.start),
@@ -296,7 +343,7 @@ def _assemble(plan: _Plan, results: Mapping[int, ChunkResult], command: str | No
         domain_spec=json.loads(plan.spec_json),
         world_model=recipe.world_model,
         seed=recipe.seed,
-        world_model_params=world_model_params(dom, recipe.world_model),
+        world_model_params=model_params,
         check_metadata=dict(dom.check_metadata()),
         edge_trajectories=None if trajectories is None else tuple(trajectories),
         provenance=provenance,

@@ -58,12 +58,15 @@ class ChunkTask:
     Attributes:
         index: chunk number (0-based).
         first: index of the chunk's first world.
-        seeds: the chunk's world seeds (see :func:`~drd_planner.data.seeding.world_seeds`).
+        seeds: the chunk's world seeds (see :func:`~drd_planner.data.seeding.world_seeds`), or with a file
+            source that is not seeded, the worlds' 0-based indices in the source.
         domain: domain name.
         spec_json: the domain spec as canonical JSON (sorted keys).
         factory: "module:attribute" that rebuilds the domain, or None for the registry.
         world_model: world model name.
         k: Yen's k per world.
+        source_json: the world source's ``worker_data`` as canonical JSON (files with their SHA-256; see
+            :mod:`drd_planner.data.world_sources`), or None: worlds drawn from ``world_model``.
     """
 
     index: int
@@ -74,6 +77,7 @@ class ChunkTask:
     factory: str | None
     world_model: str
     k: int
+    source_json: str | None = None
 
 
 @dataclass(frozen=True)

@@ -17,13 +17,14 @@ import json
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from drd_planner.argtypes import bounded_float, bounded_int
 from drd_planner.command_errors import run_command
 from drd_planner.core.problem import Problem
+from drd_planner.data.source_cli import add_source_arguments
 from drd_planner.domains.base import DOMAIN_CLASSES
 from drd_planner.exceptions import DatasetError
 
@@ -83,13 +84,19 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
         DrdError: any user-triggered failure (the caller prints one line and exits 2).
     """
     from drd_planner.data.dataset_builder import build_dataset
-    from drd_planner.data.dataset_options import BuildOptions, DatasetRecipe
+    from drd_planner.data.dataset_options import ALL_WORLDS, BuildOptions, DatasetRecipe
+    from drd_planner.data.source_cli import check_required, print_spec, source_from_args, source_summary
 
+    if getattr(args, "print_spec", False):
+        return print_spec(args.domain)
+    error = getattr(args, "build_dataset_error", None) or _raise
+    check_required(args, error)
+    source = source_from_args(args, error)
     workers = args.workers if args.workers is not None else default_workers()
     recipe = DatasetRecipe(
         domain=args.domain,
-        world_model=args.world_model,
-        num_worlds=args.worlds,
+        world_model=args.world_model or "",
+        num_worlds=args.worlds if args.worlds is not None else ALL_WORLDS,
         seed=args.seed,
         domain_spec=parse_domain_spec(args.domain_spec),
         domain_factory=args.domain_factory,
@@ -97,6 +104,7 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
         max_paths=args.max_paths,
         test_fraction=args.test_fraction,
         include_trajectories=not args.no_trajectories,
+        source=source,
     )
     options = BuildOptions(
         workers=workers,
@@ -123,6 +131,9 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
         f"{report.num_chunks} chunks ({report.resumed_chunks} resumed) checked in "
         f"{report.eval_seconds:.2f} s on {where}, {report.total_seconds:.2f} s total"
     )
+    summary = source_summary(ds.provenance)
+    if summary is not None:
+        print(summary)
     if ds.test_ids.size == 0:
         print(
             f"note: no test worlds (--test-fraction {args.test_fraction:g} of {ds.num_worlds} worlds, or no "
@@ -131,23 +142,35 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
+def _raise(message: str) -> NoReturn:
+    """The argument error of a namespace that was not made by :func:`add_build_dataset_parser`."""
+    raise DatasetError(message)
+
+
 def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``build-dataset`` on an ``add_subparsers()`` object; returns the new parser."""
     p: argparse.ArgumentParser = subparsers.add_parser(
         "build-dataset",
-        help="sample worlds, check every edge (in parallel), build the path library and split",
+        help="sample worlds (or read them from files), check every edge in parallel, build library and split",
         description=(
-            "Sample worlds from a domain's world model, check every graph edge in every world (local "
-            "processes, or a Dask cluster with --scheduler), build the path library (Yen k shortest "
-            "paths per world, union, seeded subsample), R and the train/test split, and write a dataset "
-            "file. Finished chunks are kept in OUT.parts, so an interrupted build resumes where it stopped."
+            "Sample worlds from a domain's world model (or take them from files: MoveIt scenes, a terrain "
+            "grid, recorded map bags), check every graph edge in every world (local processes, or a Dask "
+            "cluster with --scheduler), build the path library (Yen k shortest paths per world, union, "
+            "seeded subsample), R and the train/test split, and write a dataset file. Finished chunks are "
+            "kept in OUT.parts, so an interrupted build resumes where it stopped."
         ),
     )
     p.add_argument("--domain", required=True, help=f"domain name ({', '.join(sorted(DOMAIN_CLASSES))})")
-    p.add_argument("--world-model", required=True, help="the domain's world model to sample")
-    p.add_argument("--worlds", type=_positive_int, required=True, help="number of worlds n")
-    p.add_argument("--seed", type=_non_negative_int, required=True, help="base seed (non-negative)")
-    p.add_argument("--out", required=True, help="dataset file to write (.npz)")
+    p.add_argument(
+        "--world-model", help="the domain's world model to sample (required without a file source)"
+    )
+    p.add_argument(
+        "--worlds",
+        type=_positive_int,
+        help="number of worlds n (required with --world-model and --terrain; files: the first n, default all)",
+    )
+    p.add_argument("--seed", type=_non_negative_int, help="base seed (non-negative; required)")
+    p.add_argument("--out", help="dataset file to write (.npz; required)")
     p.add_argument(
         "--workers", type=_positive_int, default=None, help="local worker processes (default: all CPUs)"
     )
@@ -165,7 +188,8 @@ def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-trajectories", action="store_true", help="do not store edge trajectories")
     p.add_argument("--keep-parts", action="store_true", help="keep OUT.parts after writing OUT")
     p.add_argument("--max-chunks", type=_positive_int, help="stop after this many new chunks (resume later)")
-    p.set_defaults(func=cmd_build_dataset)
+    add_source_arguments(p)
+    p.set_defaults(func=cmd_build_dataset, build_dataset_error=p.error)
     return p
 
 

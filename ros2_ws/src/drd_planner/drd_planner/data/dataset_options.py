@@ -17,10 +17,14 @@ from typing import Any
 import numpy as np
 
 from drd_planner.data.dataset_schedulers import choose_start_method
+from drd_planner.data.world_sources import WorldSourceRequest
 from drd_planner.domains.base import Domain
 from drd_planner.exceptions import DatasetError
 
-__all__ = ["BuildOptions", "DatasetRecipe"]
+__all__ = ["ALL_WORLDS", "BuildOptions", "DatasetRecipe"]
+
+#: ``num_worlds`` of a recipe with a file source that takes every world the files hold.
+ALL_WORLDS = 0
 
 
 def _positive(name: str, value: Any) -> int:
@@ -36,8 +40,10 @@ class DatasetRecipe:
     Attributes:
         domain: a domain name (built with ``domain_spec``) or a :class:`Domain` instance (its
             ``spec()`` is what workers rebuild it from).
-        world_model: one of the domain's ``world_models``.
-        num_worlds: n sampled worlds.
+        world_model: one of the domain's ``world_models``; with a ``source``, "" (the source names it:
+            ``moveit_scenes``, ``map_bags`` or ``terrain``).
+        num_worlds: n sampled worlds; with a file ``source``, the first n of its worlds, or
+            :data:`ALL_WORLDS` (0) for every one.
         seed: non-negative base seed (world, library and split seeds derive from it).
         domain_spec: spec for a domain given by name (None: the domain's defaults).
         domain_factory: "module:attribute" that rebuilds the domain in workers, for domains outside the
@@ -46,10 +52,14 @@ class DatasetRecipe:
         max_paths: library size cap m.
         test_fraction: share of all worlds held out for testing (drawn among solvable worlds).
         include_trajectories: store the domain's edge trajectories in the file.
+        source: where the worlds come from (:mod:`drd_planner.data.world_sources`): None draws them from
+            ``world_model``; a :class:`~drd_planner.data.world_sources.SceneFolder`,
+            :class:`~drd_planner.data.world_sources.MapBags` or
+            :class:`~drd_planner.data.world_sources.TerrainFile` takes them from the user's files.
 
     Raises:
-        DatasetError: a count that is not a positive integer, a negative seed, or a test fraction
-            outside [0, 1].
+        DatasetError: a count that is not a positive integer, a negative seed, a test fraction
+            outside [0, 1], or a world model given with a file source.
     """
 
     domain: str | Domain
@@ -62,9 +72,12 @@ class DatasetRecipe:
     max_paths: int = 500
     test_fraction: float = 0.1
     include_trajectories: bool = True
+    source: WorldSourceRequest | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "num_worlds", _positive("num_worlds", self.num_worlds))
+        self._check_source()
+        if self.source is None or self.num_worlds != ALL_WORLDS:
+            object.__setattr__(self, "num_worlds", _positive("num_worlds", self.num_worlds))
         object.__setattr__(self, "k", _positive("k", self.k))
         object.__setattr__(self, "max_paths", _positive("max_paths", self.max_paths))
         seed = self.seed
@@ -75,22 +88,35 @@ class DatasetRecipe:
             raise DatasetError(f"test fraction must lie in [0, 1], got {self.test_fraction}")
         object.__setattr__(self, "test_fraction", float(self.test_fraction))
 
+    def _check_source(self) -> None:
+        """With a file source, the world model is the source's (refused when another one is given)."""
+        if self.source is None:
+            return
+        label = self.source.world_model
+        if self.world_model not in ("", label):
+            flag = self.source.argv()[0]
+            raise DatasetError(
+                f"{flag} takes its worlds from files: leave out --world-model {self.world_model} "
+                f"(the dataset's world model is {label!r})"
+            )
+        object.__setattr__(self, "world_model", label)
+
     def command(self) -> str:
         """A ``drd build-dataset`` command line that recreates this dataset: only content-affecting options.
 
         ``--out``, ``--workers``, ``--scheduler`` and ``--chunk-size`` are left out, since they do not change
-        the file's contents, so a dataset's bytes do not depend on how it was computed.
+        the file's contents, so a dataset's bytes do not depend on how it was computed. A file source is given
+        by its flags with absolute paths; the files' SHA-256 are in the dataset's provenance (``world_source``),
+        so whether the files are still the ones it was built from can be checked.
         """
         name = self.domain if isinstance(self.domain, str) else self.domain.name
-        argv = ["drd", "build-dataset", "--domain", name, "--world-model", self.world_model]
-        argv += [
-            "--worlds",
-            str(self.num_worlds),
-            "--seed",
-            str(self.seed),
-            "--max-paths",
-            str(self.max_paths),
-        ]
+        argv = ["drd", "build-dataset", "--domain", name]
+        if self.source is None:
+            argv += ["--world-model", self.world_model, "--worlds", str(self.num_worlds)]
+        else:
+            argv += self.source.argv()
+            argv += ["--worlds", str(self.num_worlds)] if self.num_worlds != ALL_WORLDS else []
+        argv += ["--seed", str(self.seed), "--max-paths", str(self.max_paths)]
         argv += ["--test-fraction", repr(float(self.test_fraction))]
         if self.k != 5:
             argv += ["--k", str(self.k)]

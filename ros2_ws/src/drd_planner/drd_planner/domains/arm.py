@@ -1,4 +1,4 @@
-"""The 7-DoF arm domain: a joint-space roadmap of the Franka Panda, its worlds and sphere-model edge checks.
+"""The 7-DoF arm domain: a joint-space roadmap of the Franka Panda, its worlds and edge checks (spheres or meshes).
 
 Pieces (one concept per module):
 
@@ -30,6 +30,12 @@ from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.arm_checker import ArmEdgeChecker
 from drd_planner.domains.arm_description import check_description_size, check_robot_coordinates
+from drd_planner.domains.arm_mesh_checker import (
+    arm_link_meshes,
+    mesh_metadata,
+    mesh_model,
+    mesh_sweep_growth,
+)
 from drd_planner.domains.arm_params import DEFAULT_GOAL, DEFAULT_START, SPEC_KEYS, ArmParams
 from drd_planner.domains.arm_roadmap import EdgeSamples, build_roadmap
 from drd_planner.domains.arm_robot import ROBOT_MODELS, RobotLoader, default_panda_dir, robot_texts
@@ -61,7 +67,11 @@ __all__ = [
 
 
 class ArmDomain(OnlineDefaults):
-    """The arm domain (registry name ``"arm"``): Panda roadmap, world models and sphere edge checks.
+    """The arm domain (registry name ``"arm"``): Panda roadmap, world models and edge checks.
+
+    World checks use the spherized model (``collision_model: spheres``, the default: fast) or FCL BVH
+    meshes of the URDF's collision geometry (``meshes``, as MoveIt; see
+    :mod:`~drd_planner.domains.arm_mesh_checker`).
 
     Implements :class:`~drd_planner.domains.online.OnlineDomain` (worlds: :class:`ArmWorld`). From
     :class:`~drd_planner.domains.online.OnlineDefaults` it keeps: no vehicle sphere (the arm is checked as
@@ -74,7 +84,9 @@ class ArmDomain(OnlineDefaults):
             one model object).
 
     Raises:
-        ProblemError: invalid values, unreadable or invalid robot files, or start and goal not connected.
+        ProblemError: invalid values, unreadable or invalid robot files, a start, goal or extra state that
+            is not statically valid (the failing check and parameter named) or repeated, or one not connected
+            to the start.
     """
 
     name = "arm"
@@ -88,18 +100,7 @@ class ArmDomain(OnlineDefaults):
             self._robot = loader.model(*self._robot_texts)
         except GeometryError as exc:
             raise ProblemError(f"arm robot model: {exc}") from exc
-        if len(p.start) != self._robot.dof or len(p.goal) != self._robot.dof:
-            raise ProblemError(f"start and goal need {self._robot.dof} joint values")
-        self._graph = build_roadmap(
-            self._robot,
-            start=p.start,
-            goal=p.goal,
-            num_samples=p.num_samples,
-            k=p.k,
-            seed=p.seed,
-            resolution=p.resolution,
-            floor_z=p.floor_z,
-        )
+        self._graph = build_roadmap(self._robot, p)
         self.samples = EdgeSamples.of_graph(self._graph, p.resolution)
         self._sweep = ArmSweep(self._graph, self.samples)
         ends = np.array([p.start, p.goal], dtype=np.float64)
@@ -156,6 +157,11 @@ class ArmDomain(OnlineDefaults):
         return 1
 
     @property
+    def extra_vertices(self) -> range:
+        """The vertices of the spec's ``extra_states``: vertex ``2 + i`` is ``extra_states[i]``."""
+        return range(2, 2 + len(self._params.extra_states))
+
+    @property
     def world_models(self) -> tuple[str, ...]:
         """``("clutter", "table_clutter")``."""
         return WORLD_MODELS
@@ -172,21 +178,31 @@ class ArmDomain(OnlineDefaults):
     def checker(self, world: ArmWorld | Scene, *, robot: RobotModel | None = None) -> ArmEdgeChecker:
         """An edge checker for a world (scene with the domain margin) or a ready scene (its own margin).
 
+        The collision model is the spec's ``collision_model``: the spheres, or the URDF's collision meshes
+        (:mod:`~drd_planner.domains.arm_mesh_checker`; placed by ``robot``'s kinematics when given).
+
         Args:
             world: the obstacles.
             robot: another description of the same arm (see :meth:`robot_from_description`); its
                 self-collision is then tested too, since the roadmap was pruned for :attr:`robot` only.
+
+        Raises:
+            ProblemError: not a world or scene, or collision meshes that cannot be read.
         """
         scene = world.to_scene(margin=self.margin) if isinstance(world, ArmWorld) else world
         if not isinstance(scene, Scene):
             raise ProblemError(f"arm checker needs an ArmWorld or a Scene, got {type(world).__name__}")
-        other = robot is not None and robot is not self._robot
+        arm = robot if robot is not None else self._robot
+        model = None
+        if self._params.collision_model == "meshes":
+            model = mesh_model(arm, scene, arm_link_meshes(self._params, self._robot_texts[0]))
         return ArmEdgeChecker(
-            robot=robot if robot is not None else self._robot,
+            robot=arm,
             graph=self._graph,
             scene=scene,
             samples=self.samples,
-            self_collision=other,
+            self_collision=arm is not self._robot,
+            model=model,
         )
 
     def robot_from_description(self, urdf: str, *, limits: MapLimits = MapLimits.DEFAULT) -> RobotModel:
@@ -239,11 +255,17 @@ class ArmDomain(OnlineDefaults):
         return None
 
     def check_metadata(self) -> dict[str, Any]:
-        """How edges are checked: sampling resolution (rad), margin (m), collision model."""
+        """How edges are checked: sampling resolution (rad), margin (m), collision model (with its meshes)."""
+        meshes = (
+            mesh_metadata(arm_link_meshes(self._params, self._robot_texts[0]))
+            if self._params.collision_model == "meshes"
+            else {}
+        )
         return {
             "robot": self._robot.chain.robot_name,
             "joints": list(self._robot.chain.joint_names),
-            "collision_model": "spheres",
+            "collision_model": self._params.collision_model,
+            **meshes,
             "spheres": self._robot.spheres.count,
             "resolution_rad": self.resolution,
             "resolution_meaning": "max joint step between consecutive samples of a straight joint-space edge",
@@ -300,5 +322,16 @@ class ArmDomain(OnlineDefaults):
     def sweep_spheres(
         self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
     ) -> SweepSpheres:
-        """Per edge every robot sphere at every checked configuration, grown by half a sample step."""
-        return self._sweep.spheres(source, edges, robot if robot is not None else self._robot)
+        """Per edge every robot sphere at every checked configuration, grown by half a sample step.
+
+        Under the mesh model (``collision_model: meshes``) every sphere also grows by
+        :func:`~drd_planner.domains.arm_mesh_checker.mesh_sweep_growth`, so the swept spheres contain the
+        link meshes the checker tests (the meshes reach up to about 8 cm outside the Panda's spheres).
+        """
+        model = robot if robot is not None else self._robot
+        growth = (
+            mesh_sweep_growth(model, arm_link_meshes(self._params, self._robot_texts[0]))
+            if self._params.collision_model == "meshes"
+            else None
+        )
+        return self._sweep.spheres(source, edges, model, growth)

@@ -1,13 +1,24 @@
-"""The arm's edge checker: straight joint-space edges sampled at the check resolution, sphere model vs scene.
+"""The arm's edge checker: straight joint-space edges sampled at the check resolution, a collision model vs scene.
 
 The end vertices of an edge are checked first (cached per world), then the interior samples in bisection
-order, stopping at the first sphere that meets an obstacle (the scene's margin included). Forward
-kinematics is batched over all samples of an edge, and in :meth:`ArmEdgeChecker.check_many` over all
-samples of many edges at once. Each sample is tested in two levels through the scene API: one bounding
-sphere per link first, then the spheres of the links whose bounding sphere touches something.
+order, stopping at the first blocked sample. Forward kinematics is batched over all samples of an edge, and
+in :meth:`ArmEdgeChecker.check_many` over all samples of many edges at once.
+
+What "blocked" means is the checker's *collision model* (a :class:`ConfigurationTest`):
+
+- :class:`SphereTest` (``collision_model: spheres``, the default): the spherized arm, every sphere grown by
+  the scene margin, tested in two levels through the scene API (one bounding sphere per link first, then
+  the spheres of the links whose bounding sphere touches something);
+- :class:`~drd_planner.geometry.mesh_collider.MeshCollider` (``collision_model: meshes``, see
+  :mod:`drd_planner.domains.arm_mesh_checker`): the URDF's collision meshes as FCL BVH models.
+
+Both decide an edge's samples in the same order with the same early exit; self-collision (when asked for)
+is the sphere model's in both.
 """
 
 from __future__ import annotations
+
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -20,70 +31,54 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 
-__all__ = ["CHECK_BLOCK", "ArmEdgeChecker", "check_arm_edge"]
+__all__ = ["CHECK_BLOCK", "ArmEdgeChecker", "ConfigurationTest", "SphereTest", "check_arm_edge"]
 
 #: Interpolated configurations per forward-kinematics block in :meth:`ArmEdgeChecker.check_many`.
 CHECK_BLOCK = 4096
 
 
-class ArmEdgeChecker:
-    """Checks the edges of a joint-space graph against one collision scene.
+class ConfigurationTest(Protocol):
+    """A collision model of the arm against one scene: decides batches of configurations."""
 
-    Answers are cached: asking for an edge twice costs nothing the second time.
+    def base_free(self) -> bool:
+        """Whether the parts fixed to the root link (the same in every configuration) are free."""
+        ...
+
+    def groups_blocked(self, q: FloatArray, owner: IntArray, count: int) -> BoolArray:
+        """(count,) whether some configuration of each group hits the scene (moving parts only).
+
+        Args:
+            q: (N, D) configurations (rad); each group's rows consecutive and in check order.
+            owner: (N,) int64 group of each row, non-decreasing, in ``[0, count)``.
+            count: the number of groups.
+        """
+        ...
+
+
+class SphereTest:
+    """The sphere collision model: the robot's spheres, grown by the scene margin, against the scene.
 
     Args:
         robot: the robot (FK and spheres).
-        graph: the roadmap; ``vertex_states`` (V, D) in radians.
         scene: obstacles; its margin inflates every robot sphere.
-        resolution: max joint step between samples (rad); ignored when ``samples`` is given.
-        samples: precomputed :class:`EdgeSamples` of ``graph`` (shared between checkers of one domain).
-        self_collision: also test self-collision of every sample (needed only for graphs not built by
-            :func:`build_roadmap`, which already excludes self-colliding edges).
     """
 
-    def __init__(
-        self,
-        *,
-        robot: RobotModel,
-        graph: ExplicitGraph,
-        scene: Scene,
-        resolution: float = 0.05,
-        samples: EdgeSamples | None = None,
-        self_collision: bool = False,
-    ) -> None:
-        states = graph_states(graph)
-        if states.shape[1] != robot.dof:
-            raise ProblemError(f"graph states have {states.shape[1]} joints, the robot {robot.dof}")
+    def __init__(self, robot: RobotModel, scene: Scene) -> None:
         self.robot = robot
-        self.graph = graph
         self.scene = scene
-        self.samples = samples if samples is not None else EdgeSamples.of_graph(graph, resolution)
-        self.self_collision = self_collision
-        self._states = states
         self._fixed = np.nonzero(robot.spheres.frame_index == 0)[0]
         self._moving_groups = np.nonzero(robot.groups.frame_index > 0)[0]
         self._group_radii = robot.groups.radii[self._moving_groups]
-        self._edge_state = np.zeros(graph.num_edges, dtype=np.int8)  # 0 unknown, 1 free, -1 blocked
-        self._vertex_state = np.zeros(graph.num_vertices, dtype=np.int8)
         self._base_free: bool | None = None
-        self.configurations_checked = 0
 
-    # ----------------------------------------------------------------------------------------------
-
-    def _edge_ids(self, edges: npt.ArrayLike) -> IntArray:
-        """Validated (K,) edge ids."""
-        ids = np.asarray(edges, dtype=np.int64).reshape(-1)
-        if ids.size and (ids.min() < 0 or ids.max() >= self.graph.num_edges):
-            raise ProblemError(f"edge ids must lie in [0, {self.graph.num_edges})")
-        return ids
-
-    def _base_is_free(self) -> bool:
-        """Whether the spheres fixed to the root link (the same in every configuration) are free."""
+    def base_free(self) -> bool:
+        """Whether the spheres fixed to the root link are free (cached)."""
         if self._base_free is None:
             if self._fixed.size == 0:
                 self._base_free = True
             else:
-                centres = self.robot.sphere_centres(self._states[:1])[0, self._fixed]
+                zero = np.zeros((1, self.robot.dof))
+                centres = self.robot.sphere_centres(zero)[0, self._fixed]
                 self._base_free = not self.scene.spheres_collide(
                     centres, self.robot.spheres.radii[self._fixed]
                 )
@@ -96,7 +91,6 @@ class ArmEdgeChecker:
             ``(config, sphere, centres)``: for each of the C candidate spheres its configuration (row of
             ``q``), sphere index and (C, 3) centre (m), ordered by configuration.
         """
-        self.configurations_checked += q.shape[0]
         frames = self.robot.fk.frames(q)
         groups = self.robot.group_centres_from_frames(frames)[:, self._moving_groups]
         radii = np.broadcast_to(self._group_radii, groups.shape[:2]).reshape(-1)
@@ -111,16 +105,96 @@ class ArmEdgeChecker:
         centres = self.robot.sphere_centres_from_frames(frames[configs])[row_of, sphere]
         return config, sphere, centres
 
-    def _blocked_configs(self, q: FloatArray) -> BoolArray:
-        """(N,) True where a configuration's moving spheres hit the scene (or it self-collides)."""
+    def groups_blocked(self, q: FloatArray, owner: IntArray, count: int) -> BoolArray:
+        """(count,) whether a moving sphere of some configuration of each group hits the scene.
+
+        One group (one edge's interior) stops at the first blocked sphere in row order; several groups are
+        decided together, every configuration of the batch at once.
+        """
+        blocked = np.zeros(count, dtype=bool)
+        if q.shape[0] == 0:
+            return blocked
         config, sphere, centres = self._candidates(q)
-        blocked = np.zeros(q.shape[0], dtype=bool)
-        if config.size:
-            hits = self.scene.spheres_collide_mask(centres, self.robot.spheres.radii[sphere])
-            blocked[config[hits]] = True
-        if self.self_collision:
-            blocked |= self.robot.self_collision(q)
+        if config.size == 0:
+            return blocked
+        radii = self.robot.spheres.radii[sphere]
+        if count == 1:
+            blocked[0] = self.scene.spheres_collide(centres, radii)
+            return blocked
+        hits = self.scene.spheres_collide_mask(centres, radii)
+        blocked[np.unique(owner[config[hits]])] = True
         return blocked
+
+
+class ArmEdgeChecker:
+    """Checks the edges of a joint-space graph against one collision scene.
+
+    Answers are cached: asking for an edge twice costs nothing the second time.
+
+    Args:
+        robot: the robot (FK, spheres, self-collision).
+        graph: the roadmap; ``vertex_states`` (V, D) in radians.
+        scene: obstacles; its margin applies.
+        resolution: max joint step between samples (rad); ignored when ``samples`` is given.
+        samples: precomputed :class:`EdgeSamples` of ``graph`` (shared between checkers of one domain).
+        self_collision: also test self-collision of every sample (needed only for graphs not built by
+            :func:`build_roadmap`, which already excludes self-colliding edges); the sphere model's test.
+        model: the collision model against ``scene`` (default: :class:`SphereTest` of ``robot``).
+
+    Attributes:
+        configurations_checked: configurations handed to the collision model so far.
+    """
+
+    def __init__(
+        self,
+        *,
+        robot: RobotModel,
+        graph: ExplicitGraph,
+        scene: Scene,
+        resolution: float = 0.05,
+        samples: EdgeSamples | None = None,
+        self_collision: bool = False,
+        model: ConfigurationTest | None = None,
+    ) -> None:
+        states = graph_states(graph)
+        if states.shape[1] != robot.dof:
+            raise ProblemError(f"graph states have {states.shape[1]} joints, the robot {robot.dof}")
+        self.robot = robot
+        self.graph = graph
+        self.scene = scene
+        self.samples = samples if samples is not None else EdgeSamples.of_graph(graph, resolution)
+        self.self_collision = self_collision
+        self.model: ConfigurationTest = model if model is not None else SphereTest(robot, scene)
+        self._states = states
+        self._edge_state = np.zeros(graph.num_edges, dtype=np.int8)  # 0 unknown, 1 free, -1 blocked
+        self._vertex_state = np.zeros(graph.num_vertices, dtype=np.int8)
+        self.configurations_checked = 0
+
+    # ----------------------------------------------------------------------------------------------
+
+    def _edge_ids(self, edges: npt.ArrayLike) -> IntArray:
+        """Validated (K,) edge ids."""
+        ids = np.asarray(edges, dtype=np.int64).reshape(-1)
+        if ids.size and (ids.min() < 0 or ids.max() >= self.graph.num_edges):
+            raise ProblemError(f"edge ids must lie in [0, {self.graph.num_edges})")
+        return ids
+
+    def _groups_blocked(self, q: FloatArray, owner: IntArray, count: int) -> BoolArray:
+        """(count,) the collision model's answer for groups of configurations, self-collision added."""
+        self.configurations_checked += q.shape[0]
+        if self.self_collision and q.shape[0]:
+            own = np.zeros(count, dtype=bool)
+            own[np.unique(owner[self.robot.self_collision(q)])] = True
+            if count == 1 and own[0]:
+                return own
+            blocked: BoolArray = own | self.model.groups_blocked(q, owner, count)
+            return blocked
+        return self.model.groups_blocked(q, owner, count)
+
+    def _blocked_configs(self, q: FloatArray) -> BoolArray:
+        """(N,) True where a configuration's moving parts hit the scene (or it self-collides)."""
+        rows = np.arange(q.shape[0], dtype=np.int64)
+        return self._groups_blocked(q, rows, q.shape[0])
 
     def _vertices_free(self, vertices: IntArray) -> BoolArray:
         """(K,) whether each vertex configuration is free (cached)."""
@@ -136,10 +210,7 @@ class ArmEdgeChecker:
         q = self.samples.configurations(self.graph, edge)
         if q.shape[0] == 0:
             return True
-        if self.self_collision and bool(self.robot.self_collision(q).any()):
-            return False
-        _, sphere, centres = self._candidates(q)
-        return not (sphere.size and self.scene.spheres_collide(centres, self.robot.spheres.radii[sphere]))
+        return not bool(self._groups_blocked(q, np.zeros(q.shape[0], dtype=np.int64), 1)[0])
 
     # ----------------------------------------------------------------------------------------------
 
@@ -151,7 +222,7 @@ class ArmEdgeChecker:
         q = np.asarray(states, dtype=np.float64)
         if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != self._states.shape[1] or not np.all(np.isfinite(q)):
             raise ProblemError(f"a motion must be a finite (K, {self._states.shape[1]}) array, got {q.shape}")
-        return self._base_is_free() and not bool(self._blocked_configs(q).any())
+        return self.model.base_free() and not bool(self._blocked_configs(q).any())
 
     def check(self, edge: int) -> bool:
         """True when ``edge`` is free: end vertices first, then interior samples in bisection order."""
@@ -159,7 +230,7 @@ class ArmEdgeChecker:
         if self._edge_state[e] == 0:
             u, v = self.graph.edges[e]
             free = (
-                self._base_is_free()
+                self.model.base_free()
                 and bool(self._vertices_free(np.array([u, v])).all())
                 and self._interior_free(e)
             )
@@ -171,7 +242,7 @@ class ArmEdgeChecker:
         ids = self._edge_ids(edges)
         todo = np.unique(ids[self._edge_state[ids] == 0])
         if todo.size:
-            if not self._base_is_free():
+            if not self.model.base_free():
                 self._edge_state[todo] = -1
             else:
                 ends = self.graph.edges[todo]
@@ -198,9 +269,8 @@ class ArmEdgeChecker:
             u = self._states[self.graph.edges[block[owner], 0]]
             v = self._states[self.graph.edges[block[owner], 1]]
             q = u + self.samples.fractions[sample_ids][:, None] * (v - u)
-            blocked = self._blocked_configs(q) if q.shape[0] else np.zeros(0, dtype=bool)
-            hits = np.bincount(owner[blocked], minlength=block.shape[0])
-            self._edge_state[block] = np.where(hits > 0, -1, 1)
+            blocked = self._groups_blocked(q, owner, block.shape[0])
+            self._edge_state[block] = np.where(blocked, -1, 1)
             start = stop
 
 

@@ -1,12 +1,14 @@
 """The arm's joint-space roadmap: statically valid configurations, k-nearest edges, interior edge samples.
 
-Roadmap: scrambled Halton samples (``scipy.stats.qmc``, seeded) within the joint limits plus the
-start and goal; only *statically valid* configurations are kept (no self-collision between the
-checked sphere pairs, no moving sphere below the floor plane). Each vertex is joined to its k nearest
-neighbours (Euclidean joint-space distance, ``cKDTree``); an edge is kept when every interpolated
-configuration along it is statically valid as well, so self-collision never has to be tested again per
-world. Only the connected component of the start is kept; the goal must be in it. Edge length (cost) =
-joint-space Euclidean length in radians.
+Roadmap: the *anchors* (vertex 0 the start, 1 the goal, 2 + i the spec's ``extra_states[i]``, e.g. the
+start and goal states of a scene set's MoveIt requests) plus scrambled Halton samples (``scipy.stats.qmc``,
+seeded) within the joint limits; only *statically valid* configurations are kept (within the joint limits,
+no self-collision between the checked sphere pairs, no moving sphere below the floor plane), and an anchor
+that is not is refused with the failing check and the parameter that changes it. Each vertex is joined to
+its k nearest neighbours (Euclidean joint-space distance, ``cKDTree``); an edge is kept when every
+interpolated configuration along it is statically valid as well, so self-collision never has to be tested
+again per world. Only the connected component of the start is kept; every anchor must be in it. Edge
+length (cost) = joint-space Euclidean length in radians.
 
 :class:`EdgeSamples` holds the interior samples of every edge at the check resolution (no joint moves
 more than ``resolution`` radians between samples), each edge's in bisection order.
@@ -26,12 +28,22 @@ from scipy.stats import qmc
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.domains.arm_static import static_problems
+from drd_planner.domains.arm_params import ArmParams
+from drd_planner.domains.arm_static import WHERE, floor_accepting, lowest_bottoms, static_problems
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.ordering import bisection_order
 from drd_planner.geometry.robot import RobotModel
 
-__all__ = ["EdgeSamples", "build_roadmap", "graph_states", "segment_counts", "statically_valid"]
+__all__ = [
+    "DUPLICATE_TOLERANCE",
+    "EdgeSamples",
+    "anchor_names",
+    "anchor_states",
+    "build_roadmap",
+    "graph_states",
+    "segment_counts",
+    "statically_valid",
+]
 
 
 def statically_valid(robot: RobotModel, q: npt.ArrayLike, *, floor_z: float | None = 0.0) -> BoolArray:
@@ -107,76 +119,155 @@ def graph_states(graph: ExplicitGraph) -> FloatArray:
     return graph.vertex_states
 
 
-def build_roadmap(
-    robot: RobotModel,
-    *,
-    start: npt.ArrayLike,
-    goal: npt.ArrayLike,
-    num_samples: int,
-    k: int,
-    seed: int,
-    resolution: float,
-    floor_z: float | None = 0.0,
-) -> ExplicitGraph:
-    """A statically valid k-nearest-neighbour roadmap; vertex 0 is ``start``, vertex 1 ``goal``.
+def build_roadmap(robot: RobotModel, params: ArmParams) -> ExplicitGraph:
+    """A statically valid k-nearest-neighbour roadmap of ``params`` (:class:`ArmParams`).
+
+    Vertex 0 is ``params.start``, vertex 1 ``params.goal`` and vertex ``2 + i`` is
+    ``params.extra_states[i]`` (the *anchors*); the Halton samples that are statically valid follow, then
+    every vertex is joined to its ``params.k`` nearest neighbours. Only the connected component of the
+    start is kept, and every anchor must be in it, so the anchors keep their ids. With no extra states the
+    roadmap is the same, byte for byte, as before extra states existed.
 
     Args:
         robot: the robot (limits, spheres, self-collision pairs).
-        start: (D,) start configuration (rad).
-        goal: (D,) goal configuration (rad).
-        num_samples: Halton samples drawn (before dropping invalid ones).
-        k: neighbours per vertex (edges are the symmetric union).
-        seed: Halton scrambling seed.
-        resolution: max joint step (rad) when validating edges.
-        floor_z: floor height (m) for the static test (None: no floor).
+        params: start, goal, extra_states (rad), num_samples, k, seed (Halton scrambling), resolution (rad,
+            max joint step when validating edges) and floor_z (m; None: no floor); the robot files of
+            ``params`` are not read here.
 
     Returns:
         An undirected graph with edges ``[u, v]``, u < v, sorted; ``vertex_states`` (V, D).
 
     Raises:
-        ProblemError: bad arguments, start or goal not statically valid, or start and goal disconnected.
+        ProblemError: bad sizes; an anchor with the wrong number of joint values, not statically valid
+            (the failing check and the parameter that changes it named) or repeated; an anchor not
+            connected to the start (the num_samples and k to try named).
     """
-    if num_samples < 1 or k < 1:
-        raise ProblemError(f"roadmap needs num_samples >= 1 and k >= 1, got {num_samples}, {k}")
-    ends = robot.fk.as_configurations(np.stack([np.asarray(start, float), np.asarray(goal, float)]))
-    valid_ends = statically_valid(robot, ends, floor_z=floor_z)
-    for name, end, ok in zip(("start", "goal"), ends, valid_ends.tolist(), strict=True):
-        if not ok:
-            why = "; ".join(static_problems(robot, end, floor_z=floor_z, name=name))
-            raise ProblemError(f"{name} configuration is not statically valid: {why}")
-    unit = qmc.Halton(d=robot.dof, scramble=True, seed=seed).random(num_samples)
+    if params.num_samples < 1 or params.k < 1:
+        raise ProblemError(
+            f"roadmap needs num_samples >= 1 and k >= 1, got {params.num_samples}, {params.k}: "
+            f"change them {WHERE}"
+        )
+    anchors = anchor_states(robot, params)
+    unit = qmc.Halton(d=robot.dof, scramble=True, seed=params.seed).random(params.num_samples)
     samples = robot.lower + unit * (robot.upper - robot.lower)
-    samples = samples[statically_valid(robot, samples, floor_z=floor_z)]
-    states = np.concatenate([ends, samples])
+    samples = samples[statically_valid(robot, samples, floor_z=params.floor_z)]
+    states = np.concatenate([anchors, samples])
+    pairs, lengths = _valid_edges(robot, states, params)
+    return _start_component(states, pairs, lengths, anchors.shape[0], params)
+
+
+def anchor_names(num_extra: int) -> list[str]:
+    """The spec names of the anchors: ``start``, ``goal``, ``extra_states[0]`` ... ``extra_states[M-1]``."""
+    return ["start", "goal", *(f"extra_states[{i}]" for i in range(num_extra))]
+
+
+def anchor_states(robot: RobotModel, params: ArmParams) -> FloatArray:
+    """(2 + M, D) start, goal and extra states (rad), each checked for size, static validity and repeats.
+
+    Raises:
+        ProblemError: the first anchor with the wrong number of joint values; the first one that is not
+            statically valid (which check, which parameter; the other invalid ones listed); the first extra
+            state within :data:`DUPLICATE_TOLERANCE` of the start, the goal or an earlier extra state.
+    """
+    rows = [params.start, params.goal, *params.extra_states]
+    names = anchor_names(len(params.extra_states))
+    for name, row in zip(names, rows, strict=True):
+        if len(row) != robot.dof:
+            raise ProblemError(
+                f"{name} has {len(row)} joint values; the arm needs {robot.dof} joint values "
+                f"({', '.join(robot.chain.joint_names)}): change {name} {WHERE}"
+            )
+    anchors = np.array(rows, dtype=np.float64).reshape(len(rows), robot.dof)
+    invalid = np.flatnonzero(~statically_valid(robot, anchors, floor_z=params.floor_z)).tolist()
+    if invalid:
+        first = invalid[0]
+        why = "; ".join(static_problems(robot, anchors[first], floor_z=params.floor_z, name=names[first]))
+        bottoms = lowest_bottoms(robot, anchors)
+        if params.floor_z is not None and np.count_nonzero(bottoms < params.floor_z) > 1:
+            why += (
+                f"; floor_z = {floor_accepting(float(bottoms.min())):g} passes the floor test of all "
+                f"{np.count_nonzero(bottoms < params.floor_z)} states below the floor"
+            )
+        also = (
+            f" (also not statically valid: {_listed([names[i] for i in invalid[1:]])})" if invalid[1:] else ""
+        )
+        raise ProblemError(f"{names[first]} configuration is not statically valid: {why}{also}")
+    _refuse_repeats(anchors, names)
+    return anchors
+
+
+#: Two anchors whose joint values all differ by at most this (rad) are the same configuration (refused).
+DUPLICATE_TOLERANCE = 1e-9
+
+
+def _refuse_repeats(anchors: FloatArray, names: list[str]) -> None:
+    """ProblemError for the first extra state (index >= 2) that repeats an earlier anchor."""
+    close = cKDTree(anchors).query_pairs(DUPLICATE_TOLERANCE, p=np.inf, output_type="ndarray")
+    close = np.sort(close, axis=1)
+    close = close[close[:, 1] >= 2]
+    if close.shape[0]:
+        later = int(close[:, 1].min())
+        earlier = int(close[close[:, 1] == later, 0].min())
+        raise ProblemError(
+            f"{names[later]} repeats {names[earlier]} (every joint within {DUPLICATE_TOLERANCE:g} rad): give "
+            "each extra state once and none equal to start or goal (vertex 2 + i is extra_states[i]), e.g. "
+            "numpy.unique(states, axis=0)"
+        )
+
+
+def _listed(names: list[str], most: int = 10) -> str:
+    """``a, b, c`` with at most ``most`` names, then how many more."""
+    shown = ", ".join(names[:most])
+    return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
+
+
+def _valid_edges(robot: RobotModel, states: FloatArray, params: ArmParams) -> tuple[IntArray, FloatArray]:
+    """(E, 2) k-nearest pairs u < v, sorted, whose every interior sample is statically valid; (E,) lengths."""
     count = states.shape[0]
-    kk = min(k + 1, count)
+    kk = min(params.k + 1, count)
     _, neighbours = cKDTree(states).query(states, kk)
     pairs = np.stack([np.repeat(np.arange(count), kk - 1), neighbours[:, 1:].ravel()], axis=1)
     pairs = np.unique(np.sort(pairs, axis=1), axis=0).astype(np.int64)
     pairs = pairs[pairs[:, 0] != pairs[:, 1]]
     lengths = np.linalg.norm(states[pairs[:, 1]] - states[pairs[:, 0]], axis=1)
     candidate = ExplicitGraph(pairs, lengths, count, directed=False, vertex_states=states)
-    samples_of = EdgeSamples.of_graph(candidate, resolution)
+    samples_of = EdgeSamples.of_graph(candidate, params.resolution)
     interior = states[pairs[samples_of.edge_of, 0]] + samples_of.fractions[:, None] * (
         states[pairs[samples_of.edge_of, 1]] - states[pairs[samples_of.edge_of, 0]]
     )
-    bad_sample = ~statically_valid(robot, interior, floor_z=floor_z)
+    bad_sample = ~statically_valid(robot, interior, floor_z=params.floor_z)
     keep = np.bincount(samples_of.edge_of[bad_sample], minlength=pairs.shape[0]) == 0
-    pairs, lengths = pairs[keep], lengths[keep]
+    return pairs[keep], lengths[keep]
+
+
+def _start_component(
+    states: FloatArray, pairs: IntArray, lengths: FloatArray, num_anchors: int, params: ArmParams
+) -> ExplicitGraph:
+    """The graph of the start's connected component (vertices keep their order); every anchor must be in it."""
+    count = states.shape[0]
     adjacency = coo_array((np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(count, count))
     _, labels = connected_components(adjacency, directed=False)
-    if labels[0] != labels[1]:
+    apart = np.flatnonzero(labels[:num_anchors] != labels[0]).tolist()
+    if apart:
+        component_size = int(np.count_nonzero(labels == labels[0]))
+        names = anchor_names(num_anchors - 2)
+        verb = "is" if len(apart) == 1 else "are"
+        what = (
+            "start and goal are not connected"
+            if apart[0] == 1
+            else f"{_listed([names[i] for i in apart])} {verb} not connected to the start"
+        )
         raise ProblemError(
-            f"start and goal are not connected in the roadmap (num_samples={num_samples}, k={k}, "
-            f"seed={seed}); raise num_samples or k"
+            f"{what} in the roadmap (num_samples={params.num_samples}, k={params.k}, seed={params.seed}; "
+            f"the start's component has {component_size} of {count} vertices): raise num_samples "
+            f"(e.g. to {2 * params.num_samples}) or k (e.g. to {params.k + 4}) {WHERE}"
         )
     component = np.nonzero(labels == labels[0])[0]
     renumber = np.full(count, -1, dtype=np.int64)
     renumber[component] = np.arange(component.shape[0])
     in_component = labels[pairs[:, 0]] == labels[0]
-    new_pairs = renumber[pairs[in_component]]
     return ExplicitGraph(
-        new_pairs,
+        renumber[pairs[in_component]],
         lengths[in_component],
         int(component.shape[0]),
         directed=False,

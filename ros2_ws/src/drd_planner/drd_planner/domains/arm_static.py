@@ -8,22 +8,33 @@ the floor (which link reaches how low, and the ``floor_z`` parameter that sets t
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.arrays import FloatArray
 from drd_planner.geometry.robot import RobotModel
 
-__all__ = ["static_problems"]
+__all__ = ["WHERE", "floor_accepting", "lowest_bottoms", "static_problems"]
+
+
+#: Where the user changes a parameter named in a message.
+WHERE = "in the arm spec (--domain-spec)"
 
 
 def static_problems(robot: RobotModel, q: npt.ArrayLike, *, floor_z: float | None, name: str) -> list[str]:
     """The checks the (D,) configuration ``q`` fails, one sentence each; empty when it is statically valid.
 
+    Each sentence names the check (joint limits: joint, value and range; self-collision: the two links;
+    floor: the link whose sphere reaches lowest, how low, and ``floor_z``) and the spec parameters that
+    change the outcome (``name`` itself, ``floor_z`` with the value that would accept ``q``, ``srdf_path``).
+
     Args:
         robot: the robot (limits, spheres, self-collision pairs).
         q: the configuration (rad).
         floor_z: the floor height of the static test (m); None: no floor.
-        name: what ``q`` is to the user (``"start"``, ``"goal"``), the parameter that changes it.
+        name: what ``q`` is in the spec (``"start"``, ``"goal"``, ``"extra_states[3]"``).
     """
     qa = robot.fk.as_configurations(np.asarray(q, dtype=np.float64).reshape(1, -1))
     config = qa[0]
@@ -34,20 +45,44 @@ def static_problems(robot: RobotModel, q: npt.ArrayLike, *, floor_z: float | Non
             f"{robot.chain.joint_names[j]} = {config[j]:.3f} not in [{robot.lower[j]:.3f}, {robot.upper[j]:.3f}]"
             for j in outside.tolist()
         )
-        problems.append(f"outside the joint limits ({joints}): change {name}")
+        problems.append(f"outside the joint limits ({joints} rad): change {name} {WHERE}")
     if bool(robot.self_collision(qa)[0]):
-        problems.append(f"self-colliding ({_touching_links(robot, qa)}): change {name}")
+        problems.append(
+            f"self-colliding ({_touching_links(robot, qa)}): change {name} {WHERE}, or exclude the pair in the "
+            "SRDF (srdf_path)"
+        )
     if floor_z is not None:
-        moving = np.flatnonzero(robot.spheres.frame_index > 0)
-        bottoms = robot.sphere_centres(qa)[0, moving, 2] - robot.spheres.radii[moving]
-        lowest = int(np.argmin(bottoms))
-        if bottoms[lowest] < floor_z:
-            link = robot.chain.link_names[int(robot.spheres.link_index[moving[lowest]])]
-            problems.append(
-                f"below the floor ({link} reaches down to z = {bottoms[lowest]:.3f} m, the floor is at "
-                f"floor_z = {floor_z:g} m): change {name}, or lower floor_z (null: no floor test)"
-            )
+        problems.extend(_floor_problem(robot, qa, floor_z, name))
     return problems
+
+
+def lowest_bottoms(robot: RobotModel, q: npt.ArrayLike) -> FloatArray:
+    """(N,) height (m) of the lowest point of any moving link's sphere, for (N, D) configurations (rad)."""
+    qa = robot.fk.as_configurations(q)
+    moving = robot.spheres.frame_index > 0
+    bottoms = robot.sphere_centres(qa)[:, moving, 2] - robot.spheres.radii[moving]
+    out: FloatArray = bottoms.min(axis=1) if bottoms.shape[1] else np.full(qa.shape[0], np.inf)
+    return out
+
+
+def floor_accepting(lowest: float) -> float:
+    """The highest floor height (m) on a centimetre grid that accepts a lowest sphere bottom ``lowest`` (m)."""
+    return math.floor(lowest * 100.0 - 1e-9) / 100.0
+
+
+def _floor_problem(robot: RobotModel, qa: npt.NDArray[np.float64], floor_z: float, name: str) -> list[str]:
+    """The floor sentence for the (1, D) configuration ``qa``, or none when every moving sphere is above."""
+    moving = np.flatnonzero(robot.spheres.frame_index > 0)
+    bottoms = robot.sphere_centres(qa)[0, moving, 2] - robot.spheres.radii[moving]
+    lowest = int(np.argmin(bottoms))
+    if bottoms[lowest] >= floor_z:
+        return []
+    link = robot.chain.link_names[int(robot.spheres.link_index[moving[lowest]])]
+    return [
+        f"below the floor (a sphere of {link} reaches down to z = {bottoms[lowest]:.3f} m, the floor is at "
+        f"floor_z = {floor_z:g} m): set floor_z to {floor_accepting(float(bottoms[lowest])):g} or lower, or "
+        f"null (no floor test), {WHERE}, or change {name}"
+    ]
 
 
 def _touching_links(robot: RobotModel, qa: npt.NDArray[np.float64]) -> str:

@@ -86,10 +86,24 @@ class ArmSweep:
         reach = np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, interior.shape[0] + 2)
         return np.concatenate([states[[u, v]], interior]), reach
 
-    def spheres(self, source: EdgeSource, edges: Sequence[int], robot: RobotModel) -> SweepSpheres:
-        """Per edge (M, 3) centres and (M,) reach of every robot sphere at every checked configuration."""
+    def spheres(
+        self,
+        source: EdgeSource,
+        edges: Sequence[int],
+        robot: RobotModel,
+        growth: FloatArray | None = None,
+    ) -> SweepSpheres:
+        """Per edge (M, 3) centres and (M,) reach (m) of every robot sphere at every checked configuration.
+
+        Args:
+            source: the planning session whose graph edges and motions are swept.
+            edges: edge ids (into ``source``'s graph).
+            robot: the arm model whose spheres sweep.
+            growth: (S,) metres added to every sphere radius first (None: none): under the mesh collision
+                model, the growth that makes the spheres contain the link meshes.
+        """
         rates = self.rates(robot)
-        radii = robot.spheres.radii
+        radii = robot.spheres.radii if growth is None else robot.spheres.radii + growth
         blocks: list[FloatArray] = []
         reaches: list[FloatArray] = []
         for e in edges:

@@ -4,7 +4,7 @@ Pieces (one concept per module):
 
 - :mod:`~drd_planner.domains.helicopter_lattice`: the state lattice and every edge's sampled trajectory;
 - :mod:`~drd_planner.domains.helicopter_worlds`: the world models (``"wires"``, ``"canyon"``, ``"terrain"``,
-  each with optional no-fly zones) and the scene of a world;
+  ``"corridors"``, each with optional no-fly zones) and the scene of a world;
 - :mod:`~drd_planner.domains.helicopter_checker`: the sphere-sweep edge checker the node also uses.
 
 - :mod:`~drd_planner.domains.helicopter_spec`: the spec (:class:`HelicopterParams`).
@@ -152,7 +152,7 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
 
     @property
     def world_models(self) -> tuple[str, ...]:
-        """``("wires", "canyon", "terrain")``."""
+        """``("wires", "canyon", "terrain", "corridors")``."""
         return WORLD_MODELS
 
     @property

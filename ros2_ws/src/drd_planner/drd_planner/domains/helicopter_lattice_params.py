@@ -96,21 +96,23 @@ class LatticeParams:
     """Parameters of the helicopter lattice (all JSON-able; see :mod:`~drd_planner.domains.helicopter_lattice`).
 
     Attributes:
-        x_range: (min, max) x of the grid, metres.
-        y_range: (min, max) y of the grid, metres.
-        xy_spacing: grid spacing in x and y, metres.
-        z_levels: increasing altitudes of the levels, metres.
-        turning_radius: Dubins turning radius, metres.
-        max_heading_deg: largest |heading| kept, degrees (180 keeps all 8 headings).
-        sample_spacing: largest arc-length step between trajectory samples, metres.
-        climb: which primitives get climb/descend variants: "none", "straight" or "all".
-        max_climb_gradient: largest |dz| / horizontal length of a climbing primitive.
-        start: (x, y) metres of the start; heading 0, altitude level ``start_level``.
-        goal: (x, y) metres of the goal; heading 0, altitude level ``goal_level``.
-        start_level: index into ``z_levels`` of the start (-1: the middle level).
-        goal_level: index into ``z_levels`` of the goal (-1: the middle level).
-        axis_primitives: (dx cells, dy cells, heading steps) for heading 0.
-        diagonal_primitives: (dx cells, dy cells, heading steps) for heading 45 degrees.
+        x_range: (min, max) x of the grid (m).
+        y_range: (min, max) y of the grid (m).
+        xy_spacing: grid spacing in x and y (m).
+        z_levels: increasing, equally spaced altitudes of the levels (m).
+        turning_radius: Dubins turning radius (m).
+        max_heading_deg: largest |heading| kept (deg); 180 keeps all 8 headings.
+        sample_spacing: largest arc-length step between trajectory samples (m), at most ``vehicle_radius``.
+        climb: which primitives get climb/descend variants (name): "none", "straight" or "all".
+        max_climb_gradient: largest |dz| / horizontal length of a climbing primitive (ratio).
+        start: (x, y) of the start (m); heading 0, altitude level ``start_level``.
+        goal: (x, y) of the goal (m); heading 0, altitude level ``goal_level``.
+        start_level: position in ``z_levels`` of the start (index); -1: the middle level.
+        goal_level: position in ``z_levels`` of the goal (index); -1: the middle level.
+        axis_primitives: motion primitives for heading 0 (cells): [dx cells, dy cells, heading steps of
+            45 degrees] each.
+        diagonal_primitives: motion primitives for heading 45 degrees (cells): [dx cells, dy cells, heading
+            steps of 45 degrees] each.
     """
 
     x_range: tuple[float, float] = (0.0, 700.0)

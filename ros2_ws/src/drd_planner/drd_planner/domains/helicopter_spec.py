@@ -83,12 +83,12 @@ class HelicopterParams(SpecParams):
     """The helicopter domain's spec, validated.
 
     Attributes:
-        lattice: lattice parameters.
-        vehicle_radius: vehicle sphere radius, metres (> 0, >= the lattice's sample spacing).
-        margin: collision margin added to the radius, metres (>= 0).
-        terrain_cell: grid spacing of generated terrain, metres (> 0).
-        world_margin: how far generated terrain extends beyond the lattice corridor, metres (>= 0).
-        wire_segments: capsules per wire span in the scene (None: the wire's default).
+        lattice: lattice parameters (the ``lattice.*`` keys).
+        vehicle_radius: vehicle sphere radius (m), > 0 and >= the lattice's sample spacing.
+        margin: collision margin added to the radius (m), >= 0.
+        terrain_cell: grid spacing of generated terrain (m), > 0.
+        world_margin: how far generated terrain extends beyond the lattice corridor (m), >= 0.
+        wire_segments: capsules per wire span in the scene (count); None: the wire's default.
         models: per world model its parameter record (given as records or partial dicts; every model is
             filled in).
 

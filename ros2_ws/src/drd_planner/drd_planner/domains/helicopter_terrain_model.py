@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.helicopter_world_frame import ModelDraw, WorldFrame, draw_uniform, smoothstep
+from drd_planner.domains.helicopter_world_frame import ModelDraw, WorldFrame, draw_uniform, flatten_near
 from drd_planner.domains.helicopter_world_params import DEFAULT_TERRAIN_FILE, TerrainParams
 from drd_planner.exceptions import GeometryError, ProblemError
 from drd_planner.geometry.terrain import Heightfield, read_esri_ascii
@@ -88,21 +88,6 @@ def _bilinear_index(grid: FloatArray, fi: FloatArray, fj: FloatArray) -> FloatAr
     )
 
 
-def _flatten_near(
-    heights: FloatArray, gx: FloatArray, gy: FloatArray, keep: FloatArray, *, cap: float, radius: float
-) -> FloatArray:
-    """``heights`` lowered to at most ``cap`` within ``radius`` of each keep-clear point.
-
-    The cap fades out over the next ``radius`` metres (a smoothstep), so the start and goal are always clear.
-    """
-    out = heights
-    for point in keep:
-        dist = np.hypot(gx - point[0], gy - point[1])
-        weight = smoothstep((dist - radius) / radius)
-        out = weight * out + (1.0 - weight) * np.minimum(out, cap)
-    return np.asarray(out, dtype=np.float64)
-
-
 def _crop_centre(
     rng: np.random.Generator, p: TerrainParams, shape: tuple[int, int], mpc: float, radius_cells: float
 ) -> tuple[float, float] | None:
@@ -156,7 +141,7 @@ def _scale_and_shift(
     shift = window.target - float(np.quantile(heights, open_fraction))
     heights = heights + shift
     gap = draw_uniform(rng, p.ground_gap)
-    heights = _flatten_near(
+    heights = flatten_near(
         heights, window.gx, window.gy, window.keep, cap=window.target - gap, radius=p.keep_clear_radius
     )
     return heights, {"relief": relief, "open_fraction": open_fraction, "ground_gap": gap, "shift": shift}

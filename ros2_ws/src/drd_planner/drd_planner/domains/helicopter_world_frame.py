@@ -16,12 +16,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from drd_planner.arrays import FloatArray
+from drd_planner.domains.helicopter_world_params import NoFlyZone
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Shape
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.geometry.wires import Wire
 
-__all__ = ["ModelDraw", "WorldFrame", "draw_integer", "draw_uniform", "smoothstep"]
+__all__ = ["ModelDraw", "WorldFrame", "draw_integer", "draw_uniform", "flatten_near", "smoothstep"]
 
 
 @dataclass(frozen=True)
@@ -66,12 +67,15 @@ class ModelDraw(NamedTuple):
         wires: sagging wire spans.
         solids: (name, shape, pose) solid obstacles (e.g. towers).
         info: JSON-able summary of the draw.
+        nofly: no-fly zones the model itself placed (e.g. the active ones of a known list); the random
+            zones of the ``nofly`` parameter come on top.
     """
 
     terrain: Heightfield
     wires: tuple[Wire, ...]
     solids: tuple[tuple[str, Shape, Pose], ...]
     info: dict[str, Any]
+    nofly: tuple[NoFlyZone, ...] = ()
 
 
 def draw_uniform(rng: np.random.Generator, r: tuple[float, float]) -> float:
@@ -88,3 +92,19 @@ def smoothstep(t: FloatArray) -> FloatArray:
     """The cubic smoothstep 3 t^2 - 2 t^3 of ``t`` clipped to [0, 1], elementwise."""
     t = np.clip(t, 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
+
+
+def flatten_near(
+    heights: FloatArray, gx: FloatArray, gy: FloatArray, keep: FloatArray, *, cap: float, radius: float
+) -> FloatArray:
+    """(rows, cols) ``heights`` lowered to at most ``cap`` within ``radius`` of each keep-clear point.
+
+    ``gx``, ``gy`` are the (rows, cols) x and y of the heights and ``keep`` the (p, >= 2) keep-clear points,
+    metres. The cap fades out over the next ``radius`` metres (a smoothstep), so the start and goal stay clear.
+    """
+    out = heights
+    for point in keep:
+        dist = np.hypot(gx - point[0], gy - point[1])
+        weight = smoothstep((dist - radius) / radius)
+        out = weight * out + (1.0 - weight) * np.minimum(out, cap)
+    return np.asarray(out, dtype=np.float64)

@@ -1,7 +1,8 @@
 """The parameter records of the helicopter world models and their no-fly zones (frozen, validated, JSON-able).
 
 Each world model (:mod:`~drd_planner.domains.helicopter_worlds` lists them) draws its worlds from one record:
-:class:`WiresParams`, :class:`CanyonParams` or :class:`TerrainParams`; ranges ``[lo, hi]`` are drawn uniformly
+:class:`WiresParams`, :class:`CanyonParams` or :class:`TerrainParams` (the ``"corridors"`` model's record is in
+:mod:`~drd_planner.domains.helicopter_corridors_params`); ranges ``[lo, hi]`` are drawn uniformly
 per world. All share the no-fly fields of :class:`NoFlyParams` (a count of random :class:`NoFlyZone` columns,
 or the zones themselves). Records turn into and from dicts through :mod:`~drd_planner.domains.helicopter_params`.
 
@@ -28,7 +29,6 @@ __all__ = [
     "DEFAULT_TERRAIN_FILE",
     "NOFLY_Z_RANGE",
     "CanyonParams",
-    "ModelParams",
     "NoFlyParams",
     "NoFlyZone",
     "TerrainParams",
@@ -86,12 +86,12 @@ class NoFlyZone:
     """A vertical no-fly column.
 
     Attributes:
-        shape: "cylinder" or "prism" (a rectangular prism).
-        center: (x, y) metres of its axis.
-        radius: cylinder radius, metres (cylinders only).
-        size: (x, y) side lengths of the prism before its yaw, metres (prisms only).
-        yaw_deg: prism rotation about z, degrees.
-        z_range: (bottom, top) metres.
+        shape: "cylinder" or "prism" (name); a prism is a rectangular prism.
+        center: (x, y) of its axis (m).
+        radius: cylinder radius (m); cylinders only.
+        size: (x, y) side lengths of the prism before its yaw (m); prisms only.
+        yaw_deg: prism rotation about z (deg).
+        z_range: (bottom, top) of the column (m).
     """
 
     shape: str = "cylinder"
@@ -174,11 +174,12 @@ class NoFlyParams:
     """The no-fly fields every model has (metres).
 
     Attributes:
-        nofly: a count of random zones, or the zones (dicts or :class:`NoFlyZone`).
-        nofly_radius: radius range of random cylinders.
-        nofly_size: side length range of random prisms.
-        nofly_keep_clear: how far random zones keep from the start and goal (plus the vehicle clearance).
-        nofly_region: ((x0, x1), (y0, y1)) where random zone centres are drawn.
+        nofly: how many random no-fly zones each world gets (count), or the zones themselves: a list of zone
+            dicts with the keys of :class:`NoFlyZone` (shape, center, radius, size, yaw_deg, z_range).
+        nofly_radius: [lo, hi] radius of random cylinders (m).
+        nofly_size: [lo, hi] side length of random prisms (m).
+        nofly_keep_clear: how far random zones keep from the start and goal (m), plus the vehicle clearance.
+        nofly_region: [[x0, x1], [y0, y1]] where random zone centres are drawn (m).
     """
 
     nofly: Any = 0
@@ -204,7 +205,27 @@ class NoFlyParams:
 
 @dataclass(frozen=True)
 class WiresParams(NoFlyParams):
-    """Parameters of the ``"wires"`` model (see :mod:`~drd_planner.domains.helicopter_worlds`; ranges [lo, hi], metres)."""
+    """Parameters of the ``"wires"`` model (see :mod:`~drd_planner.domains.helicopter_wires_model`).
+
+    Ranges [lo, hi] are drawn uniformly per world (per line, per tower span where it says so).
+
+    Attributes:
+        bumps: [lo, hi] number of Gaussian bumps summed into the rolling terrain (count).
+        bump_height: [lo, hi] height of each bump (m).
+        bump_sigma: [lo, hi] width (standard deviation) of each bump (m).
+        lines: [lo, hi] number of power lines crossing the corridor (count).
+        line_x: [lo, hi] x where a line crosses the corridor's centre line (m); not used with ``line_sites``.
+        line_angle_deg: [lo, hi] heading of a line off the y axis (deg).
+        span: [lo, hi] distance between the towers of a line (m).
+        tower_height: [lo, hi] height of a line's towers above the terrain (m).
+        tower_radius: tower cylinder radius (m).
+        conductors: [lo, hi] conductors per line, one above the other (count).
+        conductor_gap: vertical distance between the conductors of a line (m).
+        sag: [lo, hi] sag of each span at its middle, per span (m).
+        wire_diameter: conductor diameter (m).
+        line_sites: known x where power-line corridors cross the centre line (m); each world has ``lines`` of
+            them, picked at random; null: the crossings are drawn from ``line_x``.
+    """
 
     nofly: Any = 2
     bumps: IntRange = (3, 8)
@@ -240,7 +261,25 @@ class WiresParams(NoFlyParams):
 
 @dataclass(frozen=True)
 class CanyonParams(NoFlyParams):
-    """Parameters of the ``"canyon"`` model (see :mod:`~drd_planner.domains.helicopter_worlds`; ranges [lo, hi], metres)."""
+    """Parameters of the ``"canyon"`` model (see :mod:`~drd_planner.domains.helicopter_canyon_model`).
+
+    Ranges [lo, hi] are drawn uniformly per world (per spur and per wire where it says so).
+
+    Attributes:
+        floor_height: [lo, hi] height of the flat valley floor (m).
+        wall_height: [lo, hi] height of the plateau the valley cuts (m).
+        half_width: [lo, hi] half width of the flat valley floor (m).
+        wall_width: [lo, hi] horizontal distance over which the valley walls rise (m).
+        meander: [lo, hi] amplitude of the meandering valley centre line (m).
+        meander_modes: sine terms of the meander (count).
+        max_offset: largest |y| of the valley centre line (m).
+        spurs: [lo, hi] rock spurs (Gaussian bumps) narrowing the valley (count).
+        spur_height: [lo, hi] height of each spur (m).
+        spur_sigma: [lo, hi] width (standard deviation) of each spur (m).
+        rim_wires: [lo, hi] wires strung rim to rim across the valley (count).
+        rim_wire_low: [lo, hi] height a rim wire sags down to, per wire (m).
+        wire_diameter: rim wire diameter (m).
+    """
 
     floor_height: Range = (0.0, 20.0)
     wall_height: Range = (120.0, 180.0)
@@ -270,9 +309,25 @@ class CanyonParams(NoFlyParams):
 
 @dataclass(frozen=True)
 class TerrainParams(NoFlyParams):
-    """Parameters of the ``"terrain"`` model (see :mod:`~drd_planner.domains.helicopter_worlds`; ranges [lo, hi], metres).
+    """Parameters of the ``"terrain"`` model (see :mod:`~drd_planner.domains.helicopter_terrain_model`).
 
-    ``path`` None means :func:`default_terrain_path` (resolved when a world is drawn, not stored).
+    ``path`` None means :func:`default_terrain_path` (resolved when a world is drawn, not stored). Ranges
+    [lo, hi] are drawn uniformly per world.
+
+    Attributes:
+        path: the ESRI ASCII elevation grid to crop (file); null: the shared Front Range grid.
+        metres_per_cell: [lo, hi] metres one source grid cell spans after resampling (m).
+        relief: [lo, hi] height span of the crop's 2-98 % height range after scaling (m).
+        open_fraction: [lo, hi] share of the crop lying at least the vehicle clearance below the start
+            altitude (fraction).
+        ground_gap: [lo, hi] how far below the start altitude the pads around start and goal are capped (m).
+        keep_clear_radius: radius of the flat pads around the start and goal (m).
+        max_tries: redraws of a crop window with unknown (NODATA) heights (count).
+        site: [row, col] of the one operating area the crop is centred on, as fractions of the grid
+            (fraction); null: a random place per world.
+        site_jitter: largest shift of the crop around ``site`` per axis (m).
+        rotation_deg: [lo, hi] rotation of the crop (deg).
+        mirror: probability that a crop is mirrored (fraction).
     """
 
     path: str | None = None
@@ -316,6 +371,3 @@ class TerrainParams(NoFlyParams):
     def resolved_path(self) -> Path:
         """The grid file to read."""
         return Path(self.path) if self.path else default_terrain_path()
-
-
-ModelParams = WiresParams | CanyonParams | TerrainParams

@@ -15,8 +15,11 @@ Models (:data:`WORLD_MODELS`; ranges ``[lo, hi]`` are drawn uniformly per world)
 - ``"terrain"`` (:mod:`~drd_planner.domains.helicopter_terrain_model`): random crops, rotations and scalings
   of a real elevation model (default ``$DRD_SHARED_DATA/terrain/srtm_front_range_144.asc``), padded flat
   around the start and goal.
+- ``"corridors"`` (:mod:`~drd_planner.domains.helicopter_corridors_model`): one real operating site at its
+  true scale, the DEM with a random registration error, power lines on known routes (present or not,
+  towers and sag uncertain) and published no-fly zones (active or not).
 
-Every model also adds no-fly zones (``nofly``: a count of random zones, or a list of zone dicts, see
+Every model also adds random no-fly zones (``nofly``: a count of random zones, or a list of zone dicts, see
 :class:`NoFlyZone`): full-height vertical cylinders or rectangular prisms kept ``nofly_keep_clear``
 metres away from the start and goal.
 
@@ -33,13 +36,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from drd_planner.domains.helicopter_canyon_model import draw_canyon
+from drd_planner.domains.helicopter_corridors_model import CorridorsModel
+from drd_planner.domains.helicopter_corridors_params import CorridorsParams
 from drd_planner.domains.helicopter_params import params_from_dict
-from drd_planner.domains.helicopter_terrain_model import TerrainModel
+from drd_planner.domains.helicopter_terrain_model import TerrainGrids, TerrainModel
 from drd_planner.domains.helicopter_wires_model import draw_wires
 from drd_planner.domains.helicopter_world_frame import ModelDraw, WorldFrame, draw_uniform
 from drd_planner.domains.helicopter_world_params import (
     CanyonParams,
-    ModelParams,
     NoFlyZone,
     TerrainParams,
     WiresParams,
@@ -64,18 +68,25 @@ __all__ = [
 ]
 
 
+ModelParams = WiresParams | CanyonParams | TerrainParams | CorridorsParams
+"""The parameter record of any helicopter world model."""
+
+
 class _WorldModel(NamedTuple):
     """A world model: its parameter record type and its draw ``(rng, params, frame) -> ModelDraw``."""
 
-    params: type[WiresParams] | type[CanyonParams] | type[TerrainParams]
+    params: type[WiresParams] | type[CanyonParams] | type[TerrainParams] | type[CorridorsParams]
     draw: Callable[[np.random.Generator, Any, WorldFrame], ModelDraw]
 
 
-#: The world models by name; the terrain model owns the cache of the elevation grids it has read.
+#: The elevation grids read so far (shared by the models that read grids).
+_GRIDS = TerrainGrids()
+#: The world models by name.
 _MODELS: dict[str, _WorldModel] = {
     "wires": _WorldModel(WiresParams, draw_wires),
     "canyon": _WorldModel(CanyonParams, draw_canyon),
-    "terrain": _WorldModel(TerrainParams, TerrainModel().draw),
+    "terrain": _WorldModel(TerrainParams, TerrainModel(_GRIDS).draw),
+    "corridors": _WorldModel(CorridorsParams, CorridorsModel(_GRIDS).draw),
 }
 WORLD_MODELS: tuple[str, ...] = tuple(_MODELS)
 
@@ -144,10 +155,10 @@ def generate_world(model: str, seed: int, params: ModelParams, frame: WorldFrame
             f"world model {model!r} needs {found.params.__name__}, got {type(params).__name__}"
         )
     rng = world_rng(model, seed)
-    terrain, wires, solids, info = found.draw(rng, params, frame)
-    zones = _nofly_zones(rng, params, frame)
-    solids = solids + tuple((f"nofly_{i}", *z.solid()) for i, z in enumerate(zones))
-    return HelicopterWorld(model, int(seed), terrain, wires, solids, zones, info)
+    drawn = found.draw(rng, params, frame)
+    zones = drawn.nofly + _nofly_zones(rng, params, frame)
+    solids = drawn.solids + tuple((f"nofly_{i}", *z.solid()) for i, z in enumerate(zones))
+    return HelicopterWorld(model, int(seed), drawn.terrain, drawn.wires, solids, zones, drawn.info)
 
 
 def _nofly_zones(rng: np.random.Generator, p: ModelParams, frame: WorldFrame) -> tuple[NoFlyZone, ...]:

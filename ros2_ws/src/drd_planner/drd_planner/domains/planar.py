@@ -307,11 +307,12 @@ class PlanarDomain(SpecParams, OnlineDefaults):
     :mod:`drd_planner.domains.planar_worlds` (planar parameters). Edges: straight segments, checked exactly.
 
     Attributes:
-        num_vertices: N, the number of random points (100, 150 or 200 in the authors' datasets).
-        seed: seed of the graph's points.
-        eta: radius multiplier (1 in the authors' datasets).
-        pattern_seed: seed of the fixed slot-pattern lists shared by all worlds of ``one_wall`` / ``two_wall``.
-        keep_clear: keep random squares off the start and goal vertices (the authors did not).
+        num_vertices: N, the number of random points (count); 100, 150 or 200 in the authors' datasets.
+        seed: seed of the graph's points (seed).
+        eta: connection radius multiplier (ratio); 1 in the authors' datasets.
+        pattern_seed: seed of the fixed slot-pattern lists shared by all worlds of ``one_wall`` / ``two_wall``
+            (seed).
+        keep_clear: keep random squares off the start and goal vertices (flag); the authors did not.
     """
 
     SPEC_LABEL: ClassVar[str] = "planar"

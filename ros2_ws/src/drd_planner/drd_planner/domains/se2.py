@@ -328,14 +328,14 @@ class Se2Domain(SpecParams, LatticeMembers[Se2Lattice], OnlineDefaults):
     the goal vertex the vertex of ``goal_state``.
 
     Attributes:
-        spacing: xy lattice spacing (0.05).
-        turning_radius: Dubins turning radius (0.099).
-        waypoint_spacing: largest arc-length gap between checked waypoints (0.01).
-        bounds: (xmin, ymin, xmax, ymax) of the lattice.
-        start_state: start state (x, y, heading rad) on the lattice.
-        goal_state: goal state on the lattice.
-        pattern_seed: seed of the fixed slot-pattern lists of ``one_wall`` / ``two_wall``.
-        keep_clear: keep random squares off the start and goal positions (the authors did not).
+        spacing: xy lattice spacing (unit square).
+        turning_radius: Dubins turning radius (unit square).
+        waypoint_spacing: largest arc-length gap between checked waypoints (unit square).
+        bounds: (xmin, ymin, xmax, ymax) of the lattice (unit square).
+        start_state: start state (x, y, heading) on the lattice (unit square), the heading in radians.
+        goal_state: goal state (x, y, heading) on the lattice (unit square), the heading in radians.
+        pattern_seed: seed of the fixed slot-pattern lists of ``one_wall`` / ``two_wall`` (seed).
+        keep_clear: keep random squares off the start and goal positions (flag); the authors did not.
     """
 
     SPEC_LABEL: ClassVar[str] = "se2"

@@ -14,13 +14,27 @@ from __future__ import annotations
 
 import fcl
 
-__all__ = ["FirstHitCallback", "first_hit", "pair_collides", "pair_distance"]
+__all__ = ["FirstHitCallback", "first_hit", "pair_collides", "pair_contacts", "pair_distance"]
 
 
 def pair_collides(first: fcl.CollisionObject, second: fcl.CollisionObject) -> bool:
     """Whether two FCL objects intersect (touching counts), with a fresh request and result."""
     contacts: int = fcl.collide(first, second, fcl.CollisionRequest(), fcl.CollisionResult())
     return contacts > 0
+
+
+def pair_contacts(
+    first: fcl.CollisionObject, second: fcl.CollisionObject, max_contacts: int
+) -> list[fcl.Contact]:
+    """Up to ``max_contacts`` FCL contacts (position, normal, penetration depth in metres) of two objects.
+
+    A fresh request (contacts enabled) and result for every call; an empty list when they do not intersect.
+    """
+    result = fcl.CollisionResult()  # fresh per call, see the module docstring
+    fcl.collide(
+        first, second, fcl.CollisionRequest(num_max_contacts=max_contacts, enable_contact=True), result
+    )
+    return list(result.contacts)
 
 
 def pair_distance(first: fcl.CollisionObject, second: fcl.CollisionObject) -> float:

@@ -40,6 +40,7 @@ __all__ = [
     "ScenePrimitive",
     "parse_planning_scene",
     "read_planning_scene",
+    "read_yaml_text",
 ]
 
 
@@ -223,9 +224,17 @@ def read_planning_scene(
     Raises:
         GeometryError: unreadable file or invalid content.
     """
+    return parse_planning_scene(read_yaml_text(path, "planning scene"), source=str(path), frames=frames)
+
+
+def read_yaml_text(path: str | Path, what: str) -> str:
+    """The UTF-8 text of a MoveIt YAML file; ``what`` names the kind of file in the error.
+
+    Raises:
+        GeometryError: the file cannot be read or is not UTF-8.
+    """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        return p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise GeometryError(f"cannot read planning scene {p}: {exc}") from exc
-    return parse_planning_scene(text, source=str(p), frames=frames)
+        raise GeometryError(f"cannot read {what} {p}: {exc}") from exc

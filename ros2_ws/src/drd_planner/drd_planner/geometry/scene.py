@@ -107,6 +107,16 @@ class Scene:
         return None if self._terrain is None else self._terrain.heightfield
 
     @property
+    def packed_obstacles(self) -> PackedObstacles:
+        """The flat obstacle arrays the sphere queries use (rebuilt after changes; read-only by convention)."""
+        return self._pack()
+
+    @property
+    def terrain_collider(self) -> TerrainCollider | None:
+        """The terrain's FCL tiles, or None."""
+        return self._terrain
+
+    @property
     def bounds(self) -> tuple[FloatArray, FloatArray] | None:
         """``(lo, hi)``, each (3,) in metres: the AABB of everything in the scene (without margin); None if empty."""
         packed = self._pack()

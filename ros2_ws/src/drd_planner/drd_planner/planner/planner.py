@@ -164,7 +164,7 @@ class Planner:
         key = (_cache_key(start), _cache_key(goal))
         if key in self._cache:
             self._cache.move_to_end(key)
-            return self._cache[key]
+            return dataclasses.replace(self._cache[key], reused=True)
         model = self._build_model(start, goal)
         self._cache[key] = model
         while len(self._cache) > self._cache_size:
@@ -433,6 +433,7 @@ class Planner:
             cost=cost,
             stage=stage,
             query=model.label,
+            query_cached=model.reused,
             library_size=0 if model.library is None else model.library.num_paths,
             timings=plan_timings(checks, t_model, t_begin),
             new_states=model.query.new_states,
@@ -468,6 +469,7 @@ def _unproven(
         model.goal,
         checks=tuple(checks),
         query=model.label,
+        query_cached=model.reused,
         library_size=0 if model.library is None else model.library.num_paths,
         timings=plan_timings(checks, t_model, t_begin),
     )

@@ -26,6 +26,7 @@ class QueryModel:
         label: ``tree:<name>`` or ``online``.
         build_s: seconds it took to build.
         precomputed: the prior's tree it uses, or None for a model built online.
+        reused: handed out from the planner's query cache (built by an earlier plan of the query).
     """
 
     query: QueryGraph
@@ -35,6 +36,7 @@ class QueryModel:
     label: str
     build_s: float
     precomputed: QueryTree | None = None
+    reused: bool = False
 
     @property
     def start(self) -> int:

@@ -79,6 +79,8 @@ class PlanResult:
         cost: the path's length in the domain's unit (0 unless FOUND).
         stage: which stage proved the path (None unless FOUND).
         query: ``tree:<name>`` for a precomputed tree, ``online`` for a library built for this query.
+        query_cached: the query's library and tree came from the planner's query cache (built or loaded
+            by an earlier plan of the same query) rather than being built for this plan.
         library_size: m of the query's library (0 when it had none).
         timings: where the time went.
         new_states: for an off-graph start or goal, its new vertex id -> (D,) state (ids from V on).
@@ -95,6 +97,7 @@ class PlanResult:
     cost: float = 0.0
     stage: PlanStage | None = None
     query: str = ""
+    query_cached: bool = False
     library_size: int = 0
     timings: PlanTimings = field(default_factory=PlanTimings)
     new_states: Mapping[int, FloatArray] = field(default_factory=dict)

@@ -2,7 +2,8 @@
 
 The side view is the vertical plane through the start-goal direction of the end effector. Both show
 the obstacles' outlines projected on the plane, the edge layers (the positions of each edge's joint
-samples, as the node publishes them) and the arm (its joint frames) at its start and goal.
+samples, as the node publishes them) and the arm (its joint frames) at its start and goal; both views
+carry the check numbers (placed off the obstacles once the figure's layout is fixed).
 """
 
 from __future__ import annotations
@@ -66,7 +67,8 @@ def arm_views(
     _, solids = split_obstacles(snapshot)
     for ax, plane in ((top, TOP), (side, side_plane)):
         view = PanelView(ax, plane, drawing if ax is top else None)
-        view.obstacles(snapshot, solid_label="obstacle")
+        drawing.panels.append(view)
+        view.draw_obstacles(snapshot, solid_label="obstacle")
         view.edges(geometry, result)
         for key, bones in skeletons.items():
             x, y = view.project(bones).T

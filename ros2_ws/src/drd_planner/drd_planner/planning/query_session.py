@@ -67,12 +67,15 @@ class QueryPlanResult(PlanResult):
         stage: which stage proved the path (``tree``, ``bisect``, ``library``, ``graph``, ``trivial``;
             "" unless ok).
         query: ``tree:<name>`` (a precomputed tree), ``online`` or ``connected`` (with new motions).
+        query_cached: the query's library and tree came from the planner's query cache (an earlier
+            request of the same query built them).
         cost: the path's length in the domain's unit (0 unless ok).
         library_size: paths in the query's library.
     """
 
     stage: str = ""
     query: str = ""
+    query_cached: bool = False
     cost: float = 0.0
     library_size: int = 0
 
@@ -323,6 +326,7 @@ class QuerySession(DomainSession):
             "tree": self._name,
             "checks": checks,
             "query": result.query,
+            "query_cached": result.query_cached,
             "library_size": result.library_size,
         }
         blocked = sum(not c.free for c in checks)

@@ -17,7 +17,9 @@ the snapshots and one of its grown spheres touches that AABB.
 1. Both checkers decide an edge from its sampled spheres only, each inflated by the scene margin
    (:class:`~drd_planner.domains.helicopter_checker.HelicopterChecker`,
    :class:`~drd_planner.domains.arm_checker.ArmEdgeChecker`); the domains' sweep models
-   (:meth:`~drd_planner.domains.online.OnlineDomain.sweep_spheres`) place the same spheres.
+   (:meth:`~drd_planner.domains.online.OnlineDomain.sweep_spheres`) place the same spheres. A domain whose
+   checker tests other shapes (the arm's collision meshes, ``collision_model: meshes``) grows its sweep
+   spheres until they contain those shapes, so the argument below holds for them too.
 2. The scene (:class:`~drd_planner.geometry.scene.Scene`) decides each sphere against each part on its own
    (an FCL pair test, or "centre inside a closed mesh", both only for parts whose AABB overlaps the
    sphere's AABB) and against the terrain (FCL tiles and "centre under the surface"). Parts do not

@@ -42,7 +42,14 @@ def print_record(number: int, record: PlanRecord) -> None:
     print(f"\nplan {number}: {asked} on map version {result.map_version}, tree {result.tree}")
     if "replan_reason" in record.request:
         print(f"  why: {record.request['replan_reason']}")
-    print(f"  served by: {_served_by(result.query)} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)")
+    cached = (
+        " (reused from the query cache)"
+        if result.query_cached and not result.query.startswith("tree:")
+        else ""
+    )
+    print(
+        f"  served by: {_served_by(result.query)}{cached} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)"
+    )
     for check in result.checks:
         state = "free   " if check.free else "BLOCKED"
         source = "cache" if check.cached else f"{check.check_ms:7.3f} ms"
@@ -141,7 +148,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if served.snapshot is None:  # an old record: its maps are no longer kept
                     continue
                 files = plan_picture(
-                    served.session, served.snapshot, served.result, args.out / f"plan_{k}.png"
+                    served.session,
+                    served.snapshot,
+                    served.result,
+                    args.out / f"plan_{k}.png",
+                    query_cached=served.result.query_cached,
                 )
                 print(f"picture: {', '.join(str(f) for f in files)}")
         if not history:
