@@ -84,8 +84,9 @@ class ArmParams(SpecParams):
         extra_states: (M, D) further configurations (rad) made roadmap vertices 2..M+1 after start and goal,
             joined to their k nearest neighbours like every sample (e.g. the start and goal states of the
             MoveIt requests of a scene set); stored as a list of lists.
-        collision_model: how world checks see the arm (name): ``"spheres"`` (the spherized model; fast and
-            conservative) or ``"meshes"`` (FCL BVH meshes of the URDF's collision geometry, as MoveIt).
+        collision_model: how world checks see the arm (name): ``"spheres"`` (the spherized model; fast, but
+            an approximation: the Panda's collision meshes reach up to 8 cm outside it) or ``"meshes"`` (FCL BVH
+            meshes of the URDF's collision geometry, as MoveIt).
 
     Raises:
         ProblemError: a value of the wrong type, or out of range.
