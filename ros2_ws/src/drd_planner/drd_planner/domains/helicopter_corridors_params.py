@@ -7,9 +7,11 @@ active or not). :class:`CorridorsParams` holds them; the model is
 :mod:`~drd_planner.domains.helicopter_corridors_model`.
 
 The defaults are one site of the shared SRTM Front Range grid (longitude -105.4617, latitude 40.1825, the
-lattice's x axis pointing north) with four known lines and three known zones, laid out for the real-scale
-lattice ``trees/heli_lines_spec.json`` (x in [0, 2500] m, y in [-1250, 1250] m, start (0, 0), goal
-(2500, 0)); they also keep clear of the default lattice's start and goal.
+lattice's x axis pointing north): a massif in the middle, a valley east and south of it; four known lines
+(two taps that stand only where their line does) and five known zones (an airspace shelf over the valley and
+two areas of one exercise that are activated together), laid out for the real-scale lattice
+``trees/heli_lines_spec.json`` (x in [0, 2500] m, y in [-1250, 1250] m, start (0, 0), goal (2500, -1000),
+60 m above the datum); they also keep clear of the default lattice's start and goal.
 
 Units: metres, degrees where the name says ``_deg``; probabilities in [0, 1].
 """
@@ -192,7 +194,7 @@ DEFAULT_LINES: tuple[KnownLine, ...] = (
     KnownLine("ridge_tap", ((1300.0, 1400.0), (1450.0, 850.0)), 0.85, requires="west_feeder"),
 )
 
-#: The default site's published no-fly zones: an airfield's airspace shelf over the valley (from 70 m above
+#: The default site's published no-fly zones: an airfield's airspace shelf over the valley (from 90 m above
 #: the datum up), two areas of one exercise in the valley, a quarry's blasting area and a range.
 DEFAULT_ZONES: tuple[KnownZone, ...] = (
     KnownZone(
@@ -200,18 +202,18 @@ DEFAULT_ZONES: tuple[KnownZone, ...] = (
         shape="prism",
         center=(1550.0, -1000.0),
         size=(1500.0, 800.0),
-        z_range=(70.0, 3000.0),
+        z_range=(90.0, 3000.0),
         probability=0.5,
     ),
     KnownZone(
-        name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.4, group="exercise"
+        name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.3, group="exercise"
     ),
     KnownZone(
         name="bridge_works",
         shape="prism",
         center=(1850.0, -1175.0),
         size=(200.0, 250.0),
-        probability=0.4,
+        probability=0.3,
         group="exercise",
     ),
     KnownZone(
