@@ -41,6 +41,10 @@ def msgs(request: pytest.FixtureRequest) -> object:
     return RclpyMessages()
 
 
+#: The spec of the small arm fixtures: a 60-sample, 5-neighbour Panda roadmap (seed 3).
+SMALL_ARM_SPEC = {"num_samples": 60, "k": 5, "seed": 3}
+
+
 @pytest.fixture(scope="module")
 def small_arm() -> Any:
     """A 60-sample, 5-neighbour Panda roadmap domain (seed 3); skips when the shared Panda model is absent."""
@@ -49,6 +53,19 @@ def small_arm() -> Any:
     from drd_planner.domains.arm import ArmDomain
     from drd_planner.domains.base import domain_from_spec
 
-    built = domain_from_spec("arm", {"num_samples": 60, "k": 5, "seed": 3})
+    built = domain_from_spec("arm", SMALL_ARM_SPEC)
+    assert isinstance(built, ArmDomain)
+    return built
+
+
+@pytest.fixture(scope="module")
+def small_arm_meshes() -> Any:
+    """:func:`small_arm` checked with the Panda's collision meshes; skips when the meshes are absent."""
+    if not (SHARED_DATA / "panda" / "meshes" / "collision").is_dir():
+        pytest.skip("shared Panda collision meshes not present (set DRD_SHARED_DATA)")
+    from drd_planner.domains.arm import ArmDomain
+    from drd_planner.domains.base import domain_from_spec
+
+    built = domain_from_spec("arm", {**SMALL_ARM_SPEC, "collision_model": "meshes"})
     assert isinstance(built, ArmDomain)
     return built

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import SMALL_ARM_SPEC
 
 from drd_planner.bench.checker_compare import compare_world, summarize
 from drd_planner.bench.world_recipes import WorldRecipe, seeded_recipes
@@ -14,8 +14,7 @@ from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import ProblemError
 
-PANDA = SHARED_DATA / "panda"
-SMALL = {"num_samples": 60, "k": 5, "seed": 3}
+SMALL = SMALL_ARM_SPEC
 # A 2 cm cube against the back of the base: inside its collision mesh, 5 cm clear of the base sphere.
 REAR = """world:
   collision_objects:
@@ -26,12 +25,8 @@ REAR = """world:
 
 
 @pytest.fixture(scope="module")
-def meshes() -> ArmDomain:
-    if not (PANDA / "meshes" / "collision").is_dir():
-        pytest.skip(f"shared Panda model {PANDA} not present (set DRD_SHARED_DATA)")
-    built = domain_from_spec("arm", {**SMALL, "collision_model": "meshes"})
-    assert isinstance(built, ArmDomain)
-    return built
+def meshes(small_arm_meshes: ArmDomain) -> ArmDomain:
+    return small_arm_meshes
 
 
 def test_outcomes_are_the_checkers_own(small_arm: ArmDomain, meshes: ArmDomain) -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 import fcl
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import SHARED_DATA, SMALL_ARM_SPEC
 
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.arm_checker import ArmEdgeChecker, SphereTest
@@ -22,16 +22,12 @@ from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Pose, make_fcl_geometry
 
 PANDA = SHARED_DATA / "panda"
-SMALL = {"num_samples": 60, "k": 5, "seed": 3}
+SMALL = SMALL_ARM_SPEC
 
 
 @pytest.fixture(scope="module")
-def meshes() -> ArmDomain:
-    if not (PANDA / "meshes" / "collision").is_dir():
-        pytest.skip(f"shared Panda model {PANDA} not present (set DRD_SHARED_DATA)")
-    built = domain_from_spec("arm", {**SMALL, "collision_model": "meshes"})
-    assert isinstance(built, ArmDomain)
-    return built
+def meshes(small_arm_meshes: ArmDomain) -> ArmDomain:
+    return small_arm_meshes
 
 
 def mesh_model(checker: ArmEdgeChecker) -> MeshCollider:

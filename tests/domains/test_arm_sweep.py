@@ -53,11 +53,10 @@ def test_edge_spheres_hold_every_checked_configuration(domain: ArmDomain) -> Non
     assert np.all(spheres[1][1] >= np.tile(domain.robot.spheres.radii, 3))
 
 
-def test_under_the_mesh_model_the_sweep_spheres_grow_to_hold_the_meshes(domain: ArmDomain) -> None:
-    from drd_planner.domains.arm import ArmDomain as Arm
-    from drd_planner.domains.arm_params import ArmParams
-
-    meshes = Arm(ArmParams.from_spec({**domain.spec(), "collision_model": "meshes"}))
+def test_under_the_mesh_model_the_sweep_spheres_grow_to_hold_the_meshes(
+    domain: ArmDomain, small_arm_meshes: ArmDomain
+) -> None:
+    meshes = small_arm_meshes
 
     class Source:
         def edge_states(self, edge: int) -> np.ndarray:
