@@ -40,9 +40,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import breadth_first_order
 
 from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, open_bag, write_bag
 from drd_msgs_py.factory import RosbagsMessages, header
+from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.arm_worlds import ArmWorld
 from drd_planner.domains.helicopter import HelicopterDomain
@@ -70,8 +74,27 @@ ARM_SPHERE_RADIUS = 0.04
 PLAN_SEED = 0
 #: Candidate goals of request 2 tried (in a seeded order of the graph's vertices).
 GOAL_TRIES = 200
-#: The helicopter bags: bag name -> the world model its prior ``trees/<name>.npz`` was built for.
-HELI_BAGS: dict[str, str] = {"heli_wires": "wires"}
+
+
+@dataclass(frozen=True)
+class HeliBag:
+    """How one helicopter bag is made.
+
+    Attributes:
+        world_model: the world model its map is drawn from.
+        any_stop: the robot may stop at any vertex of request 1's plan for request 2 (the middle one first);
+            False: only the middle one (on the real-scale lattice few goals are reachable from some vertices).
+    """
+
+    world_model: str
+    any_stop: bool = False
+
+
+#: The helicopter bags: bag name -> how it is made (its prior is ``trees/<name>.npz``).
+HELI_BAGS: dict[str, HeliBag] = {
+    "heli_wires": HeliBag("wires"),
+    "heli_lines": HeliBag("corridors", any_stop=True),
+}
 
 
 @dataclass
@@ -206,23 +229,63 @@ def _finish(
     return Scenario(name, seed, messages, edge, frame)
 
 
-def _tour(scenario: Scenario, session: QuerySession, msgs: RosbagsMessages) -> Scenario | None:
+def _reachable(graph: ExplicitGraph, free: npt.NDArray[np.bool_], source: int) -> npt.NDArray[np.bool_]:
+    """(V,) whether each vertex is reached from ``source`` along the ``free`` (E,) edges of ``graph``."""
+    edges = graph.edges[free]
+    ones = np.ones(len(edges), dtype=np.int8)
+    matrix = coo_matrix((ones, (edges[:, 0], edges[:, 1])), shape=(graph.num_vertices,) * 2).tocsr()
+    order = breadth_first_order(matrix, source, directed=graph.directed, return_predecessors=False)
+    reached = np.zeros(graph.num_vertices, dtype=bool)
+    reached[order] = True
+    return reached
+
+
+def _tour(
+    scenario: Scenario, session: QuerySession, msgs: RosbagsMessages, *, any_stop: bool = False
+) -> Scenario | None:
     """Add the moving robot and requests 2 (a new goal) and 3 (home from between two vertices).
 
+    The robot stops at the middle vertex of request 1's plan; with ``any_stop``, else at the next nearest
+    to the middle with a fitting goal (see :class:`HeliBag`).
     Candidates are planned on one snapshot of the maps in force (they do not change after the update),
     from the states the robot reports; :func:`_verify` then plans every request from the bag.
     """
+    snapshot = _snapshot(session, scenario.messages, _ns(UPDATE_S), scenario.frame)
+    path = _plan(session, scenario.messages, 1, scenario.frame).result.path_vertices
+    graph = session.prior.graph
+    free = session.checker(snapshot).check_many(np.arange(graph.num_edges))
+    mid = len(path) // 2
+    stops = sorted(range(1, len(path) - 1), key=lambda i: (abs(i - mid), i)) if any_stop else []
+    for at in [mid, *(i for i in stops if i != mid)]:
+        found = _tour_from(
+            scenario, session, msgs, snapshot, int(path[at]), _reachable(graph, free, path[at])
+        )
+        if found is not None:
+            return found
+    return None
+
+
+def _tour_from(
+    scenario: Scenario,
+    session: QuerySession,
+    msgs: RosbagsMessages,
+    snapshot: Any,
+    here: int,
+    reachable: npt.NDArray[np.bool_],
+) -> Scenario | None:
+    """:func:`_tour` with the robot stopped at vertex ``here``; ``reachable`` (V,): vertices it can reach.
+
+    Goals are tried in a seeded order of the vertices. Those it cannot reach give no plan and are skipped
+    unplanned, so up to :data:`GOAL_TRIES` goals are planned and the choice is the one without the skip.
+    """
     frame = scenario.frame
-    snapshot = _snapshot(session, scenario.messages, _ns(UPDATE_S), frame)
-    path = _plan(session, scenario.messages, 1, frame).result.path_vertices
-    here = path[len(path) // 2]
     home = int(session.domain.start)
     taken = {home, int(session.domain.goal), here}
-    order = np.random.default_rng(scenario.seed).permutation(session.prior.graph.num_vertices)
-    lengths = session.prior.graph.lengths
-    for goal in (int(v) for v in order[:GOAL_TRIES]):
-        if goal in taken:
-            continue
+    graph = session.prior.graph
+    order = np.random.default_rng(scenario.seed).permutation(graph.num_vertices)
+    lengths = graph.lengths
+    candidates = [int(v) for v in order if reachable[v] and int(v) not in taken]
+    for goal in candidates[:GOAL_TRIES]:
         third = session.plan(snapshot, session.vertex_state(here), goal, seed=PLAN_SEED)
         if not third.ok or third.num_blocked == 0 or third.query != "online" or len(third.path_edges) < 3:
             continue
@@ -277,14 +340,14 @@ def heli_scenario(
     msgs: RosbagsMessages, *, first_seed: int, tries: int, name: str = "heli_wires"
 ) -> Scenario:
     """A helicopter bag (prior ``trees/<name>.npz``, its world model :data:`HELI_BAGS` ``[name]``, frame ``map``)."""
-    model = HELI_BAGS[name]
+    bag = HELI_BAGS[name]
     session = QuerySession(load_prior(REPO / "trees" / f"{name}.npz"), name=name)
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     segments = domain.spec()["wire_segments"]
     frame = "map"
     for seed in range(first_seed, first_seed + tries):
-        world = domain.make_world(model, seed)
+        world = domain.make_world(bag.world_model, seed)
         t0, t1 = _ns(MAPS_S), _ns(UPDATE_S)
         markers, cloud = helicopter_world_messages(
             world, wire_segments=segments, frame_id=frame, stamp=_stamp(t0), msgs=msgs
@@ -316,7 +379,7 @@ def heli_scenario(
                 continue
             scenario = _finish(name, seed, session, frame, messages, edge, msgs)
             if scenario is not None:
-                scenario = _tour(scenario, session, msgs)
+                scenario = _tour(scenario, session, msgs, any_stop=bag.any_stop)
             if scenario is not None:
                 scenario.notes.append(
                     f"sphere r={HELI_SPHERE_RADIUS} m at {np.round(centre, 2).tolist()} (map)"

@@ -77,6 +77,11 @@ def test_parser_glue_and_spec_file(tmp_path: Path, capsys: pytest.CaptureFixture
     ds = load_dataset(out)
     assert ds.domain_spec == {"size": 3, "block_probability": 0.1, "delay_s": 0.0}
     assert ds.graph.num_vertices == 9 and ds.edge_trajectories is None
+    # The recorded command recreates the same bytes, trajectories left out included.
+    again = tmp_path / "again.npz"
+    argv = shlex.split(ds.provenance["command"])[1:]
+    assert cmd_build_dataset(parser.parse_args([*argv, "--out", str(again)])) == 0
+    assert again.read_bytes() == out.read_bytes()
 
 
 def test_max_chunks_stops_and_the_same_command_resumes(

@@ -26,6 +26,10 @@ def test_recipe_command_lists_only_content_settings() -> None:
     assert argv[argv.index("--k") + 1] == "3" and argv[argv.index("--max-paths") + 1] == "40"
     assert argv[argv.index("--domain-spec") + 1] == '{"models": {"terrain": {"mirror": 0}}}'
     assert "--k" not in DatasetRecipe("planar", "forest", 5, 0).command()
+    # Leaving the edge trajectories out changes the file, so the command says so.
+    assert "--no-trajectories" not in argv
+    lean = DatasetRecipe("planar", "forest", 5, 0, include_trajectories=False)
+    assert shlex.split(lean.command())[-1] == "--no-trajectories"
 
 
 @pytest.mark.parametrize(

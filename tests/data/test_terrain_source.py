@@ -76,6 +76,7 @@ def test_flags_map_onto_terrain_spec_keys(grid: Path, tmp_path: Path) -> None:
         keys["rotation_deg"] == [0.0, 0.0]
         and keys["mirror"] == 0.0
         and keys["metres_per_cell"] == [CELL, CELL]
+        and keys["relief"] is None
     )
     scaled = terrain_keys(TerrainFile(str(grid), crop="as-is", crop_scale=(12.0, 15.0)), field)
     assert scaled["metres_per_cell"] == [12.0, 15.0] and "site" not in scaled

@@ -38,7 +38,7 @@ def _shipped_trees() -> list[Path]:
 
 def test_shipped_trees_exist() -> None:
     names = {p.stem for p in _shipped_trees()}
-    assert {"heli_wires", "heli_terrain", "arm_table_clutter"} <= names
+    assert {"heli_lines", "heli_wires", "heli_terrain", "arm_table_clutter"} <= names
 
 
 @pytest.mark.parametrize("path", _shipped_trees(), ids=lambda p: p.stem)

@@ -206,3 +206,29 @@ def test_the_real_scale_preset_is_big_and_keeps_its_start_and_goal_clear() -> No
         world = domain.make_world("corridors", seed)
         assert not domain.checker(world).scene.spheres_collide(ends, domain.vehicle_radius)
         assert world.info["datum"] > 2000.0  # metres above sea level: the real grid at its true heights
+
+
+def test_the_shipped_lines_prior_walks_its_tree_on_a_corridors_world() -> None:
+    from conftest import REPO_ROOT, SHARED_DATA
+
+    from drd_planner.domains.base import domain_from_spec
+    from drd_planner.planner import Planner, load_prior
+
+    if not (SHARED_DATA / "terrain" / "srtm_front_range_144.asc").is_file():
+        pytest.skip(f"shared elevation model not present under {SHARED_DATA} (set DRD_SHARED_DATA)")
+    path = REPO_ROOT / "trees" / "heli_lines.npz"
+    prior = load_prior(path)
+    spec = json.loads((REPO_ROOT / "trees" / "heli_lines_spec.json").read_text(encoding="utf-8"))
+    assert (
+        prior.domain == "helicopter"
+        and prior.domain_spec["lattice"]["z_levels"] == spec["lattice"]["z_levels"]
+    )
+    domain = domain_from_spec(prior.domain, prior.domain_spec)
+    assert np.array_equal(domain.graph.edges, prior.graph.edges)
+    own = prior.trees[0]
+    assert (own.start, own.goal) == (domain.start, domain.goal)
+    assert own.leaf is not None and own.leaf.eta < 1.0  # the tree does not hand over at its root
+    result = Planner(prior).plan(domain.start, domain.goal, domain.checker(domain.make_world("corridors", 6)))
+    assert result.found
+    stages = [check.stage for check in result.checks]
+    assert stages[0] == "tree" and "bisect" in stages

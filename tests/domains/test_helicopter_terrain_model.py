@@ -53,3 +53,17 @@ def test_model_draws_through_its_cache(tmp_path: Path) -> None:
     two = model.draw(np.random.default_rng(3), params, frame)
     assert np.array_equal(one.terrain.heights, two.terrain.heights) and one.info == two.info
     assert len(model.grids) == 1 and one.wires == () and one.solids == ()
+
+
+def test_relief_null_keeps_the_grids_own_heights(tmp_path: Path) -> None:
+    path = _grid(tmp_path / "hills.asc", 300.0, size=120)  # heights 300 +- 20 m: a 40 m span at most
+    model = TerrainModel()
+    frame = WorldFrame((0.0, 300.0), (-100.0, 100.0), 50.0, 25.0, ((0.0, 0.0, 65.0),), 6.0, 40.0)
+    scaled = model.draw(np.random.default_rng(3), TerrainParams(path=str(path), nofly=0), frame)
+    own = model.draw(np.random.default_rng(3), TerrainParams(path=str(path), relief=None, nofly=0), frame)
+    assert scaled.info["relief"] >= 80.0  # the default draws a relief in [80, 200] m
+    assert 0.0 < own.info["relief"] <= 40.0
+    span = np.ptp(own.terrain.heights)
+    assert span <= 40.0 + 1e-6  # only shifted (and capped at the pads), never stretched
+    with pytest.raises(ProblemError, match="relief"):
+        TerrainParams(relief=(0.0, 10.0))

@@ -146,20 +146,22 @@ def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessag
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["heli_wires", "arm_table_clutter"])
+@pytest.mark.parametrize("name", ["heli_wires", "heli_lines", "arm_table_clutter"])
 def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Path) -> None:
     bundled = REPO_ROOT / "bags" / f"{name}.mcap"
     if not bundled.is_file():
         pytest.skip(f"{bundled} not generated (python scripts/make_bags.py)")
     if name.startswith("arm") and not (SHARED_DATA / "panda" / "panda.urdf").is_file():
         pytest.skip("the shared Panda files are needed to plan on the arm bag")
+    if name == "heli_lines" and not (SHARED_DATA / "terrain" / "srtm_front_range_144.asc").is_file():
+        pytest.skip("the shared elevation model is needed to draw the heli_lines world")
     contents = open_bag(bundled)
     assert bundled.stat().st_size < 2 * 1024 * 1024
     assert contents.topics["/obstacles"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
     assert [r.kind for r in bag_requests(contents.decoded())] == [
         "goal_pose" if "heli" in name else "goal_joints"
     ] * 4
-    only = "heli" if name.startswith("heli") else "arm"
+    only = name if name.startswith("heli") else "arm"
     run = subprocess.run(
         [
             sys.executable,

@@ -172,7 +172,9 @@ def test_the_shipped_files_fit_the_read_limits_with_room() -> None:
         assert path.stat().st_size * 10 < safe_npz.MAX_FILE_BYTES
         assert sum(i.file_size for i in infos) * 10 < safe_npz.MAX_TOTAL_BYTES
         assert max(i.file_size for i in infos) * 10 < safe_npz.MAX_MEMBER_BYTES
-        assert max(i.file_size / i.compress_size for i in infos) * 5 < safe_npz.MAX_COMPRESSION_RATIO
+        # Deflate's own bound (about 1032:1) sets this limit, so it cannot leave more room: an array of equal
+        # values (unit edge costs) reaches about half of it.
+        assert max(i.file_size / i.compress_size for i in infos) * 2 < safe_npz.MAX_COMPRESSION_RATIO
         assert len(infos) * 10 < safe_npz.MAX_MEMBERS
 
 

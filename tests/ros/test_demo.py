@@ -1,4 +1,4 @@
-"""The main job (``planner_demo``): the real node on the bundled helicopter bag, end to end."""
+"""The main job (``planner_demo``): the real node on the bundled real-scale helicopter bag, end to end."""
 
 from __future__ import annotations
 
@@ -29,10 +29,12 @@ def test_main_job_plans_prints_the_check_logs_records_and_draws(
     assert "plan 0: goal_pose on map version 2" in out
     assert "plan 1: map_update" in out and "blocked by the update" in out
     assert "plan 2: goal_pose" in out
-    assert out.count("check   1: edge") == 5 and "BLOCKED" in out and "[bisect" in out
+    assert out.count("check   1: edge") == 5 and "BLOCKED" in out
+    # The stages of the check log: the tree of the real-scale prior chooses the first checks, BiSECt the rest.
+    assert "[tree  ]" in out and "[bisect]" in out
     served = [line for line in out.splitlines() if line.startswith("  served by:")]
     assert len(served) == 5
-    assert all("precomputed DiRECt tree 'heli_wires'" in line for line in served[:3])
+    assert all("precomputed DiRECt tree 'heli_lines'" in line for line in served[:3])
     assert "built online" in served[3] and "off the graph" in served[4]
     assert "(1 new motions)" in out
     for k in range(5):

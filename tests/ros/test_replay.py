@@ -150,11 +150,12 @@ def _check_requests(
     return results
 
 
-def test_heli_bag_replays_into_the_node_and_matches_drd_plan(context: Any, tmp_path: Path) -> None:
+@pytest.mark.parametrize("name", ["heli_wires", "heli_lines"])
+def test_heli_bag_replays_into_the_node_and_matches_drd_plan(name: str, context: Any, tmp_path: Path) -> None:
     out = tmp_path / "heli_out.mcap"
-    summary, node = _replay(context, "heli_wires.npz", "map", BAGS / "heli_wires.mcap", out)
+    summary, node = _replay(context, f"{name}.npz", "map", BAGS / f"{name}.mcap", out)
     try:
-        _check_requests(summary, BAGS / "heli_wires.mcap", out, "heli_wires.npz", "map")
+        _check_requests(summary, BAGS / f"{name}.mcap", out, f"{name}.npz", "map")
         assert summary.record_path == out and not summary.interrupted
         assert not node.errors, node.errors
     finally:

@@ -124,6 +124,8 @@ class DatasetRecipe:
             argv += ["--domain-spec", json.dumps(dict(self.domain_spec), sort_keys=True)]
         if self.domain_factory:
             argv += ["--domain-factory", self.domain_factory]
+        if not self.include_trajectories:
+            argv += ["--no-trajectories"]
         return shlex.join(argv)
 
 

@@ -14,8 +14,8 @@ line. The flags:
 ``--terrain FILE``                   the ``terrain`` world model on an ESRI ASCII grid (worlds from seeds)
 ``--site X,Y``                       with ``--terrain``: centre of the operating area, in the grid's coordinates
 ``--site-jitter M``                  with ``--terrain``: metres a crop's centre may move from the site per axis
-``--crop {random,as-is}``            with ``--terrain``: random rotation, mirror and scale, or north up at the
-                                     grid's own cell size
+``--crop {random,as-is}``            with ``--terrain``: random rotation, mirror, scale and relief, or north up
+                                     at the grid's own cell size and heights
 ``--crop-scale M|LO,HI``             with ``--terrain``: metres per source cell
 ``--print-spec``                     print every spec key of ``--domain`` (default, unit, meaning) and exit
 ==================================== ================================================================================
@@ -115,7 +115,8 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
         "--crop",
         choices=CROP_CHOICES,
         default=None,
-        help="--terrain: random rotation/mirror/scale (default), or as-is: north up at the grid's cell size",
+        help="--terrain: random rotation/mirror/scale/relief (default), or as-is: north up at the grid's "
+        "cell size and its own heights",
     )
     group.add_argument(
         "--crop-scale", metavar="M|LO,HI", type=_scale, help="--terrain: metres per source cell"

@@ -11,9 +11,10 @@ flag                  spec key (``models.terrain``)
                       (``row = (y - y0) / ((rows - 1) cell)``, ``col = (x - x0) / ((cols - 1) cell)``, with
                       (x0, y0) the centre of its lower-left cell)
 ``--site-jitter M``   ``site_jitter``: metres per axis a crop's centre may move from the site
-``--crop as-is``      ``rotation_deg`` [0, 0], ``mirror`` 0 and ``metres_per_cell`` [cell, cell]: north up, not
-                      mirrored, one source cell = the grid's own cell size (the default ``random`` keeps the
-                      model's random rotation, mirror and scale)
+``--crop as-is``      ``rotation_deg`` [0, 0], ``mirror`` 0, ``metres_per_cell`` [cell, cell] and ``relief``
+                      null: north up, not mirrored, one source cell = the grid's own cell size, the grid's own
+                      heights (only shifted to the drawn open fraction; the default ``random`` keeps the model's
+                      random rotation, mirror, scale and relief)
 ``--crop-scale LO,HI`` ``metres_per_cell``: metres per source cell, drawn per world
 ===================== ===================================================================================
 
@@ -81,7 +82,9 @@ def terrain_keys(request: TerrainFile, grid: Heightfield) -> dict[str, Any]:
                 f"--crop as-is: {request.path} has cell size {cell:g} (degrees?); give the metres per cell "
                 "with --crop-scale M"
             )
-        keys.update({"rotation_deg": [0.0, 0.0], "mirror": 0.0, "metres_per_cell": [cell, cell]})
+        keys.update(
+            {"rotation_deg": [0.0, 0.0], "mirror": 0.0, "metres_per_cell": [cell, cell], "relief": None}
+        )
     if request.crop_scale is not None:
         keys["metres_per_cell"] = [float(request.crop_scale[0]), float(request.crop_scale[1])]
     return keys

@@ -197,8 +197,8 @@ class MapBags:
         return ["--bags", *self.files] + ([] if self.frame is None else ["--frame", self.frame])
 
 
-#: Crop presets of ``--crop``: ``random`` keeps the model's random rotation, mirror and scale; ``as-is``
-#: crops north up, unmirrored, at the grid's own cell size (one source cell = cell size metres).
+#: Crop presets of ``--crop``: ``random`` keeps the model's random rotation, mirror, scale and relief; ``as-is``
+#: crops north up, unmirrored, at the grid's own cell size (one source cell = cell size metres) and heights.
 CROP_CHOICES: tuple[str, ...] = ("random", "as-is")
 
 

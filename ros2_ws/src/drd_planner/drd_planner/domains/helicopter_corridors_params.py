@@ -206,14 +206,14 @@ DEFAULT_ZONES: tuple[KnownZone, ...] = (
         probability=0.5,
     ),
     KnownZone(
-        name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.3, group="exercise"
+        name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.6, group="exercise"
     ),
     KnownZone(
         name="bridge_works",
         shape="prism",
         center=(1850.0, -1175.0),
         size=(200.0, 250.0),
-        probability=0.3,
+        probability=0.6,
         group="exercise",
     ),
     KnownZone(

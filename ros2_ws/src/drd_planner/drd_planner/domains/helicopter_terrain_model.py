@@ -4,7 +4,8 @@ The elevation model (ESRI ASCII grid at ``path``; default
 :func:`~drd_planner.domains.helicopter_world_params.default_terrain_path`; any grid works, its own cell size is
 ignored) is cropped at a random place, rotated by a random angle (and mirrored with probability ``mirror``),
 resampled at ``metres_per_cell`` metres per source cell (compressing the real ~90 m cells so a corridor holds
-ridges and valleys), scaled so its 2-98 % height range spans ``relief`` metres, and shifted so a fraction
+ridges and valleys), scaled so its 2-98 % height range spans ``relief`` metres (``relief`` null: the grid's
+own heights, not scaled), and shifted so a fraction
 ``open_fraction`` of it lies at least the vehicle clearance below the start altitude. Within
 ``keep_clear_radius`` of the start and goal it is capped ``ground_gap`` below that (a smooth pad), so both are
 always clear. Windows with unknown (NODATA) heights are redrawn up to ``max_tries`` times. With ``site`` =
@@ -135,8 +136,12 @@ def _scale_and_shift(
 ) -> tuple[FloatArray, dict[str, Any]]:
     """Heights scaled to a drawn relief, shifted to a drawn open fraction and padded at the keep-clear points."""
     lo, hi = np.percentile(heights, [2.0, 98.0])
-    relief = draw_uniform(rng, p.relief)
-    heights = (heights - lo) * (relief / max(float(hi - lo), 1.0))
+    if p.relief is None:  # the grid's own heights (``--crop as-is``)
+        relief = float(hi - lo)
+        heights = heights - lo
+    else:
+        relief = draw_uniform(rng, p.relief)
+        heights = (heights - lo) * (relief / max(float(hi - lo), 1.0))
     open_fraction = draw_uniform(rng, p.open_fraction)
     shift = window.target - float(np.quantile(heights, open_fraction))
     heights = heights + shift

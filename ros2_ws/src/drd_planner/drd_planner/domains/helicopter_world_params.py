@@ -317,7 +317,8 @@ class TerrainParams(NoFlyParams):
     Attributes:
         path: the ESRI ASCII elevation grid to crop (file); null: the shared Front Range grid.
         metres_per_cell: [lo, hi] metres one source grid cell spans after resampling (m).
-        relief: [lo, hi] height span of the crop's 2-98 % height range after scaling (m).
+        relief: [lo, hi] height span of the crop's 2-98 % height range after scaling (m); null: the grid's own
+            heights, not scaled (only shifted to the open fraction).
         open_fraction: [lo, hi] share of the crop lying at least the vehicle clearance below the start
             altitude (fraction).
         ground_gap: [lo, hi] how far below the start altitude the pads around start and goal are capped (m).
@@ -332,7 +333,7 @@ class TerrainParams(NoFlyParams):
 
     path: str | None = None
     metres_per_cell: Range = (15.0, 40.0)
-    relief: Range = (80.0, 200.0)
+    relief: Range | None = (80.0, 200.0)
     open_fraction: Range = (0.35, 0.85)
     ground_gap: Range = (0.0, 25.0)
     keep_clear_radius: float = 80.0
@@ -359,7 +360,9 @@ class TerrainParams(NoFlyParams):
         _bounded(self, "site_jitter", 0.0, math.inf)
         _bounded(self, "mirror", 0.0, 1.0)
         _ranges(self, ("rotation_deg",))
-        _ranges(self, ("metres_per_cell", "relief"), low=1e-9)
+        _ranges(self, ("metres_per_cell",), low=1e-9)
+        if self.relief is not None:
+            _ranges(self, ("relief",), low=1e-9)
         _ranges(self, ("ground_gap",))
         _ranges(self, ("open_fraction",), low=0.0)
         if self.open_fraction[1] > 1.0:

@@ -7,8 +7,10 @@ the request again), records everything the node publishes into ``OUT/outputs.mca
 plan with its per-check log and writes a picture of each (``OUT/plan_<k>.png``: terrain, wires, no-fly
 zones, checked edges green/red, the plan).
 
-Defaults: the helicopter Wires tree (``trees/heli_wires.npz``) and ``bags/heli_wires.mcap``;
-``--tree arm_table_clutter --bag arm_table_clutter`` runs the arm.
+Defaults: the real-scale helicopter prior (``trees/heli_lines.npz``: power-line corridors, known no-fly
+zones and registration error over 2.5 km of real terrain, 20 999 lattice edges) and ``bags/heli_lines.mcap``;
+``--tree heli_wires --bag heli_wires`` runs the small Wires corridor, ``--tree arm_table_clutter --bag
+arm_table_clutter`` the arm.
 """
 
 from __future__ import annotations
@@ -85,10 +87,10 @@ def build_parser() -> argparse.ArgumentParser:
     """The ``planner_demo`` argument parser."""
     parser = argparse.ArgumentParser(prog="planner_demo", description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "--tree", default="heli_wires", help="tree file or shipped tree name (default heli_wires)"
+        "--tree", default="heli_lines", help="tree file or shipped tree name (default heli_lines)"
     )
     parser.add_argument(
-        "--bag", default="heli_wires", help="bag file or bundled bag name (default heli_wires)"
+        "--bag", default="heli_lines", help="bag file or bundled bag name (default heli_lines)"
     )
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default ./out)")
     parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2)")
