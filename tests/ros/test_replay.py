@@ -53,9 +53,7 @@ def context() -> Iterator[Any]:
     ctx.try_shutdown()
 
 
-def _replay(
-    ctx: Any, tree: str, frame: str, bag: Path, out: Path, *, settle: float = 1.0
-) -> tuple[ReplaySummary, PlannerNode]:
+def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[ReplaySummary, PlannerNode]:
     if not bag.is_file():
         pytest.skip(f"{bag} not generated (python scripts/make_bags.py)")
     params = [
@@ -66,7 +64,10 @@ def _replay(
     try:
         assert node.trigger_configure().name == "SUCCESS", node.errors
         assert node.trigger_activate().name == "SUCCESS"
-        summary = replay_bag(bag, context=ctx, nodes=[node], options=ReplayOptions(record=out, settle=settle))
+        # After the bag, until the node has answered everything (the real-scale lattice's last request
+        # builds its library and tree online, about 0.6 s on an idle 2-core machine, more under load).
+        options = ReplayOptions(record=out, settle=1.0, settle_until=lambda: node.planning_idle)
+        summary = replay_bag(bag, context=ctx, nodes=[node], options=options)
     except BaseException:
         node.destroy_node()
         raise
@@ -155,10 +156,7 @@ def _check_requests(
 @pytest.mark.parametrize("name", ["heli_wires", "heli_lines"])
 def test_heli_bag_replays_into_the_node_and_matches_drd_plan(name: str, context: Any, tmp_path: Path) -> None:
     out = tmp_path / "heli_out.mcap"
-    # The real-scale lattice's last request builds its library and tree online (about 0.6 s on an idle
-    # 2-core machine): give the node time to answer it after the bag ends.
-    settle = 4.0 if name == "heli_lines" else 1.0
-    summary, node = _replay(context, f"{name}.npz", "map", BAGS / f"{name}.mcap", out, settle=settle)
+    summary, node = _replay(context, f"{name}.npz", "map", BAGS / f"{name}.mcap", out)
     try:
         _check_requests(summary, BAGS / f"{name}.mcap", out, f"{name}.npz", "map")
         assert summary.record_path == out and not summary.interrupted
@@ -206,6 +204,8 @@ def test_replay_without_a_planner_records_nothing(context: Any, tmp_path: Path) 
     assert read_bag(tmp_path / "o.mcap") == []
     with pytest.raises(ValueError, match="rate"):
         replay_bag(bag, context=context, options=ReplayOptions(rate=0.0))
+    with pytest.raises(ValueError, match="settle_limit"):
+        ReplayOptions(settle_limit=float("nan"))
 
 
 def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -131,7 +131,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         record = args.out / "outputs.mcap"
         print(f"replaying {bag_path} into the planner node (frame {frame!r}, tree {node.sessions[0].name})")
-        options = ReplayOptions(record=record, overwrite=True, rate=args.rate)
+        # After the bag, wait until the node has answered every request, however slow this machine is.
+        options = ReplayOptions(
+            record=record, overwrite=True, rate=args.rate, settle_until=lambda: node.planning_idle
+        )
         summary = replay_bag(bag, context=context, nodes=[node], options=options)
         print(
             f"published {len(summary.published)} bag messages; recorded "

@@ -82,6 +82,8 @@ LATCHED_OUTPUTS = ("plan", "joint_trajectory")
 #: Depth of the recording subscriptions (volatile: a plan latched before the replay is not recorded).
 RECORD_DEPTH = 100
 _SPIN_S = 0.02
+#: Seconds spun after ``ReplayOptions.settle_until`` holds, so the outputs of the last answer arrive.
+ANSWER_S = 0.5
 #: Seconds spun after every subscriber matched, before the first message (discovery settles both ways).
 _MATCH_GRACE_S = 0.3
 
@@ -231,6 +233,10 @@ class ReplayOptions:
         log: called with one progress line at a time (None: silent).
         require_listener: refuse to replay (and to write ``record``) when after ``wait`` seconds no
             bag topic has a subscriber: no planner is running there.
+        settle_until: after ``settle``, keep spinning until this returns True (e.g. the planner's
+            ``planning_idle``: every request answered, however slow the machine), at most
+            ``settle_limit`` seconds more; then spin :data:`ANSWER_S` so its last outputs are recorded.
+        settle_limit: the most seconds spent waiting for ``settle_until``.
 
     Raises:
         ValueError: ``rate``, ``settle`` or ``wait`` out of range.
@@ -244,6 +250,8 @@ class ReplayOptions:
     namespace: str | None = None
     log: Callable[[str], None] | None = None
     require_listener: bool = False
+    settle_until: Callable[[], bool] | None = None
+    settle_limit: float = 60.0
 
     def __post_init__(self) -> None:
         rate, settle, wait = self.rate, self.settle, self.wait
@@ -251,6 +259,8 @@ class ReplayOptions:
             raise ValueError(f"rate must be a finite number > 0, got {rate}")
         if not (math.isfinite(settle) and settle >= 0 and math.isfinite(wait) and wait >= 0):
             raise ValueError(f"settle and wait must be finite and >= 0 s, got {settle}, {wait}")
+        if not (math.isfinite(self.settle_limit) and self.settle_limit >= 0):
+            raise ValueError(f"settle_limit must be finite and >= 0 s, got {self.settle_limit}")
 
     def say(self, line: str) -> None:
         """Pass one progress line to :attr:`log`."""
@@ -283,6 +293,13 @@ class _Replayer:
         self.executor.remove_node(self.node)
         self.executor.shutdown()
         self.node.destroy_node()
+
+    def spin_until(self, done: Callable[[], bool], limit: float) -> None:
+        """Spin until ``done()`` (at most ``limit`` s), then :data:`ANSWER_S` more for its outputs."""
+        end = time.monotonic() + limit
+        while not done() and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=_SPIN_S)
+        self.spin_for(ANSWER_S)
 
     def spin_for(self, seconds: float) -> None:
         """Spin the executor for ``seconds`` of wall time."""
@@ -410,6 +427,8 @@ def replay_bag(
             unmatched = replayer.wait_for_peers()
             published = replayer.play()
             replayer.spin_for(options.settle)
+            if options.settle_until is not None:
+                replayer.spin_until(options.settle_until, options.settle_limit)
         except KeyboardInterrupt:
             interrupted = True
             options.say("  interrupted: writing what was recorded so far")
