@@ -57,6 +57,28 @@ def test_policy_context_passes_the_graph_when_supported(problem: Problem, tree: 
     assert (ctx.start, ctx.goal) == (problem.start, problem.goal)
 
 
+def test_policy_context_carries_the_training_worlds(problem: Problem) -> None:
+    ctx = policy_context(problem, theta=train_bias(problem), tree=None, seed=0)
+    worlds = problem.require_worlds()
+    assert ctx.train_worlds is not None and ctx.train_weights is None  # uniform prior
+    np.testing.assert_array_equal(ctx.train_worlds, worlds.X[worlds.train_ids])
+
+
+def test_bench_runs_the_learned_lazysp_selectors(problem: Problem, tmp_path: Path) -> None:
+    from drd_planner.cli import main
+
+    names = ["lazysp", "lazysp_posterior", "lazysp_posterior_delta"]
+    out = tmp_path / "lazy.json"
+    argv = ["bench", "--gccd", str(gccd_folder("dataset_2d_1")), "--max-worlds", "3"]
+    assert main([*argv, "--policies", ",".join(names), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert list(doc["policies"]) == names
+    for name in names:
+        assert doc["policies"][name]["failures"] == 0
+        assert all(c > 0 for c in doc["policies"][name]["checks"])
+    assert not set(names[1:]) & set(DEFAULT_POLICIES)  # opt-in baselines
+
+
 def test_run_world_reproduces_the_benchmark_episodes(problem: Problem, tree: DecisionTree) -> None:
     res = run_benchmark(
         problem, policies=["direct_only", "bisect"], tree=tree, seed=7, max_worlds=4, progress=False

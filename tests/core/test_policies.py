@@ -64,6 +64,7 @@ def test_same_seed_same_checks() -> None:
                 graph=problem.graph,
                 start=problem.start,
                 goal=problem.goal,
+                train_worlds=worlds.X[worlds.train_ids],
             )
             result = run_episode(
                 problem.library,

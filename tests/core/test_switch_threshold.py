@@ -132,3 +132,49 @@ def test_summary_is_a_few_short_lines() -> None:
     for head in ("fixed", "kappa 5", "kappa 20", "kappa 50"):
         end = lines[1].index(head) + len(head)
         assert lines[3][end - 1].isdigit() and lines[3][end : end + 1] in (" ", "*", ""), head
+
+
+def test_k_fold_validation_uses_disjoint_folds_and_the_one_standard_error_rule(problem) -> None:  # type: ignore[no-untyped-def]
+    grid = ValidationGrid(candidates=(0.05, 0.3, 1.0), pseudo_counts=(None, 10.0))
+    choice = select_switch_threshold(problem, grid, seed=2, folds=3)
+    worlds = problem.worlds
+    held = np.asarray(choice.validation_ids)
+    per_fold = round(0.1 * worlds.train_ids.size)
+    assert held.size == 3 * per_fold and np.unique(held).size == held.size  # three disjoint folds
+    assert np.isin(held, worlds.train_ids).all() and worlds.R[held].any(axis=1).all()
+    for candidate, means in choice.fold_means.items():
+        assert len(means) == 3
+        assert choice.mean_checks[candidate] == pytest.approx(np.mean(means))
+    best = min(choice.mean_checks.values())
+    best_candidate = min(choice.mean_checks, key=lambda c: (choice.mean_checks[c], -c[0]))
+    within = {
+        c for c, v in choice.mean_checks.items() if v <= best + choice.standard_error(best_candidate) + 1e-12
+    }
+    chosen = (choice.eta, choice.pseudo_count)
+    assert chosen in within
+    # The simplest of those within one standard error: no candidate there has a larger eta, and at the
+    # same eta the fixed leaf goes first.
+    assert all(c[0] <= chosen[0] for c in within)
+    if chosen[1] is not None:
+        assert (chosen[0], None) not in within
+    assert choice.standard_error(chosen) >= 0.0
+    summary = choice.as_json()
+    assert summary["folds"] == 3 and set(summary["standard_error"]) == {
+        f"eta {e:g}" + ("" if k is None else f" kappa {k:g}") for e, k in choice.mean_checks
+    }
+    assert "3 folds x" in choice.describe()
+    # Same seed, same folds, same choice; one fold is the single split of before.
+    assert select_switch_threshold(problem, grid, seed=2, folds=3) == choice
+    single = select_switch_threshold(problem, grid, seed=2)
+    assert single.fold_means == {} and single.standard_error((single.eta, single.pseudo_count)) == 0.0
+
+
+def test_folds_shrink_to_what_the_worlds_hold_and_bad_folds_are_refused(problem) -> None:  # type: ignore[no-untyped-def]
+    grid = ValidationGrid(candidates=(0.2,), pseudo_counts=(None,))
+    many = select_switch_threshold(problem, grid, seed=0, folds=1000, max_worlds=5)
+    feasible = int(problem.worlds.R[problem.worlds.train_ids].any(axis=1).sum())
+    assert len(many.fold_means[(0.2, None)]) == (feasible - 1) // 5  # folds of 5 worlds, one world kept
+    assert len(many.validation_ids) == 5 * ((feasible - 1) // 5)
+    for bad in (0, -1, 2.5):
+        with pytest.raises(ProblemError, match="folds must be an integer >= 1"):
+            select_switch_threshold(problem, grid, folds=bad)  # type: ignore[arg-type]

@@ -23,6 +23,8 @@ if TYPE_CHECKING:  # the names below load on first use (``planner_node`` install
     from drd_planner.exceptions import DrdError, PlanningError, PriorFileError
     from drd_planner.planner import (
         PLAN_POLICIES,
+        ImproveBudget,
+        Improvement,
         LeafSetting,
         Planner,
         PlanResult,
@@ -44,6 +46,8 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(
         (
             "PLAN_POLICIES",
+            "ImproveBudget",
+            "Improvement",
             "LeafSetting",
             "Planner",
             "PlanResult",
@@ -66,6 +70,8 @@ __all__ = [
     "CheckRecord",
     "DrdError",
     "EdgeOracle",
+    "ImproveBudget",
+    "Improvement",
     "LeafSetting",
     "PlanResult",
     "PlanStage",

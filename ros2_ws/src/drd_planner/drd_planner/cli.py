@@ -15,6 +15,7 @@ from drd_planner import __version__
 from drd_planner.command_errors import run_command
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
 from drd_planner.core.tree import DecisionTree
 from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
@@ -42,6 +43,13 @@ def _tree_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--colouring", action="store_true", help="group never-overlapping regions into one ECD"
     )
+    parser.add_argument(
+        "--region-rule",
+        choices=REGION_RULES,
+        default=DEFAULT_REGION_RULE,
+        help="which path the tree and BiSECt try to prove: the most probable (probability, the paper's) or "
+        "the most probable per expected check (per_check)",
+    )
 
 
 def _tree_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -50,6 +58,7 @@ def _tree_kwargs(args: argparse.Namespace) -> dict[str, Any]:
         "colouring": args.colouring,
         "top_regions": args.top_regions,
         "max_prob_region": args.candidates == "max-prob-region",
+        "region_rule": args.region_rule,
     }
 
 
@@ -140,6 +149,8 @@ def _suite_options(args: argparse.Namespace) -> SuiteOptions:
         max_worlds=args.max_worlds,
         max_checks=args.max_checks,
         tree_options=_tree_kwargs(args),
+        validation_folds=args.validation_folds,
+        region_rules=REGION_RULES if args.validate_region_rule else (),
         reference=args.reference,
         tie_subset=tuple(args.tie_subset) if args.tie_subset is not None else TIE_SUBSET,
         resamples=args.resamples,
@@ -384,6 +395,20 @@ def _add_bench_parser(sub: Any) -> None:
         default=None,
         help="switch to BiSECt at or below this consistent fraction; 'auto' (default) validates it on "
         "held-out training worlds",
+    )
+    p.add_argument(
+        "--validate-region-rule",
+        action="store_true",
+        help="validate the region rules (probability, per_check) per dataset, each with its own tree, eta "
+        "and kappa, and keep the paper's unless per_check wins by more than the validation noise",
+    )
+    p.add_argument(
+        "--validation-folds",
+        type=int,
+        default=1,
+        metavar="K",
+        help="validate eta and kappa on K disjoint held-out sets of training worlds, each with its own "
+        "tree, and take the simplest setting within one standard error of the best (default 1: one split)",
     )
     _kappa_option(p)
     p.add_argument(

@@ -158,8 +158,14 @@ def policy_context(
 ) -> PolicyContext:
     """The context a policy factory gets: library, unit costs, (E,) training bias, tree, seed and graph.
 
-    The graph, start and goal are what the full-graph policies (``lazysp``, ``lazysp_set``) need.
+    The graph, start and goal are what the full-graph policies (``lazysp``, ``lazysp_set``) need; the
+    (n_train, E) training worlds and their prior weights what the learned ``lazysp_posterior*`` need.
     """
+    worlds = problem.worlds
+    train_worlds = train_weights = None
+    if worlds is not None:
+        train_worlds = worlds.X[worlds.train_ids]
+        train_weights = None if worlds.prior is None else worlds.weights(worlds.train_ids)
     return PolicyContext(
         problem.library,
         problem.edge_costs,
@@ -172,6 +178,8 @@ def policy_context(
         graph=problem.graph,
         start=problem.start,
         goal=problem.goal,
+        train_worlds=train_worlds,
+        train_weights=train_weights,
     )
 
 

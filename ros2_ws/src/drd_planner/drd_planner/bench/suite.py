@@ -8,6 +8,7 @@ with a note. :func:`suite_json` and :func:`suite_markdown` turn the runs into on
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -66,6 +67,12 @@ class SuiteOptions:
             checked when the options are made (:class:`~drd_planner.bench.extras.MissingExtraError`).
         training_sizes: training-set sizes of the checks-vs-training-size figure (empty: no such figure).
         figure_world: position in the test list of the world drawn in the checked-edges figure.
+        validation_folds: folds of the eta / kappa validation (1: one held-out split; k > 1: k-fold with
+            the one-standard-error rule, :func:`~drd_planner.core.switch_threshold.select_switch_threshold`).
+        region_rules: region rules to validate (:mod:`~drd_planner.core.region_rule`): each gets its own
+            eta / kappa validation with a tree built by it, and the first (the paper's) is kept unless
+            another's validated mean is lower by more than its standard error (any lower with one
+            split); empty: ``tree_options``' rule, not validated.
     """
 
     policies: tuple[str, ...] = DEFAULT_POLICIES
@@ -82,6 +89,8 @@ class SuiteOptions:
     figures: Path | None = None
     training_sizes: tuple[int, ...] = DEFAULT_SIZES
     figure_world: int = 0
+    validation_folds: int = 1
+    region_rules: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         """Fail early, naming the extra, when figures are asked for without matplotlib."""
@@ -165,8 +174,7 @@ def run_dataset(
     t0 = time.perf_counter()
     check_policy_names(options.policies)
     require_test_worlds(problem)
-    eta, kappa, eta_choice = resolve_leaf(problem, options, progress=progress)
-    options = dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,))
+    options, eta_choice, rule_scores = resolve_settings(problem, options, progress=progress)
     if tree is None and _needs_tree(options):
         tree = build_tree(problem, progress=False, **dict(options.tree_options))
     result = run_benchmark(
@@ -174,13 +182,18 @@ def run_dataset(
         policies=options.policies,
         tree=tree,
         seed=options.seed,
-        settings=PolicySettings(eta, options.alpha, kappa),
+        settings=_settings(options),
         max_worlds=options.max_worlds,
         max_checks=options.max_checks,
         progress=progress,
     )
     if eta_choice is not None:
         result.settings["eta_selection"] = eta_choice.as_json()
+    if rule_scores:
+        result.settings["region_rule_selection"] = {
+            "chosen": options.tree_options["region_rule"],
+            "validated_mean_checks": rule_scores,
+        }
     table = result_table1(
         result,
         reference=options.reference,
@@ -196,6 +209,33 @@ def run_dataset(
         figures += _checked_edges_figure(problem, result, tree, options, notes)
         curve = _training_figure(problem, options, figures, notes)
     return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0, eta_choice)
+
+
+def resolve_settings(
+    problem: Problem, options: SuiteOptions, *, progress: bool | None = False
+) -> tuple[SuiteOptions, SwitchThresholdChoice | None, dict[str, float]]:
+    """The options with a concrete eta, kappa and region rule; the eta/kappa validation; each rule's score.
+
+    Without ``options.region_rules`` this is :func:`resolve_leaf`. With them, every rule is validated
+    (its own tree, eta and kappa) and the rule chosen as :class:`SuiteOptions` says; its validated mean
+    checks are the returned scores.
+    """
+    if not options.region_rules:
+        eta, kappa, choice = resolve_leaf(problem, options, progress=progress)
+        return dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,)), choice, {}
+    best: tuple[SuiteOptions, SwitchThresholdChoice | None] | None = None
+    best_score, scores = math.inf, {}
+    for rule in options.region_rules:
+        trial = dataclasses.replace(options, tree_options={**options.tree_options, "region_rule": rule})
+        eta, kappa, choice = resolve_leaf(problem, trial, progress=progress)
+        if choice is None:  # nothing validated (eta and kappa fixed, or no tree): keep the first rule
+            return dataclasses.replace(trial, eta=eta, pseudo_counts=(kappa,)), None, {}
+        score = choice.mean_checks[(eta, kappa)]
+        scores[rule] = score
+        if best is None or score < best_score - choice.standard_error((eta, kappa)) - 1e-12:
+            best, best_score = (dataclasses.replace(trial, eta=eta, pseudo_counts=(kappa,)), choice), score
+    assert best is not None
+    return best[0], best[1], scores
 
 
 def resolve_leaf(
@@ -218,6 +258,7 @@ def resolve_leaf(
         seed=options.seed,
         max_worlds=options.max_worlds,
         progress=progress,
+        folds=options.validation_folds,
     )
     return choice.eta, choice.pseudo_count, choice
 

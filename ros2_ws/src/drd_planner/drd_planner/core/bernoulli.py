@@ -15,6 +15,7 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.region_rule import ProofOrder, region_scores
 from drd_planner.exceptions import ProblemError
 
 #: theta is clamped into [THETA_EPS, 1 - THETA_EPS] so that no untested path has p = 1 or 0.
@@ -47,6 +48,7 @@ class BernoulliLibraryState:
         self._theta = th
         self._log_theta = np.log(th)
         self._log_1m_theta = np.log1p(-th)
+        self._proof_order: ProofOrder | None = None
         self._tested = np.zeros(library.num_edges, dtype=bool)
         self._alive = np.ones(library.num_paths, dtype=bool)
         self._remaining = np.diff(self._csr.indptr).astype(np.int64)
@@ -72,6 +74,18 @@ class BernoulliLibraryState:
     def most_probable_path(self) -> int:
         """i* = argmax over alive paths of p_i (first index on ties): the MaxProbReg path."""
         return int(np.argmax(np.where(self._alive, self._logp, -np.inf)))
+
+    def region_path(self, rule: str, edge_costs: FloatArray) -> int:
+        """The alive path the region rule ``rule`` picks (:mod:`drd_planner.core.region_rule`).
+
+        ``"probability"`` is :meth:`most_probable_path`; ``"per_check"`` ranks by p_i per expected check.
+        """
+        if rule == "probability":
+            return self.most_probable_path()
+        if self._proof_order is None:  # sorted once per bias
+            self._proof_order = ProofOrder(self._csr.indptr, self._csr.indices, self._theta, edge_costs)
+        costs = self._proof_order.costs(self._tested, self._alive)
+        return int(np.argmax(region_scores(rule, self.log_path_probability, costs)))
 
     def untested_edges_of(self, path: int) -> IntArray:
         """Sorted untested edges of ``path``."""
@@ -110,6 +124,7 @@ class BernoulliLibraryState:
         self._theta = th
         self._log_theta = np.log(th)
         self._log_1m_theta = np.log1p(-th)
+        self._proof_order = None
         self._logp = np.asarray(self._csr @ np.where(self._tested, 0.0, self._log_theta), dtype=np.float64)
 
     def observe(self, edge: int, free: bool) -> None:

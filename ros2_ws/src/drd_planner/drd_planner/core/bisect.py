@@ -17,6 +17,7 @@ from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bernoulli import BernoulliLibraryState
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.logmath import log1mexp
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 
 
 def bias_from_worlds(
@@ -50,9 +51,11 @@ class Bisect(BernoulliLibraryState):
         library: the m paths.
         theta: (E,) bias, P(edge free), in (0, 1).
         edge_costs: (E,) positive check costs.
-        max_prob_region: restrict candidates to the most probable alive path (MaxProbReg, option 1).
+        max_prob_region: restrict candidates to the edges of one alive path (MaxProbReg, option 1).
         lite: use the un-squared outcome factor (BiSECt-lite, exponent n_e + 1 instead of 2 n_e + 1).
         observations: edges already checked (edge -> free), clamped before the first selection.
+        region_rule: which path ``max_prob_region`` restricts to (:data:`~drd_planner.core.region_rule.REGION_RULES`):
+            the most probable (the paper's), or the most probable per expected check.
     """
 
     def __init__(
@@ -64,9 +67,11 @@ class Bisect(BernoulliLibraryState):
         max_prob_region: bool = True,
         lite: bool = False,
         observations: Mapping[int, bool] | None = None,
+        region_rule: str = DEFAULT_REGION_RULE,
     ) -> None:
         self._costs = np.asarray(edge_costs, dtype=np.float64)
         self._max_prob_region = max_prob_region
+        self._region_rule = check_region_rule(region_rule)
         self._exponent_factor = 1 if lite else 2
         super().__init__(library, theta, observations=observations)
 
@@ -98,7 +103,7 @@ class Bisect(BernoulliLibraryState):
         """The next edge to check, or None when solved."""
         if self.solved():
             return None
-        istar = self.most_probable_path()
+        istar = self.region_path(self._region_rule, self._costs)
         own = self.untested_edges_of(istar)
         own_gain = self.gains(own)
         e_own = int(own[int(np.argmax(own_gain))])

@@ -111,6 +111,36 @@ class GraphArcs:
         seq = np.asarray(vertices[::-1], dtype=np.int64)
         return self.edge_of(seq[:-1], seq[1:])
 
+    def deletion_lengths(
+        self, start: int, goal: int, edge_weights: FloatArray, edges: IntArray
+    ) -> tuple[float, FloatArray]:
+        """Shortest start-goal length, and the same with each of ``edges`` deleted in turn.
+
+        One batched Dijkstra over ``m + 1`` disjoint copies of the graph (copy 0 as weighted, copy
+        ``j + 1`` without ``edges[j]``); arcs of edges weighted inf are deleted in every copy.
+
+        Args:
+            start: start vertex.
+            goal: goal vertex.
+            edge_weights: (E,) non-negative edge weights (inf: deleted), in length units.
+            edges: (m,) edge ids to delete one at a time.
+
+        Returns:
+            The length without deletions and the (m,) lengths with ``edges[j]`` deleted; inf where
+            the goal is unreachable.
+        """
+        ids = np.asarray(edges, dtype=np.int64)
+        copies, n = ids.size + 1, self.num_vertices
+        indices, indptr = self.batch_structure(copies, start)
+        weights = np.tile(np.asarray(edge_weights, dtype=np.float64), (copies, 1))
+        weights[np.arange(1, copies), ids] = np.inf
+        data = np.concatenate([weights[:, self.edge].ravel(), np.ones(copies)])
+        size = copies * n + 1
+        csr = sp.csr_array((data, indices, indptr), shape=(size, size))
+        dist = dijkstra(csr, directed=True, indices=size - 1)
+        at_goal = dist[np.arange(copies) * n + goal] - 1.0  # the super-source's arcs weigh 1
+        return float(at_goal[0]), np.asarray(at_goal[1:], dtype=np.float64)
+
     def batch_structure(self, copies: int, start: int) -> tuple[IntArray, IntArray]:
         """CSR ``(indices, indptr)`` of ``copies`` disjoint copies of the graph plus a super-source.
 
@@ -267,6 +297,10 @@ class LazySP:
             self._stale = True
 
     def _position(self, path: IntArray, checked: BoolArray) -> int:
+        """Position in ``path`` of the edge to check (``checked`` has an unchecked entry).
+
+        The selector hook: subclasses (:mod:`drd_planner.core.lazysp_learned`) override it.
+        """
         open_pos = np.flatnonzero(~checked)
         if self._selector == "forward":
             return int(open_pos[0])

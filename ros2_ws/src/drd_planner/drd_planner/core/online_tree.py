@@ -18,10 +18,11 @@ from functools import cached_property
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.arrays import FloatArray, IntArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.direct import DirectSelector
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, NodeRegionInputs, check_region_rule
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, direct_node_edge, leaf_bias, node_summary
 from drd_planner.exceptions import ProblemError
 
@@ -42,6 +43,7 @@ class LazyDirectTree:
         expand_threshold: a non-root node is expanded only if its fraction is at least this (0.05).
         max_prob_region: restrict a node's tests to the best-supported path's edges (as offline).
         max_nodes: cap on the nodes held; a node that would exceed it becomes a leaf.
+        region_rule: which path ``max_prob_region`` restricts to (as offline; the paper's by default).
     """
 
     def __init__(
@@ -54,6 +56,7 @@ class LazyDirectTree:
         expand_threshold: float = 0.05,
         max_prob_region: bool = True,
         max_nodes: int = DEFAULT_MAX_NODES,
+        region_rule: str = DEFAULT_REGION_RULE,
     ) -> None:
         x = np.asarray(X, dtype=bool)
         if x.ndim != 2 or x.shape[1] != library.num_edges or x.shape[0] == 0:
@@ -69,6 +72,11 @@ class LazyDirectTree:
         self._expand = float(expand_threshold)
         self._max_prob_region = max_prob_region
         self._max_nodes = int(max_nodes)
+        self._region = (
+            None
+            if check_region_rule(region_rule) == DEFAULT_REGION_RULE
+            else NodeRegionInputs(region_rule, x, library, self._costs)
+        )
         self._lib_edges = library.library_edges
         self._r_float: FloatArray | None = None
         self._selector: DirectSelector | None = None
@@ -77,6 +85,7 @@ class LazyDirectTree:
         self._fraction: list[float] = [1.0 if self._total > 0 else 0.0]
         self._edge: list[int | None] = [None]
         self._children: list[list[int]] = [[NO_CHILD, NO_CHILD]]
+        self._parent: list[int] = [-1]
 
     @property
     def num_edges(self) -> int:
@@ -87,6 +96,11 @@ class LazyDirectTree:
     def num_paths(self) -> int:
         """M."""
         return self._library.num_paths
+
+    @property
+    def region_rule(self) -> str:
+        """The region rule of the nodes (:class:`~drd_planner.core.tree.TreeNodes`)."""
+        return DEFAULT_REGION_RULE if self._region is None else self._region.rule
 
     @property
     def num_nodes(self) -> int:
@@ -155,6 +169,8 @@ class LazyDirectTree:
                 self._r(),
                 self._library,
                 max_prob_region=self._max_prob_region,
+                region=self._region,
+                checked=self._checked_mask(node) if self._region is not None else None,
             )
         if edge is None:
             self._edge[node] = NO_EDGE
@@ -167,5 +183,14 @@ class LazyDirectTree:
             self._fraction.append(float(self._weights[child_active].sum()) / self._total)
             self._edge.append(None)
             self._children.append([NO_CHILD, NO_CHILD])
+            self._parent.append(node)
             self._children[node][x] = len(self._edge) - 1
         return edge
+
+    def _checked_mask(self, node: int) -> BoolArray:
+        """(E,) the edges checked on the way from the root to ``node``."""
+        mask = np.zeros(self.num_edges, dtype=bool)
+        while self._parent[node] >= 0:
+            node = self._parent[node]
+            mask[self._edge[node]] = True
+        return mask

@@ -13,14 +13,21 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.arrays import FloatArray
+from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.baselines import LazySPSet, MaxTally, MVoI, RandomEdge, SetCover, WeightedMaxTally
 from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, LazySP, LazySPSettings, lazysp_name
+from drd_planner.core.lazysp_learned import (
+    LEARNED_LAZYSP_POLICIES,
+    PosteriorLazySP,
+    PosteriorSettings,
+    all_edge_outcomes,
+)
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import ConsistentWorldsBias
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 from drd_planner.core.tree import NO_CHILD, NO_EDGE, DecisionTree, TreeNodes
 from drd_planner.exceptions import PolicyError, ProblemError
 
@@ -43,9 +50,12 @@ class BisectPolicy:
         *,
         max_prob_region: bool = True,
         name: str | None = None,
+        region_rule: str = DEFAULT_REGION_RULE,
     ) -> None:
         self._name = name or ("bisect" if max_prob_region else "bisect_all")
-        self._bisect = Bisect(library, theta, edge_costs, max_prob_region=max_prob_region)
+        self._bisect = Bisect(
+            library, theta, edge_costs, max_prob_region=max_prob_region, region_rule=region_rule
+        )
 
     @property
     def name(self) -> str:
@@ -100,7 +110,9 @@ class DirectBisectPolicy:
     bias keeps being re-conditioned on every later outcome (the authors' ``update_posterior``
     option, :class:`~drd_planner.core.posterior.ConsistentWorldsBias`); None keeps it fixed after
     the switch as in the paper's benchmark. The posterior needs a tree that carries its training
-    worlds (``DecisionTree.world_free``).
+    worlds (``DecisionTree.world_free``). ``region_rule`` picks BiSECt's path after the switch
+    (:mod:`~drd_planner.core.region_rule`; None: the rule the tree was built with, so one option of
+    ``build_tree`` sets both stages).
     """
 
     def __init__(
@@ -113,8 +125,10 @@ class DirectBisectPolicy:
         alpha: float = DEFAULT_ALPHA,
         pseudo_count: float | None = None,
         name: str = "direct_bisect",
+        region_rule: str | None = None,
     ) -> None:
         _check_tree_fits(tree, library)
+        self._region_rule = check_region_rule(tree.region_rule if region_rule is None else region_rule)
         if pseudo_count is not None and tree.training_outcomes is None:
             raise ProblemError(
                 "the posterior-updating leaf needs the training worlds in the tree "
@@ -170,7 +184,9 @@ class DirectBisectPolicy:
                 outcomes, pseudo_count=self._pseudo_count, alpha=self._alpha, observations=self._observed
             )
             theta = self._posterior.theta()
-        self._bisect = Bisect(self._library, theta, self._costs, observations=self._observed)
+        self._bisect = Bisect(
+            self._library, theta, self._costs, observations=self._observed, region_rule=self._region_rule
+        )
 
     def select(self) -> int | None:
         """Tree edge while in the tree; BiSECt's choice afterwards."""
@@ -290,7 +306,9 @@ class PolicyContext:
 
     ``eta`` and ``pseudo_count`` configure ``direct_bisect``'s switch and leaf (see
     :class:`DirectBisectPolicy`). ``graph``, ``start`` and ``goal`` are needed by the policies in
-    :data:`GRAPH_POLICIES`.
+    :data:`GRAPH_POLICIES`. ``train_worlds`` ((n_train, E) bool, True = free, over every graph edge)
+    and their ``train_weights`` ((n_train,) prior weights, None: uniform) are needed by the learned
+    LazySP selectors (:mod:`drd_planner.core.lazysp_learned`).
     """
 
     library: PathLibrary
@@ -304,6 +322,8 @@ class PolicyContext:
     graph: ExplicitGraph | None = None
     start: int | None = None
     goal: int | None = None
+    train_worlds: BoolArray | None = None
+    train_weights: FloatArray | None = None
 
 
 PolicyFactory = Callable[[PolicyContext], Policy]
@@ -337,6 +357,29 @@ def _lazysp(selector: str) -> PolicyFactory:
         if ctx.start is None or ctx.goal is None:
             raise ProblemError("lazysp needs the start and goal vertices (PolicyContext.start/goal)")
         return LazySP(graph, ctx.start, ctx.goal, LazySPSettings(selector=selector, seed=ctx.seed))
+
+    return make
+
+
+def _lazysp_learned(name: str) -> PolicyFactory:
+    def make(ctx: PolicyContext) -> Policy:
+        graph = _need_graph(ctx)
+        if ctx.start is None or ctx.goal is None:
+            raise ProblemError(f"{name} needs the start and goal vertices (PolicyContext.start/goal)")
+        if ctx.train_worlds is None:
+            raise ProblemError(
+                f"{name} needs the training worlds over every graph edge (PolicyContext.train_worlds, "
+                "(n_train, E) bool; drd bench fills it from the dataset)"
+            )
+        if ctx.train_worlds.ndim != 2 or ctx.train_worlds.shape[1] != graph.num_edges:
+            raise ProblemError(
+                f"{name}: train_worlds has shape {ctx.train_worlds.shape}, the graph {graph.num_edges} edges"
+            )
+        # A fixed kappa: ctx.pseudo_count is tuned for direct_bisect's leaf, not for LazySP.
+        outcomes = all_edge_outcomes(ctx.train_worlds, ctx.train_weights)
+        delta = name == LEARNED_LAZYSP_POLICIES[1]
+        settings = PosteriorSettings(pseudo_count=DEFAULT_PSEUDO_COUNT, delta=delta)
+        return PosteriorLazySP(graph, ctx.start, ctx.goal, outcomes, settings)
 
     return make
 
@@ -387,6 +430,7 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "lazysp_set": _lazysp_set(weighted=True),
     "lazysp_set_random": _lazysp_set(weighted=False),
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
+    **{name: _lazysp_learned(name) for name in LEARNED_LAZYSP_POLICIES},
 }
 
 #: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method exactly as in
@@ -397,5 +441,12 @@ POLICIES: Mapping[str, PolicyFactory] = {
 #: and shows how much of ``direct_bisect``'s gain the posterior alone gives.
 TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only", "bisect_posterior"})
 
-#: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``).
-GRAPH_POLICIES: tuple[str, ...] = (*(lazysp_name(s) for s in SELECTORS), "lazysp_set", "lazysp_set_random")
+#: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``; the
+#: learned ``lazysp_posterior*`` also ``train_worlds``; their kappa is ``DEFAULT_PSEUDO_COUNT`` whatever
+#: ``pseudo_count`` says, which is tuned for ``direct_bisect``'s leaf).
+GRAPH_POLICIES: tuple[str, ...] = (
+    *(lazysp_name(s) for s in SELECTORS),
+    *LEARNED_LAZYSP_POLICIES,
+    "lazysp_set",
+    "lazysp_set_random",
+)

@@ -15,6 +15,14 @@ which relies less on the tree). The test worlds are never looked at.
 The same validation also chooses the leaf's posterior pseudo-count kappa
 (:mod:`drd_planner.core.posterior`) among ``pseudo_counts``; None there is the paper's fixed leaf
 bias, and it wins ties, as does the larger eta and then the larger kappa.
+
+One split of 27-90 worlds is noisy. With ``folds`` = k > 1 the validation is k-fold: k disjoint seeded
+sets of held-out feasible training worlds (each the size of the single split), a tree built on the
+training worlds outside each, every candidate run on every held-out world. A candidate's score is its
+mean over all of them; its standard error is the spread of its k fold means over sqrt(k). The choice is
+the *simplest* candidate within one standard error of the best mean (the one-standard-error rule: the
+larger eta, then the fixed leaf, then the larger kappa), so a setting must beat a simpler one by more
+than the noise to be chosen.
 """
 
 from __future__ import annotations
@@ -54,6 +62,7 @@ class SwitchThresholdChoice:
         validation_ids: (k,) world rows held out (0-based rows of the problem's world database).
         seconds: wall time of the validation (not compared: equal choices may take different times).
         basis: what every candidate was run on, for reports (default: "K held-out training worlds").
+        fold_means: with k-fold validation, candidate -> its mean checks on each fold (empty otherwise).
     """
 
     eta: float
@@ -62,6 +71,14 @@ class SwitchThresholdChoice:
     validation_ids: tuple[int, ...]
     seconds: float = field(default=0.0, compare=False)
     basis: str = ""
+    fold_means: dict[tuple[float, float | None], tuple[float, ...]] = field(default_factory=dict)
+
+    def standard_error(self, candidate: tuple[float, float | None]) -> float:
+        """The standard error of a candidate's mean over the folds (0.0 with one split)."""
+        means = self.fold_means.get(candidate, ())
+        if len(means) < 2:
+            return 0.0
+        return float(np.std(means, ddof=1) / np.sqrt(len(means)))
 
     def as_json(self) -> dict[str, object]:
         """A JSON-able summary (for benchmark files and tree provenance)."""
@@ -71,6 +88,16 @@ class SwitchThresholdChoice:
             "mean_checks": {_label(*k): v for k, v in sorted(self.mean_checks.items(), key=_order)},
             "num_validation_worlds": len(self.validation_ids),
             "seconds": self.seconds,
+            **(
+                {
+                    "folds": len(next(iter(self.fold_means.values()))),
+                    "standard_error": {
+                        _label(*k): self.standard_error(k) for k in sorted(self.fold_means, key=_order_key)
+                    },
+                }
+                if self.fold_means
+                else {}
+            ),
         }
 
     def describe(self) -> str:
@@ -110,8 +137,17 @@ def _label(eta: float, pseudo_count: float | None) -> str:
 
 
 def _order(item: tuple[tuple[float, float | None], float]) -> tuple[float, float]:
-    (eta, kappa), _ = item
+    return _order_key(item[0])
+
+
+def _order_key(candidate: tuple[float, float | None]) -> tuple[float, float]:
+    eta, kappa = candidate
     return (eta, -1.0 if kappa is None else kappa)
+
+
+def _simplest(candidates: Sequence[tuple[float, float | None]]) -> tuple[float, float | None]:
+    """The larger eta, then the fixed leaf (None), then the larger kappa."""
+    return max(candidates, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
 
 
 @dataclass(frozen=True)
@@ -164,26 +200,32 @@ def select_switch_threshold(
     seed: int = 0,
     max_worlds: int | None = None,
     progress: bool | None = False,
+    folds: int = 1,
 ) -> SwitchThresholdChoice:
     """Pick eta and the leaf pseudo-count by validation on held-out feasible training worlds (see the module docstring).
 
     Args:
         problem: a problem with a world database; only its training worlds are used.
         grid: the candidates and the policy and tree settings (None: :class:`ValidationGrid` defaults).
-        validation_fraction: share of the training worlds held out (at least one world).
+        validation_fraction: share of the training worlds held out per fold (at least one world).
         seed: seeds the hold-out draw.
-        max_worlds: hold out at most this many worlds (a quick run; None: the validation fraction).
+        max_worlds: hold out at most this many worlds per fold (a quick run; None: the validation fraction).
         progress: report the episodes on stderr (:class:`drd_planner.progress.Progress`; False: silent).
+        folds: 1: one held-out split, the best mean wins (ties to the simpler setting); k > 1: k disjoint
+            held-out sets, each with its own tree, and the one-standard-error rule (module docstring).
+            Fewer folds are used when the feasible training worlds do not fill k of them.
 
     Raises:
         ProblemError: no candidates, a candidate outside (0, 1], a pseudo-count that is not
-            positive, ``max_worlds`` below 1, or no feasible training world.
+            positive, ``max_worlds`` or ``folds`` below 1, or fewer than two feasible training worlds.
     """
     t0 = time.perf_counter()
     grid = grid or ValidationGrid()
     cands, kappas = _checked_candidates(grid)
     if not 0.0 < validation_fraction < 1.0:
         raise ProblemError(f"validation_fraction must lie in (0, 1); got {validation_fraction}")
+    if int(folds) != folds or folds < 1:
+        raise ProblemError(f"folds must be an integer >= 1, got {folds!r}")
     worlds = problem.require_worlds()
     train = worlds.train_ids
     feasible = train[worlds.R[train].any(axis=1)]
@@ -192,21 +234,36 @@ def select_switch_threshold(
     if max_worlds is not None and max_worlds < 1:
         raise ProblemError(f"max_worlds must be at least 1, got {max_worlds}")
     k = min(feasible.size - 1, max(1, round(validation_fraction * train.size)), max_worlds or feasible.size)
+    num_folds = max(1, min(int(folds), (feasible.size - 1) // k))
     rng = np.random.default_rng(seed)
-    held_out = np.sort(rng.choice(feasible, size=k, replace=False))
-    fit = np.setdiff1d(train, held_out)
-    sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held_out))
+    drawn = rng.choice(feasible, size=k * num_folds, replace=False)
     options = {
-        k: v for k, v in (grid.tree_options or {}).items() if k not in ("expand_threshold", "progress")
+        key: v for key, v in (grid.tree_options or {}).items() if key not in ("expand_threshold", "progress")
     }
-    tree = build_tree(sub, expand_threshold=grid.expand_threshold, progress=False, **options)
-    means = _mean_checks(problem, tree, (cands, kappas), held_out, alpha=grid.alpha, progress=progress)
-    best = min(means.values())
-    tied = [k for k, v in means.items() if v <= best + 1e-12]
-    eta, kappa = max(tied, key=lambda k: (k[0], k[1] is None, -1.0 if k[1] is None else k[1]))
-    return SwitchThresholdChoice(
-        eta, kappa, means, tuple(int(h) for h in held_out), seconds=time.perf_counter() - t0
+    per_fold: list[dict[tuple[float, float | None], float]] = []
+    for fold in range(num_folds):
+        held_out = np.sort(drawn[fold * k : (fold + 1) * k])
+        fit = np.setdiff1d(train, held_out)
+        sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held_out))
+        tree = build_tree(sub, expand_threshold=grid.expand_threshold, progress=False, **options)
+        per_fold.append(
+            _mean_checks(problem, tree, (cands, kappas), held_out, alpha=grid.alpha, progress=progress)
+        )
+    means = {c: float(np.mean([f[c] for f in per_fold])) for c in per_fold[0]}
+    fold_means = {c: tuple(f[c] for f in per_fold) for c in per_fold[0]} if num_folds > 1 else {}
+    best = min(means, key=lambda c: (means[c], -_order_key(c)[0]))
+    choice = SwitchThresholdChoice(
+        0.0,
+        None,
+        means,
+        tuple(int(h) for h in np.sort(drawn)),
+        seconds=0.0,
+        basis=f"{num_folds} folds x {k} held-out training worlds" if num_folds > 1 else "",
+        fold_means=fold_means,
     )
+    margin = choice.standard_error(best) + 1e-12
+    eta, kappa = _simplest([c for c, v in means.items() if v <= means[best] + margin])
+    return dataclasses.replace(choice, eta=eta, pseudo_count=kappa, seconds=time.perf_counter() - t0)
 
 
 def _checked_candidates(grid: ValidationGrid) -> tuple[list[float], list[float | None]]:

@@ -20,11 +20,12 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
-from drd_planner.arrays import FloatArray, IntArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.direct import DirectSelector
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, NodeRegionInputs, check_region_rule
 from drd_planner.exceptions import ProblemError
 
 NO_EDGE = -1
@@ -80,6 +81,11 @@ class DecisionTree:
         """N."""
         return int(self.edge.shape[0])
 
+    @property
+    def region_rule(self) -> str:
+        """The region rule the tree was built with (``info``; the paper's for files without it)."""
+        return str(self.info.get("region_rule", DEFAULT_REGION_RULE))
+
     def depth(self) -> int:
         """Length of the longest root-to-leaf path, in checks."""
         depth = np.zeros(self.num_nodes, dtype=np.int64)
@@ -131,6 +137,11 @@ class TreeNodes(Protocol):
         """The training worlds for the posterior leaf, or None when the tree does not carry them."""
         ...
 
+    @property
+    def region_rule(self) -> str:
+        """The region rule the tree's nodes use; BiSECt after the switch follows it by default."""
+        ...
+
     def node_edge(self, node: int) -> int:
         """The edge to check at ``node``, or NO_EDGE at a leaf."""
         ...
@@ -166,6 +177,7 @@ def build_tree(
     max_prob_region: bool = True,
     max_nodes: int = 100_000,
     progress: bool | None = None,
+    region_rule: str = DEFAULT_REGION_RULE,
 ) -> DecisionTree:
     """Build the DiRECt decision tree on the problem's training worlds.
 
@@ -183,13 +195,19 @@ def build_tree(
             that path's remaining edges in order (the region is "latched").
         max_nodes: safety cap on the number of nodes.
         progress: show a progress bar (None: only on a terminal).
+        region_rule: which path ``max_prob_region`` restricts to
+            (:data:`~drd_planner.core.region_rule.REGION_RULES`; the paper's: the best-supported path).
     """
     worlds = problem.require_worlds()
     train = worlds.train_ids
     if train.size == 0:
         raise ProblemError("cannot build a decision tree without training worlds")
     builder = _TreeBuilder(
-        problem, colouring=colouring, top_regions=top_regions, max_prob_region=max_prob_region
+        problem,
+        colouring=colouring,
+        top_regions=top_regions,
+        max_prob_region=max_prob_region,
+        region_rule=check_region_rule(region_rule),
     )
     t0 = time.perf_counter()
     expanded = builder.expand(expand_threshold=expand_threshold, max_nodes=max_nodes, progress=progress)
@@ -199,6 +217,7 @@ def build_tree(
         "colouring": colouring,
         "top_regions": top_regions,
         "max_prob_region": max_prob_region,
+        "region_rule": region_rule,
         "num_train_worlds": int(train.size),
         "num_ecds": builder.selector.num_ecds,
         "null_ecd": builder.selector.has_null_ecd,
@@ -216,7 +235,13 @@ class _TreeBuilder:
     """
 
     def __init__(
-        self, problem: Problem, *, colouring: bool, top_regions: int | None, max_prob_region: bool
+        self,
+        problem: Problem,
+        *,
+        colouring: bool,
+        top_regions: int | None,
+        max_prob_region: bool,
+        region_rule: str = DEFAULT_REGION_RULE,
     ) -> None:
         """Prepare the training worlds of ``problem`` and DiRECt's selector (see :func:`build_tree`)."""
         worlds = problem.require_worlds()
@@ -233,6 +258,11 @@ class _TreeBuilder:
             self.X, self.R, problem.edge_costs, prior=self.prior, colouring=colouring
         )
         self.r_float = self.R.astype(np.float64)
+        self.region = (
+            None
+            if region_rule == DEFAULT_REGION_RULE
+            else NodeRegionInputs(region_rule, self.X, problem.library, problem.edge_costs)
+        )
         self.edges: list[int] = []
         self.children: list[list[int]] = []
         self.actives: list[IntArray] = []
@@ -268,8 +298,16 @@ class _TreeBuilder:
                 self.r_float,
                 self.problem.library,
                 max_prob_region=self.max_prob_region,
+                region=self.region,
+                checked=self._checked_mask(node) if self.region is not None else None,
             )
         return self._choose_incdrd(node, self.top_regions)
+
+    def _checked_mask(self, node: int) -> BoolArray:
+        """(E,) the edges checked on the way from the root to ``node``."""
+        mask = np.zeros(self.problem.library.num_edges, dtype=bool)
+        mask[list(self.checked_on_branch(node))] = True
+        return mask
 
     def _choose_incdrd(self, node: int, top_regions: int) -> int | None:
         """IncDRD: DiRECt on ``top_regions`` greedy-cover regions, then the latched region's edges in order."""
@@ -368,6 +406,8 @@ def direct_node_edge(
     library: PathLibrary,
     *,
     max_prob_region: bool,
+    region: NodeRegionInputs | None = None,
+    checked: BoolArray | None = None,
 ) -> int | None:
     """The DiRECt edge of a tree node whose consistent training worlds are ``active`` (or None: a leaf).
 
@@ -382,12 +422,20 @@ def direct_node_edge(
         library: the m paths.
         max_prob_region: restrict the tests to the edges of the best-supported path (falling back to
             every test when none of them splits the worlds).
+        region: what the ``per_check`` region rule needs (None: the paper's rule, the path valid in the
+            most consistent worlds).
+        checked: (E,) bool edges checked on the way from the root to the node (``per_check`` only).
     """
     candidates = None
     if max_prob_region:
         support = weights[active] @ r_float[active]
-        if support.max() > 0:
-            candidates = library.path_edges[int(np.argmax(support))]
+        if region is None or region.rule == "probability":
+            best = int(np.argmax(support)) if support.max() > 0 else None
+        else:
+            done = np.zeros(library.num_edges, dtype=bool) if checked is None else checked
+            best = region.path(support, active, weights, done)
+        if best is not None:
+            candidates = library.path_edges[best]
     choice = selector.select(active, candidates=candidates)
     if choice is None and candidates is not None:
         choice = selector.select(active)

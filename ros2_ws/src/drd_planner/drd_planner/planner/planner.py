@@ -12,6 +12,7 @@ checked free in this plan:
 2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
    prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
 
+With ``improve_budget`` a plan then seeks shorter verified paths (:mod:`~drd_planner.planner.anytime`).
 So the planner says "no path" only when the graph has none given the checks made; a check or time
 budget ends a plan with its own status.
 """
@@ -30,9 +31,11 @@ from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
+from drd_planner.core.lazysp_learned import LEARNED_LAZYSP_POLICIES
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.exceptions import ProblemError
+from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.graph_fallback import (
@@ -45,13 +48,23 @@ from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
 from drd_planner.planner.query_library import query_library, vertex_sequence
 from drd_planner.planner.query_model import QueryModel
-from drd_planner.planner.result import PlanResult, PlanStage, PlanStatus, library_stage, plan_timings
+from drd_planner.planner.result import (
+    PlanResult,
+    PlanStage,
+    PlanStatus,
+    library_stage,
+    plan_timings,
+    trivial_result,
+    unproven_result,
+)
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
 #: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
 #: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
-PLAN_POLICIES = tuple(sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS)}))
+PLAN_POLICIES = tuple(
+    sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS), *LEARNED_LAZYSP_POLICIES})
+)
 
 
 class Planner:
@@ -251,6 +264,7 @@ class Planner:
         max_checks: int | None = None,
         time_budget_s: float | None = None,
         policy: str = "direct_bisect",
+        improve_budget: ImproveBudget | int | None = None,
     ) -> PlanResult:
         """Find a path from ``start`` to ``goal`` whose every edge ``oracle`` says is free.
 
@@ -262,6 +276,9 @@ class Planner:
             max_checks: the most checks this plan may make (None: no limit).
             time_budget_s: the most seconds of this plan (None: no limit); checked before each selection.
             policy: the library stage's policy (:data:`PLAN_POLICIES`).
+            improve_budget: after the first verified path, look for shorter ones within this budget
+                (:mod:`~drd_planner.planner.anytime`; an int n is ``ImproveBudget(checks=n)``); None: stop
+                at the first path. Its checks count against ``max_checks`` too.
 
         Returns:
             The result; REFUSED (never an exception) for a malformed or unreachable start or goal.
@@ -271,17 +288,36 @@ class Planner:
         """
         t_begin = time.perf_counter()
         _check_plan_arguments(policy, max_checks, time_budget_s)
+        improve = as_improve_budget(improve_budget)
         deadline = None if time_budget_s is None else t_begin + float(time_budget_s)
         try:
             resolved = self._resolve(start, goal, oracle)
         except QueryError as exc:
             return PlanResult(PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin))
         if isinstance(resolved, int):
-            return self._trivial(resolved, t_begin)
+            return trivial_result(resolved, t_begin)
         model = resolved
         if model.query.connected:
             oracle = MotionDispatch(oracle, model.query.motions)  # type: ignore[arg-type]
         t_model = time.perf_counter() - t_begin
+        result = self._search(model, oracle, policy, seed, max_checks, deadline, (t_model, t_begin))
+        if improve is None or not result.found:
+            return result
+        limits = PlanLimits(seed, max_checks, deadline)
+        return improve_path(result, model, oracle, improve, prior=self.prior, limits=limits)
+
+    def _search(
+        self,
+        model: QueryModel,
+        oracle: EdgeOracle,
+        policy: str,
+        seed: int,
+        max_checks: int | None,
+        deadline: float | None,
+        times: tuple[float, float],
+    ) -> PlanResult:
+        """The library stage, then the graph stage when every library path is blocked."""
+        t_model, t_begin = times
         checks: list[CheckRecord] = []
         known: dict[int, bool] = {}
         if model.library is not None:
@@ -348,7 +384,7 @@ class Planner:
             else f"the graph has no path from {model.start} to {model.goal} even with every edge free"
             + (" (its edges are directed)" if model.query.graph.directed else "")
         )
-        return _unproven(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin)
+        return unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin)
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None
@@ -399,17 +435,6 @@ class Planner:
             None, query.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
         )
 
-    def _trivial(self, vertex: int, t_begin: float) -> PlanResult:
-        return PlanResult(
-            PlanStatus.FOUND,
-            "start and goal are the same vertex: the empty path",
-            vertex,
-            vertex,
-            vertices=np.array([vertex], dtype=np.int64),
-            stage=PlanStage.TRIVIAL,
-            timings=plan_timings((), 0.0, t_begin),
-        )
-
     def _found(
         self,
         model: QueryModel,
@@ -450,29 +475,7 @@ class Planner:
     ) -> PlanResult:
         what = "check budget" if status is EpisodeStatus.MAX_CHECKS else "time budget"
         reason = f"the {what} ran out after {len(checks)} checks before a path was verified"
-        return _unproven(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin)
-
-
-def _unproven(
-    model: QueryModel,
-    status: PlanStatus,
-    reason: str,
-    checks: list[CheckRecord],
-    t_model: float,
-    t_begin: float,
-) -> PlanResult:
-    """A result without a path (no path in the graph, or a budget ran out), with its check log."""
-    return PlanResult(
-        status,
-        reason,
-        model.start,
-        model.goal,
-        checks=tuple(checks),
-        query=model.label,
-        query_cached=model.reused,
-        library_size=0 if model.library is None else model.library.num_paths,
-        timings=plan_timings(checks, t_model, t_begin),
-    )
+        return unproven_result(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin)
 
 
 def _cache_key(endpoint: int | FloatArray) -> object:

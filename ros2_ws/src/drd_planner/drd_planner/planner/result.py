@@ -6,12 +6,16 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.exceptions import PlanningError
+
+if TYPE_CHECKING:
+    from drd_planner.planner.query_model import QueryModel
 
 
 class PlanStatus(str, Enum):
@@ -40,6 +44,25 @@ class PlanStage(str, Enum):
     GRAPH = "graph"
     #: Start and goal are the same vertex: the empty path, nothing to check.
     TRIVIAL = "trivial"
+    #: The anytime improvement after the first verified path (:mod:`drd_planner.planner.anytime`).
+    IMPROVE = "improve"
+
+
+@dataclass(frozen=True)
+class Improvement:
+    """One verified path of a plan that went on improving (the first path first, then each shorter one).
+
+    Attributes:
+        checks_so_far: the plan's checks when this path was verified (the first path's own count first).
+        path_edges: (L,) int64 edge ids of the path, start to goal; every one was checked free in this plan.
+        cost: the path's length (the graph's edge lengths summed), in the domain's unit.
+        elapsed_s: seconds from the start of the plan to its verification.
+    """
+
+    checks_so_far: int
+    path_edges: IntArray
+    cost: float
+    elapsed_s: float
 
 
 @dataclass(frozen=True)
@@ -85,6 +108,10 @@ class PlanResult:
         timings: where the time went.
         new_states: for an off-graph start or goal, its new vertex id -> (D,) state (ids from V on).
         motions: the new edges joining them, edge id -> (K, D) states along it, tail first (ids from E on).
+        improvements: with an ``improve_budget``, every verified path in the order found, strictly shorter
+            each time; the last one is this result's path. Empty without one.
+        improve_stop: why the improvement stopped (``optimal``, ``checks``, ``seconds``, ``patience``,
+            ``plan_checks``, ``plan_time``); empty without an ``improve_budget``.
     """
 
     status: PlanStatus
@@ -102,6 +129,8 @@ class PlanResult:
     timings: PlanTimings = field(default_factory=PlanTimings)
     new_states: Mapping[int, FloatArray] = field(default_factory=dict)
     motions: Mapping[int, FloatArray] = field(default_factory=dict)
+    improvements: tuple[Improvement, ...] = ()
+    improve_stop: str = ""
 
     @property
     def found(self) -> bool:
@@ -143,4 +172,39 @@ def plan_timings(
         selection_s=sum(c.select_ms for c in checks) / 1e3,
         checks_s=sum(c.check_ms for c in checks) / 1e3,
         total_s=time.perf_counter() - t_begin,
+    )
+
+
+def unproven_result(
+    model: QueryModel,
+    status: PlanStatus,
+    reason: str,
+    checks: list[CheckRecord],
+    t_model: float,
+    t_begin: float,
+) -> PlanResult:
+    """A result without a path (no path in the graph, or a budget ran out), with its check log."""
+    return PlanResult(
+        status,
+        reason,
+        model.start,
+        model.goal,
+        checks=tuple(checks),
+        query=model.label,
+        query_cached=model.reused,
+        library_size=0 if model.library is None else model.library.num_paths,
+        timings=plan_timings(checks, t_model, t_begin),
+    )
+
+
+def trivial_result(vertex: int, t_begin: float) -> PlanResult:
+    """The FOUND result of a query whose start and goal are the same vertex: the empty path."""
+    return PlanResult(
+        PlanStatus.FOUND,
+        "start and goal are the same vertex: the empty path",
+        vertex,
+        vertex,
+        vertices=np.array([vertex], dtype=np.int64),
+        stage=PlanStage.TRIVIAL,
+        timings=plan_timings((), 0.0, t_begin),
     )

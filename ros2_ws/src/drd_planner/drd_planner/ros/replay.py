@@ -39,15 +39,13 @@ from typing import Any
 
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.utilities import try_shutdown
-from rosbags.interfaces import Qos, QosDurability, QosReliability
 
 from drd_msgs_py.bags import (
     BagContents,
     BagError,
     RawMessage,
-    default_qos,
     open_bag,
     topic_base,
     write_raw_bag,
@@ -57,6 +55,7 @@ from drd_msgs_py.factory import RclpyMessages
 from drd_planner.argtypes import bounded_float
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.shipped import resolve_bag_path
+from drd_planner.ros.bag_qos import offered_qos, rclpy_qos
 
 __all__ = [
     "OUTPUT_TOPICS",
@@ -147,45 +146,6 @@ class ReplaySummary:
         """The recorded messages of one output (``plan``, ``edge_checks``, ``diagnostics``, ...), in order."""
         base = topic_base(name)
         return [r for r in self.recorded if topic_base(r.topic) == base]
-
-
-# ----------------------------------------------------------------------------------------------------
-# QoS between rosbags and rclpy
-
-
-def rclpy_qos(profile: Qos | None, topic: str) -> QoSProfile:
-    """The rclpy profile of a bag's offered QoS (keep-last; ``None`` or unknown policies: :func:`default_qos`)."""
-    fallback = default_qos(topic)
-    chosen = profile or fallback
-    reliability = ReliabilityPolicy.RELIABLE
-    if chosen.reliability == QosReliability.BEST_EFFORT:
-        reliability = ReliabilityPolicy.BEST_EFFORT
-    durable = chosen.durability
-    if durable not in (QosDurability.VOLATILE, QosDurability.TRANSIENT_LOCAL):  # system default, unknown
-        durable = fallback.durability
-    durability = (
-        DurabilityPolicy.TRANSIENT_LOCAL
-        if durable == QosDurability.TRANSIENT_LOCAL
-        else DurabilityPolicy.VOLATILE
-    )
-    depth = chosen.depth if chosen.depth > 0 else fallback.depth
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=reliability, durability=durability
-    )
-
-
-def _offered_qos(node: Any, topic: str) -> Qos:
-    """The QoS a publisher of ``topic`` offers according to the ROS graph (history: our rule)."""
-    base = topic_base(topic)
-    rule = default_qos(topic, latched=LATCHED_OUTPUTS)
-    infos = node.get_publishers_info_by_topic(topic)
-    if not infos:
-        return rule
-    offered = infos[0].qos_profile
-    latched = offered.durability == DurabilityPolicy.TRANSIENT_LOCAL
-    best_effort = offered.reliability == ReliabilityPolicy.BEST_EFFORT
-    out = default_qos(base, latched=(base,) if latched else ())
-    return out._replace(reliability=QosReliability.BEST_EFFORT) if best_effort else out
 
 
 class _Timeline:
@@ -380,7 +340,9 @@ class _Replayer:
 
     def write(self, out: Path) -> Path:
         """Write the recorded outputs with the QoS their publishers offer."""
-        qos_out = {topic: _offered_qos(self.node, topic) for topic in self.subscriptions}
+        qos_out = {
+            topic: offered_qos(self.node, topic, latched=LATCHED_OUTPUTS) for topic in self.subscriptions
+        }
         return write_raw_bag(out, self.recorded, qos=qos_out, overwrite=self.options.overwrite)
 
 
