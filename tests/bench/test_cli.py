@@ -465,12 +465,13 @@ def test_bench_gccd_with_figures(d2d1: Path, tmp_path: Path, capsys: pytest.Capt
         "direct_bisect,bisect,direct_only",
     ]
     assert main([*argv, "--figures", str(figs), "--training-sizes", "50,100", "--json", str(out)]) == 0
-    assert "wrote 6 figure files" in capsys.readouterr().out
+    assert "wrote 8 figure files" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     names = sorted(Path(p).name for p in doc["figures"])
+    stems = ("checked_edges", "training_size", "checks_vs_cost")
     assert names == sorted(
         f"{stem}.{ext}"
-        for stem in ("checked_edges_dataset_2d_1", "training_size_dataset_2d_1", "normalised_costs")
+        for stem in (*(f"{s}_dataset_2d_1" for s in stems), "normalised_costs")
         for ext in ("png", "svg")
     )
     for p in doc["figures"]:

@@ -208,6 +208,7 @@ def run_dataset(
         assert tree is not None
         figures += _checked_edges_figure(problem, result, tree, options, notes)
         curve = _training_figure(problem, options, figures, notes)
+        figures += _checks_vs_cost_figure(problem, result, options, notes)
     return DatasetRun(result, table, figures, notes, curve, time.perf_counter() - t0, eta_choice)
 
 
@@ -298,6 +299,24 @@ def _checked_edges_figure(
     }
     out = options.figures / f"checked_edges_{problem.name}"
     return plot_checked_edges(problem, episodes, out, world=world)
+
+
+def _checks_vs_cost_figure(
+    problem: Problem, result: BenchmarkResult, options: SuiteOptions, notes: list[str]
+) -> list[Path]:
+    """Checks versus path cost (:mod:`drd_planner.bench.anytime_figure`), for a dataset with its own query."""
+    assert options.figures is not None
+    if problem.graph is None or problem.start is None or problem.goal is None:
+        notes.append(f"{problem.name}: no graph query, checks-versus-cost figure skipped")
+        return []
+    from drd_planner.bench.anytime_figure import checks_vs_cost, plot_checks_vs_cost
+
+    try:
+        data = checks_vs_cost(problem, result, seed=options.seed, settings=_settings(options))
+    except DrdError as exc:
+        notes.append(f"checks-versus-cost figure skipped: {exc}")
+        return []
+    return plot_checks_vs_cost(data, problem.name, options.figures / f"checks_vs_cost_{problem.name}")
 
 
 def _training_figure(
