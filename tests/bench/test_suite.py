@@ -63,3 +63,12 @@ def test_bench_reports_the_rule_and_fold_validation(
     )
     assert settings["eta_selection"]["folds"] == 3
     assert json.loads(out.read_text())["tree"]["region_rule"] == selection["chosen"]
+
+
+def test_a_given_tree_cannot_have_its_rule_validated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = gccd_folder("dataset_2d_1")
+    argv = ["bench", "--gccd", str(folder), "--tree", str(tmp_path / "t.npz"), "--validate-region-rule"]
+    assert main(argv) == 2
+    assert "--validate-region-rule builds a tree per rule" in capsys.readouterr().err

@@ -179,6 +179,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     for name, value in (("--max-worlds", args.max_worlds), ("--max-checks", args.max_checks)):
         if value is not None and value < 1:
             raise DrdError(f"{name} must be at least 1, got {value}")
+    if args.tree and args.validate_region_rule:
+        raise DrdError("--validate-region-rule builds a tree per rule; it cannot be used with --tree")
     if args.all:
         if args.tree:
             raise DrdError("--tree fits one dataset and cannot be used with --all")
