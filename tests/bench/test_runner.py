@@ -62,6 +62,11 @@ def test_policy_context_carries_the_training_worlds(problem: Problem) -> None:
     worlds = problem.require_worlds()
     assert ctx.train_worlds is not None and ctx.train_weights is None  # uniform prior
     np.testing.assert_array_equal(ctx.train_worlds, worlds.X[worlds.train_ids])
+    # Only a policy that needs them pays for the copy (a context is built for every episode).
+    lean = policy_context(problem, theta=train_bias(problem), tree=None, seed=0, policy="bisect")
+    assert lean.train_worlds is None
+    full = policy_context(problem, theta=train_bias(problem), tree=None, seed=0, policy="lazysp_posterior")
+    assert full.train_worlds is not None
 
 
 def test_bench_runs_the_learned_lazysp_selectors(problem: Problem, tmp_path: Path) -> None:

@@ -26,7 +26,14 @@ from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Ta
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.episode import EpisodeResult, TableOracle, run_episode
-from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, POLICIES, TREE_POLICIES, PolicyContext
+from drd_planner.core.policies import (
+    DEFAULT_ALPHA,
+    DEFAULT_ETA,
+    POLICIES,
+    TRAIN_WORLD_POLICIES,
+    TREE_POLICIES,
+    PolicyContext,
+)
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import DrdError
@@ -155,15 +162,18 @@ def policy_context(
     tree: DecisionTree | None,
     seed: int,
     settings: PolicySettings = DEFAULT_SETTINGS,
+    policy: str | None = None,
 ) -> PolicyContext:
     """The context a policy factory gets: library, unit costs, (E,) training bias, tree, seed and graph.
 
     The graph, start and goal are what the full-graph policies (``lazysp``, ``lazysp_set``) need; the
-    (n_train, E) training worlds and their prior weights what the learned ``lazysp_posterior*`` need.
+    (n_train, E) training worlds and their prior weights what the learned ``lazysp_posterior*`` need
+    (:data:`~drd_planner.core.policies.TRAIN_WORLD_POLICIES`). Given the ``policy`` the context is for,
+    the training worlds are copied only when it needs them (every episode builds a context).
     """
     worlds = problem.worlds
     train_worlds = train_weights = None
-    if worlds is not None:
+    if worlds is not None and (policy is None or policy in TRAIN_WORLD_POLICIES):
         train_worlds = worlds.X[worlds.train_ids]
         train_weights = None if worlds.prior is None else worlds.weights(worlds.train_ids)
     return PolicyContext(
@@ -210,7 +220,8 @@ def run_world(
     worlds = problem.require_worlds()
     if not 0 <= world < worlds.num_worlds:
         raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
-    policy = POLICIES[name](policy_context(problem, theta=theta, tree=tree, seed=seed, settings=settings))
+    context = policy_context(problem, theta=theta, tree=tree, seed=seed, settings=settings, policy=name)
+    policy = POLICIES[name](context)
     oracle = TableOracle(worlds.X[world])
     return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
 

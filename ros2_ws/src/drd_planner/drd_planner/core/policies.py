@@ -441,6 +441,9 @@ POLICIES: Mapping[str, PolicyFactory] = {
 #: and shows how much of ``direct_bisect``'s gain the posterior alone gives.
 TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only", "bisect_posterior"})
 
+#: Policies that need ``PolicyContext.train_worlds`` (the learned LazySP selectors).
+TRAIN_WORLD_POLICIES = frozenset(LEARNED_LAZYSP_POLICIES)
+
 #: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``; the
 #: learned ``lazysp_posterior*`` also ``train_worlds``; their kappa is ``DEFAULT_PSEUDO_COUNT`` whatever
 #: ``pseudo_count`` says, which is tuned for ``direct_bisect``'s leaf).
