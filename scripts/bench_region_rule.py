@@ -53,7 +53,7 @@ def run_set(folder: Path, max_worlds: int | None) -> dict[str, Any]:
     row: dict[str, Any] = {"dataset": folder.name}
     for rule in REGION_RULES:
         t0 = time.perf_counter()
-        options = SuiteOptions(policies=POLICIES, max_worlds=max_worlds, tree_options={"region_rule": rule})
+        options = SuiteOptions(policies=POLICIES, max_worlds=max_worlds, region_rules=(rule,))
         run = run_dataset(problem, options, progress=False)
         means = {name: float(np.mean(stats.checks)) for name, stats in run.result.policies.items()}
         means["bisect"] = _bisect_mean(problem, rule, max_worlds)

@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(
-        f"\n{args.folds} folds over the feasible worlds, seed {args.seed}; eta validated per fold on its training worlds."
+        f"\n{args.folds} folds over the feasible worlds, seed {args.seed}; eta, kappa and the region rule validated per fold on its training worlds."
     )
     if args.json is not None:
         args.json.write_text(json.dumps(summaries, indent=2) + "\n", encoding="utf-8")

@@ -4,10 +4,12 @@
 Writes ``OUT/benchmark.json`` (one DESIGN.md section 5 document per dataset, with the Table-1
 ``relative`` statistics), ``OUT/table1.md`` (the markdown report) and the figures under
 ``OUT/figures/``, and prints the total wall time. Same as
-``drd bench --all GCCD --kappa none --json OUT/benchmark.json --markdown OUT/table1.md --figures OUT/figures``:
-the paper's fixed leaf bias with a validated eta; ``--posterior`` validates the posterior leaf's kappa too.
+``drd bench --all GCCD --json OUT/benchmark.json --markdown OUT/table1.md --figures OUT/figures``: the
+defaults, i.e. eta, the posterior leaf's kappa and the region rule validated per dataset;
+``--paper-leaf`` keeps the paper's fixed leaf bias and region rule (only eta validated:
+``drd bench --kappa none --region-rule probability``).
 
-Usage: python scripts/full_benchmark.py [--gccd ../shared/data/gccd] [--out results] [--max-worlds K] [--posterior]
+Usage: python scripts/full_benchmark.py [--gccd ../shared/data/gccd] [--out results] [--max-worlds K] [--paper-leaf]
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from pathlib import Path
 
 from drd_planner.bench.runner import DEFAULT_POLICIES, json_safe
 from drd_planner.bench.suite import SuiteOptions, costs_figure, run_suite, suite_json, suite_markdown
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE
 from drd_planner.exceptions import DrdError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -38,9 +41,10 @@ def main() -> int:
     parser.add_argument("--no-figures", action="store_true")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
-        "--posterior",
+        "--paper-leaf",
         action="store_true",
-        help="validate the posterior leaf (kappa) too; default: the paper's fixed leaf, eta validated",
+        help="the paper's fixed leaf bias and region rule, only eta validated (default: eta, kappa and the "
+        "region rule validated, as drd bench does)",
     )
     args = parser.parse_args()
     out = Path(args.out)
@@ -49,7 +53,7 @@ def main() -> int:
         seed=args.seed,
         max_worlds=args.max_worlds,
         figures=None if args.no_figures else out / "figures",
-        **({} if args.posterior else {"pseudo_counts": (None,)}),
+        **({"pseudo_counts": (None,), "region_rules": (DEFAULT_REGION_RULE,)} if args.paper_leaf else {}),
     )
     t0 = time.perf_counter()
     try:

@@ -22,8 +22,9 @@ from drd_planner.bench.runner import (
     run_benchmark,
 )
 from drd_planner.cli import main
+from drd_planner.core.region_rule import REGION_RULES
 from drd_planner.data.gccd import load_gccd_folder
-from drd_planner.planner import load_tree_bundle
+from drd_planner.planner import load_prior, load_tree_bundle
 
 POLICY_KEYS = {"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}
 DOC_KEYS = {"dataset", "test_ids", "oracle_lower_bound", "policies"}
@@ -60,9 +61,20 @@ def test_build_tree_validates_eta_and_kappa_on_random_queries(
 ) -> None:
     out = tmp_path / "v.npz"
     assert main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--kappa", "none"]) == 0
-    assert "random queries" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "random queries" in printed and "region rule" in printed  # --region-rule auto validates both
     prior = load_tree_bundle(out)
     assert "random queries" in prior.provenance["eta"] and prior.pseudo_count is None
+    whole = load_prior(out)
+    assert whole.region_rule in REGION_RULES and f"region rule {whole.region_rule}" in prior.provenance["eta"]
+    assert whole.trees[0].tree.region_rule in REGION_RULES
+    # A given rule is stored as given, for the prior's new queries and the dataset's own tree.
+    fixed = tmp_path / "f.npz"
+    argv = ["build-tree", "--gccd", str(d2d1), "--out", str(fixed), "--eta", "0.2", "--kappa", "none"]
+    assert main([*argv, "--region-rule", "per_check"]) == 0
+    capsys.readouterr()
+    given = load_prior(fixed)
+    assert given.region_rule == "per_check" and given.trees[0].tree.region_rule == "per_check"
 
 
 def _one_error_line(err: str) -> str:

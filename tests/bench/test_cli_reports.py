@@ -40,14 +40,20 @@ def test_build_tree_reports_progress_and_a_short_summary(
     validated = re.match(r"eta [\d.]+, fixed leaf: validated in ([\d.]+) s on 64 episodes", lines[0])
     assert validated, lines[0]
     assert "random queries" in lines[0]
-    assert lines[1].split()[:3] == ["mean", "checks", "fixed"]
-    assert sum(line.startswith("  eta ") for line in lines) == 6  # one row per eta candidate
+    # --region-rule auto (the default): both rules validated, each one's best mean reported
+    assert re.match(
+        r"  region rule (probability|per_check) \(best mean checks: probability [\d.]+, per_check", lines[1]
+    )
+    assert lines[2].split()[:3] == ["mean", "checks", "fixed"]
+    assert sum(line.startswith("  eta ") for line in lines) >= 6  # one row per eta candidate (and the tree's)
     assert any(line.startswith("tree dataset_2d_1 ") and "built in" in line for line in lines)
     done = re.fullmatch(r"done in ([\d.]+) s .*", lines[-1])
     assert done and float(done.group(1)) >= float(validated.group(1)) - 0.05  # validation included
     err = captured.err.splitlines()
-    assert err[0] == "validating eta x kappa: 384 episodes"
-    assert any(re.match(r"validating eta x kappa: \d+/384 episodes \(\d+%\)", line) for line in err)
+    assert err[0] == "validating eta x kappa x region rule: 768 episodes"  # 6 etas x 2 rules x 64 episodes
+    assert any(
+        re.match(r"validating eta x kappa x region rule: \d+/768 episodes \(\d+%\)", line) for line in err
+    )
 
 
 @pytest.mark.usefixtures("every_update_reported")

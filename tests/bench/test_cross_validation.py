@@ -22,7 +22,11 @@ def problem() -> Problem:
 
 def test_every_feasible_world_is_tested_once_by_a_fold_that_held_it_out(problem: Problem) -> None:
     result = cross_validate(
-        problem, policies=("bisect", "direct_bisect"), folds=3, seed=2, settings=FoldSettings(eta=0.2)
+        problem,
+        policies=("bisect", "direct_bisect"),
+        folds=3,
+        seed=2,
+        settings=FoldSettings(eta=0.2, region_rules=("probability",)),
     )
     worlds = problem.require_worlds()
     feasible = np.flatnonzero(worlds.R.any(axis=1))
@@ -60,6 +64,16 @@ def test_summary_pairs_policies_and_is_deterministic(problem: Problem) -> None:
     assert diff["mean"] == pytest.approx(expected)
     assert diff["ci95"][0] <= expected <= diff["ci95"][1]
     assert all(0.0 < eta <= 1.0 for eta in a.etas)  # validated per fold
+    assert len(a.settings["chosen_region_rules"]) == 3  # so is the region rule, by default
+    assert set(a.settings["chosen_region_rules"]) <= {"probability", "per_check"}
+    given = cross_validate(
+        problem,
+        policies=("direct_bisect",),
+        folds=3,
+        seed=1,
+        settings=FoldSettings(eta=0.2, pseudo_counts=(None,), region_rules=("per_check",)),
+    )
+    assert given.settings["chosen_region_rules"] == ["per_check"] * 3
 
 
 def test_bad_fold_counts_are_refused(problem: Problem) -> None:

@@ -24,10 +24,11 @@ from drd_planner.bench.runner import (
     train_bias,
 )
 from drd_planner.bench.stats import table1_stats
-from drd_planner.core.policies import POLICIES, PolicyContext
+from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, POLICIES, PolicyContext
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.gccd import load_gccd_folder
+from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import DrdError
 
 
@@ -198,3 +199,27 @@ def test_json_safe_replaces_non_finite_floats() -> None:
     }
     assert json_safe(doc) == {"a": None, "b": [1.0, None, {"c": None, "d": 2}], "e": [3.5, "x"], "f": None}
     json.dumps(json_safe(doc), allow_nan=False)
+
+
+def test_direct_bisect_fixed_runs_on_a_paper_rule_tree() -> None:
+    """With a tree built by another region rule, direct_bisect_fixed is still the paper's method exactly."""
+    from drd_planner.bench.runner import PolicySettings, paper_rule_tree
+
+    fixed = PolicySettings(
+        DEFAULT_ETA, DEFAULT_ALPHA, None
+    )  # direct_bisect with the paper's eta and leaf, on its own tree
+
+    problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
+    per_check = build_tree(problem, progress=False, region_rule="per_check")
+    paper = build_tree(problem, progress=False)
+    assert paper_rule_tree(problem, paper) is paper
+    assert per_check.num_nodes != paper.num_nodes  # the rules build different trees here
+    rebuilt = paper_rule_tree(problem, per_check)
+    assert rebuilt.region_rule == "probability"
+    np.testing.assert_array_equal(rebuilt.edge, paper.edge)
+    mixed = run_benchmark(problem, policies=("direct_bisect_fixed",), tree=per_check, max_worlds=8)
+    plain = run_benchmark(problem, policies=("direct_bisect_fixed",), tree=paper, max_worlds=8)
+    assert mixed.policies["direct_bisect_fixed"].checks == plain.policies["direct_bisect_fixed"].checks
+    own = run_benchmark(problem, policies=("direct_bisect",), tree=per_check, max_worlds=8, settings=fixed)
+    assert own.policies["direct_bisect"].checks != plain.policies["direct_bisect_fixed"].checks
+    assert mixed.tree_info["region_rule"] == "per_check"

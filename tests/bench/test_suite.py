@@ -34,7 +34,7 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
         )
     else:
         per_check_alone = SuiteOptions(
-            policies=("direct_bisect",), tree_options={"region_rule": "per_check"}, validation_folds=2
+            policies=("direct_bisect",), region_rules=("per_check",), validation_folds=2
         )
         _, other, _ = resolve_settings(problem, per_check_alone, progress=False)
         assert other is not None
@@ -42,8 +42,12 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
             scores["per_check"]
             >= scores["probability"] - other.standard_error((other.eta, other.pseudo_count)) - 1e-12
         )
+    # By default both rules are validated, as the command line's --region-rule auto does.
+    assert SuiteOptions().region_rules == REGION_RULES
     # Without candidates the tree's own rule is used and nothing is compared.
-    plain, _, none = resolve_settings(problem, SuiteOptions(policies=("direct_bisect",)), progress=False)
+    plain, _, none = resolve_settings(
+        problem, SuiteOptions(policies=("direct_bisect",), region_rules=()), progress=False
+    )
     assert none == {} and "region_rule" not in plain.tree_options
 
 
@@ -53,7 +57,7 @@ def test_bench_reports_the_rule_and_fold_validation(
     folder = gccd_folder("dataset_2d_1")
     out = tmp_path / "b.json"
     argv = ["bench", "--gccd", str(folder), "--policies", "direct_bisect,bisect", "--max-worlds", "6"]
-    argv += ["--validate-region-rule", "--validation-folds", "3", "--json", str(out)]
+    argv += ["--validation-folds", "3", "--json", str(out)]  # --region-rule auto is the default
     assert main(argv) == 0
     capsys.readouterr()
     settings = json.loads(out.read_text())["settings"]
@@ -65,10 +69,14 @@ def test_bench_reports_the_rule_and_fold_validation(
     assert json.loads(out.read_text())["tree"]["region_rule"] == selection["chosen"]
 
 
-def test_a_given_tree_cannot_have_its_rule_validated(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_a_given_rule_is_not_validated(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = gccd_folder("dataset_2d_1")
-    argv = ["bench", "--gccd", str(folder), "--tree", str(tmp_path / "t.npz"), "--validate-region-rule"]
-    assert main(argv) == 2
-    assert "--validate-region-rule builds a tree per rule" in capsys.readouterr().err
+    out = tmp_path / "b.json"
+    argv = ["bench", "--gccd", str(folder), "--policies", "direct_bisect", "--max-worlds", "4"]
+    argv += ["--region-rule", "per_check", "--json", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    assert doc["tree"]["region_rule"] == "per_check"
+    assert doc["settings"]["eta_selection"]["region_rule"] == "per_check"
+    assert "region_rule_selection" not in doc["settings"]

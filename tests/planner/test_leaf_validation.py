@@ -20,7 +20,7 @@ from drd_planner.planner.leaf_validation import (
 def test_validation_is_seeded_and_uses_training_worlds_only() -> None:
     problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
     worlds = problem.require_worlds()
-    kwargs = {"domain": "planar", "etas": (0.2, 1.0), "pseudo_counts": (None, 20.0), "queries": 4, "seed": 3}
+    kwargs = {"etas": (0.2, 1.0), "pseudo_counts": (None, 20.0), "queries": 4, "seed": 3}
     a = validate_query_leaf(problem, **kwargs)  # type: ignore[arg-type]
     b = validate_query_leaf(problem, **kwargs)  # type: ignore[arg-type]
     assert a == b
@@ -43,10 +43,10 @@ def test_the_paired_test() -> None:
 def test_given_settings_skip_validation_and_bad_input_is_refused() -> None:
     problem = make_planar_problem(model="one_wall", num_worlds=60, seed=0)
     assert leaf_from_options(problem, eta=0.4, pseudo_counts=(5.0,), seed=0)[:2] == (0.4, 5.0)
-    eta, kappa, note = leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0)
+    eta, kappa, _, note = leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0)
     assert kappa is None and 0 < eta <= 1 and "random queries" in note
     with pytest.raises(ProblemError, match="candidate"):
-        validate_query_leaf(problem, domain="planar", etas=())
+        validate_query_leaf(problem, etas=())
 
 
 def test_a_tree_whose_query_cannot_be_validated_uses_the_priors_setting() -> None:
@@ -57,7 +57,47 @@ def test_a_tree_whose_query_cannot_be_validated_uses_the_priors_setting() -> Non
     blocked = dataclasses.replace(
         problem, worlds=dataclasses.replace(worlds, R=np.zeros_like(worlds.R))
     )  # no training world has a free library path: nothing to validate on
-    leaf, note = tree_leaf_from_options(blocked, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
+    leaf, _, note = tree_leaf_from_options(blocked, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
     assert leaf is None and "not validated on this query" in note
-    leaf, note = tree_leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
+    leaf, _, note = tree_leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
     assert leaf is not None and note.startswith("its own eta")
+
+
+def test_region_rules_are_validated_on_the_same_episodes() -> None:
+    from drd_planner.core.region_rule import REGION_RULES
+
+    problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
+    choice = validate_query_leaf(
+        problem, etas=(0.2, 1.0), pseudo_counts=(None,), region_rules=REGION_RULES, queries=4, seed=3
+    )
+    assert set(choice.rule_means) == set(REGION_RULES) and choice.region_rule in REGION_RULES
+    assert choice.best_mean == choice.rule_means[choice.region_rule]
+    if choice.region_rule == "per_check":  # only a significant win replaces the paper's rule
+        assert choice.rule_means["per_check"] < choice.rule_means["probability"]
+    assert "region rule" in choice.summary_lines()[1]
+    one = validate_query_leaf(problem, etas=(0.2, 1.0), pseudo_counts=(None,), queries=4, seed=3)
+    assert one.region_rule == "probability" and one.rule_means == {}
+    assert (
+        one.mean_checks
+        == validate_query_leaf(
+            problem, etas=(0.2, 1.0), pseudo_counts=(None,), region_rules=("probability",), queries=4, seed=3
+        ).mean_checks
+    )
+    # Given settings skip the validation and keep the given rule.
+    given = leaf_from_options(problem, eta=0.4, pseudo_counts=(5.0,), seed=0, region_rules=("per_check",))
+    assert (given.eta, given.pseudo_count, given.region_rule) == (0.4, 5.0, "per_check")
+
+
+def test_a_trees_own_rule_is_validated_on_its_query() -> None:
+    from drd_planner.core.region_rule import REGION_RULES
+    from drd_planner.planner.leaf_validation import tree_leaf_from_options
+
+    problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
+    own = tree_leaf_from_options(
+        problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={}, region_rules=REGION_RULES
+    )
+    assert own.leaf is not None and own.region_rule in REGION_RULES and "region rule" in own.note
+    given = tree_leaf_from_options(
+        problem, eta=0.2, pseudo_counts=(None,), seed=0, tree_options={"region_rule": "per_check"}
+    )
+    assert given.leaf is None and given.region_rule == "per_check"

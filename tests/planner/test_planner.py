@@ -280,3 +280,25 @@ def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_prio
     assert first_stage(planner, own.start, own.goal) == "bisect"
     planner.set_leaf(0.05, None)
     assert planner.plan(*other, oracle, seed=0).checks[0].stage == "tree"
+
+
+def test_new_queries_use_the_priors_region_rule(problem: Problem, prior: WorldPrior) -> None:
+    planner = Planner(dataclasses.replace(prior, region_rule="per_check"))
+    model = planner.query_model(3, 40)
+    assert model.tree is not None and model.tree.region_rule == "per_check"
+    assert planner.query_model(problem.start, problem.goal).tree.region_rule == "probability"  # type: ignore[arg-type, union-attr]
+    # Changing the rule drops the cached online trees, not the precomputed one.
+    planner.set_leaf(0.2, None, region_rule="probability")
+    again = planner.query_model(3, 40)
+    assert again is not model and again.tree is not None and again.tree.region_rule == "probability"
+    with pytest.raises(ProblemError, match="known: probability, per_check"):
+        planner.set_leaf(0.2, None, region_rule="cheapest")
+    # Both rules verify every edge of the path they return.
+    worlds = problem.require_worlds()
+    for rule in ("probability", "per_check"):
+        planner.set_leaf(0.2, None, region_rule=rule)
+        for world in worlds.test_ids[:5]:
+            result = planner.plan(3, 40, TableOracle(worlds.X[int(world)]), seed=0)
+            if result.found:
+                outcomes = result.outcomes()
+                assert all(outcomes[int(e)] for e in result.edges)

@@ -15,7 +15,7 @@ from drd_planner.core.tree import build_tree
 from drd_planner.data.npz_format import payload_digest
 from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.data.tree_file import TreeBundle, save_tree
-from drd_planner.exceptions import PriorFileError, TreeFileError
+from drd_planner.exceptions import PriorFileError, ProblemError, TreeFileError
 from drd_planner.planner import (
     LeafSetting,
     QueryTree,
@@ -210,3 +210,29 @@ def test_a_trees_own_leaf_setting_round_trips_and_version_1_files_still_load(
     )
     with pytest.raises(PriorFileError, match=r"tree 0: header field 'eta'"):
         load_prior(bad)
+
+
+def test_the_region_rule_round_trips_and_a_bad_one_is_refused(prior: WorldPrior, tmp_path: Path) -> None:
+    assert prior.region_rule == "probability"  # the paper's unless chosen
+    with pytest.raises(ProblemError, match="known: probability, per_check"):
+        dataclasses.replace(prior, region_rule="cheapest")
+    path = save_prior(tmp_path / "p.npz", dataclasses.replace(prior, region_rule="per_check"))
+    assert load_prior(path).region_rule == "per_check"
+    # A file written before the rule was stored plans new queries with the paper's rule.
+    old = tmp_path / "old.npz"
+    _rewrite(path, old, lambda h: {k: v for k, v in h.items() if k != "region_rule"}, resign=True)
+    assert load_prior(old).region_rule == "probability"
+    bad = tmp_path / "bad.npz"
+    _rewrite(path, bad, lambda h: {**h, "region_rule": "cheapest"}, resign=True)
+    with pytest.raises(PriorFileError, match="region rule must be one of probability, per_check"):
+        load_prior(bad)
+    # A tree's own rule (in its build info) is checked too, naming the tree.
+    bad_tree = tmp_path / "bad_tree.npz"
+
+    def tree_rule(header: dict[str, Any]) -> dict[str, Any]:
+        first = {**header["trees"][0], "info": {**header["trees"][0]["info"], "region_rule": ["x"]}}
+        return {**header, "trees": [first, header["trees"][1]]}
+
+    _rewrite(path, bad_tree, tree_rule, resign=True)
+    with pytest.raises(PriorFileError, match="tree 0: the tree's region rule must be a string"):
+        load_prior(bad_tree)

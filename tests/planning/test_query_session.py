@@ -26,6 +26,7 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import WorldPrior, load_prior
+from drd_planner.planner.anytime import ImproveBudget
 from drd_planner.planning.map_state import MapSnapshot, Parts
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.query_support import MotionRegistry, yaw_from_quaternion
@@ -197,6 +198,56 @@ def test_budgets_end_with_their_own_status(heli_prior: WorldPrior) -> None:
         session.set_budgets(0, None)
     with pytest.raises(ProblemError, match="time_budget_s"):
         QuerySession(heli_prior, name="heli", time_budget_s=-1.0)
+
+
+def test_an_improve_budget_publishes_a_shorter_path_checked_free_on_the_snapshot(
+    heli_prior: WorldPrior,
+) -> None:
+    """Anytime improvement through the session: never longer, every edge checked free, the same first checks."""
+    first_only = QuerySession(heli_prior, name="first")
+    improving = QuerySession(heli_prior, name="improve", improve_budget=ImproveBudget(checks=60))
+    assert first_only.improve_budget is None and improving.improve_budget == ImproveBudget(checks=60)
+    start, shorter = _heli_start(first_only), 0
+    for seed in range(100, 108):
+        snapshot = _heli_snapshot(first_only, seed)
+        checker = _independent_checker(first_only, snapshot)
+        for goal in (HELI_GOAL, 9, 13):
+            before = first_only.plan(snapshot, start, goal, seed=seed)
+            after = improving.plan(_heli_snapshot(improving, seed), start, goal, seed=seed)
+            assert after.ok == before.ok
+            if not before.ok:
+                assert after.improve_stop == "" and after.improvements == 0
+                continue
+            # The same first path (same seed, same checks), then only improvement checks.
+            n = len(before.checks)
+            assert [(c.edge, c.free, c.stage) for c in after.checks[:n]] == [
+                (c.edge, c.free, c.stage) for c in before.checks
+            ]
+            assert {c.stage for c in after.checks[n:]} <= {"improve"} and len(after.checks) - n <= 60
+            assert after.improve_stop in ("optimal", "checks", "patience"), after.improve_stop
+            assert after.first_cost == pytest.approx(before.cost) and after.cost <= before.cost + 1e-9
+            assert (after.improvements > 0) == (after.cost < before.cost - 1e-9)
+            assert (after.stage == "improve") == (after.improvements > 0)
+            assert before.improve_stop == "" and "improvement" not in before.message
+            assert f"improvement stopped: {after.improve_stop}" in after.message
+            shorter += after.cost < before.cost - 1e-9
+            # Every edge of the published path was checked free in this plan, and FCL agrees.
+            log = {c.edge: c.free for c in after.checks}
+            assert all(log.get(e) is True for e in after.path_edges)
+            truth = {c.edge: bool(checker.check_motion(improving.edge_states(c.edge))) for c in after.checks}
+            assert truth == log
+            assert checker.check_motion(after.states)
+            np.testing.assert_allclose(after.states[0], start)
+            np.testing.assert_allclose(after.states[-1], improving.vertex_state(goal))
+    assert shorter >= 6  # measured: 12 of the 14 found plans get shorter (every improvement: optimal)
+    # The plan's check cap bounds the improvement too: the shorter path to 9 on world 102 needs checks 4-7,
+    # which a cap of 6 cannot pay for, so that plan keeps its first path (an int budget is checks).
+    for cap, checks, improvements in ((None, 7, 1), (6, 3, 0)):
+        capped = QuerySession(heli_prior, name="capped", max_checks=cap, improve_budget=100)
+        result = capped.plan(_heli_snapshot(capped, 102), start, 9, seed=102)
+        assert result.ok and (len(result.checks), result.improvements) == (checks, improvements)
+    with pytest.raises(ProblemError, match="ImproveBudget"):
+        QuerySession(heli_prior, name="bad", improve_budget=1.5)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(

@@ -23,6 +23,7 @@ from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
 from drd_planner.domains.arm import default_panda_dir  # noqa: E402
 from drd_planner.exceptions import ProblemError  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
+from drd_planner.ros.parameters import plan_budgets_of  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[2] / "ros2_ws" / "src" / "drd_planner" / "config"
 SHIPPED = ("heli_wires.yaml", "arm_table_clutter.yaml")
@@ -70,6 +71,13 @@ def test_every_parameter_has_a_comment(name: str) -> None:
         assert lines[at - 1].strip().startswith("#"), f"{name}: no comment above {key}"
 
 
+@pytest.mark.parametrize("name", SHIPPED)
+def test_the_shipped_budgets_leave_the_anytime_improvement_off(name: str) -> None:
+    _, params = _parameters(CONFIG / name)
+    assert (params["improve_checks"], params["improve_time_budget"]) == (0, 0.0)
+    assert plan_budgets_of(params) == {"max_checks": None, "time_budget_s": None, "improve_budget": None}
+
+
 @pytest.mark.parametrize("started", SHIPPED, indirect=True)
 def test_file_sets_exactly_the_declared_parameters_and_they_take_effect(
     started: tuple[PlannerNode, Path],
@@ -97,6 +105,7 @@ def _configures(node: PlannerNode, path: Path) -> None:
     _, params = _parameters(path)
     assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS, node.errors
     assert [s.name for s in node.sessions] == params["tree_paths"]
+    assert all(s.improve_budget is None for s in node.sessions)  # the anytime improvement ships off
     assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
     assert not node.sessions
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import signal
 import subprocess
@@ -32,11 +33,14 @@ from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
 from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planner.anytime import ImproveBudget  # noqa: E402
 from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
+from drd_planner.planning.query_session import QuerySession  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
+from drd_planner.ros.parameters import parameter_problems, plan_budgets_of  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
 use_domain(60)
@@ -48,10 +52,11 @@ def context() -> Iterator[Any]:
         yield ctx
 
 
-def _node(ctx: Any, trees: list[str]) -> PlannerNode:
+def _node(ctx: Any, trees: list[str], **overrides: Any) -> PlannerNode:
     params = [
         Parameter("tree_paths", value=trees),
         Parameter("start_without_robot_state", value="prior_start"),
+        *(Parameter(name, value=value) for name, value in overrides.items()),
     ]
     return PlannerNode(context=ctx, parameter_overrides=params)
 
@@ -376,3 +381,80 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
         assert set(second.path_edges) <= free  # the new plan was checked free on the new map
         assert second.map_version == node.snapshot.version
+
+
+def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_values(context: Any) -> None:
+    """improve_checks > 0: the published plan is the best verified one, no longer than the first path."""
+    node = _node(context, [str(TREE)], improve_checks=40)
+    peer = Peer(context)
+    with active_planner(context, node, peer) as executor:
+        session = node.sessions[0]
+        assert session.improve_budget == ImproveBudget(checks=40) and session.max_checks is None
+        _publish_world(executor, node, peer)  # Wires world 3
+        peer.goals.publish(_goal(session))
+        assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()) and bool(peer.checks))
+        record = node.history[-1]
+        best, summary = record.result, peer.summaries()[-1]
+        assert node.published is best and best.ok
+        # The first path of the same request, offline on the same maps, without improvement.
+        markers, cloud = _world(session)
+        snapshot = MapSnapshot(
+            1,
+            obstacle_map(markers, frame_id="map"),
+            terrain_from_cloud(cloud, frame_id="map"),
+            session.margin,
+        )
+        start, goal = int(session.domain.start), int(session.domain.goal)
+        first = QuerySession(session.prior, name="first").plan(snapshot, start, goal, seed=0)
+        assert first.ok and best.first_cost == pytest.approx(first.cost)
+        assert best.cost < first.cost  # measured: 739.29 -> 700.0 m, 1 shorter path, 24 checks
+        assert best.improvements >= 1 and best.stage == "improve"
+        assert (
+            summary["improvements"] == str(best.improvements) and summary["improve_stop"] == best.improve_stop
+        )
+        assert int(summary["improve_checks"]) == len(best.checks) - len(first.checks) > 0
+        assert f"improvement stopped: {best.improve_stop}" in summary["message"]
+        # What is on `plan` is that path, and every edge of it was checked free in the published log.
+        np.testing.assert_allclose(
+            [[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in peer.plans[-1].poses],
+            best.states[:, :3],
+        )
+        free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
+        assert set(best.path_edges) <= free
+        # A map update that blocks the improved path: re-checked, replanned (improving again) on the new map.
+        edge = best.path_edges[len(best.path_edges) // 2]
+        states = session.edge_states(edge)
+        box = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
+        peer.obstacles.publish(
+            obstacle_markers(
+                [("extra/1", Box((30.0, 30.0, 30.0)), box)],
+                frame_id="map",
+                msgs=RclpyMessages(),
+                delete_all_first=False,
+            )
+        )
+        assert spin_until(executor, lambda: len(peer.plans) >= 2 and len(peer.checks) >= 2)
+        assert spin_until(executor, lambda: peer.summaries()[-1]["request"] == "map_update")
+        again, summary = node.published, peer.summaries()[-1]
+        assert again is not None and again is node.history[-1].result and edge not in again.path_edges
+        assert f"plan edge {edge} blocked" in summary["replan_reason"] and summary["improve_stop"]
+        free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
+        assert set(again.path_edges) <= free and again.map_version == node.snapshot.version
+        # A negative value is refused with its name; the old value stays.
+        for name, bad in (("improve_checks", -1), ("improve_time_budget", -1.0)):
+            (result,) = node.set_parameters([Parameter(name, value=bad)])
+            assert not result.successful and name in result.reason
+        assert node.get_parameter("improve_checks").value == 40
+        assert node.get_parameter("improve_time_budget").value == 0.0
+    assert parameter_problems({"improve_checks": -1}) == ["improve_checks must be >= 0, got -1"]
+    assert "improve_time_budget must be finite" in parameter_problems({"improve_time_budget": math.nan})[0]
+    # Either parameter enables the improvement; 0 is no limit; both 0 is off.
+    assert plan_budgets_of({"improve_checks": 0, "improve_time_budget": 0.0})["improve_budget"] is None
+    assert plan_budgets_of({"improve_time_budget": 0.5})["improve_budget"] == ImproveBudget(seconds=0.5)
+    assert plan_budgets_of({"improve_checks": 7, "max_checks": 50}) == {
+        "max_checks": 50,
+        "time_budget_s": None,
+        "improve_budget": ImproveBudget(checks=7),
+    }
+    with pytest.raises(rclpy.exceptions.ParameterException):  # the descriptor's range, before the node exists
+        _node(context, [str(TREE)], improve_checks=-1)

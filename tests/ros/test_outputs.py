@@ -39,3 +39,31 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     assert (
         values["result"] == "path_found" and values["request"] == "goal_pose" and values["map_version"] == 3
     )
+
+
+def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:
+    checks = (_check(1, True, "tree"), _check(2, True, "improve"), _check(3, False, "improve"))
+    common = {"ok": True, "status": "path_found", "message": "found", "map_version": 1, "tree": "heli"}
+    plain = plan_summary_values(
+        QueryPlanResult(**common, checks=checks[:1], cost=751.1),  # type: ignore[arg-type]
+        {"request": "goal_pose"},
+        wait_s=0.0,
+        plan_messaging_s=0.0,
+        messaging_s=0.0,
+    )
+    assert not {"improvements", "improve_stop", "improve_checks", "first_cost", "cost"} & set(plain)
+    improved = QueryPlanResult(
+        **common,  # type: ignore[arg-type]
+        checks=checks,
+        stage="improve",
+        cost=700.0,
+        first_cost=751.1,
+        improvements=2,
+        improve_stop="optimal",
+    )
+    values = plan_summary_values(
+        improved, {"request": "goal_pose"}, wait_s=0.0, plan_messaging_s=0.0, messaging_s=0.0
+    )
+    assert (values["improvements"], values["improve_stop"], values["improve_checks"]) == (2, "optimal", 2)
+    assert (values["first_cost"], values["cost"]) == ("751.100000", "700.000000")
+    assert list(values)[-1] == "request"  # the request's own values stay last

@@ -64,6 +64,7 @@ def _result(ok: bool) -> Any:
         checks=(),
         num_blocked=0,
         seconds={},
+        improve_stop="",
     )
 
 

@@ -16,13 +16,16 @@ from drd_planner.command_errors import run_command
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
-from drd_planner.core.tree import DecisionTree
 from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.bag_cli import print_check
 
 if TYPE_CHECKING:
     from drd_planner.bench.suite import SuiteOptions
+    from drd_planner.planner.leaf_validation import PriorLeaf, TreeLeaf
+
+#: ``--region-rule auto``: validate every region rule, each with its own eta and kappa.
+AUTO = "auto"
 
 
 def _policies(text: str) -> list[str]:
@@ -45,10 +48,11 @@ def _tree_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--region-rule",
-        choices=REGION_RULES,
-        default=DEFAULT_REGION_RULE,
-        help="which path the tree and BiSECt try to prove: the most probable (probability, the paper's) or "
-        "the most probable per expected check (per_check)",
+        choices=(*REGION_RULES, AUTO),
+        default=AUTO,
+        help="which path the tree and BiSECt try to prove: the most probable (probability, the paper's), "
+        "the most probable per expected check (per_check), or auto (default): each validated with its own "
+        "eta and kappa, the paper's kept unless per_check needs fewer checks",
     )
 
 
@@ -58,14 +62,13 @@ def _tree_kwargs(args: argparse.Namespace) -> dict[str, Any]:
         "colouring": args.colouring,
         "top_regions": args.top_regions,
         "max_prob_region": args.candidates == "max-prob-region",
-        "region_rule": args.region_rule,
+        "region_rule": DEFAULT_REGION_RULE if args.region_rule == AUTO else args.region_rule,
     }
 
 
-def _build_tree_from_args(problem: Problem, args: argparse.Namespace) -> DecisionTree:
-    from drd_planner.core.tree import build_tree
-
-    return build_tree(problem, **_tree_kwargs(args))
+def _region_rules(args: argparse.Namespace) -> tuple[str, ...]:
+    """The region rules to validate: every one for ``--region-rule auto``, else the one given."""
+    return REGION_RULES if args.region_rule == AUTO else (args.region_rule,)
 
 
 def _eta_arg(text: str) -> float | None:
@@ -99,17 +102,22 @@ def _kappa_arg(text: str) -> tuple[float | None, ...]:
     return (value,)
 
 
-def _prior_leaf(problem: Problem, args: argparse.Namespace) -> tuple[float, float | None, str]:
-    """A prior's eta and kappa: as given, or validated on random queries (``planner.leaf_validation``)."""
+def _prior_leaf(problem: Problem, args: argparse.Namespace) -> PriorLeaf:
+    """A prior's eta, kappa and region rule: as given, or validated on random queries (``planner.leaf_validation``)."""
     from drd_planner.planner.leaf_validation import leaf_from_options
 
     return leaf_from_options(
-        problem, eta=args.eta, pseudo_counts=_kappas(args), seed=args.seed, progress=None
+        problem,
+        eta=args.eta,
+        pseudo_counts=_kappas(args),
+        seed=args.seed,
+        region_rules=_region_rules(args),
+        progress=None,
     )
 
 
-def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[Any, str]:
-    """A precomputed tree's own eta and kappa, validated on its query (``planner.leaf_validation``)."""
+def _tree_leaf(problem: Problem, args: argparse.Namespace) -> TreeLeaf:
+    """A precomputed tree's own eta, kappa and region rule, validated on its query (``planner.leaf_validation``)."""
     from drd_planner.planner.leaf_validation import tree_leaf_from_options
 
     return tree_leaf_from_options(
@@ -118,6 +126,7 @@ def _tree_leaf(problem: Problem, args: argparse.Namespace) -> tuple[Any, str]:
         pseudo_counts=_kappas(args),
         seed=args.seed,
         tree_options=_tree_kwargs(args),
+        region_rules=_region_rules(args),
         progress=None,
     )
 
@@ -150,7 +159,7 @@ def _suite_options(args: argparse.Namespace) -> SuiteOptions:
         max_checks=args.max_checks,
         tree_options=_tree_kwargs(args),
         validation_folds=args.validation_folds,
-        region_rules=REGION_RULES if args.validate_region_rule else (),
+        region_rules=() if args.tree else _region_rules(args),
         reference=args.reference,
         tie_subset=tuple(args.tie_subset) if args.tie_subset is not None else TIE_SUBSET,
         resamples=args.resamples,
@@ -179,8 +188,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     for name, value in (("--max-worlds", args.max_worlds), ("--max-checks", args.max_checks)):
         if value is not None and value < 1:
             raise DrdError(f"{name} must be at least 1, got {value}")
-    if args.tree and args.validate_region_rule:
-        raise DrdError("--validate-region-rule builds a tree per rule; it cannot be used with --tree")
     if args.all:
         if args.tree:
             raise DrdError("--tree fits one dataset and cannot be used with --all")
@@ -397,12 +404,6 @@ def _add_bench_parser(sub: Any) -> None:
         default=None,
         help="switch to BiSECt at or below this consistent fraction; 'auto' (default) validates it on "
         "held-out training worlds",
-    )
-    p.add_argument(
-        "--validate-region-rule",
-        action="store_true",
-        help="validate the region rules (probability, per_check) per dataset, each with its own tree, eta "
-        "and kappa, and keep the paper's unless per_check wins by more than the validation noise",
     )
     p.add_argument(
         "--validation-folds",

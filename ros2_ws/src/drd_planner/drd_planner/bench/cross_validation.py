@@ -4,8 +4,8 @@ A dataset's held-back test split (10 %) is small: on 100 worlds a difference of 
 two policies is within the noise. Cross-validation uses the whole database instead. The feasible worlds
 (those with a valid library path, as the test protocol requires) are dealt at random (seeded) into
 ``folds`` folds; for each fold the tree, the switch threshold (validated on held-out *training* worlds
-of that fold, as ``drd build-tree --eta auto`` does) and the training bias are learnt from every other
-world, and each policy runs on the fold's worlds with :func:`drd_planner.bench.runner.run_benchmark`.
+of that fold, as ``drd build-tree --eta auto`` does, with the region rule when several are given) and the
+training bias are learnt from every other world, and each policy runs on the fold's worlds with :func:`drd_planner.bench.runner.run_benchmark`.
 The result pairs the policies world by world, so differences come with a bootstrap confidence interval.
 """
 
@@ -24,7 +24,14 @@ from drd_planner.bench.runner import BenchmarkResult, PolicySettings, run_benchm
 from drd_planner.bench.stats import bootstrap_mean_ci
 from drd_planner.core.policies import DEFAULT_ALPHA, TREE_POLICIES
 from drd_planner.core.problem import Problem
-from drd_planner.core.switch_threshold import DEFAULT_PSEUDO_COUNTS, ValidationGrid, select_switch_threshold
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
+from drd_planner.core.switch_threshold import (
+    DEFAULT_PSEUDO_COUNTS,
+    SwitchThresholdChoice,
+    ValidationGrid,
+    select_region_rule,
+    select_switch_threshold,
+)
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
 
@@ -97,12 +104,16 @@ class FoldSettings:
             fold together with eta; a single candidate fixes it.
         alpha: data weight of the bias.
         tree_options: keyword arguments of :func:`drd_planner.core.tree.build_tree`.
+        region_rules: region rules validated per fold with eta and kappa
+            (:func:`~drd_planner.core.switch_threshold.select_region_rule`; default: every rule, as
+            ``drd bench`` does); empty: ``tree_options``' rule.
     """
 
     eta: float | None = None
     pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS
     alpha: float = DEFAULT_ALPHA
     tree_options: Mapping[str, Any] | None = None
+    region_rules: Sequence[str] = REGION_RULES
 
 
 def cross_validate(
@@ -143,6 +154,7 @@ def cross_validate(
     lower: list[float] = []
     etas: list[float] = []
     chosen_kappas: list[float | None] = []
+    chosen_rules: list[str] = []
     kappas = tuple(settings.pseudo_counts)
     if not kappas:
         raise DrdError("pseudo_counts needs at least one candidate (None for the fixed leaf bias)")
@@ -161,6 +173,7 @@ def cross_validate(
         result = _run_fold(sub, policies, seed, settings)
         etas.append(float(result.settings["eta"]))
         chosen_kappas.append(result.settings["pseudo_count"])
+        chosen_rules.append(str(result.tree_info.get("region_rule", DEFAULT_REGION_RULE)))
         order.append(np.asarray(result.test_ids, dtype=np.int64))
         fold_of.append(np.full(len(result.test_ids), k, dtype=np.int64))
         lower.extend(result.lower_bound)
@@ -185,6 +198,7 @@ def cross_validate(
             "eta": settings.eta,
             "pseudo_counts": list(kappas),
             "chosen_pseudo_counts": chosen_kappas,
+            "chosen_region_rules": chosen_rules,
             "tree_options": dict(settings.tree_options or {}),
         },
     )
@@ -199,10 +213,17 @@ def _run_fold(sub: Problem, policies: Sequence[str], seed: int, settings: FoldSe
     kappas = tuple(settings.pseudo_counts)
     needs_tree = any(p in TREE_POLICIES for p in policies)
     eta, kappa = settings.eta, kappas[0] if len(kappas) == 1 else None
+    rules = tuple(settings.region_rules) or (str(options.get("region_rule", DEFAULT_REGION_RULE)),)
+    options["region_rule"] = rules[0]  # unless validated below
     if needs_tree and (eta is None or len(kappas) > 1):
-        grid = ValidationGrid.around(eta, kappas, options, alpha=settings.alpha)
-        choice = select_switch_threshold(sub, grid, seed=seed)
-        eta, kappa = choice.eta, choice.pseudo_count
+
+        def validate(rule: str) -> SwitchThresholdChoice:
+            grid = ValidationGrid.around(eta, kappas, {**options, "region_rule": rule}, alpha=settings.alpha)
+            return select_switch_threshold(sub, grid, seed=seed)
+
+        choice = select_region_rule(rules, validate)
+        assert choice is not None
+        eta, kappa, options["region_rule"] = choice.eta, choice.pseudo_count, choice.region_rule
     elif eta is None:
         eta = 1.0
     expand = float(options.pop("expand_threshold", 0.05))

@@ -18,12 +18,13 @@ from drd_planner.bench.runner import require_test_worlds, write_bench_files
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
 from drd_planner.exceptions import DrdError
+from drd_planner.planner.leaf_validation import PriorLeaf
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
 from drd_planner.planner.prior_file import load_prior
 from drd_planner.planner.query_sampling import draw_queries
 
-Leaf = Callable[[Problem, argparse.Namespace], tuple[float, float | None, str]]
+Leaf = Callable[[Problem, argparse.Namespace], PriorLeaf]
 
 
 def benchmark_prior(
@@ -37,15 +38,23 @@ def benchmark_prior(
         prior = load_prior(args.tree, expected_domain=domain)
         if problem.graph is None or not np.array_equal(prior.graph.edges, problem.graph.edges):
             raise DrdError(f"{args.tree} was built for another graph than {problem.name!r}")
-        return prior, f"prior {args.tree} (eta {prior.eta:g}, kappa {prior.pseudo_count})"
-    eta, kappa, note = leaf(problem, args)
-    tree = build_tree(problem, progress=False, **tree_options)
+        return prior, (
+            f"prior {args.tree} (eta {prior.eta:g}, kappa {prior.pseudo_count}, region rule {prior.region_rule})"
+        )
+    setting = leaf(problem, args)
+    tree = build_tree(problem, progress=False, **{**tree_options, "region_rule": setting.region_rule})
     assert problem.start is not None and problem.goal is not None
     own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
     prior = prior_from_problem(
-        problem, domain=domain, trees=(own,), eta=eta, pseudo_count=kappa, library_seed=args.seed
+        problem,
+        domain=domain,
+        trees=(own,),
+        eta=setting.eta,
+        pseudo_count=setting.pseudo_count,
+        region_rule=setting.region_rule,
+        library_seed=args.seed,
     )
-    return prior, note
+    return prior, setting.note
 
 
 def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dict[str, Any]) -> int:
@@ -73,7 +82,7 @@ def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dic
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     print(report, end="")
-    print(f"eta and kappa: {note}")
+    print(f"eta, kappa and region rule: {note}")
     write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
     print(
         f"total wall time {time.perf_counter() - t0:.1f} s (loading, eta and kappa and the tree "

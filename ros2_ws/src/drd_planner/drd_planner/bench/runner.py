@@ -29,12 +29,14 @@ from drd_planner.core.episode import EpisodeResult, TableOracle, run_episode
 from drd_planner.core.policies import (
     DEFAULT_ALPHA,
     DEFAULT_ETA,
+    PAPER_RULE_POLICIES,
     POLICIES,
     TRAIN_WORLD_POLICIES,
     TREE_POLICIES,
     PolicyContext,
 )
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import DrdError
 from drd_planner.progress import Progress
@@ -226,6 +228,19 @@ def run_world(
     return run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=max_checks)
 
 
+def paper_rule_tree(problem: Problem, tree: DecisionTree) -> DecisionTree:
+    """``tree`` when it uses the paper's region rule, else a tree built the same way with that rule.
+
+    :data:`~drd_planner.core.policies.PAPER_RULE_POLICIES` (``direct_bisect_fixed``) run on it, so they
+    stay the paper's method when the run's tree was built with another rule (:mod:`drd_planner.core.region_rule`).
+    """
+    if tree.region_rule == DEFAULT_REGION_RULE:
+        return tree
+    same = ("expand_threshold", "colouring", "top_regions", "max_prob_region")
+    options = {key: tree.info[key] for key in same if key in tree.info}
+    return build_tree(problem, progress=False, region_rule=DEFAULT_REGION_RULE, **options)
+
+
 def require_test_worlds(problem: Problem) -> None:
     """Raise DrdError, with what to do, when ``problem`` has no test worlds to benchmark on."""
     worlds = problem.require_worlds()
@@ -277,6 +292,9 @@ def run_benchmark(
         tree = build_tree(problem, progress=progress)
     if tree is not None:
         tree_info = {"nodes": tree.num_nodes, "depth": tree.depth(), **tree.info}
+    paper_tree = None
+    if tree is not None and PAPER_RULE_POLICIES.intersection(policies):
+        paper_tree = paper_rule_tree(problem, tree)
     theta = train_bias(problem, alpha=settings.alpha)
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
@@ -303,7 +321,7 @@ def run_benchmark(
                     name,
                     int(world),
                     theta=theta,
-                    tree=tree,
+                    tree=paper_tree if name in PAPER_RULE_POLICIES else tree,
                     seed=seed + k,
                     settings=settings,
                     max_checks=max_checks,

@@ -8,7 +8,6 @@ with a note. :func:`suite_json` and :func:`suite_markdown` turn the runs into on
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -35,10 +34,12 @@ from drd_planner.bench.runner import (
 from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA, TREE_POLICIES
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import REGION_RULES
 from drd_planner.core.switch_threshold import (
     DEFAULT_PSEUDO_COUNTS,
     SwitchThresholdChoice,
     ValidationGrid,
+    select_region_rule,
     select_switch_threshold,
 )
 from drd_planner.core.tree import DecisionTree, build_tree
@@ -72,7 +73,7 @@ class SuiteOptions:
         region_rules: region rules to validate (:mod:`~drd_planner.core.region_rule`): each gets its own
             eta / kappa validation with a tree built by it, and the first (the paper's) is kept unless
             another's validated mean is lower by more than its standard error (any lower with one
-            split); empty: ``tree_options``' rule, not validated.
+            split); default: every rule; empty: ``tree_options``' rule, not validated.
     """
 
     policies: tuple[str, ...] = DEFAULT_POLICIES
@@ -90,7 +91,7 @@ class SuiteOptions:
     training_sizes: tuple[int, ...] = DEFAULT_SIZES
     figure_world: int = 0
     validation_folds: int = 1
-    region_rules: tuple[str, ...] = ()
+    region_rules: tuple[str, ...] = REGION_RULES
 
     def __post_init__(self) -> None:
         """Fail early, naming the extra, when figures are asked for without matplotlib."""
@@ -224,19 +225,23 @@ def resolve_settings(
     if not options.region_rules:
         eta, kappa, choice = resolve_leaf(problem, options, progress=progress)
         return dataclasses.replace(options, eta=eta, pseudo_counts=(kappa,)), choice, {}
-    best: tuple[SuiteOptions, SwitchThresholdChoice | None] | None = None
-    best_score, scores = math.inf, {}
-    for rule in options.region_rules:
-        trial = dataclasses.replace(options, tree_options={**options.tree_options, "region_rule": rule})
-        eta, kappa, choice = resolve_leaf(problem, trial, progress=progress)
-        if choice is None:  # nothing validated (eta and kappa fixed, or no tree): keep the first rule
-            return dataclasses.replace(trial, eta=eta, pseudo_counts=(kappa,)), None, {}
-        score = choice.mean_checks[(eta, kappa)]
-        scores[rule] = score
-        if best is None or score < best_score - choice.standard_error((eta, kappa)) - 1e-12:
-            best, best_score = (dataclasses.replace(trial, eta=eta, pseudo_counts=(kappa,)), choice), score
-    assert best is not None
-    return best[0], best[1], scores
+
+    def with_rule(rule: str) -> SuiteOptions:
+        return dataclasses.replace(options, tree_options={**options.tree_options, "region_rule": rule})
+
+    choice = select_region_rule(
+        options.region_rules, lambda rule: resolve_leaf(problem, with_rule(rule), progress=progress)[2]
+    )
+    if choice is None:  # nothing validated (eta and kappa fixed, or no tree): the first rule
+        trial = with_rule(options.region_rules[0])
+        eta, kappa, _ = resolve_leaf(problem, trial, progress=progress)
+        return dataclasses.replace(trial, eta=eta, pseudo_counts=(kappa,)), None, {}
+    chosen = with_rule(choice.region_rule)
+    return (
+        dataclasses.replace(chosen, eta=choice.eta, pseudo_counts=(choice.pseudo_count,)),
+        choice,
+        dict(choice.rule_means),
+    )
 
 
 def resolve_leaf(

@@ -440,6 +440,9 @@ POLICIES: Mapping[str, PolicyFactory] = {
 #: check on (the tree's root with the posterior leaf): it needs the tree only for its training worlds,
 #: and shows how much of ``direct_bisect``'s gain the posterior alone gives.
 TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only", "bisect_posterior"})
+#: Tree policies that are the paper's method exactly, so a benchmark runs them on a tree built with the
+#: paper's region rule even when the run's tree uses another (``drd_planner.bench.runner.paper_rule_tree``).
+PAPER_RULE_POLICIES = frozenset({"direct_bisect_fixed"})
 
 #: Policies that need ``PolicyContext.train_worlds`` (the learned LazySP selectors).
 TRAIN_WORLD_POLICIES = frozenset(LEARNED_LAZYSP_POLICIES)

@@ -23,13 +23,17 @@ mean over all of them; its standard error is the spread of its k fold means over
 the *simplest* candidate within one standard error of the best mean (the one-standard-error rule: the
 larger eta, then the fixed leaf, then the larger kappa), so a setting must beat a simpler one by more
 than the noise to be chosen.
+
+:func:`select_region_rule` repeats the validation for each region rule (:mod:`~drd_planner.core.region_rule`),
+each with its own tree, eta and kappa, and keeps the first rule (the paper's) unless another one's best
+mean is lower by more than its standard error (with one split: lower at all).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -39,6 +43,7 @@ from drd_planner.arrays import IntArray
 from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import DEFAULT_ALPHA, DirectBisectPolicy
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.exceptions import ProblemError
 from drd_planner.progress import Progress
@@ -63,6 +68,9 @@ class SwitchThresholdChoice:
         seconds: wall time of the validation (not compared: equal choices may take different times).
         basis: what every candidate was run on, for reports (default: "K held-out training worlds").
         fold_means: with k-fold validation, candidate -> its mean checks on each fold (empty otherwise).
+        region_rule: the region rule every candidate ran with (:mod:`~drd_planner.core.region_rule`).
+        rule_means: when several rules were validated (:func:`select_region_rule`), rule -> the mean
+            checks of its best candidate (empty otherwise).
     """
 
     eta: float
@@ -72,6 +80,13 @@ class SwitchThresholdChoice:
     seconds: float = field(default=0.0, compare=False)
     basis: str = ""
     fold_means: dict[tuple[float, float | None], tuple[float, ...]] = field(default_factory=dict)
+    region_rule: str = DEFAULT_REGION_RULE
+    rule_means: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def best_mean(self) -> float:
+        """The chosen candidate's mean checks."""
+        return self.mean_checks[(self.eta, self.pseudo_count)]
 
     def standard_error(self, candidate: tuple[float, float | None]) -> float:
         """The standard error of a candidate's mean over the folds (0.0 with one split)."""
@@ -88,6 +103,8 @@ class SwitchThresholdChoice:
             "mean_checks": {_label(*k): v for k, v in sorted(self.mean_checks.items(), key=_order)},
             "num_validation_worlds": len(self.validation_ids),
             "seconds": self.seconds,
+            "region_rule": self.region_rule,
+            **({"rule_mean_checks": dict(self.rule_means)} if self.rule_means else {}),
             **(
                 {
                     "folds": len(next(iter(self.fold_means.values()))),
@@ -103,7 +120,10 @@ class SwitchThresholdChoice:
     def describe(self) -> str:
         """One line for logs and provenance: the choice and every candidate's mean."""
         means = ", ".join(f"{_label(*k)}: {v:.2f}" for k, v in sorted(self.mean_checks.items(), key=_order))
-        return f"{_label(self.eta, self.pseudo_count)} (validated on {self._basis()}; mean checks {means})"
+        return (
+            f"{_label(self.eta, self.pseudo_count)}{self._rule_text()} (validated on {self._basis()}; "
+            f"mean checks {means})"
+        )
 
     def summary_lines(self) -> list[str]:
         """A short report for people: the choice and the time taken, then mean checks per candidate.
@@ -117,6 +137,7 @@ class SwitchThresholdChoice:
         leaf = "fixed leaf" if self.pseudo_count is None else f"kappa {self.pseudo_count:g}"
         lines = [
             f"eta {self.eta:g}, {leaf}: validated in {self.seconds:.1f} s on {self._basis()}",
+            *([f"  {self._rule_text().lstrip(', ')}"] if self._rule_text() else []),
             "  mean checks " + "".join(f"{h:>{width - 1}} " for h in heads).rstrip(),
         ]
         for eta in etas:
@@ -127,6 +148,13 @@ class SwitchThresholdChoice:
                 row += f"{'-' if value is None else f'{value:.2f}':>{width - 1}}{mark}"
             lines.append(row.rstrip())
         return lines
+
+    def _rule_text(self) -> str:
+        """The rule's part of a summary: the rule and each validated rule's best mean; empty for the paper's alone."""
+        if self.region_rule == DEFAULT_REGION_RULE and not self.rule_means:
+            return ""
+        means = ", ".join(f"{r} {v:.2f}" for r, v in self.rule_means.items())
+        return f", region rule {self.region_rule}" + (f" (best mean checks: {means})" if means else "")
 
     def _basis(self) -> str:
         return self.basis or f"{len(self.validation_ids)} held-out training worlds"
@@ -260,10 +288,40 @@ def select_switch_threshold(
         seconds=0.0,
         basis=f"{num_folds} folds x {k} held-out training worlds" if num_folds > 1 else "",
         fold_means=fold_means,
+        region_rule=str(options.get("region_rule", DEFAULT_REGION_RULE)),
     )
     margin = choice.standard_error(best) + 1e-12
     eta, kappa = _simplest([c for c, v in means.items() if v <= means[best] + margin])
     return dataclasses.replace(choice, eta=eta, pseudo_count=kappa, seconds=time.perf_counter() - t0)
+
+
+def select_region_rule(
+    rules: Sequence[str], validate: Callable[[str], SwitchThresholdChoice | None]
+) -> SwitchThresholdChoice | None:
+    """The validation of the best region rule, each rule validated by ``validate(rule)``.
+
+    The first rule is kept unless a later one's best mean is lower than the kept one's by more than its
+    standard error (one split: any amount). The returned choice has ``region_rule`` and ``rule_means``
+    set. None when ``validate`` validated nothing (it returned None: eta and kappa are fixed).
+
+    Raises:
+        ProblemError: no rule.
+    """
+    if not rules:
+        raise ProblemError("give at least one region rule to validate")
+    best: SwitchThresholdChoice | None = None
+    scores: dict[str, float] = {}
+    for rule in rules:
+        choice = validate(rule)
+        if choice is None:
+            return None
+        choice = dataclasses.replace(choice, region_rule=rule)
+        scores[rule] = choice.best_mean
+        margin = choice.standard_error((choice.eta, choice.pseudo_count)) + 1e-12
+        if best is None or choice.best_mean < best.best_mean - margin:
+            best = choice
+    assert best is not None
+    return dataclasses.replace(best, rule_means=scores if len(scores) > 1 else {})
 
 
 def _checked_candidates(grid: ValidationGrid) -> tuple[list[float], list[float | None]]:

@@ -34,6 +34,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 from drd_planner.core.tree import DecisionTree
 from drd_planner.data.content_checks import (
     MAX_VERTICES,
@@ -52,7 +53,7 @@ from drd_planner.data.npz_format import NpzFormat, building_for_domain
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.safe_npz import refusing, short
 from drd_planner.data.spec_limits import check_domain_spec
-from drd_planner.exceptions import TreeFileError
+from drd_planner.exceptions import ProblemError, TreeFileError
 
 FORMAT_NAME = "drd_planner.tree"
 FORMAT_VERSION = 2
@@ -244,7 +245,14 @@ def decision_tree(
     """The decision tree of the node arrays ``a`` (``node_*``, ``library_edges``, ``free_fraction``).
 
     Check the arrays first with :func:`~drd_planner.data.content_checks.check_tree_arrays`.
+
+    Raises:
+        ProblemError: ``info`` names a region rule that does not exist.
     """
+    rule = info.get("region_rule", DEFAULT_REGION_RULE)
+    if not isinstance(rule, str):
+        raise ProblemError(f"the tree's region rule must be a string, got {short(rule, 40)}")
+    check_region_rule(rule)
     return DecisionTree(
         edge=a["node_edge"],
         children=a["node_children"],

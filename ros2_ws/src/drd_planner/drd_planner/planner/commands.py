@@ -68,7 +68,8 @@ def query_tree(
 ) -> tuple[QueryTree, str]:
     """An offline DiRECt tree for another query of ``prior``, on the library the planner would build online.
 
-    ``tree_leaf(problem)`` gives the tree's own ``(leaf, note)`` (None: the tree uses the prior's).
+    ``tree_leaf(problem)`` gives the tree's own ``(leaf, region_rule, note)``
+    (:class:`~drd_planner.planner.leaf_validation.TreeLeaf`; None: the prior's leaf and rule).
     """
     if prior.worlds is None:
         raise DrdError("this prior has no training worlds over every edge; rebuild it from its dataset")
@@ -104,8 +105,8 @@ def query_tree(
             prior.world_weights,
         ),
     )
-    tree = build_tree(problem, **tree_options)
-    leaf, note = (None, "") if tree_leaf is None else tree_leaf(problem)
+    leaf, rule, note = (None, prior.region_rule, "") if tree_leaf is None else tree_leaf(problem)
+    tree = build_tree(problem, **{**tree_options, "region_rule": rule})
     return QueryTree(problem.name, start, goal, library, tree, leaf), note
 
 
@@ -114,8 +115,9 @@ def build_prior(
 ) -> tuple[WorldPrior, list[str]]:
     """The prior ``drd build-tree`` writes, and a few lines per tree built (see :func:`cmd_build_tree`).
 
-    ``leaf(problem, args)`` gives the prior's ``(eta, kappa, note)``; ``tree_leaf(problem, args)`` each
-    tree's own ``(LeafSetting or None, note)`` (None as the callable: trees use the prior's).
+    ``leaf(problem, args)`` gives the prior's setting (:class:`~drd_planner.planner.leaf_validation.PriorLeaf`);
+    ``tree_leaf(problem, args)`` each tree's own (:class:`~drd_planner.planner.leaf_validation.TreeLeaf`;
+    None as the callable: trees use the prior's).
     """
     import dataclasses
 
@@ -128,30 +130,33 @@ def build_prior(
             raise DrdError("--prior adds trees: give at least one --query START,GOAL")
     else:
         problem = load_problem_from_args(args)
-        eta, kappa, note = leaf(problem, args)
-        lines += note.splitlines()
+        setting = leaf(problem, args)
+        lines += setting.note.splitlines()
         t0 = time.perf_counter()
-        tree = build_tree(problem, **tree_options)
+        own_leaf, own_rule, own_note = (
+            (None, setting.region_rule, "") if tree_leaf is None else tree_leaf(problem, args)
+        )
+        tree = build_tree(problem, **{**tree_options, "region_rule": own_rule})
         assert problem.start is not None and problem.goal is not None
         lines.append(
             f"tree {problem.name} ({problem.start} -> {problem.goal}): {tree.num_nodes} nodes, depth "
             f"{tree.depth()}, built in {time.perf_counter() - t0:.2f} s"
         )
-        own_leaf, own_note = (None, "") if tree_leaf is None else tree_leaf(problem, args)
         own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree, own_leaf)
         lines += ["  " + line for line in own_note.splitlines()]
         prior = prior_from_problem(
             problem,
             domain=problem_domain(problem),
             trees=(own,),
-            eta=eta,
-            pseudo_count=kappa,
+            eta=setting.eta,
+            pseudo_count=setting.pseudo_count,
+            region_rule=setting.region_rule,
             library_seed=args.seed,
             provenance={
                 "command": " ".join(sys.argv),
                 "dataset": problem.name,
                 "software": __version__,
-                "eta": note,
+                "eta": setting.note,
             },
         )
     trees = list(prior.trees)

@@ -34,6 +34,7 @@ from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings
 from drd_planner.core.lazysp_learned import LEARNED_LAZYSP_POLICIES
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
+from drd_planner.core.region_rule import check_region_rule
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
@@ -115,16 +116,21 @@ class Planner:
         """How far a state may lie from the vertex it snaps to, in state units."""
         return self._endpoints.snap_tolerance
 
-    def set_leaf(self, eta: float, pseudo_count: float | None) -> None:
+    def set_leaf(self, eta: float, pseudo_count: float | None, *, region_rule: str | None = None) -> None:
         """Use this switch threshold and leaf pseudo-count for every query from the next plan on.
 
-        It overrides the prior's setting and the precomputed trees' own; the cache stays valid.
+        It overrides the prior's setting and the precomputed trees' own; the cache stays valid. A new
+        ``region_rule`` (None: keep) drops the cached online trees; precomputed trees keep their own rule.
 
         Raises:
-            ProblemError: eta outside (0, 1] or a pseudo-count that is not positive.
+            ProblemError: eta outside (0, 1], a pseudo-count that is not positive, or an unknown rule.
         """
+        rule = check_region_rule(region_rule or self.prior.region_rule)
         self._leaf_override = LeafSetting(eta, pseudo_count)
-        self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count)
+        if rule != self.prior.region_rule:
+            for key in [k for k, m in self._cache.items() if m.precomputed is None]:
+                del self._cache[key]
+        self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count, region_rule=rule)
 
     def leaf(self, model: QueryModel) -> LeafSetting:
         """The eta and kappa of a query's library stage.
@@ -233,6 +239,7 @@ class Planner:
                 query.edge_costs,
                 weights=prior.world_weights,
                 expand_threshold=self._expand,
+                region_rule=prior.region_rule,
             )
         label = "connected" if query.connected else "online"
         return QueryModel(query, library, tree, theta, label, time.perf_counter() - t0)

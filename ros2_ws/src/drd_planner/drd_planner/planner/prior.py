@@ -24,6 +24,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DEFAULT_ALPHA, DEFAULT_ETA
 from drd_planner.core.problem import Problem
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 from drd_planner.core.tree import DecisionTree
 from drd_planner.exceptions import ProblemError
 
@@ -92,6 +93,8 @@ class WorldPrior:
         eta: switch threshold to BiSECt (validated for the dataset's own query when built).
         alpha: weight of the data term in BiSECt's bias.
         pseudo_count: kappa of the posterior leaf, or None for the paper's fixed leaf bias.
+        region_rule: the region rule of the trees built online for new queries
+            (:mod:`~drd_planner.core.region_rule`); precomputed trees keep the one they were built with.
         max_paths: m of the libraries built online.
         library_seed: seed of the online libraries' world order.
         domain_spec: JSON-safe spec that rebuilds the domain (and its FCL checker).
@@ -110,6 +113,7 @@ class WorldPrior:
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
     pseudo_count: float | None = None
+    region_rule: str = DEFAULT_REGION_RULE
     max_paths: int = DEFAULT_MAX_PATHS
     library_seed: int = 0
     domain_spec: dict[str, Any] = field(default_factory=dict)
@@ -143,7 +147,8 @@ class WorldPrior:
             object.__setattr__(self, "world_weights", w)
 
     def _check_settings(self) -> None:
-        """Validate eta, alpha, the pseudo-count and the library size."""
+        """Validate eta, alpha, the pseudo-count, the region rule and the library size."""
+        check_region_rule(self.region_rule)
         if not 0.0 < self.eta <= 1.0 or not 0.0 < self.alpha <= 1.0:
             raise ProblemError(f"eta and alpha must lie in (0, 1]; got {self.eta} and {self.alpha}")
         if self.pseudo_count is not None and not (np.isfinite(self.pseudo_count) and self.pseudo_count > 0):
@@ -222,6 +227,7 @@ class PriorOptions(TypedDict, total=False):
     eta: float
     alpha: float
     pseudo_count: float | None
+    region_rule: str
     max_paths: int
     library_seed: int
     edge_trajectories: tuple[FloatArray, ...] | None
@@ -255,6 +261,7 @@ def prior_from_problem(
         eta=options.get("eta", DEFAULT_ETA),
         alpha=options.get("alpha", DEFAULT_ALPHA),
         pseudo_count=options.get("pseudo_count"),
+        region_rule=options.get("region_rule", DEFAULT_REGION_RULE),
         max_paths=options.get("max_paths", DEFAULT_MAX_PATHS),
         library_seed=options.get("library_seed", 0),
         domain_spec=dict(meta.get("domain_spec") or {}),

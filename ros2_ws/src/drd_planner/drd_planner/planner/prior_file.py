@@ -3,7 +3,8 @@
 Format ``drd_planner.prior`` version 2 (version 1 still loads): a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`;
 read by :mod:`drd_planner.data.safe_npz`, so loading never executes code and checks every size before
 it allocates) with a JSON header (name, domain
-and its spec, check metadata, switch threshold eta, alpha, kappa, online-library settings, one entry
+and its spec, check metadata, switch threshold eta, alpha, kappa, the region rule of online trees
+(``region_rule``, absent in older files: the paper's ``probability``), online-library settings, one entry
 per tree with its name, start, goal, build info and, from version 2, its own ``leaf`` (eta and kappa
 validated on that query, or null for the prior's), provenance, SHA-256 digests) and these arrays:
 
@@ -45,6 +46,7 @@ import numpy.typing as npt
 from drd_planner import __version__
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
 from drd_planner.data.content_checks import (
     MAX_COORDINATE_M,
     MAX_WORLD_OUTCOMES,
@@ -161,6 +163,7 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
         "eta": prior.eta,
         "alpha": prior.alpha,
         "pseudo_count": prior.pseudo_count,
+        "region_rule": prior.region_rule,
         "max_paths": prior.max_paths,
         "library_seed": prior.library_seed,
         "trees": trees,
@@ -262,6 +265,7 @@ def _prior_from(header: dict[str, Any], arrays: dict[str, npt.NDArray[Any]]) -> 
         eta=header_fraction(header, "eta"),
         alpha=header_fraction(header, "alpha"),
         pseudo_count=header_number(header, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True),
+        region_rule=_region_rule(header.get("region_rule", DEFAULT_REGION_RULE), "the prior"),
         max_paths=header_int(header, "max_paths", low=1, high=MAX_LIBRARY_PATHS),
         library_seed=header_int(header, "library_seed", low=0, high=MAX_JSON_INT),
         domain_spec=spec,
@@ -304,11 +308,20 @@ def _tree_from(
         check_walks(graph, library.path_edges, start, goal, vertex_paths)
         check_tree_arrays(a, graph.num_edges, m, library.library_edges)
         leaf = _leaf_from(entry.get("leaf"))
+        world_free = np.ascontiguousarray(worlds[:, a["library_edges"]])
+        tree = decision_tree(a, library, header_dict(entry, "info"), world_free, weights)
     except DrdError as exc:
         raise PriorFileError(f"tree {i}: {exc}") from exc
-    world_free = np.ascontiguousarray(worlds[:, a["library_edges"]])
-    tree = decision_tree(a, library, header_dict(entry, "info"), world_free, weights)
     return QueryTree(name, start, goal, library, tree, leaf)
+
+
+def _region_rule(value: Any, what: str) -> str:
+    """A region rule from a header (PriorFileError naming the known ones when it is not one)."""
+    if not isinstance(value, str) or value not in REGION_RULES:
+        raise PriorFileError(
+            f"{what}'s region rule must be one of {', '.join(REGION_RULES)}, got {short(value, 40)}"
+        )
+    return value
 
 
 def _leaf_from(entry: Any) -> LeafSetting | None:

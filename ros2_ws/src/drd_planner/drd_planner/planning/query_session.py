@@ -15,6 +15,9 @@ query when there is one, DiRECt online otherwise, the graph fallback when the li
 - Motion edges get session-wide ids from E on (:class:`~drd_planner.planning.query_support.MotionRegistry`):
   ``edge_states`` answers them for the last plans, and :func:`~drd_planner.planning.replan.recheck_plan`
   re-checks a published plan's motions after a map update like its graph edges.
+- With an ``improve_budget`` (:class:`~drd_planner.planner.anytime.ImproveBudget`) a plan goes on after its
+  first verified path, checking on the same snapshot for shorter ones, and returns the shortest it verified
+  (``improvements`` shorter paths after the first, ``improve_stop`` why it stopped).
 - Every returned path is re-verified independently of the planner's bookkeeping: each edge, motions
   included, was answered free by this session's oracle on this snapshot (in this plan or from the
   snapshot's cache), and its dense states join up from the start to the goal; otherwise
@@ -25,7 +28,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -33,6 +36,7 @@ import numpy.typing as npt
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import PlanningError, ProblemError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
+from drd_planner.planner.anytime import ImproveBudget, as_improve_budget
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
@@ -55,6 +59,14 @@ DEFAULT_SNAP_TOLERANCE = 1e-6
 DEFAULT_POSITION_TOLERANCE = 0.05
 
 
+class SessionBudgets(TypedDict):
+    """The budget arguments of :class:`QuerySession` (the node builds them from its parameters)."""
+
+    max_checks: int | None
+    time_budget_s: float | None
+    improve_budget: ImproveBudget | None
+
+
 @dataclass(frozen=True)
 class QueryPlanResult(PlanResult):
     """A :class:`~drd_planner.planning.session.PlanResult` with what the query planner adds.
@@ -64,13 +76,17 @@ class QueryPlanResult(PlanResult):
     building the query's library and tree); ``policy`` is the planner's time less library and checks.
 
     Attributes:
-        stage: which stage proved the path (``tree``, ``bisect``, ``library``, ``graph``, ``trivial``;
-            "" unless ok).
+        stage: which stage proved the path (``tree``, ``bisect``, ``library``, ``graph``, ``trivial``, or
+            ``improve`` when the anytime improvement found a shorter one; "" unless ok).
         query: ``tree:<name>`` (a precomputed tree), ``online`` or ``connected`` (with new motions).
         query_cached: the query's library and tree came from the planner's query cache (an earlier
             request of the same query built them).
         cost: the path's length in the domain's unit (0 unless ok).
         library_size: paths in the query's library.
+        first_cost: with an improve budget, the cost of the plan's first verified path (0 otherwise).
+        improvements: with an improve budget, how many shorter verified paths were found after the first.
+        improve_stop: with an improve budget, why the improvement stopped (``optimal``, ``checks``,
+            ``seconds``, ``patience``, ``plan_checks``, ``plan_time``); "" without one or unless ok.
     """
 
     stage: str = ""
@@ -78,6 +94,9 @@ class QueryPlanResult(PlanResult):
     query_cached: bool = False
     cost: float = 0.0
     library_size: int = 0
+    first_cost: float = 0.0
+    improvements: int = 0
+    improve_stop: str = ""
 
 
 _STATUS = {
@@ -96,6 +115,9 @@ class QuerySession(DomainSession):
         max_checks: cap on checks per plan (None: none).
         time_budget_s: cap on a plan's planner time in seconds (None: none); the snapshot's scene and
             checker (:meth:`prepare`) are not counted.
+        improve_budget: after a plan's first verified path, look for shorter verified ones within this
+            budget (an int n is ``ImproveBudget(checks=n)``; None: stop at the first path); ``max_checks``
+            and ``time_budget_s`` bound it too.
         snap_tolerance: how far a state may be from a vertex and be that vertex (state units); None uses
             the planner's default (a quarter of the median edge length: the path may then start up to
             that far from the given state).
@@ -105,7 +127,7 @@ class QuerySession(DomainSession):
     Raises:
         PriorFileError: the prior has no domain spec, the spec cannot be rebuilt, or its stored graph
             differs from the graph its spec builds.
-        ProblemError: a budget that is not positive.
+        ProblemError: a budget that is not positive, or an ``improve_budget`` of another kind.
     """
 
     def __init__(
@@ -115,6 +137,7 @@ class QuerySession(DomainSession):
         name: str,
         max_checks: int | None = None,
         time_budget_s: float | None = None,
+        improve_budget: ImproveBudget | int | None = None,
         snap_tolerance: float | None = DEFAULT_SNAP_TOLERANCE,
         cache_size: int = 16,
         motions_kept: int = DEFAULT_MOTIONS_KEPT,
@@ -123,6 +146,7 @@ class QuerySession(DomainSession):
         super().__init__(domain, name)
         self._prior = prior
         self.set_budgets(max_checks, time_budget_s)
+        self._improve_budget = as_improve_budget(improve_budget)
         self._planner = Planner(prior, cache_size=cache_size, snap_tolerance=snap_tolerance)
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=self._planner.snap_tolerance)
         self._num_edges = prior.graph.num_edges
@@ -160,6 +184,11 @@ class QuerySession(DomainSession):
     def time_budget_s(self) -> float | None:
         """Cap on a plan's planner time in seconds (None: none)."""
         return self._time_budget_s
+
+    @property
+    def improve_budget(self) -> ImproveBudget | None:
+        """The anytime improvement after each plan's first verified path (None: off)."""
+        return self._improve_budget
 
     def set_budgets(self, max_checks: int | None, time_budget_s: float | None) -> None:
         """Use these caps from the next plan on (a runtime parameter change).
@@ -308,7 +337,13 @@ class QuerySession(DomainSession):
         oracle = SnapshotOracle(self.checker(snapshot), cache, self._motions)
         t_prepared = time.perf_counter()
         result = self._planner.plan(
-            start, goal, oracle, seed=seed, max_checks=self._max_checks, time_budget_s=self._time_budget_s
+            start,
+            goal,
+            oracle,
+            seed=seed,
+            max_checks=self._max_checks,
+            time_budget_s=self._time_budget_s,
+            improve_budget=self._improve_budget,
         )
         query = self._query_edges(result, start, goal)
         checks = self._session_checks(result, oracle, query)
@@ -344,7 +379,7 @@ class QuerySession(DomainSession):
             status="path_found",
             message=(
                 f"path of {len(path)} edges ({motions} new motions) proven by the {stage} stage after "
-                f"{len(checks)} checks ({blocked} blocked)"
+                f"{len(checks)} checks ({blocked} blocked){_improvement_text(result)}"
             ),
             path_edges=path,
             path_vertices=tuple(int(v) for v in result.vertices),
@@ -352,6 +387,9 @@ class QuerySession(DomainSession):
             seconds=seconds,
             stage=stage,
             cost=result.cost,
+            first_cost=result.improvements[0].cost if result.improvements else 0.0,
+            improvements=max(len(result.improvements) - 1, 0),
+            improve_stop=result.improve_stop,
             **common,
         )
 
@@ -443,3 +481,15 @@ class QuerySession(DomainSession):
     def _endpoint_state(self, vertex: int, result: PlannerResult) -> FloatArray:
         state = result.new_states.get(vertex)
         return np.array(state, dtype=np.float64) if state is not None else self.vertex_state(vertex)
+
+
+def _improvement_text(result: PlannerResult) -> str:
+    """What the anytime improvement did, for a found plan's message ("" without an improve budget)."""
+    if not result.improve_stop:
+        return ""
+    found = max(len(result.improvements) - 1, 0)
+    first = result.improvements[0].cost if result.improvements else result.cost
+    return (
+        f"; {found} shorter path(s) after the first (cost {first:.4g} -> {result.cost:.4g}), "
+        f"improvement stopped: {result.improve_stop}"
+    )

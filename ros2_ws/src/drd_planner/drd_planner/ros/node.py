@@ -69,7 +69,13 @@ from drd_planner.planning.session import PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs
-from drd_planner.ros.parameters import PARAMETERS, declare_parameters, map_limits_of, parameter_problems
+from drd_planner.ros.parameters import (
+    PARAMETERS,
+    declare_parameters,
+    map_limits_of,
+    parameter_problems,
+    plan_budgets_of,
+)
 from drd_planner.ros.plan_worker import PlanWorker
 from drd_planner.ros.reporter import NodeReporter
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, heartbeat_values, map_values
@@ -177,7 +183,7 @@ class PlannerNode(LifecycleNode):
             self._report_error(f"configure: invalid parameters: {'; '.join(problems)}", topic="node")
             return TransitionCallbackReturn.FAILURE
         try:
-            sessions = self._load_sessions([p for p in self._parameter("tree_paths") if p])
+            sessions = self._load_sessions([p for p in values["tree_paths"] if p], values)
         except DrdError as exc:
             self._report_error(f"configure: {exc}", topic="node")
             return TransitionCallbackReturn.FAILURE
@@ -195,23 +201,15 @@ class PlannerNode(LifecycleNode):
         self.get_logger().info(f"loaded {len(sessions)} tree(s): {', '.join(s.name for s in sessions)}")
         return TransitionCallbackReturn.SUCCESS
 
-    def _load_sessions(self, names: list[str]) -> list[QuerySession]:
+    def _load_sessions(self, names: list[str], values: dict[str, Any]) -> list[QuerySession]:
         """One prior per file of ``tree_paths`` (DrdError: none named, a bad file, or priors that disagree)."""
         if not names:
             raise DrdError("parameter tree_paths names no tree file")
-        max_checks = int(self._parameter("max_checks"))
-        budget = float(self._parameter("planning_time_budget"))
+        budgets = plan_budgets_of(values)  # max_checks, time_budget_s, improve_budget
         sessions = []
         for name in names:
             path = resolve_tree_path(name)
-            sessions.append(
-                QuerySession(
-                    load_prior(path),
-                    name=path.stem,
-                    max_checks=max_checks if max_checks > 0 else None,
-                    time_budget_s=budget if budget > 0 else None,
-                )
-            )
+            sessions.append(QuerySession(load_prior(path), name=path.stem, **budgets))
         ambiguous = ambiguity(sessions)
         if ambiguous is not None:
             raise DrdError(ambiguous)

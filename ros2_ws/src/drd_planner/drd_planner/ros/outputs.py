@@ -76,9 +76,12 @@ def plan_summary_values(
     ``query`` says what served it (``tree:<name>`` a precomputed tree, ``online`` a library and tree
     built for a new query, ``connected`` the same with new motions to off-graph states) and ``stage``
     what proved the path; ``library_s`` is the time spent finding or building the query's library.
+    A plan that ran the anytime improvement (``improve_stop`` set) adds ``improvements`` (shorter verified
+    paths after the first), ``improve_stop`` (why it stopped), ``improve_checks`` (its checks),
+    ``first_cost`` and ``cost`` (path lengths, the first and the published one, in the domain's unit).
     """
     seconds = result.seconds
-    return {
+    values: dict[str, Any] = {
         "tree": result.tree,
         "query": result.query,
         "stage": result.stage,
@@ -99,8 +102,15 @@ def plan_summary_values(
         "plan_messaging_s": f"{plan_messaging_s:.6f}",
         "messaging_s": f"{messaging_s:.6f}",
         "result": result.status,
-        **extra,
     }
+    stop = result.improve_stop
+    if stop:
+        values["improvements"] = result.improvements
+        values["improve_stop"] = stop
+        values["improve_checks"] = sum(c.stage == "improve" for c in result.checks)
+        values["first_cost"] = f"{result.first_cost:.6f}"
+        values["cost"] = f"{result.cost:.6f}"
+    return {**values, **extra}
 
 
 class PlannerOutputs:

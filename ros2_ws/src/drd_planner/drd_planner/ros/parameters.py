@@ -3,8 +3,9 @@
 :func:`declare_parameters` declares them with ``ParameterDescriptor`` s (description, range, read-only),
 :func:`parameter_problems` checks a set of values; the node runs it at ``configure`` (over the values
 it starts from, overrides included) and on every runtime change (a bad change is refused with its
-reason, the old value stays). Parameters read at ``configure`` (trees, frame, tolerances, check cap)
-take effect at the next ``configure``; ``seed`` and ``replan_on_map_update`` at the next plan.
+reason, the old value stays). Parameters read at ``configure`` (trees, frame, tolerances, check cap,
+budgets) take effect at the next ``configure``; ``seed`` and ``replan_on_map_update`` at the next plan.
+:func:`plan_budgets_of` turns the budget parameters into the priors' plan budgets.
 """
 
 from __future__ import annotations
@@ -12,11 +13,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from drd_planner.planning.map_limits import MapLimits
+
+if TYPE_CHECKING:
+    from drd_planner.planning.query_session import SessionBudgets
 
 __all__ = [
     "MAP_LIMIT_PARAMETERS",
@@ -25,6 +29,7 @@ __all__ = [
     "declare_parameters",
     "map_limits_of",
     "parameter_problems",
+    "plan_budgets_of",
 ]
 
 #: Largest goal tolerance (metres) a goal may be off the tree's goal; beyond it a request would match
@@ -194,6 +199,24 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         float_range=(0.0, 3600.0),
     ),
     ParameterSpec(
+        "improve_checks",
+        0,
+        "Anytime improvement: most extra edge checks per plan after its first verified path, spent looking "
+        "for shorter verified paths (0: no check limit). The improvement runs when improve_checks or "
+        "improve_time_budget is > 0 (both 0: off, the first path is published); max_checks and "
+        "planning_time_budget bound it too. Read at configure.",
+        _non_negative,
+        int_range=(0, INT64_MAX),
+    ),
+    ParameterSpec(
+        "improve_time_budget",
+        0.0,
+        "Anytime improvement: most seconds per plan after its first verified path (0: no time limit); "
+        "see improve_checks for when the improvement runs. Read at configure.",
+        _non_negative_seconds,
+        float_range=(0.0, 3600.0),
+    ),
+    ParameterSpec(
         "replan_on_map_update",
         True,
         "Re-check the published plan on every map update and replan (or withdraw it) when it is blocked.",
@@ -219,6 +242,32 @@ PARAMETERS = PARAMETERS + MAP_LIMIT_PARAMETERS
 def map_limits_of(values: Mapping[str, Any]) -> MapLimits:
     """The :class:`MapLimits` of the node's parameter values (name -> value; other names are ignored)."""
     return MapLimits.from_parameters(values)
+
+
+def plan_budgets_of(values: Mapping[str, Any]) -> SessionBudgets:
+    """The plan budgets of the node's priors (``QuerySession`` keyword arguments) from checked parameter values.
+
+    ``max_checks``, ``planning_time_budget``, ``improve_checks`` and ``improve_time_budget`` (missing: 0);
+    0 means no limit, and the anytime improvement is off when both of its parameters are 0.
+    """
+    # Imported here, not with the module: ``planner_node --help`` reads PARAMETERS and stays light.
+    from drd_planner.planner.anytime import ImproveBudget
+
+    max_checks = int(values.get("max_checks", 0))
+    seconds = float(values.get("planning_time_budget", 0.0))
+    improve_checks = int(values.get("improve_checks", 0))
+    improve_seconds = float(values.get("improve_time_budget", 0.0))
+    improve = None
+    if improve_checks > 0 or improve_seconds > 0:
+        improve = ImproveBudget(
+            checks=improve_checks if improve_checks > 0 else None,
+            seconds=improve_seconds if improve_seconds > 0 else None,
+        )
+    return {
+        "max_checks": max_checks if max_checks > 0 else None,
+        "time_budget_s": seconds if seconds > 0 else None,
+        "improve_budget": improve,
+    }
 
 
 def declare_parameters(node: Any) -> None:
