@@ -19,6 +19,10 @@ from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
+from drd_msgs_py.factory import RclpyMessages
+from drd_planner.geometry.pose import Pose
+from drd_planner.geometry.shapes import Box
+from drd_planner.planning.world_messages import obstacle_markers
 from drd_planner.ros.node import LATCHED
 
 
@@ -57,6 +61,14 @@ class Peer:
         self.node.create_subscription(JointTrajectory, "joint_trajectory", self.trajectories.append, LATCHED)
         self.node.create_subscription(DiagnosticArray, "edge_checks", self.checks.append, 10)
         self.node.create_subscription(DiagnosticArray, "/diagnostics", self.diagnostics.append, 10)
+
+    def block_edge(self, session: Any, edge: int, name: str = "extra/1") -> None:
+        """Add a 30 m box at the middle of a helicopter edge's states to the latched obstacle map."""
+        states = session.edge_states(edge)
+        middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
+        markers = [(name, Box((30.0, 30.0, 30.0)), middle)]
+        msg = obstacle_markers(markers, frame_id="map", msgs=RclpyMessages(), delete_all_first=False)
+        self.obstacles.publish(msg)
 
     def summaries(self, name: str = "drd_planner: plan") -> list[dict[str, str]]:
         """The key/values of every received summary status called ``name`` (level under ``level``)."""

@@ -423,16 +423,7 @@ def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_value
         assert set(best.path_edges) <= free
         # A map update that blocks the improved path: re-checked, replanned (improving again) on the new map.
         edge = best.path_edges[len(best.path_edges) // 2]
-        states = session.edge_states(edge)
-        box = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
-        peer.obstacles.publish(
-            obstacle_markers(
-                [("extra/1", Box((30.0, 30.0, 30.0)), box)],
-                frame_id="map",
-                msgs=RclpyMessages(),
-                delete_all_first=False,
-            )
-        )
+        peer.block_edge(session, edge)
         assert spin_until(executor, lambda: len(peer.plans) >= 2 and len(peer.checks) >= 2)
         assert spin_until(executor, lambda: peer.summaries()[-1]["request"] == "map_update")
         again, summary = node.published, peer.summaries()[-1]

@@ -31,12 +31,10 @@ from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
-from drd_planner.geometry.pose import Pose  # noqa: E402
-from drd_planner.geometry.shapes import Box  # noqa: E402
 from drd_planner.planning import map_store as map_store_module  # noqa: E402
 from drd_planner.planning import service as service_module  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
-from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.guard import MAX_ERROR_CHARS  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
@@ -174,17 +172,8 @@ def test_a_map_that_arrives_while_the_first_plan_is_made_is_checked_before_it_st
         first = made[0]
         assert first.ok and node.published is None
         edge = first.path_edges[len(first.path_edges) // 2]
-        states = session.edge_states(edge)
-        middle = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
         version = node.snapshot.version
-        peer.obstacles.publish(
-            obstacle_markers(
-                [("extra/1", Box((30.0, 30.0, 30.0)), middle)],
-                frame_id="map",
-                msgs=RclpyMessages(),
-                delete_all_first=False,
-            )
-        )
+        peer.block_edge(session, edge)
         assert spin_until(executor, lambda: node.snapshot.version > version)
         release.set()
 

@@ -25,9 +25,7 @@ from std_srvs.srv import Trigger  # noqa: E402
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.cli import main as drd  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
-from drd_planner.geometry.pose import Pose  # noqa: E402
-from drd_planner.geometry.shapes import Box  # noqa: E402
-from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
+from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'
@@ -162,17 +160,8 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         again = node.published
         assert again is not None
         edge = again.path_edges[len(again.path_edges) // 2]
-        states = session.edge_states(edge)
-        box = Pose(position=tuple(float(v) for v in states[len(states) // 2, :3]))
         count = len(peer.plans)
-        peer.obstacles.publish(
-            obstacle_markers(
-                [("extra/1", Box((30.0, 30.0, 30.0)), box)],
-                frame_id="map",
-                msgs=RclpyMessages(),
-                delete_all_first=False,
-            )
-        )
+        peer.block_edge(session, edge)
 
         def replans() -> list[dict[str, str]]:
             return [v for v in peer.summaries() if v["request"] == "map_update"]
