@@ -11,6 +11,7 @@ from conftest import gccd_folder
 
 from drd_planner import progress
 from drd_planner.cli import main
+from drd_planner.core.switch_threshold import DEFAULT_ETA_CANDIDATES
 from drd_planner.data.gccd import load_gccd_folder
 
 #: Longest line a summary may print (the old one-line eta report had 670-900 characters).
@@ -45,14 +46,16 @@ def test_build_tree_reports_progress_and_a_short_summary(
         r"  region rule (probability|per_check) \(best mean checks: probability [\d.]+, per_check", lines[1]
     )
     assert lines[2].split()[:3] == ["mean", "checks", "fixed"]
-    assert sum(line.startswith("  eta ") for line in lines) >= 6  # one row per eta candidate (and the tree's)
+    assert sum(line.startswith("  eta ") for line in lines) >= len(DEFAULT_ETA_CANDIDATES)  # a row per eta
     assert any(line.startswith("tree dataset_2d_1 ") and "built in" in line for line in lines)
     done = re.fullmatch(r"done in ([\d.]+) s .*", lines[-1])
     assert done and float(done.group(1)) >= float(validated.group(1)) - 0.05  # validation included
     err = captured.err.splitlines()
-    assert err[0] == "validating eta x kappa x region rule: 768 episodes"  # 6 etas x 2 rules x 64 episodes
+    total = len(DEFAULT_ETA_CANDIDATES) * 2 * 64  # eta candidates x 2 rules x 64 episodes
+    assert err[0] == f"validating eta x kappa x region rule: {total} episodes"
     assert any(
-        re.match(r"validating eta x kappa x region rule: \d+/768 episodes \(\d+%\)", line) for line in err
+        re.match(rf"validating eta x kappa x region rule: \d+/{total} episodes \(\d+%\)", line)
+        for line in err
     )
 
 
@@ -76,7 +79,8 @@ def test_bench_max_worlds_also_limits_the_validation(
     assert total and float(total.group(1)) >= float(total.group(2))
     assert float(total.group(2)) == pytest.approx(selection["seconds"], abs=0.06)
     err = captured.err
-    assert "validating eta x kappa: 18 episodes" in err  # 6 eta x 1 kappa x 3 worlds
+    etas = len(DEFAULT_ETA_CANDIDATES)
+    assert f"validating eta x kappa: {etas * 3} episodes" in err  # eta candidates x 1 kappa x 3 worlds
     assert re.search(r"^dataset_2d_1 episodes: 1/6 episodes \(17%\), .* \[direct_bisect\]$", err, flags=re.M)
     assert re.search(r"^dataset_2d_1 episodes: 4/6 episodes \(67%\), .* \[bisect\]$", err, flags=re.M)
     assert "dataset_2d_1 episodes: 6/6 episodes done in" in err

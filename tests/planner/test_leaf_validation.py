@@ -101,3 +101,10 @@ def test_a_trees_own_rule_is_validated_on_its_query() -> None:
         problem, eta=0.2, pseudo_counts=(None,), seed=0, tree_options={"region_rule": "per_check"}
     )
     assert given.leaf is None and given.region_rule == "per_check"
+    # eta and kappa given, the rule open: only the rule is validated, on the tree's own query
+    rule_only = tree_leaf_from_options(
+        problem, eta=0.2, pseudo_counts=(None,), seed=0, tree_options={}, region_rules=REGION_RULES
+    )
+    assert (
+        rule_only.leaf is None and rule_only.region_rule in REGION_RULES and "region rule" in rule_only.note
+    )

@@ -16,6 +16,7 @@ from drd_planner.command_errors import run_command
 from drd_planner.core.episode import EpisodeResult
 from drd_planner.core.problem import Problem
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
+from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.bag_cli import print_check
@@ -34,7 +35,10 @@ def _policies(text: str) -> list[str]:
 
 def _tree_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--threshold", type=float, default=0.05, help="expand nodes with at least this fraction"
+        "--threshold",
+        type=float,
+        default=DEFAULT_EXPAND_THRESHOLD,
+        help=f"expand nodes with at least this fraction (default {DEFAULT_EXPAND_THRESHOLD})",
     )
     parser.add_argument(
         "--candidates",

@@ -32,7 +32,7 @@ from drd_planner.core.switch_threshold import (
     select_region_rule,
     select_switch_threshold,
 )
-from drd_planner.core.tree import build_tree
+from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD, build_tree
 from drd_planner.exceptions import DrdError
 
 __all__ = ["CrossValidationResult", "FoldSettings", "cross_validate"]
@@ -226,7 +226,7 @@ def _run_fold(sub: Problem, policies: Sequence[str], seed: int, settings: FoldSe
         eta, kappa, options["region_rule"] = choice.eta, choice.pseudo_count, choice.region_rule
     elif eta is None:
         eta = 1.0
-    expand = float(options.pop("expand_threshold", 0.05))
+    expand = float(options.pop("expand_threshold", DEFAULT_EXPAND_THRESHOLD))
     tree = build_tree(sub, expand_threshold=expand, progress=False, **options) if needs_tree else None
     return run_benchmark(
         sub,

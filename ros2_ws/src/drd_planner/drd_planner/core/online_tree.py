@@ -23,7 +23,14 @@ from drd_planner.core.direct import DirectSelector
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, NodeRegionInputs, check_region_rule
-from drd_planner.core.tree import NO_CHILD, NO_EDGE, direct_node_edge, leaf_bias, node_summary
+from drd_planner.core.tree import (
+    DEFAULT_EXPAND_THRESHOLD,
+    NO_CHILD,
+    NO_EDGE,
+    direct_node_edge,
+    leaf_bias,
+    node_summary,
+)
 from drd_planner.exceptions import ProblemError
 
 #: Nodes one lazy tree may hold; past it, nodes become leaves (BiSECt takes over), so memory stays bounded.
@@ -40,7 +47,7 @@ class LazyDirectTree:
         library: the m paths of the query.
         edge_costs: (E,) positive check costs.
         weights: (n,) positive prior weights, or None for uniform.
-        expand_threshold: a non-root node is expanded only if its fraction is at least this (0.05).
+        expand_threshold: a non-root node is expanded only if its fraction is at least this.
         max_prob_region: restrict a node's tests to the best-supported path's edges (as offline).
         max_nodes: cap on the nodes held; a node that would exceed it becomes a leaf.
         region_rule: which path ``max_prob_region`` restricts to (as offline; the paper's by default).
@@ -53,7 +60,7 @@ class LazyDirectTree:
         edge_costs: npt.ArrayLike,
         *,
         weights: npt.ArrayLike | None = None,
-        expand_threshold: float = 0.05,
+        expand_threshold: float = DEFAULT_EXPAND_THRESHOLD,
         max_prob_region: bool = True,
         max_nodes: int = DEFAULT_MAX_NODES,
         region_rule: str = DEFAULT_REGION_RULE,

@@ -44,12 +44,12 @@ from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import DEFAULT_ALPHA, DirectBisectPolicy
 from drd_planner.core.problem import Problem
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE
-from drd_planner.core.tree import DecisionTree, build_tree
+from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD, DecisionTree, build_tree
 from drd_planner.exceptions import ProblemError
 from drd_planner.progress import Progress
 
 #: Candidate thresholds; 1.0 means "switch at the root" (BiSECt with the training bias).
-DEFAULT_ETA_CANDIDATES: tuple[float, ...] = (0.05, 0.1, 0.2, 0.4, 0.6, 1.0)
+DEFAULT_ETA_CANDIDATES: tuple[float, ...] = (0.01, 0.02, 0.05, 0.1, 0.2, 0.4, 0.6, 1.0)
 #: Candidate posterior pseudo-counts of the leaf; None keeps the bias fixed after the switch.
 DEFAULT_PSEUDO_COUNTS: tuple[float | None, ...] = (None, 5.0, 20.0, 50.0)
 #: Fraction of the feasible training worlds held out for validation.
@@ -195,7 +195,7 @@ class ValidationGrid:
     candidates: Sequence[float] | None = None
     pseudo_counts: Sequence[float | None] = DEFAULT_PSEUDO_COUNTS
     alpha: float = DEFAULT_ALPHA
-    expand_threshold: float = 0.05
+    expand_threshold: float = DEFAULT_EXPAND_THRESHOLD
     tree_options: Mapping[str, Any] | None = None
 
     @classmethod
@@ -209,13 +209,13 @@ class ValidationGrid:
     ) -> ValidationGrid:
         """The grid of a run whose eta is given (only that one is tried) or open (None: the defaults).
 
-        The tree's expansion threshold is ``tree_options``' ``expand_threshold`` (0.05 when absent).
+        The tree's expansion threshold is ``tree_options``' ``expand_threshold`` (the default when absent).
         """
         return cls(
             candidates=None if eta is None else (eta,),
             pseudo_counts=pseudo_counts,
             alpha=alpha,
-            expand_threshold=float(tree_options.get("expand_threshold", 0.05)),
+            expand_threshold=float(tree_options.get("expand_threshold", DEFAULT_EXPAND_THRESHOLD)),
             tree_options=tree_options,
         )
 

@@ -230,11 +230,12 @@ def tree_leaf_from_options(
     (:func:`~drd_planner.core.switch_threshold.select_switch_threshold`, the validation ``drd bench``
     runs; with several ``region_rules`` :func:`~drd_planner.core.switch_threshold.select_region_rule`),
     not on the random queries that choose the prior's. When eta and kappa are both given, the tree has no
-    setting of its own (leaf None: the prior's, as given, applies) and the rule is the first of
-    ``region_rules`` (None: ``tree_options``' rule). The note is a short report.
+    setting of its own (leaf None: the prior's, as given, applies) and only the rule is validated (with one
+    rule in ``region_rules``, or None: ``tree_options``' rule, nothing is). The note is a short report.
     """
     rules = tuple(region_rules or (str(tree_options.get("region_rule", DEFAULT_REGION_RULE)),))
-    if eta is not None and len(pseudo_counts) == 1:
+    given = eta is not None and len(pseudo_counts) == 1
+    if given and len(rules) == 1:
         return TreeLeaf(None, rules[0], "its own eta and kappa: the prior's (given)")
 
     def validate(rule: str) -> SwitchThresholdChoice:
@@ -252,4 +253,6 @@ def tree_leaf_from_options(
     assert choice is not None
     lines = choice.summary_lines()
     lines[0] = f"its own {lines[0]} (its own query)"
+    if given:  # only the rule was validated: eta and kappa stay the prior's, as given
+        return TreeLeaf(None, choice.region_rule, "\n".join(lines))
     return TreeLeaf(LeafSetting(choice.eta, choice.pseudo_count), choice.region_rule, "\n".join(lines))

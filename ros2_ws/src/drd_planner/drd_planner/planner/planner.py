@@ -35,6 +35,7 @@ from drd_planner.core.lazysp_learned import LEARNED_LAZYSP_POLICIES
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
+from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
@@ -85,7 +86,7 @@ class Planner:
         *,
         cache_size: int = DEFAULT_CACHE_SIZE,
         snap_tolerance: float | None = None,
-        expand_threshold: float = 0.05,
+        expand_threshold: float = DEFAULT_EXPAND_THRESHOLD,
         connector: QueryConnector | None = None,
         connect_states: bool = True,
     ) -> None:
@@ -127,9 +128,8 @@ class Planner:
         """
         rule = check_region_rule(region_rule or self.prior.region_rule)
         self._leaf_override = LeafSetting(eta, pseudo_count)
-        if rule != self.prior.region_rule:
-            for key in [k for k, m in self._cache.items() if m.precomputed is None]:
-                del self._cache[key]
+        if rule != self.prior.region_rule:  # the cached online trees were built with the old rule
+            self._cache = OrderedDict((k, m) for k, m in self._cache.items() if m.precomputed is not None)
         self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count, region_rule=rule)
 
     def leaf(self, model: QueryModel) -> LeafSetting:
