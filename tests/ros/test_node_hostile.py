@@ -335,3 +335,23 @@ def test_a_robot_state_stream_in_the_wrong_frame_is_reported_once_per_period(con
         refused = [e for e in node.errors if e.startswith("odometry refused")]
         assert len(refused) == 1 and "frame 'odom'" in refused[0]
         assert node.service is not None and node.service.robot_states.get(False) is None
+
+
+def test_a_signal_whose_interrupt_an_import_swallowed_still_ends_the_start(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """trimesh's optional imports catch BaseException, so the KeyboardInterrupt of a signal during the node's
+    imports can be lost (CI saw a SIGTERM at 0.2 s ignored); the recorded signal still ends the start."""
+    from drd_planner.ros import planner_node
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGTERM)])
+    # Without the check the node would start and spin: a late SIGTERM ends it then with status 0, not 130.
+    stop = threading.Timer(10.0, lambda: os.kill(os.getpid(), signal.SIGTERM))
+    stop.start()
+    try:
+        assert planner_node.main(["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]) == 130
+    finally:
+        stop.cancel()
+        for s, handler in before.items():
+            signal.signal(s, handler)

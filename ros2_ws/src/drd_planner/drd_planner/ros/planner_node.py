@@ -3,7 +3,9 @@
 A node started in the background from a shell script inherits SIGINT *ignored*; until rclpy installs
 its handlers (after about a second of imports) such a signal was lost and the node ran on. Here
 SIGINT and SIGTERM are made to interrupt before anything heavy is imported, so a signal at any moment
-of the start ends the process (status 130 before the node runs, 0 once it spins).
+of the start ends the process (status 130 before the node runs, 0 once it spins). A signal is also
+recorded, because an import may swallow the KeyboardInterrupt it raises (trimesh's optional imports catch
+``BaseException``): it then ends the process once the imports are done.
 
 Usage::
 
@@ -31,7 +33,14 @@ parameters (--ros-args -p NAME:=VALUE, or a YAML file with --params-file):
 """
 
 
+#: Signals received before the node runs. The KeyboardInterrupt a signal raises can be swallowed by a
+#: library's import (trimesh wraps its optional imports in ``except BaseException``), so the signal is also
+#: recorded here and checked once the imports are done.
+_RECEIVED: list[int] = []
+
+
 def _interrupt(signum: int, frame: FrameType | None) -> None:
+    _RECEIVED.append(signum)
     raise KeyboardInterrupt
 
 
@@ -63,6 +72,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
         from drd_planner.ros.node import main as run_node
 
+        if _RECEIVED:  # a signal during the imports whose KeyboardInterrupt an import swallowed
+            return 130
         return run_node(args)
     except KeyboardInterrupt:
         return 130
