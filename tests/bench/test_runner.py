@@ -223,3 +223,38 @@ def test_direct_bisect_fixed_runs_on_a_paper_rule_tree() -> None:
     own = run_benchmark(problem, policies=("direct_bisect",), tree=per_check, max_worlds=8, settings=fixed)
     assert own.policies["direct_bisect"].checks != plain.policies["direct_bisect_fixed"].checks
     assert mixed.tree_info["region_rule"] == "per_check"
+
+
+def test_run_benchmark_trains_the_imitation_selector_once(
+    problem: Problem, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from drd_planner.bench import runner
+    from drd_planner.core.lazysp_imitation import DaggerSettings, ImitationModel, train_for_problem
+
+    calls: list[int] = []
+
+    def quick(prob: Problem, *, seed: int) -> ImitationModel:
+        calls.append(seed)
+        return train_for_problem(prob, seed=seed, settings=DaggerSettings(work_budget=2e6, rollouts=False))
+
+    monkeypatch.setattr(runner, "train_for_problem", quick)
+    res = run_benchmark(
+        problem, policies=["lazysp", "lazysp_imitation"], seed=3, max_worlds=4, progress=False
+    )
+    assert calls == [3]  # once per dataset, with the run's seed, not once per episode
+    assert res.imitation_model is not None
+    assert res.settings["imitation"]["episodes"] >= 1
+    assert res.policies["lazysp_imitation"].failures == 0
+    # The run's model reproduces its episodes through run_world without training again.
+    settings = PolicySettings(imitation_model=res.imitation_model)
+    theta = train_bias(problem)
+    again = [
+        run_world(
+            problem, "lazysp_imitation", w, theta=theta, tree=None, seed=3 + k, settings=settings
+        ).num_checks
+        for k, w in enumerate(res.test_ids)
+    ]
+    assert again == res.policies["lazysp_imitation"].checks and calls == [3]
+    # Without the policy, nothing is trained and the settings block is unchanged.
+    plain = run_benchmark(problem, policies=["lazysp"], seed=3, max_worlds=2, progress=False)
+    assert plain.imitation_model is None and "imitation" not in plain.settings and calls == [3]

@@ -9,6 +9,7 @@ from conftest import gccd_folder, gccd_graph_datasets
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode
+from drd_planner.core.lazysp_imitation import DaggerSettings, train_for_problem
 from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.core.tree import build_tree
 from drd_planner.data.gccd import load_gccd_folder
@@ -52,6 +53,8 @@ def test_same_seed_same_checks() -> None:
     worlds = problem.require_worlds()
     tree = build_tree(problem, progress=False)
     theta = bias_from_worlds(worlds.X[worlds.train_ids])
+    # lazysp_imitation's selector is trained once per dataset (a small budget here).
+    model = train_for_problem(problem, seed=0, settings=DaggerSettings(work_budget=2e6, rollouts=False))
     for name in POLICIES:
         runs = []
         for _ in range(2):
@@ -65,6 +68,7 @@ def test_same_seed_same_checks() -> None:
                 start=problem.start,
                 goal=problem.goal,
                 train_worlds=worlds.X[worlds.train_ids],
+                imitation_model=model,
             )
             result = run_episode(
                 problem.library,

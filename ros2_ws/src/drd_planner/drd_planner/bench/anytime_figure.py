@@ -101,7 +101,9 @@ def _graph_policy_points(
                 theta=theta,
                 tree=None,
                 seed=seed + k,
-                settings=settings or DEFAULT_SETTINGS,
+                settings=dataclasses.replace(
+                    settings or DEFAULT_SETTINGS, imitation_model=result.imitation_model
+                ),
             )
             if episode.path_edges is None:
                 continue

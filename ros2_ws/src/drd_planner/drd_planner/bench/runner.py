@@ -15,7 +15,7 @@ import json
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +26,7 @@ from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Ta
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.episode import EpisodeResult, TableOracle, run_episode
+from drd_planner.core.lazysp_imitation import IMITATION_POLICY, ImitationModel, train_for_problem
 from drd_planner.core.policies import (
     DEFAULT_ALPHA,
     DEFAULT_ETA,
@@ -123,7 +124,8 @@ class BenchmarkResult:
         lower_bound: (n,) oracle lower bound per test world (NaN where no library path is valid).
         policies: policy name -> its statistics.
         tree_info: size and build provenance of the decision tree used (empty when none).
-        settings: seed, eta, alpha, max_worlds and max_checks of the run.
+        settings: seed, eta, alpha, max_worlds and max_checks of the run (and ``imitation`` training stats).
+        imitation_model: the ``lazysp_imitation`` selector the run trained (None: not run).
     """
 
     dataset: str
@@ -132,6 +134,7 @@ class BenchmarkResult:
     policies: dict[str, PolicyStats]
     tree_info: dict[str, Any] = field(default_factory=dict)
     settings: dict[str, Any] = field(default_factory=dict)
+    imitation_model: ImitationModel | None = None
 
     def checks(self) -> dict[str, list[int]]:
         """Policy name -> checks per test world."""
@@ -146,11 +149,13 @@ class PolicySettings:
         eta: switch threshold of ``direct_bisect``.
         alpha: data weight of the bias.
         pseudo_count: kappa of ``direct_bisect``'s posterior leaf; None keeps the leaf bias fixed.
+        imitation_model: ``lazysp_imitation``'s selector, trained once per dataset (None: not yet).
     """
 
     eta: float = DEFAULT_ETA
     alpha: float = DEFAULT_ALPHA
     pseudo_count: float | None = None
+    imitation_model: ImitationModel | None = None
 
 
 #: The defaults of every setting.
@@ -192,6 +197,7 @@ def policy_context(
         goal=problem.goal,
         train_worlds=train_worlds,
         train_weights=train_weights,
+        imitation_model=settings.imitation_model,
     )
 
 
@@ -216,12 +222,14 @@ def run_world(
     """One episode of policy ``name`` on world row ``world`` against its row of X.
 
     ``run_benchmark`` calls this with ``seed + k`` for the k-th test world, so the same call here
-    reproduces any of its episodes (figures use that).
+    reproduces any of its episodes (figures use that; ``lazysp_imitation`` also needs ``settings.imitation_model``).
     """
     check_policy_names([name])
     worlds = problem.require_worlds()
     if not 0 <= world < worlds.num_worlds:
         raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
+    if name == IMITATION_POLICY and settings.imitation_model is None:
+        settings = replace(settings, imitation_model=train_for_problem(problem, seed=seed))
     context = policy_context(problem, theta=theta, tree=tree, seed=seed, settings=settings, policy=name)
     policy = POLICIES[name](context)
     oracle = TableOracle(worlds.X[world])
@@ -269,7 +277,7 @@ def run_benchmark(
         problem: a problem with a world database (train ids train, test ids are the episodes).
         policies: registry names (see ``drd_planner.core.policies.POLICIES``).
         tree: a prebuilt tree; built from the training worlds when a tree policy needs one.
-        seed: base seed; world k of the test list uses ``seed + k``.
+        seed: base seed; world k of the test list uses ``seed + k`` (``lazysp_imitation`` trains once with it).
         settings: eta, alpha and the leaf pseudo-count of the Bayesian policies.
         max_worlds: only the first ``max_worlds`` test worlds (smoke runs).
         max_checks: cap on the checks of one episode (None: no cap); capped episodes are failures.
@@ -296,6 +304,8 @@ def run_benchmark(
     if tree is not None and PAPER_RULE_POLICIES.intersection(policies):
         paper_tree = paper_rule_tree(problem, tree)
     theta = train_bias(problem, alpha=settings.alpha)
+    if IMITATION_POLICY in policies and settings.imitation_model is None:
+        settings = replace(settings, imitation_model=train_for_problem(problem, seed=seed))
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
@@ -332,7 +342,7 @@ def run_benchmark(
                     failed.append(k)
                 bar.update(1)
             results[name] = PolicyStats(checks, len(failed), select_ms, time.perf_counter() - t0, failed)
-    run_settings = {
+    run_settings: dict[str, Any] = {
         "seed": seed,
         "eta": settings.eta,
         "pseudo_count": settings.pseudo_count,
@@ -340,8 +350,10 @@ def run_benchmark(
         "max_worlds": max_worlds,
         "max_checks": max_checks,
     }
+    model = settings.imitation_model
+    run_settings.update({"imitation": dict(model.stats)} if model else {})
     return BenchmarkResult(
-        problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, run_settings
+        problem.name, [int(t) for t in test_ids], lower.tolist(), results, tree_info, run_settings, model
     )
 
 

@@ -19,6 +19,7 @@ from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, LazySP, LazySPSettings, lazysp_name
+from drd_planner.core.lazysp_imitation import IMITATION_POLICY, ImitationLazySP, ImitationModel
 from drd_planner.core.lazysp_learned import (
     LEARNED_LAZYSP_POLICIES,
     PosteriorLazySP,
@@ -308,7 +309,9 @@ class PolicyContext:
     :class:`DirectBisectPolicy`). ``graph``, ``start`` and ``goal`` are needed by the policies in
     :data:`GRAPH_POLICIES`. ``train_worlds`` ((n_train, E) bool, True = free, over every graph edge)
     and their ``train_weights`` ((n_train,) prior weights, None: uniform) are needed by the learned
-    LazySP selectors (:mod:`drd_planner.core.lazysp_learned`).
+    LazySP selectors (:mod:`drd_planner.core.lazysp_learned`). ``imitation_model`` is the selector of
+    ``lazysp_imitation`` (:mod:`drd_planner.core.lazysp_imitation`), trained once per dataset by the
+    caller (``drd_planner.bench.runner.run_benchmark``), never per episode.
     """
 
     library: PathLibrary
@@ -324,6 +327,7 @@ class PolicyContext:
     goal: int | None = None
     train_worlds: BoolArray | None = None
     train_weights: FloatArray | None = None
+    imitation_model: ImitationModel | None = None
 
 
 PolicyFactory = Callable[[PolicyContext], Policy]
@@ -364,6 +368,11 @@ def _lazysp(selector: str) -> PolicyFactory:
 def _lazysp_learned(name: str) -> PolicyFactory:
     def make(ctx: PolicyContext) -> Policy:
         graph = _need_graph(ctx)
+        if name == IMITATION_POLICY and ctx.imitation_model is None:
+            raise ProblemError(
+                f"{name} needs a trained selector (PolicyContext.imitation_model; train it once per dataset "
+                "with drd_planner.core.lazysp_imitation.train_imitation_selector, as drd bench does)"
+            )
         if ctx.start is None or ctx.goal is None:
             raise ProblemError(f"{name} needs the start and goal vertices (PolicyContext.start/goal)")
         if ctx.train_worlds is None:
@@ -377,6 +386,8 @@ def _lazysp_learned(name: str) -> PolicyFactory:
             )
         # A fixed kappa: ctx.pseudo_count is tuned for direct_bisect's leaf, not for LazySP.
         outcomes = all_edge_outcomes(ctx.train_worlds, ctx.train_weights)
+        if ctx.imitation_model is not None and name == IMITATION_POLICY:
+            return ImitationLazySP(graph, ctx.start, ctx.goal, outcomes, ctx.imitation_model)
         delta = name == LEARNED_LAZYSP_POLICIES[1]
         settings = PosteriorSettings(pseudo_count=DEFAULT_PSEUDO_COUNT, delta=delta)
         return PosteriorLazySP(graph, ctx.start, ctx.goal, outcomes, settings)
@@ -430,7 +441,7 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "lazysp_set": _lazysp_set(weighted=True),
     "lazysp_set_random": _lazysp_set(weighted=False),
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
-    **{name: _lazysp_learned(name) for name in LEARNED_LAZYSP_POLICIES},
+    **{name: _lazysp_learned(name) for name in (*LEARNED_LAZYSP_POLICIES, IMITATION_POLICY)},
 }
 
 #: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method exactly as in
@@ -444,8 +455,9 @@ TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only"
 #: paper's region rule even when the run's tree uses another (``drd_planner.bench.runner.paper_rule_tree``).
 PAPER_RULE_POLICIES = frozenset({"direct_bisect_fixed"})
 
-#: Policies that need ``PolicyContext.train_worlds`` (the learned LazySP selectors).
-TRAIN_WORLD_POLICIES = frozenset(LEARNED_LAZYSP_POLICIES)
+#: Policies that need ``PolicyContext.train_worlds`` (the learned LazySP selectors; ``lazysp_imitation``
+#: also ``imitation_model``).
+TRAIN_WORLD_POLICIES = frozenset({*LEARNED_LAZYSP_POLICIES, IMITATION_POLICY})
 
 #: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``; the
 #: learned ``lazysp_posterior*`` also ``train_worlds``; their kappa is ``DEFAULT_PSEUDO_COUNT`` whatever
@@ -453,6 +465,7 @@ TRAIN_WORLD_POLICIES = frozenset(LEARNED_LAZYSP_POLICIES)
 GRAPH_POLICIES: tuple[str, ...] = (
     *(lazysp_name(s) for s in SELECTORS),
     *LEARNED_LAZYSP_POLICIES,
+    IMITATION_POLICY,
     "lazysp_set",
     "lazysp_set_random",
 )

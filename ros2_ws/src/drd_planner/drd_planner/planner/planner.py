@@ -31,9 +31,8 @@ from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
-from drd_planner.core.lazysp_learned import LEARNED_LAZYSP_POLICIES
 from drd_planner.core.online_tree import LazyDirectTree
-from drd_planner.core.policies import POLICIES, TREE_POLICIES, PolicyContext
+from drd_planner.core.policies import POLICIES, TRAIN_WORLD_POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
@@ -65,7 +64,7 @@ DEFAULT_CACHE_SIZE = 16
 #: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
 #: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
 PLAN_POLICIES = tuple(
-    sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS), *LEARNED_LAZYSP_POLICIES})
+    sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS), *TRAIN_WORLD_POLICIES})
 )
 
 
