@@ -29,7 +29,7 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.tree import DecisionTree, build_tree
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.data.planar_problem import make_planar_problem
-from drd_planner.exceptions import DrdError
+from drd_planner.exceptions import DrdError, ProblemError
 
 
 @pytest.fixture(scope="module")
@@ -255,6 +255,10 @@ def test_run_benchmark_trains_the_imitation_selector_once(
         for k, w in enumerate(res.test_ids)
     ]
     assert again == res.policies["lazysp_imitation"].checks and calls == [3]
+    # run_world never trains per episode: without the run's model it says what is missing.
+    with pytest.raises(ProblemError, match="imitation_model"):
+        run_world(problem, "lazysp_imitation", res.test_ids[0], theta=theta, tree=None, seed=3)
+    assert calls == [3]
     # Without the policy, nothing is trained and the settings block is unchanged.
     plain = run_benchmark(problem, policies=["lazysp"], seed=3, max_worlds=2, progress=False)
     assert plain.imitation_model is None and "imitation" not in plain.settings and calls == [3]

@@ -222,14 +222,13 @@ def run_world(
     """One episode of policy ``name`` on world row ``world`` against its row of X.
 
     ``run_benchmark`` calls this with ``seed + k`` for the k-th test world, so the same call here
-    reproduces any of its episodes (figures use that; ``lazysp_imitation`` also needs ``settings.imitation_model``).
+    reproduces any of its episodes (figures use that; ``lazysp_imitation`` also needs the run's
+    ``settings.imitation_model``, ``BenchmarkResult.imitation_model``: it is never trained per episode).
     """
     check_policy_names([name])
     worlds = problem.require_worlds()
     if not 0 <= world < worlds.num_worlds:
         raise DrdError(f"world {world} is outside [0, {worlds.num_worlds})")
-    if name == IMITATION_POLICY and settings.imitation_model is None:
-        settings = replace(settings, imitation_model=train_for_problem(problem, seed=seed))
     context = policy_context(problem, theta=theta, tree=tree, seed=seed, settings=settings, policy=name)
     policy = POLICIES[name](context)
     oracle = TableOracle(worlds.X[world])

@@ -370,8 +370,9 @@ def _lazysp_learned(name: str) -> PolicyFactory:
         graph = _need_graph(ctx)
         if name == IMITATION_POLICY and ctx.imitation_model is None:
             raise ProblemError(
-                f"{name} needs a trained selector (PolicyContext.imitation_model; train it once per dataset "
-                "with drd_planner.core.lazysp_imitation.train_imitation_selector, as drd bench does)"
+                f"{name} needs a trained selector (PolicyContext.imitation_model, from "
+                "PolicySettings.imitation_model in drd_planner.bench.runner; train it once per dataset with "
+                "drd_planner.core.lazysp_imitation.train_for_problem, as run_benchmark does)"
             )
         if ctx.start is None or ctx.goal is None:
             raise ProblemError(f"{name} needs the start and goal vertices (PolicyContext.start/goal)")
