@@ -355,3 +355,46 @@ def test_a_signal_whose_interrupt_an_import_swallowed_still_ends_the_start(
         stop.cancel()
         for s, handler in before.items():
             signal.signal(s, handler)
+
+
+def test_a_signal_during_the_autostart_transition_ends_the_node_with_status_0(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """CI saw a SIGTERM 1.37 s after start end the node with status 1: rclpy's handler shut the context
+    down during configure (the interrupt was swallowed by an import), so the transition could not publish
+    and rclpy raised RCLError. Here configure shuts the context down as that handler does."""
+    import rclpy
+
+    from drd_planner.ros import node as node_module
+
+    configure = PlannerNode.on_configure
+
+    def configure_then_shutdown(self: PlannerNode, state: Any) -> Any:
+        result = configure(self, state)
+        rclpy.try_shutdown()  # what rclpy's SIGTERM handler does to the default context
+        return result
+
+    monkeypatch.setattr(PlannerNode, "on_configure", configure_then_shutdown)
+    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    assert node_module.main(args) == 0
+
+
+def test_an_import_that_a_signal_broke_half_way_ends_the_start_with_130(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """CI saw a SIGINT at 1.05 s end the start with status 1: the interrupt, raised inside scipy.ndimage's
+    import, left it failing with a NameError. Any import error after a recorded signal is that signal."""
+    from drd_planner.ros import planner_node
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    monkeypatch.setitem(sys.modules, "drd_planner.ros.node", None)  # its import now fails
+    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]
+    try:
+        monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGINT)])
+        assert planner_node.main(args) == 130
+        monkeypatch.setattr(planner_node, "_RECEIVED", [])
+        with pytest.raises(ImportError):  # without a signal an import error is an error
+            planner_node.main(args)
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)

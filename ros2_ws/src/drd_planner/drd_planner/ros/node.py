@@ -48,6 +48,7 @@ from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -489,6 +490,9 @@ def main(args: list[str] | None = None) -> int:
             executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except rclpy_implementation.RCLError:  # a signal shut the context down mid-transition: the end asked for
+        if node.context.ok():
+            raise
     finally:
         executor.shutdown()
         node.destroy_node()

@@ -5,7 +5,8 @@ its handlers (after about a second of imports) such a signal was lost and the no
 SIGINT and SIGTERM are made to interrupt before anything heavy is imported, so a signal at any moment
 of the start ends the process (status 130 before the node runs, 0 once it spins). A signal is also
 recorded, because an import may swallow the KeyboardInterrupt it raises (trimesh's optional imports catch
-``BaseException``): it then ends the process once the imports are done.
+``BaseException``): it then ends the process once the imports are done. An import that the interrupt broke
+half-way and that fails on with another error (scipy.ndimage raised a NameError) ends it the same way.
 
 Usage::
 
@@ -70,8 +71,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 f"{usage()}\nplanner_node: error: unrecognised arguments: {' '.join(ours)}", file=sys.stderr
             )
             return 2
-        from drd_planner.ros.node import main as run_node
-
+        try:
+            from drd_planner.ros.node import main as run_node
+        except Exception:
+            if _RECEIVED:  # the interrupt broke an import half-way (scipy.ndimage then raised NameError)
+                return 130
+            raise
         if _RECEIVED:  # a signal during the imports whose KeyboardInterrupt an import swallowed
             return 130
         return run_node(args)
