@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
-from drd_planner.bench.optima_support import PathsLike, check_costs, path_library
+from drd_planner.bench.optima_support import PathsLike, bits, check_costs, path_library
 from drd_planner.core.bounds import bool_matrix
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
@@ -105,7 +105,7 @@ class _Solver:
 
         ``remaining`` is (r,) each path's cost of its unchecked edges.
         """
-        worlds = _bits(h)
+        worlds = bits(h)
         key = self._key(h, worlds, checked)
         hit = self.memo.get(key)
         if hit is not None and (hit[1] or hit[0] >= bound):
@@ -178,11 +178,6 @@ class _Node(NamedTuple):
     rows: IntArray  # the paths valid in some world of h
     valid: BoolArray  # (n, r') validity of those paths per world of h
     rem: FloatArray  # (r',) their unchecked costs
-
-
-def _bits(mask: int) -> list[int]:
-    """Indices of the set bits of ``mask``, increasing."""
-    return [i for i in range(mask.bit_length()) if mask >> i & 1]
 
 
 def _mask(indices: npt.ArrayLike) -> int:

@@ -129,17 +129,59 @@ class GraphArcs:
             The length without deletions and the (m,) lengths with ``edges[j]`` deleted; inf where
             the goal is unreachable.
         """
+        dist, _ = self.deletion_search(
+            start, edge_weights, np.concatenate([[-1], np.asarray(edges, np.int64)])
+        )
+        at_goal = dist[np.arange(dist.size // self.num_vertices) * self.num_vertices + goal]
+        return float(at_goal[0]), np.asarray(at_goal[1:], dtype=np.float64)
+
+    def deletion_paths(
+        self, start: int, goal: int, edge_weights: FloatArray, edges: IntArray
+    ) -> list[IntArray | None]:
+        """Per entry of ``edges`` the shortest start-goal path (edge ids) with that edge deleted.
+
+        Same batched Dijkstra as :meth:`deletion_lengths`; an entry of -1 deletes nothing. None where
+        the goal is unreachable.
+        """
+        dist, pred = self.deletion_search(start, edge_weights, edges, predecessors=True)
+        n = self.num_vertices
+        out: list[IntArray | None] = []
+        for j in range(len(edges)):
+            if np.isfinite(dist[j * n + goal]):
+                out.append(self.walk_back(pred[j * n : (j + 1) * n] - j * n, start, goal))
+            else:
+                out.append(None)
+        return out
+
+    def deletion_search(
+        self, start: int, edge_weights: FloatArray, edges: IntArray, *, predecessors: bool = False
+    ) -> tuple[FloatArray, npt.NDArray[np.int32]]:
+        """One Dijkstra over ``len(edges)`` disjoint copies of the graph, copy j without ``edges[j]``.
+
+        Args:
+            start: start vertex of every copy.
+            edge_weights: (E,) non-negative edge weights (inf: deleted in every copy), in length units.
+            edges: (m,) edge ids, -1 for a copy without a deletion.
+            predecessors: also return the predecessor array (else an empty one).
+
+        Returns:
+            (m * V,) distances from ``start`` (copy j's vertex v at ``j * V + v``; inf: unreachable)
+            and, when asked, the (m * V,) predecessors in the copies' shared numbering.
+        """
         ids = np.asarray(edges, dtype=np.int64)
-        copies, n = ids.size + 1, self.num_vertices
+        copies, n = ids.size, self.num_vertices
         indices, indptr = self.batch_structure(copies, start)
         weights = np.tile(np.asarray(edge_weights, dtype=np.float64), (copies, 1))
-        weights[np.arange(1, copies), ids] = np.inf
+        rows = np.flatnonzero(ids >= 0)
+        weights[rows, ids[rows]] = np.inf
         data = np.concatenate([weights[:, self.edge].ravel(), np.ones(copies)])
         size = copies * n + 1
         csr = sp.csr_array((data, indices, indptr), shape=(size, size))
-        dist = dijkstra(csr, directed=True, indices=size - 1)
-        at_goal = dist[np.arange(copies) * n + goal] - 1.0  # the super-source's arcs weigh 1
-        return float(at_goal[0]), np.asarray(at_goal[1:], dtype=np.float64)
+        if predecessors:
+            dist, pred = dijkstra(csr, directed=True, indices=size - 1, return_predecessors=True)
+        else:
+            dist, pred = dijkstra(csr, directed=True, indices=size - 1), np.empty(0, dtype=np.int32)
+        return np.asarray(dist[:-1] - 1.0), pred[:-1]  # the super-source's arcs weigh 1
 
     def batch_structure(self, copies: int, start: int) -> tuple[IntArray, IntArray]:
         """CSR ``(indices, indptr)`` of ``copies`` disjoint copies of the graph plus a super-source.

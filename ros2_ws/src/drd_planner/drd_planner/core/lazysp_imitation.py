@@ -54,8 +54,6 @@ from typing import Final
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
@@ -208,21 +206,9 @@ class ClairvoyantOracle:
 
     def _paths_without(self, weights: FloatArray, edges: list[int]) -> list[IntArray | None]:
         """Shortest path (edge ids; None: cut off) with each of ``edges`` (-1: none) deleted: one Dijkstra."""
-        arcs, n, copies = self._arcs, self._arcs.num_vertices, len(edges)
-        self.work += copies * n + CALL_WORK
-        indices, indptr = arcs.batch_structure(copies, self._start)
-        w = np.tile(weights, (copies, 1))
-        rows = [j for j, e in enumerate(edges) if e >= 0]
-        w[rows, [edges[j] for j in rows]] = np.inf
-        size = copies * n + 1
-        data = np.concatenate([w[:, arcs.edge].ravel(), np.ones(copies)])
-        csr = sp.csr_array((data, indices, indptr), shape=(size, size))
-        dist, pred = dijkstra(csr, directed=True, indices=size - 1, return_predecessors=True)
-        reached = np.isfinite(dist[np.arange(copies) * n + self._goal])
-        own = [pred[j * n : (j + 1) * n] - j * n for j in range(copies)]  # copy j's tree, its own ids
-        return [
-            arcs.walk_back(own[j], self._start, self._goal) if reached[j] else None for j in range(copies)
-        ]
+        self.work += len(edges) * self._arcs.num_vertices + CALL_WORK
+        ids = np.asarray(edges, dtype=np.int64)
+        return self._arcs.deletion_paths(self._start, self._goal, weights, ids)
 
     def blocked_phase(self, blocked: frozenset[int]) -> tuple[tuple[int, ...], IntArray | None]:
         """The greedy rollout from known-blocked set ``blocked``: (its blocked checks in order, final path).
@@ -411,10 +397,11 @@ def train_imitation_selector(
     data: list[tuple[FloatArray, FloatArray]] = []
     model: ImitationModel | None = None
     episodes, work, cursor = 0, 0.0, 0
+    arcs, lengths = GraphArcs(graph), np.asarray(graph.lengths, dtype=np.float64)
     for _ in range(settings.rounds + 1):
         spent = 0.0
         for _ in range(settings.worlds_per_round):
-            h, cursor = _next_connected(graph, start, goal, x, order, cursor)
+            h, cursor = _next_connected(arcs, lengths, start, goal, x, order, cursor)
             if spent >= per_round or h < 0:
                 break
             loo = prior.copy()
@@ -467,10 +454,9 @@ def _training_input(
 
 
 def _next_connected(
-    graph: ExplicitGraph, start: int, goal: int, x: BoolArray, order: IntArray, cursor: int
+    arcs: GraphArcs, lengths: FloatArray, start: int, goal: int, x: BoolArray, order: IntArray, cursor: int
 ) -> tuple[int, int]:
     """(the next world of ``order`` from ``cursor`` on, cyclically, with a start-goal path, or -1; new cursor)."""
-    arcs, lengths = GraphArcs(graph), np.asarray(graph.lengths, dtype=np.float64)
     for h in order[np.arange(cursor, cursor + order.size) % order.size].tolist():
         cursor += 1
         if arcs.shortest_path(start, goal, np.where(x[h], lengths, np.inf)) is not None:
