@@ -183,7 +183,9 @@ def test_latency_script_reports_the_split(tmp_path: Path) -> None:
         assert 0 < s["selection"] <= s["policy"]
         assert s["check"] + s["policy"] + s["prepare"] <= s["total"] < s["latency"]
         assert s["wait"] >= 0 and s["plan_messaging"] > 0
-        assert s["wait"] + s["total"] + s["plan_messaging"] < s["latency"]
+        # The Path can reach the peer's thread before publish() returns to the node's (CI: by 0.24 ms), so
+        # the node's messaging time overlaps the latency's end; what precedes the publish does not.
+        assert s["wait"] + s["total"] < s["latency"]
     # The node built each new snapshot's scene when the map arrived, not in the request.
     assert all(s["prepare"] < 0.2 * s["check"] for s in cold)
     for run in ("cold", "warm"):

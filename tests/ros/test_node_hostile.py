@@ -398,3 +398,28 @@ def test_an_import_that_a_signal_broke_half_way_ends_the_start_with_130(
     finally:
         for s, handler in before.items():
             signal.signal(s, handler)
+
+
+def test_a_start_that_fails_after_a_signal_ends_with_130(monkeypatch: pytest.MonkeyPatch) -> None:
+    """CI saw a SIGINT at 1.11 s end the start with status 1: rclpy's handler had shut the context down, so
+    creating the node raised RCLError. After a recorded signal any error of the start is that signal."""
+    from rclpy.impl.implementation_singleton import rclpy_implementation
+
+    from drd_planner.ros import node as node_module
+    from drd_planner.ros import planner_node
+
+    def failing_start(args: list[str]) -> int:
+        raise rclpy_implementation.RCLError("error creating node: the given context is not valid")
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    monkeypatch.setattr(node_module, "main", failing_start)
+    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]
+    try:
+        monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGINT)])
+        assert planner_node.main(args) == 130
+        monkeypatch.setattr(planner_node, "_RECEIVED", [])
+        with pytest.raises(rclpy_implementation.RCLError):  # without a signal it is an error
+            planner_node.main(args)
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)

@@ -6,7 +6,9 @@ SIGINT and SIGTERM are made to interrupt before anything heavy is imported, so a
 of the start ends the process (status 130 before the node runs, 0 once it spins). A signal is also
 recorded, because an import may swallow the KeyboardInterrupt it raises (trimesh's optional imports catch
 ``BaseException``): it then ends the process once the imports are done. An import that the interrupt broke
-half-way and that fails on with another error (scipy.ndimage raised a NameError) ends it the same way.
+half-way and that fails on with another error (scipy.ndimage raised a NameError) ends it the same way, and
+so does any error of the start after a signal (rclpy's handler shuts the context down: creating the node
+then fails).
 
 Usage::
 
@@ -73,13 +75,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
         try:
             from drd_planner.ros.node import main as run_node
+
+            # A signal during the imports whose KeyboardInterrupt an import swallowed ends the start here.
+            status = 130 if _RECEIVED else run_node(args)
         except Exception:
-            if _RECEIVED:  # the interrupt broke an import half-way (scipy.ndimage then raised NameError)
-                return 130
-            raise
-        if _RECEIVED:  # a signal during the imports whose KeyboardInterrupt an import swallowed
-            return 130
-        return run_node(args)
+            # After a signal any error of the start is the signal's: an import it broke half-way, or the
+            # node failing on the context rclpy's handler shut down.
+            if not _RECEIVED:
+                raise
+            status = 130
+        return status
     except KeyboardInterrupt:
         return 130
 
