@@ -10,14 +10,8 @@ from drd_planner.core.problem import Problem
 from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
 from drd_planner.domains.planar import PlanarChecker
 from drd_planner.planner import WorldPrior
-from drd_planner.planner.connect import (
-    DubinsConnector,
-    EdgeSampleIndex,
-    MotionOracle,
-    StraightConnector,
-    connector_for,
-    imputed_outcomes,
-)
+from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, connector_for, imputed_outcomes
+from drd_planner.planner.straight_connector import StraightConnector
 
 
 class PlanarWorldOracle:
@@ -142,26 +136,6 @@ def test_imputed_free_probability_tracks_the_true_one(
     marginal = float(prior.worlds.mean())
     assert np.corrcoef(imputed_a, truth_a)[0, 1] > 0.6
     assert np.abs(imputed_a - truth_a).mean() < np.abs(marginal - truth_a).mean()
-
-
-def test_dubins_motions_join_state_and_vertex() -> None:
-    from drd_planner.core.graph import ExplicitGraph
-
-    states = np.array([[0.0, 0.0, 65.0, 0.0], [50.0, 0.0, 65.0, 0.0], [100.0, 0.0, 90.0, 0.0]])
-    graph = ExplicitGraph(np.array([[0, 1], [1, 2]]), np.array([50.0, 56.0]), 3, True, states)
-    connector = DubinsConnector(turning_radius=100.0, reach=120.0, spacing=5.0, max_climb_gradient=0.5)
-    start = np.array([-40.0, 5.0, 60.0, 0.1])
-    motions = connector.connect(start, graph, outgoing=True)
-    assert motions
-    for m in motions:
-        assert np.allclose(m.states[0], start)
-        assert np.allclose(m.states[-1, :3], states[m.vertex, :3], atol=1e-6)
-        step = np.linalg.norm(np.diff(m.states[:, :2], axis=0), axis=1)
-        assert step.max() <= 5.0 + 1e-9
-        assert m.length >= np.linalg.norm(states[m.vertex, :3] - start[:3]) - 1e-9
-    into = connector.connect(start, graph, outgoing=False)
-    for m in into:
-        assert np.allclose(m.states[-1], start) and np.allclose(m.states[0, :3], states[m.vertex, :3])
 
 
 def test_the_connector_registry_by_domain(planar: tuple[Problem, list[np.ndarray], WorldPrior]) -> None:

@@ -26,7 +26,6 @@ than the motions, so it is far too pessimistic). The vote still errs on the bloc
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -91,110 +90,7 @@ class QueryConnector(Protocol):
         ...
 
 
-class StraightConnector:
-    """Straight segments in the state space to the nearest vertices (arm joint space, planar xy).
-
-    Args:
-        neighbours: vertices joined, at most.
-        reach: the farthest vertex joined (state units).
-        resolution: largest step between the samples of a motion (state units).
-    """
-
-    def __init__(self, *, neighbours: int = DEFAULT_NEIGHBOURS, reach: float, resolution: float) -> None:
-        if neighbours < 1 or not (reach > 0 and resolution > 0 and math.isfinite(reach + resolution)):
-            raise ProblemError("a connector needs neighbours >= 1 and finite positive reach and resolution")
-        self._k = int(neighbours)
-        self._reach = float(reach)
-        self._resolution = float(resolution)
-        self._nearest = _NearestVertices()
-
-    @property
-    def reach(self) -> float:
-        """The farthest vertex joined."""
-        return self._reach
-
-    @property
-    def position_dims(self) -> int:
-        """Every dimension is a position (joint angles or coordinates)."""
-        return 10**6
-
-    def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
-        """Segments to (or from) the nearest vertices within reach."""
-        states = _vertex_states(graph)
-        out = []
-        for d, v in self._nearest.query(graph, state, self._k, self._reach):
-            n = max(2, math.ceil(d / self._resolution) + 1)
-            line = np.linspace(state, states[v], n)
-            out.append(Motion(int(v), line if outgoing else line[::-1].copy(), float(d)))
-        return out
-
-
-class DubinsConnector:
-    """Helicopter motions: a Dubins curve in the plane, altitude linear along it ((x, y, z, heading) states).
-
-    Args:
-        turning_radius: metres.
-        neighbours: vertices joined, at most (nearest in x, y, z).
-        reach: the farthest vertex joined, metres (x, y, z).
-        spacing: largest arc-length step between samples, metres.
-        max_climb_gradient: largest |dz| / horizontal length of a motion.
-    """
-
-    def __init__(
-        self,
-        *,
-        turning_radius: float,
-        neighbours: int = DEFAULT_NEIGHBOURS,
-        reach: float,
-        spacing: float,
-        max_climb_gradient: float = 0.5,
-    ) -> None:
-        if not (turning_radius > 0 and reach > 0 and spacing > 0 and max_climb_gradient > 0):
-            raise ProblemError("a Dubins connector needs positive radius, reach, spacing and climb gradient")
-        self._radius = float(turning_radius)
-        self._k = int(neighbours)
-        self._reach = float(reach)
-        self._spacing = float(spacing)
-        self._climb = float(max_climb_gradient)
-        self._nearest = _NearestVertices(dims=3)
-
-    @property
-    def reach(self) -> float:
-        """The farthest vertex joined, metres."""
-        return self._reach
-
-    @property
-    def position_dims(self) -> int:
-        """x, y, z."""
-        return 3
-
-    def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
-        """Dubins motions to (or from) the nearest vertices within reach that the climb limit allows."""
-        from drd_planner.domains.dubins import dubins_path
-
-        states = _vertex_states(graph)
-        if states.shape[1] != 4 or state.shape != (4,):
-            raise ProblemError("helicopter states are (x, y, z, heading)")
-        out: list[Motion] = []
-        # Vertices differ by heading at one position: look at more of them than will be joined.
-        for _, v in self._nearest.query(graph, state[:3], self._k * 3, self._reach):
-            if len(out) >= self._k:
-                break
-            tail, head = (state, states[v]) if outgoing else (states[v], state)
-            path = dubins_path((tail[0], tail[1], tail[3]), (head[0], head[1], head[3]), radius=self._radius)
-            horizontal = path.length
-            dz = float(head[2] - tail[2])
-            if horizontal <= 0 or abs(dz) > self._climb * horizontal or horizontal > 4 * self._reach:
-                continue
-            n = max(2, math.ceil(horizontal / self._spacing) + 1)
-            s = np.linspace(0.0, horizontal, n)
-            pose = path.sample(s)
-            samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + dz * s / horizontal, pose[:, 2]])
-            out.append(Motion(int(v), samples, math.hypot(horizontal, dz)))
-        return out
-
-
-class _NearestVertices:
+class NearestVertices:
     """A KD-tree over a graph's vertex states (their first ``dims`` columns), rebuilt for another graph."""
 
     def __init__(self, dims: int | None = None) -> None:
@@ -204,7 +100,7 @@ class _NearestVertices:
     def query(self, graph: ExplicitGraph, point: FloatArray, k: int, reach: float) -> list[tuple[float, int]]:
         """Up to ``k`` (distance, vertex) pairs within ``reach`` of ``point``, nearest first."""
         if self._built is None or self._built[0] is not graph:
-            states = _vertex_states(graph)
+            states = vertex_states_of(graph)
             self._built = (graph, cKDTree(states if self._dims is None else states[:, : self._dims]))
         k = min(k, graph.num_vertices)
         dist, idx = self._built[1].query(point, k=k, distance_upper_bound=reach)
@@ -212,7 +108,8 @@ class _NearestVertices:
         return [(float(d), int(v)) for d, v in pairs if np.isfinite(d)]
 
 
-def _vertex_states(graph: ExplicitGraph) -> FloatArray:
+def vertex_states_of(graph: ExplicitGraph) -> FloatArray:
+    """The graph's (V, D) vertex states, or ProblemError when it has none."""
     if graph.vertex_states is None:
         raise ProblemError("this graph has no vertex states; states cannot be connected to it")
     return graph.vertex_states
@@ -234,7 +131,7 @@ class EdgeSampleIndex:
             points = np.concatenate(trajectories)
             owner = np.repeat(np.arange(graph.num_edges), [t.shape[0] for t in trajectories])
         else:
-            states = _vertex_states(graph)
+            states = vertex_states_of(graph)
             t = np.linspace(0.0, 1.0, POINTS_PER_EDGE)[None, :, None]
             a, b = states[graph.edges[:, 0]][:, None, :], states[graph.edges[:, 1]][:, None, :]
             points = (a + t * (b - a)).reshape(-1, states.shape[1])
@@ -259,27 +156,15 @@ def imputed_outcomes(index: EdgeSampleIndex, worlds: BoolArray, states: FloatArr
 
 
 def _straight(prior: WorldPrior) -> QueryConnector | None:
-    """Segments no longer than the graph's longest edge, sampled at the domain's check resolution."""
-    graph = prior.graph
-    if graph.vertex_states is None or graph.num_edges == 0:
-        return None
-    resolution = prior.domain_spec.get("resolution")
-    if not isinstance(resolution, int | float) or not resolution > 0:
-        resolution = float(np.median(graph.lengths)) / POINTS_PER_EDGE
-    return StraightConnector(reach=float(graph.lengths.max()), resolution=float(resolution))
+    from drd_planner.planner.straight_connector import straight_connector
+
+    return straight_connector(prior)
 
 
 def _dubins(prior: WorldPrior) -> QueryConnector | None:
-    lattice = prior.domain_spec.get("lattice") or {}
-    graph = prior.graph
-    if graph.vertex_states is None or graph.vertex_states.shape[1] != 4:
-        return None
-    return DubinsConnector(
-        turning_radius=float(lattice.get("turning_radius", 100.0)),
-        reach=2.0 * float(lattice.get("xy_spacing", 50.0)),
-        spacing=float(lattice.get("sample_spacing", 5.0)),
-        max_climb_gradient=float(lattice.get("max_climb_gradient", 0.5)),
-    )
+    from drd_planner.planner.dubins_connector import dubins_connector
+
+    return dubins_connector(prior)
 
 
 #: Domain name -> the connector of its priors (None: states off the graph are refused).
