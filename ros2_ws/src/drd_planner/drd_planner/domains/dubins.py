@@ -281,3 +281,133 @@ def dubins_path(start: Pose, end: Pose, *, radius: float, headings: HeadingRange
     if best is None:  # cannot happen for finite input: RSR/LSL always exist
         raise ProblemError(f"no Dubins path from {start} to {end}")
     return best
+
+
+def _mod2pi_array(angle: FloatArray) -> FloatArray:
+    """Elementwise :func:`_mod2pi`."""
+    out = np.mod(angle, _TWO_PI)
+    return np.asarray(np.where(out > _TWO_PI - 1e-9, 0.0, out), dtype=np.float64)
+
+
+def _word_lengths(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
+    """(6, N) normalised lengths t + p + q of each word (order of ``_WORDS``; inf where a word does not exist)."""
+    sa, sb, ca, cb, cab = np.sin(a), np.sin(b), np.cos(a), np.cos(b), np.cos(a - b)
+    out = np.full((len(_WORDS), a.size), np.inf)
+    with np.errstate(invalid="ignore"):
+        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)  # LSL
+        tmp = np.arctan2(cb - ca, d + sa - sb)
+        ok = p2 >= -_EPS
+        out[0] = np.where(
+            ok, _mod2pi_array(-a + tmp) + np.sqrt(np.maximum(p2, 0.0)) + _mod2pi_array(b - tmp), np.inf
+        )
+        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
+        tmp = np.arctan2(ca - cb, d - sa + sb)
+        ok = p2 >= -_EPS
+        out[1] = np.where(
+            ok, _mod2pi_array(a - tmp) + np.sqrt(np.maximum(p2, 0.0)) + _mod2pi_array(-b + tmp), np.inf
+        )
+        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
+        p = np.sqrt(np.maximum(p2, 0.0))
+        tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
+        out[2] = np.where(p2 >= -_EPS, _mod2pi_array(-a + tmp) + p + _mod2pi_array(-b + tmp), np.inf)
+        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
+        p = np.sqrt(np.maximum(p2, 0.0))
+        tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
+        out[3] = np.where(p2 >= -_EPS, _mod2pi_array(a - tmp) + p + _mod2pi_array(b - tmp), np.inf)
+        for row, sign in ((4, 1.0), (5, -1.0)):  # RLR, LRL
+            cosine = (6.0 - d * d + 2.0 * cab + 2.0 * sign * d * (sa - sb)) / 8.0
+            ok = np.abs(cosine) <= 1.0 + _EPS
+            p = _mod2pi_array(_TWO_PI - np.arccos(np.clip(cosine, -1.0, 1.0)))
+            if sign > 0:
+                t = _mod2pi_array(a - np.arctan2(ca - cb, d - sa + sb) + p / 2.0)
+                q = _mod2pi_array(a - b - t + p)
+            else:
+                t = _mod2pi_array(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2.0)
+                q = _mod2pi_array(b - a - t + p)
+            out[row] = np.where(ok, t + p + q, np.inf)
+    return out
+
+
+def dubins_lengths(starts: npt.ArrayLike, ends: npt.ArrayLike, *, radius: float) -> FloatArray:
+    """(N,) lengths of the shortest Dubins paths between (N, 3) (or broadcast (3,)) poses, vectorised.
+
+    The same closed forms as :func:`dubins_path` without the integration that verifies each word, for ranking
+    many candidates at once; :func:`dubins_path` of a chosen pair gives its verified path.
+
+    Args:
+        starts: (N, 3) or (3,) poses x, y, heading (rad).
+        ends: (N, 3) or (3,) poses.
+        radius: turning radius (length unit, > 0).
+    """
+    s = np.atleast_2d(np.asarray(starts, dtype=np.float64))
+    e = np.atleast_2d(np.asarray(ends, dtype=np.float64))
+    s, e = np.broadcast_arrays(s, e)
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
+    dx, dy = e[:, 0] - s[:, 0], e[:, 1] - s[:, 1]
+    d = np.hypot(dx, dy) / radius
+    chord = np.where(d > 0.0, np.arctan2(dy, dx), 0.0)
+    a, b = _mod2pi_array(s[:, 2] - chord), _mod2pi_array(e[:, 2] - chord)
+    return np.asarray(_word_lengths(a, b, d).min(axis=0) * radius, dtype=np.float64)
+
+
+def _turn_to_point(
+    starts: FloatArray, point: FloatArray, radius: float, sign: float
+) -> tuple[FloatArray, FloatArray]:
+    """Arc (rad) and straight length of the turn-then-straight path (left: sign 1) from each pose to a point.
+
+    NaN where the point lies inside the turning circle (no such path).
+    """
+    h = starts[:, 2]
+    cx = starts[:, 0] - sign * radius * np.sin(h)
+    cy = starts[:, 1] + sign * radius * np.cos(h)
+    wx, wy = point[0] - cx, point[1] - cy
+    dist = np.hypot(wx, wy)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        straight = np.sqrt(dist * dist - radius * radius)
+        tangent = np.arctan2(wy, wx) - sign * np.arccos(np.clip(radius / dist, -1.0, 1.0))
+    first = h - sign * math.pi / 2.0  # angle of the start point seen from the centre
+    arc = _mod2pi_array(sign * (tangent - first))
+    bad = ~(dist >= radius)
+    return np.where(bad, np.nan, arc), np.where(bad, np.nan, straight)
+
+
+def point_lengths(starts: npt.ArrayLike, point: npt.ArrayLike, *, radius: float) -> FloatArray:
+    """(N,) lengths of the shortest turn-then-straight paths from (N, 3) poses to a point (any final heading).
+
+    A path from a pose to a point whose final heading is free turns left or right on the turning circle and
+    then flies straight (Dubins' CS words); where the point lies inside both turning circles there is no
+    such path and the length is inf (a loop would be needed: the caller looks at other poses).
+    """
+    s = np.atleast_2d(np.asarray(starts, dtype=np.float64))
+    p = np.asarray(point, dtype=np.float64).ravel()[:2]
+    best = np.full(s.shape[0], np.inf)
+    for sign in (1.0, -1.0):
+        arc, straight = _turn_to_point(s, p, radius, sign)
+        length = arc * radius + straight
+        best = np.where(np.isfinite(length) & (length < best), length, best)
+    return best
+
+
+def path_to_point(start: Pose, point: tuple[float, float], *, radius: float) -> DubinsPath | None:
+    """The shortest turn-then-straight path from ``start`` to ``point`` (final heading free), or None.
+
+    None when the point lies inside both turning circles of ``start``. The path's word is ``LSL`` or ``RSR``
+    with a zero last segment (its final heading is the straight's direction).
+    """
+    _check_input(start, (point[0], point[1], 0.0), radius)
+    s = np.array([start], dtype=np.float64)
+    best: DubinsPath | None = None
+    for sign, word in ((1.0, "LSL"), (-1.0, "RSR")):
+        arc, straight = _turn_to_point(s, np.asarray(point, dtype=np.float64), radius, sign)
+        if not (np.isfinite(arc[0]) and np.isfinite(straight[0])):
+            continue
+        path = DubinsPath(
+            (float(start[0]), float(start[1]), float(start[2])),
+            word,
+            (float(arc[0]) * radius, float(straight[0]), 0.0),
+            float(radius),
+        )
+        if best is None or path.length < best.length - 1e-12:
+            best = path
+    return best

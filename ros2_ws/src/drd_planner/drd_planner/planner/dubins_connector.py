@@ -1,93 +1,232 @@
-"""Helicopter motions joining an off-graph (x, y, z, heading) state to the lattice: Dubins curves, altitude linear."""
+"""Helicopter motions joining an off-lattice (x, y, z, heading) state to the lattice: flyable curves, ahead of it.
+
+A helicopter's state is almost never a lattice vertex: odometry drifts metres off the lattice and its heading
+is anything. :class:`DubinsConnector` joins such a state to several vertices by motions the vehicle can fly:
+
+- **in the plane** the shortest Dubins path of the lattice's turning radius from the state to the vertex
+  (a start; to the state from the vertex for a goal), so the state's heading and the vertex's are both
+  honoured; a goal given without a heading (NaN heading, or a position alone) is reached by the shortest
+  turn-then-straight path from the vertex, arriving with whatever heading that path has;
+- **in altitude** a constant climb or descent along the curve, within the lattice's climb gradient;
+- **which vertices**: the Dubins length to every vertex is computed at once (vectorised closed forms,
+  :func:`~drd_planner.domains.dubins.dubins_lengths`), vertices whose altitude the climb limit cannot reach
+  are dropped, and the ``neighbours`` shortest motions are kept (ties by vertex id). The shortest motions go
+  to vertices *ahead* of a start (and
+  behind a goal) with a heading it can turn to; vertices beside or behind need loops and come last. Looking at
+  all vertices rather than the nearest ones matters: the nearest are the other headings and altitudes at
+  the same lattice point, which only a loop longer than the lattice spacing reaches.
+
+A state outside the lattice's extent (its vertices' horizontal bounding box and altitude band, grown by
+half a grid step and half a level) is refused with the extent named. Each motion is sampled every
+``spacing`` metres of arc; its samples are what the checker tests (the vehicle sphere at each).
+
+Units: metres and radians.
+"""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.domains.dubins import dubins_path
+from drd_planner.domains.dubins import DubinsPath, dubins_lengths, dubins_path, path_to_point, point_lengths
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.connect import DEFAULT_NEIGHBOURS, Motion, NearestVertices, vertex_states_of
+from drd_planner.planner.connect import Motion, vertex_states_of
+from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
 
-__all__ = ["DubinsConnector", "dubins_connector"]
+__all__ = ["DEFAULT_JOINS", "DubinsConnector", "LatticeExtent", "dubins_connector"]
+
+#: Vertices a helicopter state is joined to, at most (the shortest flyable motions).
+DEFAULT_JOINS = 16
+#: How far (m) a motion's sampled end may lie from the vertex or state it joins (the path is verified).
+END_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class LatticeExtent:
+    """Where a helicopter state may be: the lattice's horizontal box and altitude band, grown by margins.
+
+    Attributes:
+        lower: (3,) x, y, z minima of the vertices (m).
+        upper: (3,) x, y, z maxima (m).
+        margin_xy: metres allowed beyond the box horizontally.
+        margin_z: metres allowed beyond the altitude band.
+    """
+
+    lower: FloatArray
+    upper: FloatArray
+    margin_xy: float
+    margin_z: float
+
+    @classmethod
+    def of_graph(cls, graph: ExplicitGraph) -> LatticeExtent:
+        """The extent of a lattice graph's vertex states; margins half a grid step and half a level gap."""
+        states = vertex_states_of(graph)[:, :3]
+        return cls(
+            states.min(axis=0), states.max(axis=0), 0.5 * _gap(states[:, 0:2]), 0.5 * _gap(states[:, 2:3])
+        )
+
+    def refusal(self, state: FloatArray, label: str) -> str | None:
+        """Why ``state`` (x, y, z, ...) is outside the extent, or None when it is inside."""
+        x, y, z = (float(v) for v in state[:3])
+        lo, hi = self.lower - self.margin_xy, self.upper + self.margin_xy
+        if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]):
+            return (
+                f"{label} position ({x:.1f}, {y:.1f}) m is outside the lattice's horizontal extent x "
+                f"[{self.lower[0]:.0f}, {self.upper[0]:.0f}] m, y [{self.lower[1]:.0f}, {self.upper[1]:.0f}] m "
+                f"(+{self.margin_xy:.0f} m allowed)"
+            )
+        if not (self.lower[2] - self.margin_z <= z <= self.upper[2] + self.margin_z):
+            return (
+                f"{label} altitude {z:.1f} m is outside the lattice's altitude band [{self.lower[2]:.0f}, "
+                f"{self.upper[2]:.0f}] m (+-{self.margin_z:.0f} m allowed)"
+            )
+        return None
+
+
+def _gap(values: FloatArray) -> float:
+    """The smallest positive spacing between the distinct values of any column (0 for a single value)."""
+    gaps = [np.diff(np.unique(col)) for col in values.T]
+    positive = np.concatenate([g[g > 1e-9] for g in gaps]) if gaps else np.zeros(0)
+    return float(positive.min()) if positive.size else 0.0
 
 
 class DubinsConnector:
-    """Helicopter motions: a Dubins curve in the plane, altitude linear along it ((x, y, z, heading) states).
+    """Joins helicopter states to a lattice by flyable motions (see the module docstring).
 
     Args:
-        turning_radius: metres.
-        neighbours: vertices joined, at most (nearest in x, y, z).
-        reach: the farthest vertex joined, metres (x, y, z).
-        spacing: largest arc-length step between samples, metres.
+        turning_radius: the vehicle's (and the lattice's) turning radius, metres.
+        spacing: largest arc-length step between the samples of a motion, metres.
         max_climb_gradient: largest |dz| / horizontal length of a motion.
+        neighbours: vertices joined, at most.
+        extent: where states may be (None: anywhere).
     """
 
     def __init__(
         self,
         *,
         turning_radius: float,
-        neighbours: int = DEFAULT_NEIGHBOURS,
-        reach: float,
         spacing: float,
         max_climb_gradient: float = 0.5,
+        neighbours: int = DEFAULT_JOINS,
+        extent: LatticeExtent | None = None,
     ) -> None:
-        if not (turning_radius > 0 and reach > 0 and spacing > 0 and max_climb_gradient > 0):
-            raise ProblemError("a Dubins connector needs positive radius, reach, spacing and climb gradient")
+        if not (turning_radius > 0 and spacing > 0 and max_climb_gradient > 0 and neighbours >= 1):
+            raise ProblemError(
+                "a Dubins connector needs a positive radius, spacing and climb gradient, and neighbours >= 1"
+            )
+        if not math.isfinite(turning_radius + spacing + max_climb_gradient):
+            raise ProblemError("a Dubins connector needs finite radius, spacing and climb gradient")
         self._radius = float(turning_radius)
         self._k = int(neighbours)
-        self._reach = float(reach)
         self._spacing = float(spacing)
         self._climb = float(max_climb_gradient)
-        self._nearest = NearestVertices(dims=3)
+        self._extent = extent
 
     @property
     def reach(self) -> float:
-        """The farthest vertex joined, metres."""
-        return self._reach
+        """No limit on distance: every lattice vertex is a candidate (inf)."""
+        return math.inf
 
     @property
     def position_dims(self) -> int:
         """x, y, z."""
         return 3
 
+    @property
+    def free_goal_dims(self) -> tuple[int, ...]:
+        """(3,): a goal may leave its heading free (NaN, or a goal of x, y, z only)."""
+        return (3,)
+
+    @property
+    def extent(self) -> LatticeExtent | None:
+        """Where states may be (None: anywhere)."""
+        return self._extent
+
     def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
-        """Dubins motions to (or from) the nearest vertices within reach that the climb limit allows."""
+        """The shortest flyable motions from ``state`` to vertices (``outgoing``) or from vertices to it.
+
+        A NaN heading (goals only) leaves the arrival heading free.
+
+        Raises:
+            QueryError: the state is outside the extent, or a start has no heading.
+        """
         states = vertex_states_of(graph)
         if states.shape[1] != 4 or state.shape != (4,):
             raise ProblemError("helicopter states are (x, y, z, heading)")
+        label = "start" if outgoing else "goal"
+        reason = None if self._extent is None else self._extent.refusal(state, label)
+        if reason is not None:
+            raise QueryError(reason)
+        free_heading = not math.isfinite(float(state[3]))
+        if free_heading and outgoing:
+            raise QueryError("a start state needs a heading (the vehicle's yaw), got NaN")
+        poses = states[:, [0, 1, 3]]
+        own = state[[0, 1, 3]]
+        if free_heading:
+            horizontal = point_lengths(poses, own[:2], radius=self._radius)
+        elif outgoing:
+            horizontal = dubins_lengths(own, poses, radius=self._radius)
+        else:
+            horizontal = dubins_lengths(poses, own, radius=self._radius)
+        dz = states[:, 2] - state[2] if outgoing else state[2] - states[:, 2]
+        feasible = np.isfinite(horizontal) & (np.abs(dz) <= self._climb * horizontal + 1e-9)
+        candidates = np.flatnonzero(feasible)
+        length = np.hypot(horizontal[candidates], dz[candidates])
+        order = candidates[np.lexsort((candidates, length))]
         out: list[Motion] = []
-        # Vertices differ by heading at one position: look at more of them than will be joined.
-        for _, v in self._nearest.query(graph, state[:3], self._k * 3, self._reach):
+        for v in order.tolist():
+            motion = self._motion(state, states[v], int(v), outgoing=outgoing, free_heading=free_heading)
+            if motion is not None:
+                out.append(motion)
             if len(out) >= self._k:
                 break
-            tail, head = (state, states[v]) if outgoing else (states[v], state)
-            path = dubins_path((tail[0], tail[1], tail[3]), (head[0], head[1], head[3]), radius=self._radius)
-            horizontal = path.length
-            dz = float(head[2] - tail[2])
-            if horizontal <= 0 or abs(dz) > self._climb * horizontal or horizontal > 4 * self._reach:
-                continue
-            n = max(2, math.ceil(horizontal / self._spacing) + 1)
-            s = np.linspace(0.0, horizontal, n)
-            pose = path.sample(s)
-            samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + dz * s / horizontal, pose[:, 2]])
-            out.append(Motion(int(v), samples, math.hypot(horizontal, dz)))
         return out
+
+    def _motion(
+        self, state: FloatArray, vertex_state: FloatArray, vertex: int, *, outgoing: bool, free_heading: bool
+    ) -> Motion | None:
+        """The sampled motion between ``state`` and one vertex (None if its sampled end misses, never expected)."""
+        tail, head = (state, vertex_state) if outgoing else (vertex_state, state)
+        path: DubinsPath | None
+        if free_heading:
+            path = path_to_point((tail[0], tail[1], tail[3]), (head[0], head[1]), radius=self._radius)
+        else:
+            path = dubins_path((tail[0], tail[1], tail[3]), (head[0], head[1], head[3]), radius=self._radius)
+        if path is None:
+            return None
+        horizontal = path.length
+        dz = float(head[2] - tail[2])
+        n = max(2, math.ceil(horizontal / self._spacing - 1e-9) + 1)
+        s = np.linspace(0.0, horizontal, n)
+        pose = path.sample(s)
+        climb = dz * s / horizontal if horizontal > 0 else np.zeros(n)
+        samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + climb, pose[:, 2]])
+        if math.hypot(samples[-1, 0] - head[0], samples[-1, 1] - head[1]) > END_TOLERANCE * max(
+            1.0, self._radius
+        ):
+            return None
+        samples[0, :3] = tail[:3]
+        samples[-1, :3] = head[:3]
+        if not free_heading or outgoing:
+            samples[-1, 3] = head[3]
+        samples[0, 3] = tail[3]
+        return Motion(vertex, samples, math.hypot(horizontal, dz))
 
 
 def dubins_connector(prior: WorldPrior) -> DubinsConnector | None:
     """The connector of a helicopter prior (None when its graph has no (x, y, z, heading) states)."""
     lattice = prior.domain_spec.get("lattice") or {}
     graph = prior.graph
-    if graph.vertex_states is None or graph.vertex_states.shape[1] != 4:
+    if graph.vertex_states is None or graph.vertex_states.shape[1] != 4 or graph.num_vertices == 0:
         return None
     return DubinsConnector(
         turning_radius=float(lattice.get("turning_radius", 100.0)),
-        reach=2.0 * float(lattice.get("xy_spacing", 50.0)),
         spacing=float(lattice.get("sample_spacing", 5.0)),
         max_climb_gradient=float(lattice.get("max_climb_gradient", 0.5)),
+        extent=LatticeExtent.of_graph(graph),
     )

@@ -4,6 +4,10 @@ A state is a (d,) vector in the graph's vertex-state space (helicopter: x, y, z 
 in radians; arm: joint angles in radians; planar: x, y). It resolves to the nearest vertex by
 Euclidean distance in that space when the distance is within the snap tolerance; anything else is
 refused with the distance and the tolerance named.
+
+A goal may leave some dimensions free (``free_goal_dims``; the helicopter's heading): NaN there, or a goal
+given without its trailing free dimensions (a helicopter goal of three values, x, y, z), means "any value".
+Such a goal never snaps to a vertex: the connector joins it (the helicopter arrives with any heading).
 """
 
 from __future__ import annotations
@@ -35,10 +39,18 @@ class EndpointResolver:
         graph: the graph (its ``vertex_states`` are needed for states).
         snap_tolerance: the farthest a state may be from its vertex, in state units; None uses
             :data:`SNAP_FRACTION_OF_EDGE` x the median edge length.
+        free_goal_dims: state dimensions a goal may leave free (NaN, or omitted when they are the last ones).
     """
 
-    def __init__(self, graph: ExplicitGraph, *, snap_tolerance: float | None = None) -> None:
+    def __init__(
+        self,
+        graph: ExplicitGraph,
+        *,
+        snap_tolerance: float | None = None,
+        free_goal_dims: tuple[int, ...] = (),
+    ) -> None:
         self._graph = graph
+        self._free = tuple(sorted(int(d) for d in free_goal_dims))
         states = graph.vertex_states
         self._kdtree = None if states is None else cKDTree(states)
         if snap_tolerance is None:
@@ -87,10 +99,18 @@ class EndpointResolver:
         if self._kdtree is None:
             raise QueryError(f"this graph has no vertex states; give the {label} as a vertex id")
         dim = int(self._kdtree.m)
+        free = self._free if label == "goal" else ()
+        if free and state.shape == (dim - len(free),) and free == tuple(range(dim - len(free), dim)):
+            state = np.concatenate([state, np.full(len(free), np.nan)])
         if state.shape != (dim,):
-            raise QueryError(f"{label} state must have {dim} values, got shape {state.shape}")
-        if not np.all(np.isfinite(state)):
+            also = f" (or {dim - len(free)} with the free ones left out)" if free else ""
+            raise QueryError(f"{label} state must have {dim} values{also}, got shape {state.shape}")
+        fixed = np.ones(dim, dtype=bool)
+        fixed[list(free)] = False
+        if not np.all(np.isfinite(state[fixed])) or np.any(np.isinf(state)):
             raise QueryError(f"{label} state has a NaN or infinite value: {state.tolist()}")
+        if not np.all(np.isfinite(state)):
+            return state  # a goal with free dimensions is joined by the connector
         distance, vertex = self._kdtree.query(state)
         if distance > self.snap_tolerance:
             return state

@@ -92,12 +92,13 @@ class Planner:
         if cache_size < 1:
             raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
         self.prior = prior
-        self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance)
+        self._connector = (connector or connector_for(prior)) if connect_states else None
+        free = getattr(self._connector, "free_goal_dims", ())
+        self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
         self._arcs = GraphArcs(prior.graph)
         self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
         self._cache_size = cache_size
         self._expand = expand_threshold
-        self._connector = (connector or connector_for(prior)) if connect_states else None
         self._sample_index: EdgeSampleIndex | None = None
         self._leaf_override: LeafSetting | None = None
 
@@ -137,6 +138,11 @@ class Planner:
         Set by :meth:`set_leaf`, else its precomputed tree's own (:attr:`QueryTree.leaf`), else the prior's.
         """
         return self._leaf_override or self.prior.leaf_for(model.precomputed)
+
+    @property
+    def endpoints(self) -> EndpointResolver:
+        """How this planner reads starts and goals (ids, states, free goal dimensions)."""
+        return self._endpoints
 
     @property
     def connector(self) -> QueryConnector | None:

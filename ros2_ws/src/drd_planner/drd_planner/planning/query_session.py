@@ -148,7 +148,7 @@ class QuerySession(DomainSession):
         self.set_budgets(max_checks, time_budget_s)
         self._improve_budget = as_improve_budget(improve_budget)
         self._planner = Planner(prior, cache_size=cache_size, snap_tolerance=snap_tolerance)
-        self._endpoints = EndpointResolver(prior.graph, snap_tolerance=self._planner.snap_tolerance)
+        self._endpoints = self._planner.endpoints
         self._num_edges = prior.graph.num_edges
         self._motions = MotionRegistry(self._num_edges, capacity=motions_kept)
         self._trajectories = domain.edge_trajectories()
