@@ -93,7 +93,7 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
     assert "--request" in _error(capsys)
     assert main(["plan", "--bag", str(bag), "--tree", str(TREE), "--frame", "odom"]) == 2
     assert "frame 'map'" in _error(capsys)  # the request is in map; the maps were refused too
-    # A request whose goal lies beyond the graph's reach.
+    # A request whose goal lies outside the lattice's extent.
     messages = read_bag(bag)
     far = []
     for m in messages:
@@ -102,7 +102,7 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
         far.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
     moved = write_bag(tmp_path / "far.mcap", far)
     assert main(["plan", "--bag", str(moved), "--tree", str(TREE)]) == 2
-    assert "outside the graph's reach" in _error(capsys)
+    assert "goal position (1100.0, 0.0) m is outside the lattice's horizontal extent x [0, 700] m" in _error(capsys)
     # No robot state before the request: an error, or the prior's start with --prior-start.
     stateless = write_bag(tmp_path / "stateless.mcap", [m for m in read_bag(bag) if m.topic != "/odom"])
     assert main(["plan", "--bag", str(stateless), "--tree", str(TREE)]) == 2

@@ -21,6 +21,7 @@ from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.requests import (
     Goal,
+    GoalTolerances,
     ambiguity,
     goal_endpoint,
     goal_from_pose,
@@ -46,7 +47,7 @@ def _goal(position: np.ndarray, yaw: float = 0.0) -> Goal:
 def test_a_goal_near_the_stored_goal_is_that_vertex(session: QuerySession) -> None:
     stored = int(session.domain.goal)
     near = session.vertex_state(stored)[:3] + np.array([0.5, -0.5, 0.3])
-    assert goal_endpoint(session, _goal(near), MapSnapshot(0), tolerance=1.0, joint_tolerance=0.05) == stored
+    assert goal_endpoint(session, _goal(near), MapSnapshot(0)) == stored
 
 
 def test_a_goal_near_another_vertex_is_that_vertex(session: QuerySession) -> None:
@@ -55,13 +56,7 @@ def test_a_goal_near_another_vertex_is_that_vertex(session: QuerySession) -> Non
     stored = int(session.domain.goal)
     vertex = int(np.flatnonzero(np.max(np.abs(states[:, :3] - states[stored, :3]), axis=1) > 50)[0])
     near = states[vertex, :3] + np.array([0.4, 0.0, -0.4])
-    got = goal_endpoint(
-        session,
-        _goal(near, yaw=float(states[vertex, 3])),
-        MapSnapshot(0),
-        tolerance=1.0,
-        joint_tolerance=0.05,
-    )
+    got = goal_endpoint(session, _goal(near, yaw=float(states[vertex, 3])), MapSnapshot(0))
     assert got == vertex
 
 
@@ -69,11 +64,41 @@ def test_a_goal_far_from_every_vertex_is_its_own_state(session: QuerySession) ->
     states = session.prior.graph.vertex_states
     assert states is not None
     position = states[:, :3].mean(axis=0) + np.array([1234.5, 0.0, 0.0])
-    got = goal_endpoint(
-        session, _goal(position, yaw=0.25), MapSnapshot(0), tolerance=1.0, joint_tolerance=0.05
-    )
+    got = goal_endpoint(session, _goal(position, yaw=0.25), MapSnapshot(0))
     assert isinstance(got, np.ndarray)
     np.testing.assert_allclose(got, [*position, 0.25])
+
+
+def test_a_goal_yaw_is_honoured_and_a_goal_without_orientation_takes_any_heading(
+    session: QuerySession,
+) -> None:
+    stored = int(session.domain.goal)
+    position = session.vertex_state(stored)[:3]
+    # the stored goal flies in at heading 0: a goal asking pi/2 there is its own state, yaw kept
+    turned = goal_endpoint(session, _goal(position, yaw=math.pi / 2), MapSnapshot(0))
+    assert isinstance(turned, np.ndarray)
+    np.testing.assert_allclose(turned, [*position, math.pi / 2])
+    assert goal_endpoint(session, _goal(position, yaw=0.05), MapSnapshot(0)) == stored  # within 0.1 rad
+    strict = GoalTolerances(yaw_rad=0.01)
+    assert isinstance(goal_endpoint(session, _goal(position, yaw=0.05), MapSnapshot(0), strict), np.ndarray)
+    assert goal_endpoint(session, Goal(position=position, yaw=None), MapSnapshot(0)) == stored
+    off = goal_endpoint(
+        session, Goal(position=position + np.array([0.0, 37.0, 0.0]), yaw=None), MapSnapshot(0)
+    )
+    assert (
+        isinstance(off, np.ndarray)
+        and np.isnan(off[3])
+        and np.allclose(off[:3], position + np.array([0.0, 37.0, 0.0]))
+    )
+    pose = PoseStamped()
+    pose.header.frame_id = "map"
+    pose.pose.position.x, pose.pose.position.y = 10.0, 20.0
+    pose.pose.orientation.w = 0.0  # ROS 2's default is the identity (yaw 0); all four zero: no yaw
+    free = goal_from_pose(pose, "map")
+    assert free.yaw is None and "any yaw" in free.describe()
+    pose.pose.orientation.z = 0.5  # not a unit quaternion: still refused
+    with pytest.raises(MessageError, match="unit quaternion"):
+        goal_from_pose(pose, "map")
 
 
 def test_poses_and_odometry_in_the_wrong_frame_or_with_nan_are_refused() -> None:

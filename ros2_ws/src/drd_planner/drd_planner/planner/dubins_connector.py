@@ -17,7 +17,7 @@ is anything. :class:`DubinsConnector` joins such a state to several vertices by 
   the same lattice point, which only a loop longer than the lattice spacing reaches.
 
 A state outside the lattice's extent (its vertices' horizontal bounding box and altitude band, grown by
-half a grid step and half a level) is refused with the extent named. Each motion is sampled every
+one grid step and one level gap) is refused with the extent named. Each motion is sampled every
 ``spacing`` metres of arc; its samples are what the checker tests (the vehicle sphere at each).
 
 Units: metres and radians.
@@ -64,10 +64,10 @@ class LatticeExtent:
 
     @classmethod
     def of_graph(cls, graph: ExplicitGraph) -> LatticeExtent:
-        """The extent of a lattice graph's vertex states; margins half a grid step and half a level gap."""
+        """The extent of a lattice graph's vertex states; margins one grid step and one level gap."""
         states = vertex_states_of(graph)[:, :3]
         return cls(
-            states.min(axis=0), states.max(axis=0), 0.5 * _gap(states[:, 0:2]), 0.5 * _gap(states[:, 2:3])
+            states.min(axis=0), states.max(axis=0), _gap(states[:, 0:2]), _gap(states[:, 2:3])
         )
 
     def refusal(self, state: FloatArray, label: str) -> str | None:

@@ -21,11 +21,14 @@ from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.requests import Goal, goal_endpoint, read_goal, read_robot_state
-
-#: The node's defaults of ``goal_tolerance`` (m) and ``joint_tolerance`` (rad).
-GOAL_TOLERANCE_M = 1.0
-JOINT_TOLERANCE_RAD = 0.05
+from drd_planner.planning.requests import (
+    DEFAULT_TOLERANCES,
+    Goal,
+    GoalTolerances,
+    goal_endpoint,
+    read_goal,
+    read_robot_state,
+)
 
 __all__ = [
     "BagMaps",
@@ -184,8 +187,7 @@ def plan_bag_request(
     *,
     frame: str,
     seed: int = 0,
-    goal_tolerance: float = GOAL_TOLERANCE_M,
-    joint_tolerance: float = JOINT_TOLERANCE_RAD,
+    tolerances: GoalTolerances = DEFAULT_TOLERANCES,
     prior_start: bool = False,
 ) -> BagPlan:
     """Plan the ``index``-th request of time-ordered ``messages`` as the node would.
@@ -213,8 +215,6 @@ def plan_bag_request(
             f"request {index}: the bag has no accepted {topic} message before it (no robot state to plan "
             "from; plan from the prior's start with --prior-start)"
         )
-    end = goal_endpoint(
-        session, goal, maps.snapshot, tolerance=goal_tolerance, joint_tolerance=joint_tolerance
-    )
+    end = goal_endpoint(session, goal, maps.snapshot, tolerances)
     result = session.plan(maps.snapshot, start, end, seed=seed)
     return BagPlan(request, maps, start, end, result, notes)

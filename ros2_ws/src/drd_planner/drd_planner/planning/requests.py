@@ -5,11 +5,16 @@ from ``goal_joints``. :func:`goal_endpoint` turns it into what the planner takes
 
 - a goal within ``goal_tolerance`` (m) of the prior's stored goal (``joint_tolerance`` rad for joints)
   is that vertex, so a tree built for the stored query serves it;
-- else, within the tolerance of another vertex, the nearest such vertex (for the helicopter, among
-  vertices at that position, the heading nearest the goal's yaw);
+- else, within the tolerance of another vertex, the nearest such vertex;
 - else the goal state itself (x, y, z, yaw; or the joint angles), joined to the graph by new, checked
   motions. An arm's end-effector position goal must lie within ``goal_tolerance`` of a roadmap vertex's
   end effector (there is no inverse kinematics).
+
+**A helicopter goal's yaw is honoured**: a vertex serves a pose goal only when its heading is within
+``goal_yaw_tolerance`` (rad) of the goal's yaw; otherwise the goal is its own state and the path ends with
+exactly that heading. A goal whose orientation is the zero quaternion (all four components 0, "no
+orientation") has no yaw: any vertex at its position serves it, and otherwise the path may arrive at it with
+any heading (:class:`~drd_planner.planner.dubins_connector.DubinsConnector`).
 
 The robot's state comes from ``odom`` (``nav_msgs/Odometry``, helicopter: x, y, z, yaw) or
 ``joint_states`` (``sensor_msgs/JointState``, arm); :func:`pick_session` says which loaded prior
@@ -30,7 +35,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import pose_from_msg
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.pose_states import state_from_pose, wrap_angle
+from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_intake import pose_of
@@ -39,7 +44,9 @@ from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.query_support import yaw_from_quaternion
 
 __all__ = [
+    "DEFAULT_TOLERANCES",
     "Goal",
+    "GoalTolerances",
     "ambiguity",
     "goal_endpoint",
     "goal_from_pose",
@@ -57,12 +64,12 @@ class Goal:
 
     Attributes:
         position: (3,) metres in the planning frame (a pose goal), or None.
-        yaw: the pose goal's heading (rad), 0 for joint goals.
+        yaw: the pose goal's heading (rad); None: any heading (a pose without orientation); 0 for joint goals.
         joints: (D,) joint angles (rad) in the session's joint order (a joint goal), or None.
     """
 
     position: FloatArray | None = None
-    yaw: float = 0.0
+    yaw: float | None = 0.0
     joints: FloatArray | None = None
 
     def describe(self) -> str:
@@ -70,14 +77,44 @@ class Goal:
         if self.joints is not None:
             return f"joints {np.round(self.joints, 3).tolist()}"
         assert self.position is not None
-        return f"position {np.round(self.position, 2).tolist()} yaw {self.yaw:.2f}"
+        heading = "any yaw" if self.yaw is None else f"yaw {self.yaw:.2f}"
+        return f"position {np.round(self.position, 2).tolist()} {heading}"
+
+
+@dataclass(frozen=True)
+class GoalTolerances:
+    """How near a requested goal must be to a graph vertex to be that vertex.
+
+    Attributes:
+        position_m: metres per axis (a pose goal; an arm's end-effector goal).
+        joint_rad: radians per joint (a joint goal).
+        yaw_rad: radians between a pose goal's yaw and the vertex's heading (the helicopter).
+    """
+
+    position_m: float = 1.0
+    joint_rad: float = 0.05
+    yaw_rad: float = 0.1
+
+
+#: The node's default goal tolerances (its parameters' defaults).
+DEFAULT_TOLERANCES = GoalTolerances()
 
 
 def goal_from_pose(msg: Any, frame: str, what: str = "goal") -> Goal:
-    """The :class:`Goal` of a ``PoseStamped`` in ``frame``; a wrong frame, NaN or a bad quaternion is refused."""
+    """The :class:`Goal` of a ``PoseStamped`` in ``frame``; a wrong frame, NaN or a bad quaternion is refused.
+
+    The zero quaternion (all four components exactly 0) means "no orientation": a goal with any yaw.
+    """
     got = str(msg.header.frame_id)
     if got != frame:
         raise MessageError(f"{what} is in frame {got[:80]!r}; the planner works in {frame!r}")
+    q = msg.pose.orientation
+    if (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 0.0):
+        p = msg.pose.position
+        position = np.array([p.x, p.y, p.z], dtype=np.float64)
+        if not np.all(np.isfinite(position)):
+            raise MessageError(f"{what} position must be finite, got {position.tolist()}")
+        return Goal(position=position, yaw=None)
     pose = pose_of(pose_from_msg(msg.pose, what))
     return Goal(
         position=np.array(pose.position, dtype=np.float64), yaw=yaw_from_quaternion(pose.quaternion_xyzw)
@@ -169,20 +206,22 @@ def pick_session(sessions: Sequence[QuerySession], goal: Goal) -> QuerySession |
 
 
 def goal_endpoint(
-    session: QuerySession, goal: Goal, snapshot: MapSnapshot, *, tolerance: float, joint_tolerance: float
+    session: QuerySession, goal: Goal, snapshot: MapSnapshot, tolerances: GoalTolerances = DEFAULT_TOLERANCES
 ) -> Endpoint:
     """What the planner takes for ``goal`` in ``session`` (module docstring): a vertex id or a state."""
     domain = session.domain
     stored = int(domain.goal)
     if goal.joints is not None:
         return _nearest_within(
-            session, goal.joints, stored, joint_tolerance, lambda s: np.abs(s - goal.joints)
+            session, goal.joints, stored, tolerances.joint_rad, lambda s: np.abs(s - goal.joints)
         )
     assert goal.position is not None
     if session.is_arm:
-        state = session.goal_state_from_position(goal.position, snapshot=snapshot, tolerance=tolerance)
+        state = session.goal_state_from_position(
+            goal.position, snapshot=snapshot, tolerance=tolerances.position_m
+        )
         return stored if np.array_equal(state, session.vertex_state(stored)) else state
-    return _helicopter_goal(session, goal.position, goal.yaw, stored, tolerance)
+    return _helicopter_goal(session, goal.position, goal.yaw, stored, tolerances)
 
 
 def _nearest_within(
@@ -200,21 +239,26 @@ def _nearest_within(
 
 
 def _helicopter_goal(
-    session: QuerySession, position: FloatArray, yaw: float, stored: int, tolerance: float
+    session: QuerySession, position: FloatArray, yaw: float | None, stored: int, tolerances: GoalTolerances
 ) -> Endpoint:
+    """The vertex at the goal position whose heading matches its yaw (any, without one), else the goal state."""
+    wanted = state_from_pose(position, 0.0 if yaw is None else yaw)
+    if yaw is None:
+        wanted[3] = np.nan  # any heading: the connector joins it with free arrival headings
     states = session.prior.graph.vertex_states
     if states is None:
-        return state_from_pose(position, yaw)
+        return wanted
     offsets = np.max(np.abs(states[:, :3] - position), axis=1)  # metres, per axis as goal_tolerance says
-    if offsets[stored] <= tolerance:
+    near = offsets <= tolerances.position_m
+    if yaw is not None and states.shape[1] > 3:
+        turn = np.abs(np.mod(states[:, 3] - yaw + np.pi, 2.0 * np.pi) - np.pi)  # rad
+        near &= turn <= tolerances.yaw_rad
+    else:
+        turn = np.zeros(states.shape[0])
+    if near[stored]:
         return stored
-    near = np.flatnonzero(offsets <= tolerance)
-    if near.size == 0:
-        return state_from_pose(position, yaw)
-    turn = (
-        np.abs([wrap_angle(float(h) - yaw) for h in states[near, 3]])
-        if states.shape[1] > 3
-        else np.zeros(near.size)
-    )
-    order = np.lexsort((turn, offsets[near]))
-    return int(near[order[0]])
+    candidates = np.flatnonzero(near)
+    if candidates.size == 0:
+        return wanted
+    order = np.lexsort((candidates, turn[candidates], offsets[candidates]))
+    return int(candidates[order[0]])

@@ -38,7 +38,9 @@ from drd_planner.planning.map_store import MapStore, RobotLoader
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.replan import RecheckResult, recheck_plan
 from drd_planner.planning.requests import (
+    DEFAULT_TOLERANCES,
     Goal,
+    GoalTolerances,
     goal_endpoint,
     pick_session,
     read_robot_state,
@@ -170,7 +172,7 @@ class PlannerService:
         outputs: where results and reports go.
         frame_id: the planning frame.
         limits: size limits of map messages.
-        tolerances: ``goal_tolerance`` (m) and ``joint_tolerance`` (rad) of goals.
+        tolerances: how near a goal must be to a vertex to be that vertex (position, joints, yaw).
         live: the settings read at each use.
         wake: called when there is work for :meth:`serve` (the node wakes its planning thread).
     """
@@ -182,7 +184,7 @@ class PlannerService:
         *,
         frame_id: str,
         limits: MapLimits = MapLimits.DEFAULT,
-        tolerances: tuple[float, float] = (1.0, 0.05),
+        tolerances: GoalTolerances = DEFAULT_TOLERANCES,
         live: Callable[[], LiveSettings] = LiveSettings,
         wake: Callable[[], None] = lambda: None,
     ) -> None:
@@ -404,10 +406,9 @@ class PlannerService:
     ) -> Any | None:
         """Plan on the current snapshot and send the result out; ``wait_s``: how long the request waited."""
         snapshot = self._snapshot
-        tolerance, joint_tolerance = self._tolerances
         try:
             begin = start if start is not None else self._start_for(session)
-            end = goal_endpoint(session, goal, snapshot, tolerance=tolerance, joint_tolerance=joint_tolerance)
+            end = goal_endpoint(session, goal, snapshot, self._tolerances)
             result = session.plan(snapshot, begin, end, seed=self._live().seed)
         except DrdError as exc:
             self._out.error(f"{values.get('request', 'request')} refused: {exc}")

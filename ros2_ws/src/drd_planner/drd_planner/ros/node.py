@@ -73,6 +73,7 @@ from drd_planner.ros.outputs import LATCHED, PlannerOutputs
 from drd_planner.ros.parameters import (
     PARAMETERS,
     declare_parameters,
+    goal_tolerances_of,
     map_limits_of,
     parameter_problems,
     plan_budgets_of,
@@ -195,7 +196,7 @@ class PlannerNode(LifecycleNode):
             self._reporter,
             frame_id=self._frame,
             limits=map_limits_of(values),
-            tolerances=(float(self._parameter("goal_tolerance")), float(self._parameter("joint_tolerance"))),
+            tolerances=goal_tolerances_of(values),
             live=self._live_settings,
             wake=self._worker.wake,
         )

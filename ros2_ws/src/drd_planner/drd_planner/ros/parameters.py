@@ -21,6 +21,7 @@ from drd_planner.planning.map_limits import MapLimits
 
 if TYPE_CHECKING:
     from drd_planner.planning.query_session import SessionBudgets
+    from drd_planner.planning.requests import GoalTolerances
 
 __all__ = [
     "MAP_LIMIT_PARAMETERS",
@@ -162,6 +163,14 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         float_range=(0.0, MAX_JOINT_TOLERANCE_RAD),
     ),
     ParameterSpec(
+        "goal_yaw_tolerance",
+        0.1,
+        "Radians within which a helicopter goal's yaw matches a vertex's heading (else the path ends at exactly "
+        "that yaw; a goal with the zero quaternion has no yaw: any heading); read at configure.",
+        _positive_at_most(math.pi, "rad"),
+        float_range=(0.0, math.pi),
+    ),
+    ParameterSpec(
         "autostart", False, "planner_node configures and activates itself at start.", read_only=True
     ),
     ParameterSpec(
@@ -242,6 +251,17 @@ PARAMETERS = PARAMETERS + MAP_LIMIT_PARAMETERS
 def map_limits_of(values: Mapping[str, Any]) -> MapLimits:
     """The :class:`MapLimits` of the node's parameter values (name -> value; other names are ignored)."""
     return MapLimits.from_parameters(values)
+
+
+def goal_tolerances_of(values: Mapping[str, Any]) -> GoalTolerances:
+    """The goal tolerances of the node's parameter values (``goal_tolerance``, ``joint_tolerance``, ``goal_yaw_tolerance``)."""
+    from drd_planner.planning.requests import GoalTolerances
+
+    return GoalTolerances(
+        position_m=float(values["goal_tolerance"]),
+        joint_rad=float(values["joint_tolerance"]),
+        yaw_rad=float(values["goal_yaw_tolerance"]),
+    )
 
 
 def plan_budgets_of(values: Mapping[str, Any]) -> SessionBudgets:
