@@ -356,6 +356,9 @@ class PlannerService:
                 self._out.error(f"{source} refused: an arm's start comes from joint_states, not a pose")
                 return None
             assert start.position is not None
+            if start.yaw is None:
+                self._out.error(f"{source} refused: a start pose needs its orientation (the vehicle's yaw)")
+                return None
             start_state = state_from_pose(start.position, start.yaw)
         received = time.perf_counter()
         with self._planning:
