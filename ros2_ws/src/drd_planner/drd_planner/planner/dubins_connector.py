@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drd_planner.arrays import FloatArray
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.dubins import DubinsPath, dubins_lengths, dubins_path, path_to_point, point_lengths
 from drd_planner.exceptions import ProblemError
@@ -66,9 +66,7 @@ class LatticeExtent:
     def of_graph(cls, graph: ExplicitGraph) -> LatticeExtent:
         """The extent of a lattice graph's vertex states; margins one grid step and one level gap."""
         states = vertex_states_of(graph)[:, :3]
-        return cls(
-            states.min(axis=0), states.max(axis=0), _gap(states[:, 0:2]), _gap(states[:, 2:3])
-        )
+        return cls(states.min(axis=0), states.max(axis=0), _gap(states[:, 0:2]), _gap(states[:, 2:3]))
 
     def refusal(self, state: FloatArray, label: str) -> str | None:
         """Why ``state`` (x, y, z, ...) is outside the extent, or None when it is inside."""
@@ -138,6 +136,26 @@ class DubinsConnector:
         return 3
 
     @property
+    def turning_radius(self) -> float:
+        """Metres."""
+        return self._radius
+
+    @property
+    def spacing(self) -> float:
+        """Largest arc-length step between a motion's samples, metres."""
+        return self._spacing
+
+    @property
+    def max_climb_gradient(self) -> float:
+        """Largest |dz| / horizontal length of a motion."""
+        return self._climb
+
+    @property
+    def neighbours(self) -> int:
+        """Vertices a state is joined to, at most."""
+        return self._k
+
+    @property
     def free_goal_dims(self) -> tuple[int, ...]:
         """(3,): a goal may leave its heading free (NaN, or a goal of x, y, z only)."""
         return (3,)
@@ -148,9 +166,34 @@ class DubinsConnector:
         return self._extent
 
     def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
-        """The shortest flyable motions from ``state`` to vertices (``outgoing``) or from vertices to it.
+        """The ``neighbours`` shortest flyable motions from ``state`` to vertices (``outgoing``) or into it.
 
         A NaN heading (goals only) leaves the arrival heading free.
+
+        Raises:
+            QueryError: the state is outside the extent, or a start has no heading.
+        """
+        return self.more_motions(state, graph, outgoing=outgoing, skip=0, count=self._k)
+
+    def more_motions(
+        self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool, skip: int, count: int
+    ) -> list[Motion]:
+        """The motions to the next ``count`` vertices after the ``skip`` shortest (the ranking of :meth:`ranked`).
+
+        :meth:`connect` gives the first ``neighbours``; the planner asks for more when they do not suffice.
+        """
+        states = vertex_states_of(graph)
+        order = self.ranked(state, graph, outgoing=outgoing)[skip : skip + count]
+        free_heading = not math.isfinite(float(state[3]))
+        out: list[Motion] = []
+        for v in order.tolist():
+            motion = self._motion(state, states[v], int(v), outgoing=outgoing, free_heading=free_heading)
+            if motion is not None:
+                out.append(motion)
+        return out
+
+    def ranked(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> IntArray:
+        """(M,) every vertex a flyable motion joins to ``state``, by the motion's 3D length (ties by id).
 
         Raises:
             QueryError: the state is outside the extent, or a start has no heading.
@@ -177,15 +220,7 @@ class DubinsConnector:
         feasible = np.isfinite(horizontal) & (np.abs(dz) <= self._climb * horizontal + 1e-9)
         candidates = np.flatnonzero(feasible)
         length = np.hypot(horizontal[candidates], dz[candidates])
-        order = candidates[np.lexsort((candidates, length))]
-        out: list[Motion] = []
-        for v in order.tolist():
-            motion = self._motion(state, states[v], int(v), outgoing=outgoing, free_heading=free_heading)
-            if motion is not None:
-                out.append(motion)
-            if len(out) >= self._k:
-                break
-        return out
+        return np.asarray(candidates[np.lexsort((candidates, length))], dtype=np.int64)
 
     def _motion(
         self, state: FloatArray, vertex_state: FloatArray, vertex: int, *, outgoing: bool, free_heading: bool
