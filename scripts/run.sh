@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Set up a virtual environment with both packages and run one job.
-#   scripts/run.sh demo    the main job: the planner node on the bundled helicopter Wires bag (planner_demo)
+#   scripts/run.sh demo    the main job: the planner node on the bundled real-scale helicopter bag heli_lines (planner_demo)
 #   scripts/run.sh test    the whole suite: ruff, mypy, pytest
 # Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv when missing).
 set -euo pipefail

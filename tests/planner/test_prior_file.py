@@ -236,3 +236,24 @@ def test_the_region_rule_round_trips_and_a_bad_one_is_refused(prior: WorldPrior,
     _rewrite(path, bad_tree, tree_rule, resign=True)
     with pytest.raises(PriorFileError, match="tree 0: the tree's region rule must be a string"):
         load_prior(bad_tree)
+
+
+def test_a_dataset_file_given_as_a_prior_says_how_to_make_the_prior(tmp_path: Path) -> None:
+    from drd_planner.cli import main
+
+    dataset = tmp_path / "data.npz"
+    argv = [
+        "build-dataset",
+        "--domain",
+        "planar",
+        "--world-model",
+        "one_wall",
+        "--worlds",
+        "12",
+        "--seed",
+        "1",
+    ]
+    assert main([*argv, "--out", str(dataset), "--workers", "1"]) == 0
+    with pytest.raises(PriorFileError, match="is a dataset file") as info:
+        load_prior(dataset)
+    assert f"drd build-tree --dataset {dataset} --out PRIOR.npz" in str(info.value)

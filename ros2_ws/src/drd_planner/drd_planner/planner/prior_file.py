@@ -59,6 +59,7 @@ from drd_planner.data.content_checks import (
     header_number,
     header_text,
 )
+from drd_planner.data.dataset_file import FORMAT_NAME as DATASET_FORMAT_NAME
 from drd_planner.data.npz_format import building_for_domain, read_checked_npz, write_checked_npz
 from drd_planner.data.ragged import pack_ragged, unpack_ragged
 from drd_planner.data.safe_npz import (
@@ -203,7 +204,13 @@ def load_prior(path: str | Path, *, expected_domain: str | None = None) -> World
             or internally inconsistent; the message names the file and says which. Nothing else escapes.
     """
     src = check_source(path, error=PriorFileError, what=_WHAT)
-    if _file_format(src) == TREE_FORMAT_NAME:
+    found = _file_format(src)
+    if found == DATASET_FORMAT_NAME:
+        raise PriorFileError(
+            f"{src} is a dataset file (drd build-dataset), not a prior: make the prior from it with "
+            f"`drd build-tree --dataset {src} --out PRIOR.npz` and give that"
+        )
+    if found == TREE_FORMAT_NAME:
         try:
             bundle = load_tree(src, expected_domain=expected_domain)
         except DrdError as exc:
