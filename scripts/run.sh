@@ -31,8 +31,11 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 py="$venv/bin/python"
 "$py" -m pip install -q --disable-pip-version-check --upgrade pip
+# The test job also installs the benchmark peer (OMPL 1.7.0), so the comparisons the docs quote are tested.
+extras="plots,test"
+[ "$job" = test ] && extras="plots,test,peer"
 "$py" -m pip install -q --disable-pip-version-check \
-  -e ros2_ws/src/drd_msgs_py -e "ros2_ws/src/drd_planner[plots,test]" -r requirements-dev.txt
+  -e ros2_ws/src/drd_msgs_py -e "ros2_ws/src/drd_planner[$extras]" -r requirements-dev.txt
 
 case "$job" in
   demo)

@@ -9,7 +9,7 @@ from typing import Literal
 
 import numpy as np
 import pytest
-from conftest import gccd_folder
+from conftest import gccd_folder, require_ompl
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -54,12 +54,6 @@ def tiny_problem(directed: bool = False, edges: np.ndarray = EDGES) -> Problem:
     x = np.array([w[0] for w in TINY_WORLDS], dtype=bool)
     worlds = WorldDatabase(x, library.valid_paths(x), np.array([], dtype=np.int64), np.arange(4))
     return Problem("tiny", library, np.ones(4), graph, 0, 3, worlds)
-
-
-def require_ompl() -> None:
-    ok, message = ompl_available()
-    if not ok:
-        pytest.skip(message)
 
 
 # --- no OMPL needed -------------------------------------------------------------------------------

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import require_ompl
 
-from drd_planner.bench.ompl_peer import LiveWorlds, ompl_available
+from drd_planner.bench.ompl_peer import LiveWorlds
 from drd_planner.bench.plan_timing import (
     PlanRun,
     RecordingOracle,
@@ -101,9 +102,7 @@ def test_summary_compares_the_same_worlds() -> None:
 
 
 def test_ompl_runs_count_only_paths_checked_free(small_arm: ArmDomain) -> None:
-    ok, message = ompl_available()
-    if not ok:
-        pytest.skip(message)
+    require_ompl()
     recipes = seeded_recipes("clutter", [10, 11])
     live = LiveWorlds("arm", small_arm.spec(), tuple(recipes))
     runs = time_ompl(small_arm.graph, (0, 1), live, model="spheres", time_limit_s=20.0)
