@@ -162,3 +162,28 @@ def test_an_inactive_output_publishes_no_plan_to_re_check(messages: list[BagMess
     for m in messages[: bag_requests(messages)[0].position + 1]:
         _feed(service, m)
     assert out.plans and service.published is None
+
+
+def test_a_plan_after_a_refused_map_says_so(messages: list[BagMessage]) -> None:
+    out = Recorder()
+    service = _service(out)
+    first_request = bag_requests(messages)[0].position
+    for m in messages[:first_request]:
+        _feed(service, m)
+    goal = read_goal("goal_pose", messages[first_request].message, service.sessions, "map")
+    service.plan_now(goal, None)
+    assert "newer_map_refused" not in out.records[-1].request  # nothing refused yet
+    obstacles = next(m for m in messages if topic_base(m.topic) == "obstacles")
+    used = service.snapshot.version
+    service.maps.frame_id = "elsewhere"
+    with pytest.raises(MessageError, match="frame"):
+        service.take_map("obstacles", obstacles.message)
+    service.maps.frame_id = "map"
+    service.plan_now(goal, None)  # planned on the older maps: the summary says a newer one was refused
+    record = out.records[-1]
+    assert record.snapshot.version == used and record.result.map_version == used
+    assert record.request["newer_map_refused"].startswith("obstacles refused:")
+    assert "frame" in record.request["newer_map_refused"]
+    service.take_map("obstacles", obstacles.message)  # a newer map accepted: the refusal is history
+    service.plan_now(goal, None)
+    assert "newer_map_refused" not in out.records[-1].request

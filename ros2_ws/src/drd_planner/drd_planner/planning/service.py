@@ -28,6 +28,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import DrdError, PlanningError
@@ -57,6 +59,8 @@ __all__ = [
     "ServiceOutputs",
 ]
 
+#: Characters of a refused map's reason a plan summary quotes.
+MAX_REFUSAL_TEXT = 300
 #: Served requests kept in :attr:`PlannerService.history`.
 HISTORY_LENGTH = 16
 #: The newest records of the history that keep their map snapshot (older ones drop it: a snapshot
@@ -192,6 +196,9 @@ class PlannerService:
         self._out = outputs
         self.frame_id = frame_id
         self._tolerances = tolerances
+        self._refused: tuple[int, str] | None = (
+            None  # (current map version then, why) of the last refused map
+        )
         self._live = live
         self._wake = wake
         margin = self._sessions[0].margin if self._sessions else 0.0
@@ -265,7 +272,12 @@ class PlannerService:
         Raises:
             MessageError, DrdError: the message is refused; the maps are unchanged.
         """
-        snapshot = self.maps.apply(topic, msg)
+        try:
+            snapshot = self.maps.apply(topic, msg)
+        except (MessageError, DrdError) as exc:
+            # A plan on the maps that are still current says that a newer map was refused, and why.
+            self._refused = (self._snapshot.version, f"{topic_base(topic)} refused: {exc}"[:MAX_REFUSAL_TEXT])
+            raise
         if snapshot is None:
             return None
         self._prepare(snapshot)
@@ -420,6 +432,9 @@ class PlannerService:
         if result.status == "refused":
             self._out.error(f"{values.get('request', 'request')} refused: {result.message}")
             return None
+        refused = self._refused
+        if refused is not None and refused[0] >= snapshot.version:
+            values = {**values, "newer_map_refused": refused[1]}
         record = PlanRecord(session, result, snapshot, dict(values))
         self._remember(record)
 

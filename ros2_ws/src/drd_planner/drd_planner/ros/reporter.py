@@ -80,6 +80,11 @@ class NodeReporter:
         )
         self.last_plan = LastPlan(str(result.status), str(extra.get("request", "request")), time.monotonic())
         self._out.status("plan", ok=result.ok, message=result.message, values=values, stamp=stamp)
+        if "newer_map_refused" in extra:
+            self._logger.warning(
+                f"{result.tree}: planned on map version {snapshot.version}; a newer map was refused "
+                f"({extra['newer_map_refused']})"
+            )
         if result.ok:
             self._logger.info(f"{result.tree}: {result.message}")
         else:
