@@ -253,3 +253,37 @@ def test_scene_spec_defaults_come_from_the_domains_parameters() -> None:
     assert spec_defaults(SceneFolder("/s"), "arm") == {"floor_z": None}
     assert spec_defaults(SceneFolder("/s"), "helicopter") == {}
     assert spec_defaults(SceneFolder("/s"), "grid_test") == {}  # not registered: no defaults
+
+
+@pytest.mark.parametrize(
+    ("content", "fragment"),
+    [
+        ("bomb", "aliases"),
+        ("deep", "nested deeper than"),
+        ("sparse", "bytes; at most"),
+    ],
+)
+def test_hostile_scene_files_end_the_build_at_once_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], content: str, fragment: str
+) -> None:
+    """Issue 33 items 1-3: an alias bomb hung the build, deep nesting and a huge file ended in tracebacks."""
+    import time
+
+    folder = tmp_path / "hostile"
+    folder.mkdir()
+    scene = folder / "scene0001.yaml"
+    if content == "bomb":
+        lines = ['a0: &a0 ["xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx"]']
+        lines += [f"a{k}: &a{k} [{', '.join([f'*a{k - 1}'] * 9)}]" for k in range(1, 10)]
+        scene.write_text("\n".join(lines) + "\nworld: {collision_objects: [{id: *a9, primitives: []}]}\n")
+    elif content == "deep":
+        scene.write_text("world: " + "[" * 100_000 + "]" * 100_000 + "\n")
+    else:
+        sparse = tmp_path / "sparse.bin"
+        with sparse.open("wb") as handle:
+            handle.truncate(3 << 30)
+        scene.symlink_to(sparse)
+    t0 = time.perf_counter()
+    err = _refusal(["--scenes", str(folder), "--out", str(tmp_path / "d.npz")], capsys)
+    assert time.perf_counter() - t0 < 30.0
+    assert fragment in err and len(err) < 600, err

@@ -34,6 +34,7 @@ from drd_planner.domains.spec_docs import params_class
 from drd_planner.exceptions import DatasetError, GeometryError, ProblemError
 from drd_planner.geometry.moveit_request import joint_vector, parse_motion_plan_request
 from drd_planner.geometry.moveit_scene import ScenePrimitive, parse_planning_scene
+from drd_planner.geometry.moveit_yaml import MAX_YAML_BYTES
 from drd_planner.geometry.scene import Scene
 
 __all__ = [
@@ -217,12 +218,15 @@ def resolve(
     if num_worlds is not None and num_worlds > len(scenes):
         raise DatasetError(f"--worlds {num_worlds}: {folder} has only {len(scenes)} scene file(s)")
     used = scenes[: num_worlds or len(scenes)]
-    records = [FileRecord.of(p, what="scene file") for p in used]
+    records = [FileRecord.of(p, what="scene file", max_bytes=MAX_YAML_BYTES) for p in used]
     for record in records:
         scene_primitives(record.path, record.read())
     spec: dict[str, Any] | None = None
     taken: dict[str, Any] = {}
-    requests = [FileRecord.of(p, what="request file") for p in request_files(folder, used, scenes)]
+    requests = [
+        FileRecord.of(p, what="request file", max_bytes=MAX_YAML_BYTES)
+        for p in request_files(folder, used, scenes)
+    ]
     if request.requests and requests:
         if not online.joint_names:
             raise DatasetError(

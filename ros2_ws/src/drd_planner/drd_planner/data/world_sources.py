@@ -29,9 +29,9 @@ import hashlib
 import importlib
 import json
 import os
+import stat
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 from drd_planner.domains.base import Domain, EdgeChecker
@@ -67,6 +67,32 @@ SOURCE_MODULES: Mapping[str, str] = {
 }
 
 
+#: Largest source file (scene, request, terrain grid, bag) read whole, bytes; each kind may ask for less.
+MAX_SOURCE_BYTES = 1 << 30
+
+
+def _bounded_bytes(where: str, what: str, max_bytes: int) -> bytes:
+    """The bytes of the regular file ``where`` when it has at most ``max_bytes`` (its size looked at first).
+
+    Raises:
+        DatasetError: unreadable, not a regular file, or larger than ``max_bytes``.
+    """
+    label = f"{what} {where}" if what else where
+    try:
+        info = os.stat(where)
+        if not stat.S_ISREG(info.st_mode):
+            raise DatasetError(f"cannot read {label}: not a regular file")
+        if info.st_size > max_bytes:
+            raise DatasetError(f"{label} has {info.st_size} bytes; at most {max_bytes} are read")
+        with open(where, "rb") as handle:
+            data = handle.read(max_bytes + 1)
+    except OSError as exc:
+        raise DatasetError(f"cannot read {label}: {exc.strerror or exc}") from exc
+    if len(data) > max_bytes:
+        raise DatasetError(f"{label} has more than {max_bytes} bytes")
+    return data
+
+
 def _absolute(path: str | os.PathLike[str]) -> str:
     """``path`` made absolute and normalised (so a recorded command works from any folder)."""
     return os.path.abspath(os.fspath(path))
@@ -85,29 +111,27 @@ class FileRecord:
     sha256: str
 
     @classmethod
-    def of(cls, path: str | os.PathLike[str], *, what: str = "file") -> FileRecord:
+    def of(
+        cls, path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_SOURCE_BYTES
+    ) -> FileRecord:
         """The record of ``path`` as it is now.
 
         Raises:
-            DatasetError: the file cannot be read (the message names it and ``what`` it is).
+            DatasetError: the file cannot be read, is not a regular file or has more than ``max_bytes``
+                (looked at before reading; the message names it and ``what`` it is).
         """
         where = _absolute(path)
-        try:
-            data = Path(where).read_bytes()
-        except OSError as exc:
-            raise DatasetError(f"cannot read {what} {where}: {exc.strerror or exc}") from exc
+        data = _bounded_bytes(where, what, max_bytes)
         return cls(where, hashlib.sha256(data).hexdigest())
 
-    def read(self) -> bytes:
+    def read(self, *, max_bytes: int = MAX_SOURCE_BYTES) -> bytes:
         """The file's bytes, checked against the recorded SHA-256.
 
         Raises:
-            DatasetError: the file is gone, unreadable, or its bytes changed since the build was planned.
+            DatasetError: the file is gone, unreadable, larger than ``max_bytes``, or its bytes changed
+                since the build was planned.
         """
-        try:
-            data = Path(self.path).read_bytes()
-        except OSError as exc:
-            raise DatasetError(f"cannot read {self.path}: {exc.strerror or exc}") from exc
+        data = _bounded_bytes(self.path, "", max_bytes)
         digest = hashlib.sha256(data).hexdigest()
         if digest != self.sha256:
             raise DatasetError(

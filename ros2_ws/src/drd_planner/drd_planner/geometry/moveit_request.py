@@ -1,7 +1,8 @@
 """MoveIt MotionPlanRequest YAML (as written by MotionBenchMaker) -> named joint states of its start and goals.
 
 Reads ``start_state.joint_state`` (``name`` and ``position`` lists) and, per entry of ``goal_constraints``,
-its ``joint_constraints`` (``joint_name`` and ``position`` each) with ``yaml.safe_load``. Positions are in
+its ``joint_constraints`` (``joint_name`` and ``position`` each) with the bounded safe loader of
+:mod:`~drd_planner.geometry.moveit_yaml`. Positions are in
 radians (revolute joints) or metres (prismatic joints), as in MoveIt.
 
 :func:`joint_vector` puts such a named state in a robot's joint order: a joint the robot plans but the state
@@ -23,11 +24,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import GeometryError
-from drd_planner.geometry.moveit_scene import read_yaml_text
+from drd_planner.geometry.moveit_yaml import load_yaml, quoted, read_yaml_text
 
 __all__ = ["RequestStates", "joint_vector", "parse_motion_plan_request", "read_motion_plan_request"]
 
@@ -55,7 +55,7 @@ class RequestStates:
 
 def _number(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(float(value)):
-        raise GeometryError(f"{where}: joint positions must be finite numbers, got {value!r}")
+        raise GeometryError(f"{where}: joint positions must be finite numbers, got {quoted(value)}")
     return float(value)
 
 
@@ -78,7 +78,7 @@ def _start_state(doc: Mapping[str, Any], source: str) -> NamedState | None:
     out: dict[str, float] = {}
     for name, position in zip(names, positions, strict=True):
         if str(name) in out:
-            raise GeometryError(f"{where} names joint {name!r} twice")
+            raise GeometryError(f"{where} names joint {quoted(name)} twice")
         out[str(name)] = _number(position, where)
     return out
 
@@ -99,11 +99,13 @@ def _goal(constraints: Any, k: int, source: str) -> NamedState:
     out: dict[str, float] = {}
     for item in joints:
         if not isinstance(item, Mapping) or "joint_name" not in item or "position" not in item:
-            raise GeometryError(f"{where}: each joint constraint needs joint_name and position, got {item!r}")
+            raise GeometryError(
+                f"{where}: each joint constraint needs joint_name and position, got {quoted(item)}"
+            )
         name = str(item["joint_name"])
         if name in out:
-            raise GeometryError(f"{where} constrains joint {name!r} twice")
-        out[name] = _number(item["position"], f"{where} joint {name!r}")
+            raise GeometryError(f"{where} constrains joint {quoted(name)} twice")
+        out[name] = _number(item["position"], f"{where} joint {quoted(name)}")
     return out
 
 
@@ -114,10 +116,7 @@ def parse_motion_plan_request(text: str, *, source: str = "<string>") -> Request
         GeometryError: invalid YAML, no goal constraints, or anything the module docstring lists; the
             message names ``source``.
     """
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise GeometryError(f"{source}: not valid YAML: {exc}") from exc
+    doc = load_yaml(text, source=source)
     if not isinstance(doc, Mapping):
         raise GeometryError(f"{source}: a motion plan request must be a YAML mapping")
     goals = doc.get("goal_constraints") or []

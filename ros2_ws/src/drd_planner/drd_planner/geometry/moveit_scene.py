@@ -1,7 +1,7 @@
 """MoveIt PlanningScene YAML (as written by MotionBenchMaker) -> box, cylinder and sphere primitives.
 
 Reads ``world.collision_objects`` of a ``moveit_msgs/PlanningScene`` (or ``collision_objects`` of a
-``PlanningSceneWorld``) with ``yaml.safe_load``. Each object's primitives become
+``PlanningSceneWorld``) with the bounded safe loader of :mod:`~drd_planner.geometry.moveit_yaml`. Each object's primitives become
 :class:`ScenePrimitive` values whose pose is the object pose (``pose``, identity when absent, as in
 older MoveIt messages) composed with the primitive pose; an all-zero (unset) quaternion means no rotation,
 as in MoveIt. Poses may be written as lists
@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.moveit_yaml import load_yaml, quoted, read_yaml_text
 from drd_planner.geometry.shapes import Box, Cylinder, Pose, Sphere
 
 #: SolidPrimitive type constants (shape_msgs) and their names.
@@ -40,7 +40,6 @@ __all__ = [
     "ScenePrimitive",
     "parse_planning_scene",
     "read_planning_scene",
-    "read_yaml_text",
 ]
 
 
@@ -62,13 +61,13 @@ class ScenePrimitive:
 def _numbers(value: Any, count: int, what: str, where: str) -> list[float]:
     """``count`` finite floats from a list, or GeometryError naming ``where``."""
     if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != count:
-        raise GeometryError(f"{where}: {what} must be a list of {count} numbers, got {value!r}")
+        raise GeometryError(f"{where}: {what} must be a list of {count} numbers, got {quoted(value)}")
     out: list[float] = []
     for item in value:
         if isinstance(item, bool) or not isinstance(item, int | float):
-            raise GeometryError(f"{where}: {what} must contain numbers, got {item!r}")
+            raise GeometryError(f"{where}: {what} must contain numbers, got {quoted(item)}")
         if not math.isfinite(float(item)):
-            raise GeometryError(f"{where}: {what} must be finite, got {value!r}")
+            raise GeometryError(f"{where}: {what} must be finite, got {quoted(value)}")
         out.append(float(item))
     return out
 
@@ -86,7 +85,7 @@ def _vector(value: Any, keys: str, what: str, where: str) -> list[float]:
 def _pose(value: Any, where: str) -> Pose:
     """A ``geometry_msgs/Pose`` mapping as a :class:`Pose`."""
     if not isinstance(value, Mapping) or "position" not in value or "orientation" not in value:
-        raise GeometryError(f"{where}: a pose needs 'position' and 'orientation', got {value!r}")
+        raise GeometryError(f"{where}: a pose needs 'position' and 'orientation', got {quoted(value)}")
     position = _vector(value["position"], "xyz", "position", where)
     orientation = _vector(value["orientation"], "xyzw", "orientation (x, y, z, w)", where)
     if not any(orientation):
@@ -100,12 +99,14 @@ def _pose(value: Any, where: str) -> Pose:
 def _shape(primitive: Any, where: str) -> Box | Cylinder | Sphere:
     """A SolidPrimitive mapping as a shape."""
     if not isinstance(primitive, Mapping):
-        raise GeometryError(f"{where}: a primitive must be a mapping, got {primitive!r}")
+        raise GeometryError(f"{where}: a primitive must be a mapping, got {quoted(primitive)}")
     kind = primitive.get("type")
     if isinstance(kind, int) and not isinstance(kind, bool):
         kind = PRIMITIVE_TYPES.get(kind, f"type {kind}")
     if kind not in ("box", "sphere", "cylinder"):
-        raise GeometryError(f"{where}: primitive type {kind!r} is not supported (box, sphere, cylinder)")
+        raise GeometryError(
+            f"{where}: primitive type {quoted(kind)} is not supported (box, sphere, cylinder)"
+        )
     if "dimensions" not in primitive:
         raise GeometryError(f"{where}: {kind} has no dimensions")
     dims = primitive["dimensions"]
@@ -131,19 +132,19 @@ def _nonempty(obj: Mapping[str, Any], key: str) -> bool:
 def _object_primitives(obj: Any, index: int, frames: Sequence[str]) -> list[ScenePrimitive]:
     """The primitives of one CollisionObject mapping."""
     if not isinstance(obj, Mapping):
-        raise GeometryError(f"collision object #{index} must be a mapping, got {obj!r}")
+        raise GeometryError(f"collision object #{index} must be a mapping, got {quoted(obj)}")
     name = str(obj.get("id") or f"#{index}")
-    where = f"collision object {name!r}"
+    where = f"collision object {quoted(name)}"
     for key in ("meshes", "mesh_poses", "planes", "plane_poses"):
         if _nonempty(obj, key):
             raise GeometryError(f"{where} has {key}; only box, sphere and cylinder primitives are supported")
     operation = obj.get("operation", 0)
     if operation not in (0, "ADD", "add", b"\x00"):
-        raise GeometryError(f"{where} has operation {operation!r}; only ADD is supported")
+        raise GeometryError(f"{where} has operation {quoted(operation)}; only ADD is supported")
     header = obj.get("header")
     frame = str(header.get("frame_id", "")) if isinstance(header, Mapping) else ""
     if frame not in frames:
-        raise GeometryError(f"{where} is in frame {frame!r}; supported frames: {list(frames)}")
+        raise GeometryError(f"{where} is in frame {quoted(frame)}; supported frames: {list(frames)}")
     object_pose = _pose(obj["pose"], where) if "pose" in obj else Pose.identity()
     primitives = obj.get("primitives") or []
     poses = obj.get("primitive_poses") or []
@@ -195,10 +196,7 @@ def parse_planning_scene(
         GeometryError: invalid YAML, no collision objects section, or anything listed in the module
             docstring; the message names the source and the object.
     """
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise GeometryError(f"{source}: not valid YAML: {exc}") from exc
+    doc = load_yaml(text, source=source)
     if not isinstance(doc, Mapping):
         raise GeometryError(f"{source}: a planning scene must be a YAML mapping")
     world = doc.get("world", doc)
@@ -225,16 +223,3 @@ def read_planning_scene(
         GeometryError: unreadable file or invalid content.
     """
     return parse_planning_scene(read_yaml_text(path, "planning scene"), source=str(path), frames=frames)
-
-
-def read_yaml_text(path: str | Path, what: str) -> str:
-    """The UTF-8 text of a MoveIt YAML file; ``what`` names the kind of file in the error.
-
-    Raises:
-        GeometryError: the file cannot be read or is not UTF-8.
-    """
-    p = Path(path)
-    try:
-        return p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise GeometryError(f"cannot read {what} {p}: {exc}") from exc
