@@ -51,7 +51,6 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
@@ -81,19 +80,10 @@ from drd_planner.ros.parameters import (
 from drd_planner.ros.plan_worker import PlanWorker
 from drd_planner.ros.reporter import NodeReporter
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, heartbeat_values, map_values
+from drd_planner.ros.subscription_qos import REQUESTS, ROBOT_STATE, VOLATILE_MAPS
 
 __all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
 
-
-#: Map subscriptions with ``map_subscribe_transient_local`` false: hears volatile and latched publishers.
-VOLATILE_MAPS = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
-)
-#: The robot's state (odometry, joint states): best effort, which hears reliable publishers too.
-ROBOT_STATE = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
-#: Requests (topics and the service): reliable and deep enough that a burst reaches the node, which then
-#: coalesces it (with KEEP_LAST 10 the middleware would drop all but the last 10 unseen).
-REQUESTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 
 #: Seconds between two reports of the same refused robot-state message (odometry streams fast).
 STATE_ERROR_PERIOD_S = 5.0
