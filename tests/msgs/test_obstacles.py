@@ -236,3 +236,22 @@ def test_a_map_growing_over_a_limit_is_refused_and_kept(msgs: Any) -> None:
         obstacle_update(two, frame_id=FRAME, limits=limits).apply(with_mesh)
     replaced = obstacle_update(one, frame_id=FRAME, limits=limits).apply(with_mesh)  # same key: still 4
     assert set(replaced) == {"mesh/0"}
+
+
+def test_marker_strings_are_bounded_and_never_quoted_whole(msgs: Any) -> None:
+    """Issue 33 item 4: twelve markers with 8 MB namespaces were kept as map keys (RSS +290 MiB)."""
+    long_ns = "n" * 300
+    with pytest.raises(MessageError, match=r"marker 0: its ns has 300 characters .*at most 256") as info:
+        obstacle_update(_cubes(msgs, 1, ns=long_ns), frame_id=FRAME)
+    assert len(str(info.value)) < 300
+    array = _cubes(msgs, 3)
+    for marker in array.markers:
+        marker.text = "t" * 1000
+    small = MessageLimits(max_message_bytes=2500)
+    with pytest.raises(MessageError, match=r"strings .* reach \d+ characters by marker 2, over the limit "):
+        obstacle_update(array, frame_id=FRAME, limits=small)
+    assert len(obstacle_update(array, frame_id=FRAME).obstacles) == 3  # within the default limit
+    array.markers[0].header.frame_id = "f" * 100_000
+    with pytest.raises(MessageError, match="frame") as info:
+        obstacle_update(array, frame_id=FRAME)
+    assert len(str(info.value)) < 300

@@ -39,10 +39,12 @@ class MessageLimits:
     max_message_bytes: int = field(
         default=32 * 2**20,
         metadata=_doc(
-            "bytes: largest payload of one map message (terrain cloud data, robot_description text)"
+            "bytes: largest payload of one map message (terrain cloud data, robot_description text, the strings "
+            "of a MarkerArray)"
         ),
     )
-    """Bytes: the largest payload of one map message (a terrain cloud's ``data``, a ``robot_description``)."""
+    """Bytes: the largest payload of one map message (a terrain cloud's ``data``, a ``robot_description``, the
+    strings of a MarkerArray's markers: ``ns``, ``frame_id``, ``text`` and ``mesh_resource`` together)."""
 
     max_terrain_cells: int = field(
         default=250_000,

@@ -235,6 +235,10 @@ def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
     return Obstacle(key, shape, pose, name, points, label=what)
 
 
+#: Longest marker namespace accepted (characters); the obstacle map keeps every ``ns/id`` as a key.
+MAX_NAMESPACE_CHARS = 256
+
+
 def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence[Any]:
     """The markers of ``msg`` once every frame and the array's size are checked (see :func:`obstacle_update`)."""
     markers = getattr(msg, "markers", None)
@@ -242,12 +246,26 @@ def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence
         raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
     if len(markers) > limits.max_markers:
         raise MessageError(limits.refusal("max_markers", f"the MarkerArray has {len(markers)} markers"))
-    line_points = triangles = 0
+    line_points = triangles = text_bytes = 0
     for i, marker in enumerate(markers):
-        frame = str(marker.header.frame_id)
+        ns, frame = str(marker.ns), str(marker.header.frame_id)
+        text_bytes += len(ns) + len(frame) + len(str(marker.text)) + len(str(marker.mesh_resource))
+        if text_bytes > limits.max_message_bytes:
+            raise MessageError(
+                limits.refusal(
+                    "max_message_bytes",
+                    f"the MarkerArray's strings (ns, frame_id, text, mesh_resource) "
+                    f"reach {text_bytes} characters by marker {i}",
+                )
+            )
+        if len(ns) > MAX_NAMESPACE_CHARS:
+            raise MessageError(
+                f"marker {i}: its ns has {len(ns)} characters ({ns[:40]!r}...); at most {MAX_NAMESPACE_CHARS} "
+                "(the obstacle map keeps every ns/id)"
+            )
         if frame != frame_id:
-            what = f"marker {i} ({marker.ns}/{int(marker.id)})"
-            raise MessageError(f"{what} is in frame {frame!r}; the planner works in {frame_id!r}")
+            what = f"marker {i} ({ns[:80]}/{int(marker.id)})"
+            raise MessageError(f"{what} is in frame {frame[:80]!r}; the planner works in {frame_id!r}")
         if int(marker.action) == ADD and int(marker.type) == LINE_STRIP:
             line_points += len(marker.points)
         elif int(marker.action) == ADD and int(marker.type) == TRIANGLE_LIST:
