@@ -236,3 +236,16 @@ def test_a_nan_band_through_a_plateau_blocks_the_edge_across_it() -> None:
         checker = HelicopterChecker(scene, np.concatenate([low, high]), [0, 41, 82], radius=2.0)
         assert checker.check_many([0, 1]).tolist() == [free_low, free_high]
         assert [checker.check(0), checker.check(1)] == [free_low, free_high]
+
+
+def test_the_explanation_names_the_terrain_or_the_obstacle_that_blocks(domain: HelicopterDomain) -> None:
+    box = ("tower_7", Box((10.0, 10.0, 100.0)), Pose((300.0, 0.0, 50.0)))
+    checker = domain.checker(_world(domain, heights=20.0, solids=(box,)))
+    assert checker.explain_motion(np.array([[100.0, 0.0, 65.0, 0.0]])) == ""  # free
+    below = checker.explain_motion(np.array([[100.0, 0.0, 15.0, 0.0]]))
+    assert below.startswith("below the terrain (ground at 20.0 m)") and "(100.0, 0.0, 15.0 m)" in below
+    near = checker.explain_motion(np.array([[100.0, 0.0, 24.0, 0.0]]))
+    assert near.startswith("within the 7 m clearance of the terrain")
+    motion = np.array([[250.0, 0.0, 65.0, 0.0], [292.0, 0.0, 65.0, 0.0], [300.0, 0.0, 65.0, 0.0]])
+    assert not checker.check_motion(motion)
+    assert checker.explain_motion(motion) == "obstacle 'tower_7' at sample 2 of 3 (292.0, 0.0, 65.0 m)"

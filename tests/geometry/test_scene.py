@@ -328,3 +328,22 @@ def test_prefiltered_answers_equal_brute_force() -> None:
     for k in range(0, 400, 40):
         assert scene.spheres_collide(centres[k : k + 40], 0.7) == any(expected[k : k + 40])
         assert scene.sphere_sweep_free(centres[k : k + 40], 0.7) == (not any(expected[k : k + 40]))
+
+
+def test_each_obstacle_alone_says_which_one_blocks() -> None:
+    scene = Scene(margin=0.5)
+    scene.add(Box((1.0, 1.0, 1.0)), Pose.identity(), name="box")
+    scene.add(Sphere(1.0), Pose((10.0, 0.0, 0.0)), name="ball")
+    scene.add_terrain(Heightfield((-10.0, -10.0), 10.0, np.zeros((3, 3))), name="ground")
+    probe = np.array([[10.0, 0.0, 1.8]])  # 0.3 m above the ball's top: within the margin
+    blocked = [name for name in scene.names if scene.alone(name).spheres_collide(probe, 0.5)]
+    assert blocked == ["ball"] and scene.spheres_collide(probe, 0.5)
+    below = np.array([[5.0, 5.0, -3.0]])
+    assert [n for n in scene.names if scene.alone(n).spheres_collide(below, 0.1)] == ["ground"]
+    assert scene.alone("ground").terrain is not None and scene.alone("box").terrain is None
+    version = scene.version
+    alone = scene.alone("box")
+    alone.set_pose("box", Pose((50.0, 0.0, 0.0)))  # moving it there never moves it here
+    assert scene.spheres_collide(np.zeros((1, 3)), 0.1) and scene.version == version
+    with pytest.raises(GeometryError, match="no obstacle named 'nothing'"):
+        scene.alone("nothing")

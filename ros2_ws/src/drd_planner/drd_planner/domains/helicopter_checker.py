@@ -42,6 +42,8 @@ __all__ = ["HelicopterChecker", "helicopter_checker", "obstacle_boxes"]
 CHUNK_POINTS = 4096
 #: Bin size (metres) of the obstacle-box occupancy grid of the prefilter.
 BIN_SIZE = 10.0
+#: Obstacles named in one explanation at most (the rest are counted).
+MAX_CAUSES = 4
 
 
 class _NearFilter:
@@ -198,6 +200,43 @@ class HelicopterChecker:
         if xyz.ndim != 2 or xyz.shape[0] < 1 or xyz.shape[1] < 3 or not np.all(np.isfinite(xyz[:, :3])):
             raise ProblemError(f"a motion must be a finite (K, >= 3) array of samples, got shape {xyz.shape}")
         return bool(self._scene.sphere_sweep_free(np.ascontiguousarray(xyz[:, :3]), self._radius))
+
+    def explain_motion(self, states: npt.ArrayLike) -> str:
+        """What blocks a motion ((K, >= 3) samples, x, y, z m first; K = 1: one state), or "" when it is free.
+
+        The first blocked sample's cause as a user would fix it: below the terrain (with the ground height
+        there), within the clearance of the terrain, or the obstacles whose clearance it enters (each tested
+        alone, by its map name); for K > 1 also where along the motion. Slow by design (a test per obstacle):
+        the planner asks only after a plan failed.
+        """
+        xyz = np.asarray(states, dtype=np.float64)[:, :3]
+        blocked = self._scene.spheres_collide_mask(xyz, self._radius)
+        if not blocked.any():
+            return ""
+        k = int(np.argmax(blocked))
+        centre = xyz[k : k + 1]
+        clearance = self._radius + self._scene.margin
+        causes = []
+        for name in self._scene.names:
+            alone = self._scene.alone(name)
+            if not alone.spheres_collide(centre, self._radius):
+                continue
+            terrain = alone.terrain
+            if terrain is None:
+                causes.append(f"obstacle {name[:80]!r}")
+                continue
+            ground = float(terrain.surface_at(centre[:, :2], interpolation="triangles")[0])
+            under = bool(terrain.below(centre, interpolation="triangles")[0])
+            causes.append(
+                f"{'below' if under else f'within the {clearance:g} m clearance of'} the terrain (ground at "
+                f"{ground:.1f} m)"
+            )
+        shown = ", ".join(causes[:MAX_CAUSES]) + (
+            f" and {len(causes) - MAX_CAUSES} more" if len(causes) > MAX_CAUSES else ""
+        )
+        where = f" at sample {k + 1} of {xyz.shape[0]}" if xyz.shape[0] > 1 else ""
+        x, y, z = (float(v) for v in centre[0])
+        return f"{shown or 'the map'}{where} ({x:.1f}, {y:.1f}, {z:.1f} m)"
 
     def check_many(self, edges: npt.ArrayLike) -> BoolArray:
         """(K,) bool, True where each of the (K,) edge ids is free; same answers as :meth:`check`."""

@@ -210,6 +210,24 @@ class Scene:
         new._packed = self._packed  # read-only arrays; dropped by the copy's first edit
         return new
 
+    def alone(self, name: str) -> Scene:
+        """A scene with the same margin holding only obstacle ``name`` (its FCL objects shared, as :meth:`copy`).
+
+        For saying which obstacle blocks something: query each obstacle alone.
+
+        Raises:
+            GeometryError: no such obstacle.
+        """
+        entry = self._entries.get(name)
+        if entry is None:
+            raise GeometryError(f"no obstacle named {name!r} in the scene")
+        entry.shared = True
+        new = Scene(margin=self._margin)
+        new._entries = {name: entry}
+        if name == self._terrain_name:
+            new._terrain, new._terrain_name = self._terrain, name
+        return new
+
     def set_pose(self, name: str, pose: Pose) -> None:
         """Move the shape obstacle ``name`` to ``pose`` (FCL's broadphase is updated at once).
 
