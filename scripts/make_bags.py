@@ -393,6 +393,7 @@ def arm_scenario(
 ) -> Scenario:
     """The arm Table+Clutter bag (prior ``trees/arm_table_clutter.npz``, frame ``panda_link0``)."""
     session = QuerySession(load_prior(REPO / "trees" / "arm_table_clutter.npz"), name="arm_table_clutter")
+    session.planner.growth = None  # the scenario is chosen on the roadmap alone (its plans need no growth)
     domain = session.domain
     assert isinstance(domain, ArmDomain)
     frame = "panda_link0"

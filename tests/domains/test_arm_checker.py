@@ -56,3 +56,42 @@ def test_sphere_model_answers_groups_as_their_rows(domain: ArmDomain) -> None:
     assert all(
         f <= i for f, i in zip(ends_free.tolist(), interiors_free, strict=True)
     )  # interior blocked: edge blocked
+
+
+def test_motions_off_the_roadmap_obey_the_static_rules(domain: ArmDomain) -> None:
+    free = domain.scene_checker(Scene(margin=0.0))
+    robot = domain.robot
+    rng = np.random.default_rng(0)
+    q = robot.lower + rng.random((4000, robot.dof)) * (robot.upper - robot.lower)
+    ok = robot.within_limits(q) & ~robot.self_collision(q)
+    colliding = q[robot.within_limits(q) & robot.self_collision(q)][0]
+    start = np.asarray(domain.params.start, dtype=np.float64)
+    # A motion through a self-colliding configuration is blocked in an empty scene (it was not, before).
+    assert not free.check_motion(np.array([start, colliding]))
+    assert not free.check_motion(colliding[None])
+    beyond = start.copy()
+    beyond[0] = robot.upper[0] + 0.1
+    assert not free.check_motion(np.array([start, beyond]))  # joint limits
+    assert free.check_motion(q[ok][:1])
+    assert domain.params.floor_z == 0.0
+    moving = robot.spheres.frame_index > 0
+    bottoms = (robot.sphere_centres(q)[:, moving, 2] - robot.spheres.radii[moving]).min(axis=1)
+    under = q[ok & (bottoms < -0.05)][0]  # valid but for the floor
+    assert not free.check_motion(under[None]) and "below the floor" in free.explain_motion(under[None])
+
+
+def test_explain_motion_names_what_blocks_the_first_blocked_sample(domain: ArmDomain) -> None:
+    states = domain.graph.vertex_states
+    assert states is not None
+    goal = np.asarray(domain.params.goal, dtype=np.float64)
+    scene = Scene(margin=0.0)
+    scene.add(
+        Box([0.15, 0.15, 0.15]), Pose(domain.end_effector_positions(goal[None])[0].tolist()), name="can"
+    )
+    checker = domain.scene_checker(scene)
+    motion = np.linspace(np.asarray(domain.params.start, dtype=np.float64), goal, 21)
+    assert not checker.check_motion(motion)
+    why = checker.explain_motion(motion)
+    assert why.startswith("scene object 'can' (panda_") and why.endswith("at sample 21 of 21")  # the goal end
+    assert checker.explain_motion(goal[None]).startswith("scene object 'can'")
+    assert domain.scene_checker(Scene(margin=0.0)).explain_motion(motion) == ""

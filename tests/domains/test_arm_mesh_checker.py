@@ -121,7 +121,11 @@ def test_end_vertices_first_then_bisection_order_with_early_exit(meshes: ArmDoma
     scene = world.to_scene(margin=meshes.margin)
     recording = RecordingModel(mesh_model(meshes.checker(scene)))
     checker = ArmEdgeChecker(
-        robot=meshes.robot, graph=meshes.graph, scene=scene, samples=meshes.samples, model=recording
+        robot=meshes.robot,
+        graph=meshes.graph,
+        scene=scene,
+        samples=meshes.samples,
+        model_for=lambda _scene: recording,
     )
     assert checker.check(e) is False
     (ends, ends_owner, ends_count), (inner, inner_owner, inner_count) = recording.calls

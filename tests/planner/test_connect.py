@@ -143,3 +143,12 @@ def test_the_connector_registry_by_domain(planar: tuple[Problem, list[np.ndarray
     assert isinstance(connector_for(prior), StraightConnector)
     unknown = WorldPrior(**{**prior.__dict__, "domain": "se2"})
     assert connector_for(unknown) is None
+
+
+def test_the_explanation_protocol_is_optional_and_the_arm_checker_has_it(small_arm: object) -> None:
+    from drd_planner.geometry.scene import Scene
+    from drd_planner.planner.connect import MotionExplainer
+
+    checker = small_arm.scene_checker(Scene(margin=0.0))  # type: ignore[attr-defined]
+    assert isinstance(checker, MotionExplainer) and isinstance(checker, MotionOracle)
+    assert not isinstance(TableOracle(np.ones(3, dtype=bool)), MotionExplainer)

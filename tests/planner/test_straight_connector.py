@@ -22,3 +22,35 @@ def test_segments_join_the_nearest_vertices_within_reach_at_the_resolution() -> 
     into = connector.connect(state, graph, outgoing=False)
     assert all(np.allclose(m.states[-1], state) for m in into)
     assert connector.connect(np.array([20.0, 20.0]), graph, outgoing=True) == []
+
+
+def test_a_segment_is_sampled_at_the_resolution_both_ends_included() -> None:
+    connector = StraightConnector(reach=2.0, resolution=0.1)
+    line = connector.segment(np.array([0.0, 0.0]), np.array([0.35, 0.0]))
+    assert connector.resolution == 0.1 and line.shape == (5, 2)
+    assert np.allclose(line[0], 0.0) and np.allclose(line[-1], [0.35, 0.0])
+    assert np.linalg.norm(np.diff(line, axis=0), axis=1).max() <= 0.1
+    assert connector.segment(np.zeros(2), np.zeros(2)).shape == (2, 2)
+    assert connector.sampler is None
+
+
+def test_the_arm_connector_carries_the_arm_sampler(small_arm: object) -> None:
+    from drd_planner.domains.arm_sampler import ArmStateSampler
+    from drd_planner.planner import WorldPrior
+    from drd_planner.planner.connect import connector_for
+
+    graph = small_arm.graph  # type: ignore[attr-defined]
+    prior = WorldPrior(
+        name="small",
+        domain="arm",
+        graph=graph,
+        edge_costs=np.ones(graph.num_edges),
+        worlds=np.ones((2, graph.num_edges), dtype=bool),
+        domain_spec=small_arm.spec(),  # type: ignore[attr-defined]
+    )
+    connector = connector_for(prior)
+    assert isinstance(connector, StraightConnector) and isinstance(connector.sampler, ArmStateSampler)
+    assert connector.resolution == small_arm.params.resolution  # type: ignore[attr-defined]
+    broken = WorldPrior(**{**prior.__dict__, "domain_spec": {"urdf_path": "/nowhere/robot.urdf"}})
+    without = connector_for(broken)  # robot files missing: states still join, the roadmap does not grow
+    assert isinstance(without, StraightConnector) and without.sampler is None

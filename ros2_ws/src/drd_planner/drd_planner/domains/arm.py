@@ -49,6 +49,7 @@ from drd_planner.domains.arm_worlds import (
 )
 from drd_planner.domains.online import EdgeSource, OnlineDefaults, PositionGoals, SweepSpheres
 from drd_planner.exceptions import GeometryError, PlanningError, ProblemError
+from drd_planner.geometry.mesh_collider import MeshCollider
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 from drd_planner.planning.map_limits import MapLimits
@@ -193,16 +194,21 @@ class ArmDomain(OnlineDefaults):
         if not isinstance(scene, Scene):
             raise ProblemError(f"arm checker needs an ArmWorld or a Scene, got {type(world).__name__}")
         arm = robot if robot is not None else self._robot
-        model = None
+        model_for = None
         if self._params.collision_model == "meshes":
-            model = mesh_model(arm, scene, arm_link_meshes(self._params, self._robot_texts[0]))
+            meshes = arm_link_meshes(self._params, self._robot_texts[0])
+
+            def model_for(other: Scene) -> MeshCollider:
+                return mesh_model(arm, other, meshes)
+
         return ArmEdgeChecker(
             robot=arm,
             graph=self._graph,
             scene=scene,
             samples=self.samples,
             self_collision=arm is not self._robot,
-            model=model,
+            model_for=model_for,
+            floor_z=self._params.floor_z,
         )
 
     def robot_from_description(self, urdf: str, *, limits: MapLimits = MapLimits.DEFAULT) -> RobotModel:

@@ -14,10 +14,17 @@ What "blocked" means is the checker's *collision model* (a :class:`Configuration
 
 Both decide an edge's samples in the same order with the same early exit; self-collision (when asked for)
 is the sphere model's in both.
+
+**Motions off the roadmap** (:meth:`ArmEdgeChecker.check_motion`: a start or goal state joined to the roadmap,
+an edge the planner grew) were never part of the roadmap's static test, so every sample of one is held to
+the static rules first (joint limits, self-collision with the sphere model's pairs, and the floor when the
+checker has a ``floor_z``), then to the scene. :meth:`ArmEdgeChecker.explain_motion` says what blocks one
+(:mod:`drd_planner.domains.arm_explain`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -25,9 +32,11 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.domains.arm_roadmap import EdgeSamples, graph_states
+from drd_planner.domains.arm_explain import explain_base, explain_configuration
+from drd_planner.domains.arm_roadmap import EdgeSamples, graph_states, statically_valid
 from drd_planner.domains.arm_robot import ROBOT_MODELS, RobotLoader
 from drd_planner.exceptions import ProblemError
+from drd_planner.geometry.ordering import bisection_order
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
 
@@ -139,7 +148,11 @@ class ArmEdgeChecker:
         samples: precomputed :class:`EdgeSamples` of ``graph`` (shared between checkers of one domain).
         self_collision: also test self-collision of every sample (needed only for graphs not built by
             :func:`build_roadmap`, which already excludes self-colliding edges); the sphere model's test.
-        model: the collision model against ``scene`` (default: :class:`SphereTest` of ``robot``).
+            Motions off the roadmap (:meth:`check_motion`) are always tested for it.
+        model_for: the collision model of a scene (default: :class:`SphereTest` of ``robot``); the checker's
+            model is ``model_for(scene)``, and explanations test one object at a time with it.
+        floor_z: the roadmap's floor (m): no moving sphere of a motion off the roadmap may reach below it
+            (None: no floor rule).
 
     Attributes:
         configurations_checked: configurations handed to the collision model so far.
@@ -154,7 +167,8 @@ class ArmEdgeChecker:
         resolution: float = 0.05,
         samples: EdgeSamples | None = None,
         self_collision: bool = False,
-        model: ConfigurationTest | None = None,
+        model_for: Callable[[Scene], ConfigurationTest] | None = None,
+        floor_z: float | None = None,
     ) -> None:
         states = graph_states(graph)
         if states.shape[1] != robot.dof:
@@ -164,7 +178,11 @@ class ArmEdgeChecker:
         self.scene = scene
         self.samples = samples if samples is not None else EdgeSamples.of_graph(graph, resolution)
         self.self_collision = self_collision
-        self.model: ConfigurationTest = model if model is not None else SphereTest(robot, scene)
+        self.model_for: Callable[[Scene], ConfigurationTest] = (
+            model_for if model_for is not None else (lambda other: SphereTest(robot, other))
+        )
+        self.model: ConfigurationTest = self.model_for(scene)
+        self.floor_z = floor_z
         self._states = states
         self._edge_state = np.zeros(graph.num_edges, dtype=np.int8)  # 0 unknown, 1 free, -1 blocked
         self._vertex_state = np.zeros(graph.num_vertices, dtype=np.int8)
@@ -214,15 +232,58 @@ class ArmEdgeChecker:
 
     # ----------------------------------------------------------------------------------------------
 
-    def check_motion(self, states: npt.ArrayLike) -> bool:
-        """True when a joint-space motion off the roadmap ((K, D) configurations, radians) is free.
-
-        The samples must be as dense as the roadmap's check resolution (the planner's connector uses it).
-        """
+    def _motion(self, states: npt.ArrayLike) -> FloatArray:
+        """The validated (K, D) samples of a motion, in check order: both ends, then bisection order."""
         q = np.asarray(states, dtype=np.float64)
         if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != self._states.shape[1] or not np.all(np.isfinite(q)):
             raise ProblemError(f"a motion must be a finite (K, {self._states.shape[1]}) array, got {q.shape}")
-        return self.model.base_free() and not bool(self._blocked_configs(q).any())
+        if q.shape[0] <= 2:
+            return q
+        order = np.concatenate([[0, q.shape[0] - 1], bisection_order(q.shape[0] - 2) + 1])
+        return np.asarray(q[order], dtype=np.float64)
+
+    def check_motion(self, states: npt.ArrayLike) -> bool:
+        """True when a joint-space motion off the roadmap ((K, D) configurations, radians) is free.
+
+        Every sample must pass the collision model (both ends first, then bisection order, stopping at the
+        first blocked sample) and the static rules (joint limits, self-collision, the floor when ``floor_z`` is
+        set). The samples must be as dense as the roadmap's check resolution (the planner's connector
+        uses it).
+        """
+        q = self._motion(states)
+        if not self.model.base_free():
+            return False
+        self.configurations_checked += q.shape[0]
+        if self.model.groups_blocked(q, np.zeros(q.shape[0], dtype=np.int64), 1)[0]:
+            return False  # the scene first: it stops at the first blocked sample, the static rules test all
+        return bool(statically_valid(self.robot, q, floor_z=self.floor_z).all())
+
+    def explain_motion(self, states: npt.ArrayLike) -> str:
+        """What blocks a motion off the roadmap ((K, D) configurations, rad); "" when it is free.
+
+        The first blocked sample in :meth:`check_motion`'s order and why (the static rule it breaks, or the
+        scene objects that block it alone, with the link that meets each: :mod:`~drd_planner.domains.arm_explain`),
+        e.g. ``scene object 'Can1' (panda_hand) at sample 3 of 21``; one sample: no "at sample" part.
+        """
+        raw = np.asarray(states, dtype=np.float64)
+        q = self._motion(raw)
+        if not self.model.base_free():
+            return explain_base(self.scene, model_for=self.model_for) or "the robot's fixed base is blocked"
+        rows = np.arange(q.shape[0], dtype=np.int64)
+        blocked = ~statically_valid(self.robot, q, floor_z=self.floor_z) | self.model.groups_blocked(
+            q, rows, len(q)
+        )
+        if not blocked.any():
+            return ""
+        first = q[int(np.argmax(blocked))]
+        why = explain_configuration(
+            self.robot, self.scene, first, model_for=self.model_for, floor_z=self.floor_z
+        )
+        why = why or "the collision model"
+        if q.shape[0] == 1:
+            return why
+        sample = int(np.flatnonzero(np.all(raw == first, axis=1))[0]) + 1
+        return f"{why} at sample {sample} of {q.shape[0]}"
 
     def check(self, edge: int) -> bool:
         """True when ``edge`` is free: end vertices first, then interior samples in bisection order."""

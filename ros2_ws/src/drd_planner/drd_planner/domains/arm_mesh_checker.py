@@ -110,7 +110,7 @@ def mesh_edge_checker(
         scene=scene,
         samples=samples,
         self_collision=self_collision,
-        model=mesh_model(robot, scene, meshes),
+        model_for=lambda other: mesh_model(robot, other, meshes),
     )
 
 

@@ -16,7 +16,15 @@ import numpy.typing as npt
 from drd_planner.arrays import FloatArray
 from drd_planner.geometry.robot import RobotModel
 
-__all__ = ["WHERE", "floor_accepting", "lowest_bottoms", "static_problems"]
+__all__ = [
+    "WHERE",
+    "floor_accepting",
+    "limits_text",
+    "lowest_bottoms",
+    "lowest_link",
+    "static_problems",
+    "touching_links",
+]
 
 
 #: Where the user changes a parameter named in a message.
@@ -39,21 +47,30 @@ def static_problems(robot: RobotModel, q: npt.ArrayLike, *, floor_z: float | Non
     qa = robot.fk.as_configurations(np.asarray(q, dtype=np.float64).reshape(1, -1))
     config = qa[0]
     problems: list[str] = []
-    outside = np.flatnonzero((config < robot.lower) | (config > robot.upper))
-    if outside.size:
-        joints = "; ".join(
-            f"{robot.chain.joint_names[j]} = {config[j]:.3f} not in [{robot.lower[j]:.3f}, {robot.upper[j]:.3f}]"
-            for j in outside.tolist()
-        )
+    joints = limits_text(robot, config)
+    if joints:
         problems.append(f"outside the joint limits ({joints} rad): change {name} {WHERE}")
     if bool(robot.self_collision(qa)[0]):
         problems.append(
-            f"self-colliding ({_touching_links(robot, qa)}): change {name} {WHERE}, or exclude the pair in the "
+            f"self-colliding ({touching_links(robot, qa)}): change {name} {WHERE}, or exclude the pair in the "
             "SRDF (srdf_path)"
         )
     if floor_z is not None:
         problems.extend(_floor_problem(robot, qa, floor_z, name))
     return problems
+
+
+def limits_text(robot: RobotModel, q: npt.ArrayLike) -> str:
+    """The joints of the (D,) configuration ``q`` (rad) outside their limits, ``"; "``-joined; "" when none.
+
+    Each as ``<joint> = <value> not in [<lower>, <upper>]`` (rad, three decimals).
+    """
+    config = np.asarray(q, dtype=np.float64).reshape(-1)
+    outside = np.flatnonzero((config < robot.lower) | (config > robot.upper))
+    return "; ".join(
+        f"{robot.chain.joint_names[j]} = {config[j]:.3f} not in [{robot.lower[j]:.3f}, {robot.upper[j]:.3f}]"
+        for j in outside.tolist()
+    )
 
 
 def lowest_bottoms(robot: RobotModel, q: npt.ArrayLike) -> FloatArray:
@@ -72,21 +89,35 @@ def floor_accepting(lowest: float) -> float:
 
 def _floor_problem(robot: RobotModel, qa: npt.NDArray[np.float64], floor_z: float, name: str) -> list[str]:
     """The floor sentence for the (1, D) configuration ``qa``, or none when every moving sphere is above."""
-    moving = np.flatnonzero(robot.spheres.frame_index > 0)
-    bottoms = robot.sphere_centres(qa)[0, moving, 2] - robot.spheres.radii[moving]
-    lowest = int(np.argmin(bottoms))
-    if bottoms[lowest] >= floor_z:
+    link, bottom = lowest_link(robot, qa)
+    if bottom >= floor_z:
         return []
-    link = robot.chain.link_names[int(robot.spheres.link_index[moving[lowest]])]
     return [
-        f"below the floor (a sphere of {link} reaches down to z = {bottoms[lowest]:.3f} m, the floor is at "
-        f"floor_z = {floor_z:g} m): set floor_z to {floor_accepting(float(bottoms[lowest])):g} or lower, or "
+        f"below the floor (a sphere of {link} reaches down to z = {bottom:.3f} m, the floor is at "
+        f"floor_z = {floor_z:g} m): set floor_z to {floor_accepting(bottom):g} or lower, or "
         f"null (no floor test), {WHERE}, or change {name}"
     ]
 
 
-def _touching_links(robot: RobotModel, qa: npt.NDArray[np.float64]) -> str:
-    """The first checked link pair whose spheres overlap in the (1, D) configuration ``qa``."""
+def lowest_link(robot: RobotModel, qa: npt.NDArray[np.float64]) -> tuple[str, float]:
+    """``(link, z)``: the moving link reaching lowest in the (1, D) configuration ``qa`` (rad), and how low.
+
+    ``z`` is the height (m) of the bottom of that link's lowest sphere; ``("", inf)`` without moving spheres.
+    """
+    moving = np.flatnonzero(robot.spheres.frame_index > 0)
+    if moving.size == 0:
+        return "", float("inf")
+    bottoms = robot.sphere_centres(qa)[0, moving, 2] - robot.spheres.radii[moving]
+    lowest = int(np.argmin(bottoms))
+    return robot.chain.link_names[int(robot.spheres.link_index[moving[lowest]])], float(bottoms[lowest])
+
+
+def touching_links(robot: RobotModel, qa: npt.NDArray[np.float64]) -> str:
+    """The first checked link pair whose spheres overlap in the (1, D) configuration ``qa`` (rad).
+
+    ``"<link> touches <link>"``, or ``"two links touch"`` when no sphere pair overlaps (a pair excluded by
+    the SRDF never counts).
+    """
     centres = robot.sphere_centres(qa)[0]
     a, b = robot.self_pairs[:, 0], robot.self_pairs[:, 1]
     gap = np.einsum("ki,ki->k", centres[a] - centres[b], centres[a] - centres[b])

@@ -57,6 +57,41 @@ class MotionOracle(Protocol):
         ...
 
 
+@runtime_checkable
+class MotionExplainer(Protocol):
+    """Optional: an oracle that says in words what blocks a motion (for the reasons of failed plans).
+
+    The planner uses it only to word the reason of a NO_PATH result (:mod:`drd_planner.planner.no_path`),
+    never to decide anything, and its answers are not checks of the plan (not in the log, not cached):
+
+    - when every edge joining the start (or goal) was checked blocked, it asks whether that state itself is
+      blocked: ``explain_motion`` of the (1, D) state ("" means free, anything else is quoted as the cause);
+      without this protocol, ``check_motion`` of it;
+    - with this protocol it also explains the blocked motions joining that end (up to 8 other blocked edges
+      around the smaller known-reachable side when neither end is walled in), counted per cause, with the
+      ``" at sample ..."`` suffix dropped: so a cause should read the same for every motion it blocks.
+
+    ``states`` are the (K, D) states a motion is checked at: a motion off the graph as ``check_motion`` gets
+    it, a graph edge's stored trajectory, or the straight segment between its vertex states at the connector's
+    resolution. Implementations: the arm's :meth:`ArmEdgeChecker.explain_motion
+    <drd_planner.domains.arm_checker.ArmEdgeChecker.explain_motion>` (spheres and meshes). Another domain
+    implements it on its edge checker (the object whose ``check_motion`` the oracle calls); the node's
+    :class:`~drd_planner.planning.query_support.SnapshotOracle` forwards it to the snapshot's checker (and
+    answers ``"blocked"`` / "" from ``check_motion`` when the checker has none).
+    """
+
+    def explain_motion(self, states: FloatArray) -> str:
+        """What blocks the motion through the (K, D) states (in order; K = 1: one state), in a short phrase.
+
+        Name the first blocked sample's cause as a user would fix it: the obstacle by its scene name (e.g.
+        ``scene object 'Can1' (panda_hand)``), or the robot's own rule (``self-collision (panda_link1 touches
+        panda_link7)``, ``below the floor (...)``, ``outside the joint limits (...)``); for K > 1 add where
+        (``at sample 3 of 21``). Return "" when the motion is free. It may be slow (it runs after a failure)
+        but must not change what ``check``/``check_motion`` answer afterwards.
+        """
+        ...
+
+
 @dataclass(frozen=True)
 class Motion:
     """A new edge between a query state and a graph vertex.
@@ -161,6 +196,18 @@ def _straight(prior: WorldPrior) -> QueryConnector | None:
     return straight_connector(prior)
 
 
+def _arm(prior: WorldPrior) -> QueryConnector | None:
+    """Straight joint-space motions, with the arm's sampler of valid configurations (roadmap growth)."""
+    from drd_planner.domains.arm_sampler import arm_state_sampler
+    from drd_planner.planner.straight_connector import straight_connector
+
+    try:
+        sampler = arm_state_sampler(prior.domain_spec)
+    except ProblemError:  # robot files not on this machine: plan without growth
+        sampler = None
+    return straight_connector(prior, sampler=sampler)
+
+
 def _dubins(prior: WorldPrior) -> QueryConnector | None:
     from drd_planner.planner.dubins_connector import dubins_connector
 
@@ -169,7 +216,7 @@ def _dubins(prior: WorldPrior) -> QueryConnector | None:
 
 #: Domain name -> the connector of its priors (None: states off the graph are refused).
 CONNECTORS: Mapping[str, Callable[[WorldPrior], QueryConnector | None]] = {
-    "arm": _straight,
+    "arm": _arm,
     "planar": _straight,
     "gccd": _straight,
     "helicopter": _dubins,

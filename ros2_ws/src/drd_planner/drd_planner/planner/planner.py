@@ -11,10 +11,14 @@ checked free in this plan:
    (:class:`~drd_planner.core.online_tree.LazyDirectTree`). Both are cached per query (LRU).
 2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
    prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
+3. **roadmap growth**, when the graph has no free path and the domain can sample its valid states (the
+   arm): new vertices and edges where the blocked region cuts the graph, checked lazily, the graph search
+   again, until a path is verified or the growth budget ends (:mod:`~drd_planner.planner.roadmap_growth`).
 
 With ``improve_budget`` a plan then seeks shorter verified paths (:mod:`~drd_planner.planner.anytime`).
-So the planner says "no path" only when the graph has none given the checks made; a check or time
-budget ends a plan with its own status.
+So the planner says "no path" only when the graph has none given the checks made (and growth found none
+within its budget); the reason names the start and goal and what blocks them
+(:mod:`~drd_planner.planner.no_path`). A check or time budget ends a plan with its own status.
 """
 
 from __future__ import annotations
@@ -27,10 +31,10 @@ from typing import Any
 
 import numpy as np
 
-from drd_planner.arrays import FloatArray, IntArray
+from drd_planner.arrays import FloatArray
 from drd_planner.core.bisect import bias_from_worlds
-from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
-from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
+from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeStatus, run_episode
+from drd_planner.core.lazysp import SELECTORS, GraphArcs, lazysp_name
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TRAIN_WORLD_POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
@@ -39,25 +43,24 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
-from drd_planner.planner.graph_fallback import (
-    DEFAULT_FALLBACK_KAPPA,
-    FALLBACK_SELECTOR,
-    fallback_edge_weights,
-    posterior_free_probability,
-)
+from drd_planner.planner.no_path import edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
-from drd_planner.planner.query_library import query_library, vertex_sequence
+from drd_planner.planner.query_library import query_library
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.result import (
     PlanResult,
     PlanStage,
     PlanStatus,
+    exhausted_result,
+    found_result,
     library_stage,
     plan_timings,
     trivial_result,
     unproven_result,
 )
+from drd_planner.planner.roadmap_growth import DEFAULT_GROWTH, GrowthSettings, RoadmapGrowth, lazy_search
+from drd_planner.planner.state_sampler import sampler_of
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
@@ -77,6 +80,10 @@ class Planner:
         snap_tolerance: how far a state may lie from its vertex (state units); None: a quarter of the
             median edge length.
         expand_threshold: online trees expand a node only while its fraction is at least this.
+        connector: joins off-graph states to the graph (None: the prior domain's, :data:`CONNECTORS`).
+        connect_states: False refuses off-graph states (no connector).
+        growth: how far the graph grows when it has no free path (None: never); only with a connector that
+            has a sampler of valid states (the arm's) and an oracle that checks motions.
     """
 
     def __init__(
@@ -88,6 +95,7 @@ class Planner:
         expand_threshold: float = DEFAULT_EXPAND_THRESHOLD,
         connector: QueryConnector | None = None,
         connect_states: bool = True,
+        growth: GrowthSettings | None = DEFAULT_GROWTH,
     ) -> None:
         if cache_size < 1:
             raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
@@ -101,6 +109,7 @@ class Planner:
         self._expand = expand_threshold
         self._sample_index: EdgeSampleIndex | None = None
         self._leaf_override: LeafSetting | None = None
+        self.growth = growth
 
     @classmethod
     def from_file(cls, path: str | Path, *, expected_domain: str | None = None, **options: Any) -> Planner:
@@ -312,10 +321,15 @@ class Planner:
         if model.query.connected:
             oracle = MotionDispatch(oracle, model.query.motions)  # type: ignore[arg-type]
         t_model = time.perf_counter() - t_begin
-        result = self._search(model, oracle, policy, seed, max_checks, deadline, (t_model, t_begin))
+        limits = PlanLimits(seed, max_checks, deadline)
+        result = self._search(model, oracle, policy, limits, (t_model, t_begin))
         if improve is None or not result.found:
             return result
-        limits = PlanLimits(seed, max_checks, deadline)
+        if result.growth is not None:  # improve on the grown graph
+            model = dataclasses.replace(model, query=result.growth.query)
+            raw = _unwrapped(oracle)
+            assert isinstance(raw, MotionOracle)  # growth checks its edges with check_motion
+            oracle = MotionDispatch(raw, result.growth.query.motions)
         return improve_path(result, model, oracle, improve, prior=self.prior, limits=limits)
 
     def _search(
@@ -323,32 +337,31 @@ class Planner:
         model: QueryModel,
         oracle: EdgeOracle,
         policy: str,
-        seed: int,
-        max_checks: int | None,
-        deadline: float | None,
+        limits: PlanLimits,
         times: tuple[float, float],
     ) -> PlanResult:
-        """The library stage, then the graph stage when every library path is blocked."""
+        """The library stage, then the graph stage when every library path is blocked (then growth)."""
         t_model, t_begin = times
         checks: list[CheckRecord] = []
         known: dict[int, bool] = {}
         if model.library is not None:
-            lib_policy = POLICIES[policy](self._context(model, policy, seed))
+            lib_policy = POLICIES[policy](self._context(model, policy, limits.seed))
             episode = run_episode(
                 model.library,
                 model.query.edge_costs,
                 lib_policy,
                 oracle,
-                max_checks=max_checks,
-                deadline=deadline,
+                max_checks=limits.max_checks,
+                deadline=limits.deadline,
             )
             checks.extend(episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
             if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
-                return self._found(model, episode.path_edges, checks, library_stage(checks), t_model, t_begin)
+                return found_result(model, episode.path_edges, checks, library_stage(checks), times)
             if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-                return self._exhausted(model, episode.status, checks, t_model, t_begin)
-        return self._plan_on_graph(model, oracle, known, checks, max_checks, deadline, (t_model, t_begin))
+                ran_out = episode.status is EpisodeStatus.MAX_CHECKS
+                return exhausted_result(model, ran_out, checks, t_model, t_begin)
+        return self._plan_on_graph(model, oracle, known, checks, limits, times)
 
     def _resolve(self, start: Endpoint, goal: Endpoint, oracle: EdgeOracle) -> QueryModel | int:
         """The query's model, or the one vertex when start and goal snap to it (QueryError: refused)."""
@@ -364,6 +377,11 @@ class Planner:
                     "them (it needs check_motion(states)); give vertex ids or states within the snap "
                     f"tolerance {self.snap_tolerance:.4g}"
                 )
+            sampler = sampler_of(self._connector)
+            for label, value in (("start", s), ("goal", g)):
+                why = None if sampler is None or isinstance(value, int) else sampler.refusal(value, label)
+                if why:
+                    raise QueryError(why)
         return self.query_model(s, g)
 
     def _plan_on_graph(
@@ -372,31 +390,55 @@ class Planner:
         oracle: EdgeOracle,
         known: dict[int, bool],
         checks: list[CheckRecord],
-        max_checks: int | None,
-        deadline: float | None,
+        limits: PlanLimits,
         times: tuple[float, float],
     ) -> PlanResult:
-        """The graph stage after the library: its result, or why no path was proven."""
+        """The graph stage after the library, then roadmap growth: its result, or why no path was proven."""
         t_model, t_begin = times
-        budget = None if max_checks is None else max_checks - len(checks)
+        budget = None if limits.max_checks is None else limits.max_checks - len(checks)
         if budget is not None and budget <= 0:
-            return self._exhausted(model, EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin)
-        graph_episode = self._graph_stage(model, oracle, known, budget, deadline)
+            return exhausted_result(model, True, checks, t_model, t_begin)
+        graph_episode = lazy_search(
+            self.prior, model.query, oracle, known, budget=budget, deadline=limits.deadline, stage="graph"
+        )
         offset = len(checks)
         checks.extend(dataclasses.replace(c, step=c.step + offset) for c in graph_episode.checks)
+        known.update({c.edge: c.free for c in graph_episode.checks})
         if graph_episode.status is EpisodeStatus.PATH_FOUND and graph_episode.path_edges is not None:
-            return self._found(model, graph_episode.path_edges, checks, PlanStage.GRAPH, t_model, t_begin)
+            return found_result(model, graph_episode.path_edges, checks, PlanStage.GRAPH, times)
         if graph_episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-            return self._exhausted(model, graph_episode.status, checks, t_model, t_begin)
-        blocked = sum(not c.free for c in checks)
-        reason = (
-            f"no free path from {model.start} to {model.goal} in the graph: {blocked} blocked edges "
-            f"disconnect them ({len(checks)} checks)"
-            if blocked
-            else f"the graph has no path from {model.start} to {model.goal} even with every edge free"
-            + (" (its edges are directed)" if model.query.graph.directed else "")
-        )
-        return unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin)
+            return exhausted_result(
+                model, graph_episode.status is EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin
+            )
+        raw, report = _unwrapped(oracle), None
+        growth = self._growth(model)
+        if growth is not None and isinstance(raw, MotionOracle):
+            grown = growth.run(
+                raw, known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
+            )
+            report = grown.report
+            if grown.status is EpisodeStatus.PATH_FOUND and grown.path_edges is not None:
+                return found_result(model, grown.path_edges, checks, PlanStage.GROW, times, report)
+            if grown.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
+                ran_out = grown.status is EpisodeStatus.MAX_CHECKS
+                return exhausted_result(model, ran_out, checks, t_model, t_begin, report)
+        query = model.query if report is None else report.query
+        along = edge_states_of(self.prior, query, getattr(self._connector, "segment", None))
+        reason = no_path_reason(query, checks, raw, along, report)
+        return unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
+
+    def _growth(self, model: QueryModel) -> RoadmapGrowth | None:
+        """The growth of the query's graph, when the domain can sample valid states and growth is on."""
+        sampler = sampler_of(self._connector)
+        segment = getattr(self._connector, "segment", None)
+        if (
+            self.growth is None
+            or sampler is None
+            or segment is None
+            or model.query.graph.vertex_states is None
+        ):
+            return None
+        return RoadmapGrowth(self.prior, model.query, self._connector, sampler, self._index(), self.growth)  # type: ignore[arg-type]
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None
@@ -416,78 +458,10 @@ class Planner:
             goal=model.goal,
         )
 
-    def _graph_stage(
-        self,
-        model: QueryModel,
-        oracle: EdgeOracle,
-        known: dict[int, bool],
-        budget: int | None,
-        deadline: float | None,
-    ) -> EpisodeResult:
-        prior, query = self.prior, model.query
-        theta = posterior_free_probability(
-            query.worlds,
-            prior.world_weights,
-            known,
-            num_edges=query.graph.num_edges,
-            alpha=prior.alpha,
-            pseudo_count=prior.pseudo_count or DEFAULT_FALLBACK_KAPPA,
-        )
-        search = LazySP(
-            query.graph,
-            model.start,
-            model.goal,
-            LazySPSettings(selector=FALLBACK_SELECTOR, max_checks=None),
-            edge_weights=fallback_edge_weights(query.graph, theta),
-            observations=known,
-            stage="graph",
-            name="graph_fallback",
-        )
-        return run_episode(
-            None, query.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
-        )
 
-    def _found(
-        self,
-        model: QueryModel,
-        path_edges: IntArray,
-        checks: list[CheckRecord],
-        stage: PlanStage,
-        t_model: float,
-        t_begin: float,
-    ) -> PlanResult:
-        edges = np.asarray(path_edges, dtype=np.int64)
-        graph = model.query.graph
-        cost = float(graph.lengths[edges].sum())
-        return PlanResult(
-            PlanStatus.FOUND,
-            f"path of {edges.size} edges (cost {cost:.4g}) verified free after {len(checks)} checks",
-            model.start,
-            model.goal,
-            vertices=vertex_sequence(graph.edges, model.start, edges),
-            edges=edges,
-            checks=tuple(checks),
-            cost=cost,
-            stage=stage,
-            query=model.label,
-            query_cached=model.reused,
-            library_size=0 if model.library is None else model.library.num_paths,
-            timings=plan_timings(checks, t_model, t_begin),
-            new_states=model.query.new_states,
-            motions={e: model.query.motions[e] for e in edges.tolist() if e in model.query.motions},
-        )
-
-    def _exhausted(
-        self,
-        model: QueryModel,
-        status: EpisodeStatus,
-        checks: list[CheckRecord],
-        t_model: float,
-        t_begin: float,
-    ) -> PlanResult:
-        what = "check budget" if status is EpisodeStatus.MAX_CHECKS else "time budget"
-        reason = f"the {what} ran out after {len(checks)} checks before a path was verified"
-        return unproven_result(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin)
+def _unwrapped(oracle: EdgeOracle) -> EdgeOracle:
+    """The oracle a connected query's :class:`MotionDispatch` wraps (the oracle itself otherwise)."""
+    return oracle.oracle if isinstance(oracle, MotionDispatch) else oracle
 
 
 def _cache_key(endpoint: int | FloatArray) -> object:

@@ -116,6 +116,11 @@ class MotionDispatch:
         self._oracle = oracle
         self._motions = motions
 
+    @property
+    def oracle(self) -> MotionOracle:
+        """The wrapped oracle (graph edges and motions by their states)."""
+        return self._oracle
+
     def check(self, edge: int) -> bool:
         """True when ``edge`` (a graph edge or a new motion) is free."""
         states = self._motions.get(int(edge))

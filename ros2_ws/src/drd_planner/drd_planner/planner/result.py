@@ -13,8 +13,10 @@ import numpy as np
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.exceptions import PlanningError
+from drd_planner.planner.query_library import vertex_sequence
 
 if TYPE_CHECKING:
+    from drd_planner.planner.query_graph import QueryGraph
     from drd_planner.planner.query_model import QueryModel
 
 
@@ -23,7 +25,8 @@ class PlanStatus(str, Enum):
 
     #: A path was found and every edge of it was checked free in this plan.
     FOUND = "found"
-    #: The graph has no free start-goal path given the checks made (every candidate is blocked).
+    #: No free start-goal path was found: the graph has none given the checks made and, for a domain that
+    #: grows its roadmap, none was found within the growth budget (the reason says what was tried).
     NO_PATH = "no_path"
     #: ``max_checks`` or ``time_budget_s`` ran out first: nothing is known to be free yet.
     BUDGET_EXHAUSTED = "budget_exhausted"
@@ -42,6 +45,8 @@ class PlanStage(str, Enum):
     LIBRARY = "library"
     #: The search over the whole graph once every library path was blocked.
     GRAPH = "graph"
+    #: The search over the graph grown with new vertices and edges (:mod:`drd_planner.planner.roadmap_growth`).
+    GROW = "grow"
     #: Start and goal are the same vertex: the empty path, nothing to check.
     TRIVIAL = "trivial"
     #: The anytime improvement after the first verified path (:mod:`drd_planner.planner.anytime`).
@@ -63,6 +68,42 @@ class Improvement:
     path_edges: IntArray
     cost: float
     elapsed_s: float
+
+
+@dataclass(frozen=True)
+class GrowthReport:
+    """What roadmap growth did in one plan (:mod:`drd_planner.planner.roadmap_growth`).
+
+    Attributes:
+        rounds: growth rounds run (count).
+        vertices_added: new vertices (statically valid states) in the query's graph (count).
+        edges_added: new edges (motions between them and their neighbours) (count).
+        checks: checks made after growth began (new edges and old ones alike, new vertices included).
+        stop: why it stopped: ``path`` (a path was verified), ``start_blocked``, ``goal_blocked`` (that
+            state itself is blocked: no path can exist; growth checks both first), ``rounds``, ``vertices``,
+            ``seconds``, ``checks`` (a growth budget), ``plan_checks``, ``plan_time`` (the plan's own budgets).
+        query: the grown query: its graph (vertex states included; new vertices from the query's V on, new
+            edges from its E on), training columns (new edges' imputed) and every motion edge (the query's
+            joins and the grown edges, edge id -> (K, D) states, tail first).
+        state_checks: of ``checks``, those of one state: the start's and the goal's, then each new vertex's
+            before it is joined (the one-state motion of its vertex edge, a self-loop;
+            :mod:`~drd_planner.planner.grown_graph`).
+    """
+
+    rounds: int
+    vertices_added: int
+    edges_added: int
+    checks: int
+    stop: str
+    query: QueryGraph
+    state_checks: int = 0
+
+    def summary(self) -> str:
+        """``3 growth round(s) added 150 vertices and 900 edges (420 checks, 152 of them of one state; stopped: path)``."""
+        return (
+            f"{self.rounds} growth round(s) added {self.vertices_added} vertices and {self.edges_added} edges "
+            f"({self.checks} checks, {self.state_checks} of them of one state; stopped: {self.stop})"
+        )
 
 
 @dataclass(frozen=True)
@@ -112,6 +153,8 @@ class PlanResult:
             each time; the last one is this result's path. Empty without one.
         improve_stop: why the improvement stopped (``optimal``, ``checks``, ``seconds``, ``patience``,
             ``plan_checks``, ``plan_time``); empty without an ``improve_budget``.
+        growth: what roadmap growth did when the plan grew the graph (None when it did not); then
+            ``vertices``, ``edges``, ``checks`` and ``motions`` use the ids of ``growth.query``.
     """
 
     status: PlanStatus
@@ -131,6 +174,7 @@ class PlanResult:
     motions: Mapping[int, FloatArray] = field(default_factory=dict)
     improvements: tuple[Improvement, ...] = ()
     improve_stop: str = ""
+    growth: GrowthReport | None = None
 
     @property
     def found(self) -> bool:
@@ -182,6 +226,7 @@ def unproven_result(
     checks: list[CheckRecord],
     t_model: float,
     t_begin: float,
+    growth: GrowthReport | None = None,
 ) -> PlanResult:
     """A result without a path (no path in the graph, or a budget ran out), with its check log."""
     return PlanResult(
@@ -194,6 +239,65 @@ def unproven_result(
         query_cached=model.reused,
         library_size=0 if model.library is None else model.library.num_paths,
         timings=plan_timings(checks, t_model, t_begin),
+        growth=growth,
+    )
+
+
+def exhausted_result(
+    model: QueryModel,
+    checks_ran_out: bool,
+    checks: list[CheckRecord],
+    t_model: float,
+    t_begin: float,
+    growth: GrowthReport | None = None,
+) -> PlanResult:
+    """The BUDGET_EXHAUSTED result of a plan whose check budget (or else time budget) ran out."""
+    what = "check budget" if checks_ran_out else "time budget"
+    reason = f"the {what} ran out after {len(checks)} checks before a path was verified"
+    if growth is not None:
+        reason += f"; {growth.summary()}"
+    return unproven_result(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin, growth)
+
+
+def found_result(
+    model: QueryModel,
+    path_edges: IntArray,
+    checks: list[CheckRecord],
+    stage: PlanStage,
+    times: tuple[float, float],
+    growth: GrowthReport | None = None,
+) -> PlanResult:
+    """The FOUND result of a verified path of the query's graph (of ``growth.query`` when it grew).
+
+    ``times`` is ``(seconds building the query's model, time.perf_counter() at the plan's start)``.
+    """
+    query = model.query if growth is None else growth.query
+    edges = np.asarray(path_edges, dtype=np.int64)
+    cost = float(query.graph.lengths[edges].sum())
+    vertices = vertex_sequence(query.graph.edges, query.start, edges)
+    states = query.graph.vertex_states
+    new_states = dict(query.new_states)
+    if growth is not None and states is not None:  # the grown vertices on the path
+        first_grown = growth.query.graph.num_vertices - growth.vertices_added
+        new_states.update({int(v): states[int(v)] for v in vertices.tolist() if v >= first_grown})
+    grown = f"; {growth.summary()}" if growth is not None else ""
+    return PlanResult(
+        PlanStatus.FOUND,
+        f"path of {edges.size} edges (cost {cost:.4g}) verified free after {len(checks)} checks{grown}",
+        query.start,
+        query.goal,
+        vertices=vertices,
+        edges=edges,
+        checks=tuple(checks),
+        cost=cost,
+        stage=stage,
+        query=model.label,
+        query_cached=model.reused,
+        library_size=0 if model.library is None else model.library.num_paths,
+        timings=plan_timings(checks, times[0], times[1]),
+        new_states=new_states,
+        motions={e: query.motions[e] for e in edges.tolist() if e in query.motions},
+        growth=growth,
     )
 
 

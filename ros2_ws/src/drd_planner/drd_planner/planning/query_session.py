@@ -21,7 +21,7 @@ query when there is one, DiRECt online otherwise, the graph fallback when the li
 - Every returned path is re-verified independently of the planner's bookkeeping: each edge, motions
   included, was answered free by this session's oracle on this snapshot (in this plan or from the
   snapshot's cache), and its dense states join up from the start to the goal; otherwise
-  :class:`~drd_planner.exceptions.UnverifiedPathError`.
+  :class:`~drd_planner.exceptions.UnverifiedPathError` (edges of a grown roadmap too).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.exceptions import PlanningError, ProblemError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.planner.anytime import ImproveBudget, as_improve_budget
-from drd_planner.planner.endpoints import Endpoint, EndpointResolver
+from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
@@ -407,6 +407,8 @@ class QuerySession(DomainSession):
         used = [c.edge for c in result.checks] + [int(e) for e in result.edges]
         if not any(e >= self._num_edges for e in used):
             return graph_edges, {}
+        if result.growth is not None:  # the plan grew the query's graph: grown edges are its motions too
+            return result.growth.query.graph.edges, dict(result.growth.query.motions)
         # The planner's cached model of this query (the same snapping, so the same cache key).
         model = self._planner.query_model(
             self._endpoints.snap(start, "start"), self._endpoints.snap(goal, "goal")

@@ -156,6 +156,20 @@ class SnapshotOracle:
             raise PlanningError("this domain's checker cannot check motions off the graph")
         return self._answer(motion, lambda: bool(check_motion(states)))
 
+    def explain_motion(self, states: FloatArray) -> str:
+        """What blocks the motion through (K, D) ``states`` ("" when free), for the reason of a failed plan.
+
+        The checker's own ``explain_motion`` when it has one (:class:`~drd_planner.planner.connect.MotionExplainer`),
+        else ``"blocked"`` or "" from its ``check_motion``. Neither the cache nor the plan's check log sees it.
+        """
+        explain = getattr(self._checker, "explain_motion", None)
+        if explain is not None:
+            return str(explain(states))
+        check_motion = getattr(self._checker, "check_motion", None)
+        if check_motion is None:
+            raise PlanningError("this domain's checker cannot check motions off the graph")
+        return "" if check_motion(states) else "blocked"
+
 
 def rebuild_domain(prior: WorldPrior, name: str) -> OnlineDomain[Any]:
     """The prior's domain rebuilt from its stored spec, after checking it builds the prior's graph.

@@ -1,0 +1,72 @@
+"""The graph while growth adds to it: vertex edges, usable vertices, edges, imputed columns, the query."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.planner.connect import EdgeSampleIndex, imputed_outcomes
+from drd_planner.planner.grown_graph import GrownGraph, imputed_columns, new_pairs
+from drd_planner.planner.query_graph import QueryGraph
+
+
+def _query() -> tuple[QueryGraph, np.ndarray]:
+    states = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+    graph = ExplicitGraph(edges, np.ones(4), 4, vertex_states=states)
+    worlds = np.array([[True, False, True, True], [True, True, False, False], [False, True, True, True]])
+    return QueryGraph(graph, worlds, np.ones(4), 0, 2), worlds
+
+
+def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
+    query, worlds = _query()
+    index = EdgeSampleIndex(query.graph, None, position_dims=2)
+    motions = [
+        np.linspace([0.1, 0.0], [0.9, 0.0], 5),
+        np.linspace([1.0, 0.2], [1.0, 0.8], 3),
+        np.array([[0.5, 1.0]]),
+    ]
+    columns = imputed_columns(index, worlds, motions)
+    expected = np.column_stack(
+        [imputed_outcomes(index, worlds, m) for m in motions]
+    )  # <= 8 samples: the same
+    np.testing.assert_array_equal(columns, expected)
+    assert imputed_columns(index, worlds, []).shape == (3, 0)
+
+
+def test_new_pairs_are_sorted_unique_and_not_yet_edges() -> None:
+    edges = np.array([[0, 1], [2, 1]])
+    candidates = np.array([[1, 0], [3, 2], [2, 3], [1, 2], [4, 4]])
+    assert new_pairs(candidates, edges).tolist() == [[2, 3]]
+
+
+def test_vertices_get_a_vertex_edge_and_are_joined_only_when_free() -> None:
+    query, worlds = _query()
+    index = EdgeSampleIndex(query.graph, None, position_dims=2)
+    grown = GrownGraph(query, index, worlds)
+    ids, loops = grown.add_vertices(np.array([[0.5, 0.1], [0.5, 0.9]]))
+    assert ids.tolist() == [4, 5] and loops.tolist() == [4, 5]
+    assert not grown.usable[ids].any() and grown.usable[:4].all()
+    grown.mark_free(ids[:1])
+    assert grown.usable[4] and not grown.usable[5]
+    edge_ids = grown.add_edges(np.array([[0, 4]]), [np.linspace([0.0, 0.0], [0.5, 0.1], 4)])
+    start_loop = grown.add_vertex_edge(0)
+    q = grown.query()
+    assert edge_ids.tolist() == [6] and start_loop == 7
+    assert (
+        q.graph.num_vertices == 6
+        and q.graph.num_edges == 8
+        and q.worlds is not None
+        and q.worlds.shape == (3, 8)
+    )
+    assert q.graph.edges[4].tolist() == [4, 4] and q.motions[4].shape == (
+        1,
+        2,
+    )  # the vertex edge: its one state
+    assert q.graph.lengths[4] == 0.0 and np.isclose(q.graph.lengths[6], np.hypot(0.5, 0.1))
+    assert (
+        (q.start, q.goal) == (0, 2)
+        and grown.vertices_added == 2
+        and grown.edges_added == 1
+        and grown.vertex_edges == 3
+    )
