@@ -19,6 +19,7 @@ from drd_planner.core.region_rule import DEFAULT_REGION_RULE, REGION_RULES
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.domains.planar import WORLD_MODELS as PLANAR_WORLD_MODELS
 from drd_planner.exceptions import DrdError
+from drd_planner.planner.commands import add_plan_parser
 from drd_planner.planning.bag_cli import print_check
 
 if TYPE_CHECKING:
@@ -211,17 +212,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_plan(args: argparse.Namespace) -> int:
-    """``drd plan``: one offline plan through the Planner on one dataset world, or at a bag's request (no ROS)."""
-    from drd_planner.planner.commands import cmd_plan as plan
-
-    if args.bag:
-        from drd_planner.planning.bag_cli import cmd_plan_bag
-
-        return cmd_plan_bag(args)
-    return plan(args)
-
-
 def _print_episode(problem: Problem, result: EpisodeResult) -> None:
     graph = problem.graph
     for k, rec in enumerate(result.checks):
@@ -344,7 +334,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_build_dataset_parser(sub)
     _add_build_tree_parser(sub)
     _add_bench_parser(sub)
-    _add_plan_parser(sub)
+    add_plan_parser(sub)
     p = sub.add_parser("demo", help="self-contained demo on a generated planar problem")
     p.add_argument("--model", default="one_wall", choices=PLANAR_WORLD_MODELS, help="planar world model")
     p.add_argument("--worlds", type=int, default=300)
@@ -448,46 +438,6 @@ def _add_bench_parser(sub: Any) -> None:
     )
     _tree_options(p)
     p.set_defaults(func=cmd_bench)
-
-
-def _add_plan_parser(sub: Any) -> None:
-    """The ``plan`` subcommand."""
-    from drd_planner.planner.commands import query_arg
-    from drd_planner.planner.planner import PLAN_POLICIES
-
-    p = sub.add_parser(
-        "plan", help="plan once offline with a tree file on one dataset world, or at a request of a bag"
-    )
-    p.add_argument("--tree", required=True, help="prior or tree file (or a shipped tree's name with --bag)")
-    where = p.add_mutually_exclusive_group(required=True)
-    where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
-    where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
-    where.add_argument(
-        "--bag",
-        metavar="BAG",
-        help="rosbag2 MCAP bag of maps and requests (or a shipped bag's name): plan as the node would",
-    )
-    p.add_argument("--world", type=int, default=None, help="0-based world row (--gccd / --dataset)")
-    p.add_argument("--request", type=int, default=0, help="0-based request of the --bag (default 0)")
-    p.add_argument("--frame", default=None, help="planning frame for --bag (default: the maps' frame)")
-    p.add_argument(
-        "--prior-start",
-        action="store_true",
-        help="--bag: plan from the prior's start when the bag has no robot state (odom / joint_states) yet",
-    )
-    p.add_argument(
-        "--query",
-        type=query_arg,
-        default=None,
-        metavar="START,GOAL",
-        help="plan this query (vertex ids or states) instead of the dataset's own (--gccd / --dataset)",
-    )
-    p.add_argument("--max-checks", type=int, default=None, help="end the plan after this many checks")
-    p.add_argument(
-        "--policy", default="direct_bisect", choices=PLAN_POLICIES, help="the library stage's policy"
-    )
-    p.add_argument("--seed", type=int, default=0)
-    p.set_defaults(func=cmd_plan)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

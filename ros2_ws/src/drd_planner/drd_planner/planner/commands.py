@@ -1,4 +1,9 @@
-"""``drd build-tree`` (write a world prior with its trees) and ``drd plan`` (one plan through :class:`Planner`)."""
+"""``drd build-tree`` (write a world prior with its trees) and ``drd plan`` (one plan through :class:`Planner`).
+
+``drd plan`` plans on a dataset world (a table oracle, :func:`cmd_plan`) or a MoveIt request in a MoveIt scene
+with the real checker (:func:`cmd_plan_scene`, :mod:`drd_planner.planning.scene_plan`); its ``--bag`` form lives
+in :mod:`drd_planner.planning.bag_cli`.
+"""
 
 from __future__ import annotations
 
@@ -199,8 +204,90 @@ def cmd_build_tree(
     return 0
 
 
+def add_plan_parser(sub: Any) -> None:
+    """The ``drd plan`` subcommand's parser (its forms: ``--gccd``/``--dataset``, ``--bag``, ``--scene``)."""
+    from drd_planner.planner.planner import PLAN_POLICIES
+
+    p = sub.add_parser(
+        "plan",
+        help="plan once offline with a prior on one dataset world, at a request of a bag, or a MoveIt request "
+        "in a MoveIt scene",
+    )
+    p.add_argument(
+        "--tree",
+        "--prior",
+        dest="tree",
+        required=True,
+        help="prior or tree file (or a shipped tree's name with --bag)",
+    )
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
+    where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
+    where.add_argument(
+        "--bag",
+        metavar="BAG",
+        help="rosbag2 MCAP bag of maps and requests (or a shipped bag's name): plan as the node would",
+    )
+    where.add_argument(
+        "--scene",
+        metavar="SCENE.yaml",
+        help="MoveIt PlanningScene YAML: plan --request in it with the prior's real checker (roadmap growth on)",
+    )
+    p.add_argument("--world", type=int, default=None, help="0-based world row (--gccd / --dataset)")
+    p.add_argument(
+        "--request",
+        default=None,
+        metavar="N|REQUEST.yaml",
+        help="--bag: its 0-based request (default 0); --scene: the MoveIt MotionPlanRequest YAML (start state "
+        "and first joint goal, rad)",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        help='--scene: write {"status", "checks", "path_edges", "time_s", "reason", ...}',
+    )
+    p.add_argument(
+        "--time-budget",
+        type=float,
+        default=None,
+        metavar="S",
+        help="--scene: end the plan after S seconds (default: none; roadmap growth stops by itself after 10 s)",
+    )
+    p.add_argument("--frame", default=None, help="planning frame for --bag (default: the maps' frame)")
+    p.add_argument(
+        "--prior-start",
+        action="store_true",
+        help="--bag: plan from the prior's start when the bag has no robot state (odom / joint_states) yet",
+    )
+    p.add_argument(
+        "--query",
+        type=query_arg,
+        default=None,
+        metavar="START,GOAL",
+        help="plan this query (vertex ids or states) instead of the dataset's own (--gccd / --dataset)",
+    )
+    p.add_argument("--max-checks", type=int, default=None, help="end the plan after this many checks")
+    p.add_argument(
+        "--policy", default="direct_bisect", choices=PLAN_POLICIES, help="the library stage's policy"
+    )
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=cmd_plan)
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
-    """``drd plan``: one plan through :class:`Planner` against one dataset world (a table oracle)."""
+    """``drd plan``: one offline plan on a dataset world, a bag's request (no ROS) or a MoveIt scene."""
+    if args.scene:
+        return cmd_plan_scene(args)
+    if args.bag:
+        from drd_planner.planning.bag_cli import cmd_plan_bag
+
+        args.request = request_index(args.request)
+        return cmd_plan_bag(args)
+    return cmd_plan_dataset(args)
+
+
+def cmd_plan_dataset(args: argparse.Namespace) -> int:
+    """``drd plan --gccd/--dataset``: one plan through :class:`Planner` against one dataset world (a table oracle)."""
     from drd_planner.core.episode import TableOracle
     from drd_planner.data.dataset_cli import load_problem_from_args, problem_domain
 
@@ -239,6 +326,56 @@ def cmd_plan(args: argparse.Namespace) -> int:
         policy=args.policy,
     )
     print_plan(planner, result)
+    return 0 if result.found else 1
+
+
+def request_index(value: str | None) -> int:
+    """``--request`` of ``--bag``: a 0-based request number (default 0)."""
+    if value is None:
+        return 0
+    try:
+        index = int(value)
+    except ValueError:
+        raise DrdError(f"--request with --bag is a 0-based request number, got {value!r}") from None
+    if index < 0:
+        raise DrdError(f"--request must be >= 0, got {index}")
+    return index
+
+
+def cmd_plan_scene(args: argparse.Namespace) -> int:
+    """``drd plan --prior P --scene S --request R [--json F]``: a MoveIt request planned with the real checker.
+
+    Prints the outcome in one line (and the path's states when found); exit status 0 when a path was
+    found and verified, 1 otherwise; the JSON record (:meth:`ScenePlan.to_json`) with ``--json``.
+    """
+    import json
+
+    from drd_planner.planning.scene_plan import SceneRequest, plan_moveit_request
+
+    if not args.request:
+        raise DrdError("--scene needs --request REQUEST.yaml (the MoveIt MotionPlanRequest to plan)")
+    if args.time_budget is not None and not args.time_budget > 0:
+        raise DrdError(f"--time-budget must be a positive number of seconds, got {args.time_budget}")
+    request = SceneRequest(
+        Path(args.scene),
+        Path(args.request),
+        seed=args.seed,
+        max_checks=args.max_checks,
+        time_budget_s=args.time_budget,
+    )
+    plan = plan_moveit_request(load_prior(args.tree), request, label=Path(args.tree).name)
+    result = plan.result
+    print(
+        f"{request.request.name} in {request.scene.name}: {result.status.value} after {result.num_checks} "
+        f"checks in {plan.wall_s:.2f} s: {result.reason}"
+    )
+    for k, state in enumerate(plan.path_states[:: max(1, len(plan.path_states) // 10)]):
+        print(f"  path state {k}: " + " ".join(f"{v:7.3f}" for v in state))
+    if args.json:
+        try:
+            Path(args.json).write_text(json.dumps(plan.to_json(), indent=1) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise DrdError(f"cannot write --json {args.json}: {exc}") from exc
     return 0 if result.found else 1
 
 
