@@ -102,7 +102,9 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
         far.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
     moved = write_bag(tmp_path / "far.mcap", far)
     assert main(["plan", "--bag", str(moved), "--tree", str(TREE)]) == 2
-    assert "goal position (1100.0, 0.0) m is outside the lattice's horizontal extent x [0, 700] m" in _error(capsys)
+    assert "goal position (1100.0, 0.0) m is outside the lattice's horizontal extent x [0, 700] m" in _error(
+        capsys
+    )
     # No robot state before the request: an error, or the prior's start with --prior-start.
     stateless = write_bag(tmp_path / "stateless.mcap", [m for m in read_bag(bag) if m.topic != "/odom"])
     assert main(["plan", "--bag", str(stateless), "--tree", str(TREE)]) == 2

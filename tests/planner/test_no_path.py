@@ -50,11 +50,11 @@ def test_a_blocked_goal_state_is_named_with_what_blocks_it(shipped: tuple[WorldP
         "to the goal [-0.45, 0.75, 0.0, -1.6, 0.0, 2.4, 0.785]" in reason
     )  # an off-graph state: no vertex id
     assert "all 4 edges joining the goal" in reason and "were checked blocked" in reason
-    assert "the goal configuration itself is blocked: scene object 'can' (panda_" in reason
+    assert "the goal state itself is blocked: scene object 'can' (panda_" in reason
     # With growth, growth checks the goal's state first and stops: no path can exist.
     grown = Planner(prior, snap_tolerance=1e-6).plan(0, goal, domain.scene_checker(scene))
     assert grown.status is PlanStatus.NO_PATH and "can exist" in grown.reason
-    assert "goal configuration itself is blocked (checked): scene object 'can'" in grown.reason
+    assert "goal state itself is blocked (checked): scene object 'can'" in grown.reason
 
 
 def test_a_walled_in_start_names_the_obstacles_of_its_motions(shipped: tuple[WorldPrior, Any]) -> None:
@@ -63,7 +63,7 @@ def test_a_walled_in_start_names_the_obstacles_of_its_motions(shipped: tuple[Wor
     result = Planner(prior, growth=None).plan(0, 1, checker)
     assert result.status is PlanStatus.NO_PATH
     assert "edges joining the start (vertex 0:" in result.reason
-    assert "the start configuration itself is free, the motions are blocked by scene object" in result.reason
+    assert "the start state itself is free, the motions are blocked by scene object" in result.reason
 
 
 def test_without_an_explainer_the_reason_still_names_the_states() -> None:

@@ -107,9 +107,8 @@ def test_growth_checks_the_ends_first_and_stops_when_one_is_blocked(shipped: tup
     result = Planner(prior).plan(0, 1, domain.scene_checker(scene))
     assert result.status is PlanStatus.NO_PATH
     assert result.growth is not None and result.growth.stop == "goal_blocked" and result.growth.rounds == 0
-    assert (
-        "can exist" in result.reason
-        and "goal configuration itself is blocked (checked): scene object 'can'" in (result.reason)
+    assert "can exist" in result.reason and "goal state itself is blocked (checked): scene object 'can'" in (
+        result.reason
     )
 
 

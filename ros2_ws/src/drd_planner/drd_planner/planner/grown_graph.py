@@ -111,17 +111,26 @@ class GrownGraph:
         """Let these vertices (checked free) be joined to others."""
         self.usable[vertices] = True
 
-    def add_edges(self, pairs: IntArray, motions: list[FloatArray]) -> IntArray:
-        """Add (M, 2) edges with their (K, D) motions (tail ``pairs[:, 0]`` first); their edge ids."""
-        self.edges_added += pairs.shape[0]
-        return self._add_edges(pairs, motions)
+    def add_edges(
+        self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None
+    ) -> IntArray:
+        """Add (M, 2) edges with their (K, D) motions (tail ``pairs[:, 0]`` first); their edge ids.
 
-    def _add_edges(self, pairs: IntArray, motions: list[FloatArray]) -> IntArray:
+        ``lengths``: (M,) the motions' lengths in the graph's unit; None: the straight distance between the
+        end states (joint space).
+        """
+        self.edges_added += pairs.shape[0]
+        return self._add_edges(pairs, motions, lengths)
+
+    def _add_edges(
+        self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None
+    ) -> IntArray:
         first = self.edges.shape[0]
         ids = np.arange(first, first + pairs.shape[0], dtype=np.int64)
         self.edges = np.vstack([self.edges, pairs.reshape(-1, 2)])
-        lengths = np.linalg.norm(self.states[pairs[:, 1]] - self.states[pairs[:, 0]], axis=1)
-        self.lengths = np.concatenate([self.lengths, lengths])
+        if lengths is None:
+            lengths = np.linalg.norm(self.states[pairs[:, 1]] - self.states[pairs[:, 0]], axis=1)
+        self.lengths = np.concatenate([self.lengths, np.asarray(lengths, dtype=np.float64)])
         self.costs = np.concatenate([self.costs, np.full(pairs.shape[0], self._cost)])
         if self.worlds is not None and self.prior_worlds is not None:
             self.worlds = np.concatenate(

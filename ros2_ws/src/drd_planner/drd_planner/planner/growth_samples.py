@@ -25,7 +25,7 @@ the search asks for to the static rules). Nothing here checks the world.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 from scipy.sparse import coo_array
@@ -54,6 +54,7 @@ SAME_STATE = 1e-6
 STATIC_SAMPLES = 8
 
 
+@runtime_checkable
 class SegmentMaker(Protocol):
     """Makes the motion of a new edge (:class:`~drd_planner.planner.straight_connector.StraightConnector`)."""
 

@@ -1,4 +1,4 @@
-"""Why a plan found no path, in words a user can act on: the configurations, what was tried, what blocks.
+"""Why a plan found no path, in words a user can act on: the states (configurations), what was tried, what blocks.
 
 :func:`no_path_reason` writes the reason of a NO_PATH result:
 
@@ -101,7 +101,7 @@ def _endpoint_text(
             if explainer is None or states is None
             else f": {explainer.explain_motion(states[vertex][None])}"
         )
-        return f"the {label} configuration itself is blocked (checked){why}"
+        return f"the {label} state itself is blocked (checked){why}"
     if incident.size == 0 or not all(outcome.get(int(e)) is False for e in incident.tolist()):
         return ""
     lengths = query.graph.lengths[incident]
@@ -114,13 +114,15 @@ def _endpoint_text(
         if explainer is not None:  # an explanation checks without side effects on the plan's oracle
             why = explainer.explain_motion(alone)
             if why:
-                return f"{what}, and the {label} configuration itself is blocked: {why}"
+                return f"{what}, and the {label} state itself is blocked: {why}"
         elif isinstance(oracle, MotionOracle) and not oracle.check_motion(alone):
-            return f"{what}, and the {label} configuration itself is blocked"
+            return f"{what}, and the {label} state itself is blocked"
     if explainer is None:
-        return f"{what}; the {label} configuration itself is free"
+        return f"{what}; the {label} state itself is free"
     motions = [m for m in (along(int(e)) for e in incident.tolist()) if m is not None]
-    return f"{what}; the {label} configuration itself is free, the motions are blocked by {_causes(explainer, motions)}"
+    return (
+        f"{what}; the {label} state itself is free, the motions are blocked by {_causes(explainer, motions)}"
+    )
 
 
 def _cut_text(query: QueryGraph, outcome: dict[int, bool], oracle: EdgeOracle, along: EdgeStates) -> str:

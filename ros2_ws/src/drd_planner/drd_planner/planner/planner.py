@@ -11,9 +11,11 @@ checked free in this plan:
    (:class:`~drd_planner.core.online_tree.LazyDirectTree`). Both are cached per query (LRU).
 2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
    prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
-3. **roadmap growth**, when the graph has no free path and the domain can sample its valid states (the
-   arm): new vertices and edges where the blocked region cuts the graph, checked lazily, the graph search
-   again, until a path is verified or the growth budget ends (:mod:`~drd_planner.planner.roadmap_growth`).
+3. **growth**, when the graph has no free path: a domain that samples its valid states (the arm) gets new
+   vertices and edges where the blocked region cuts the graph (:mod:`~drd_planner.planner.roadmap_growth`);
+   an off-graph start or goal whose connector ranks more joins (the helicopter) gets more of them
+   (:mod:`~drd_planner.planner.join_growth`); each checked lazily, the graph search again, until a path is
+   verified or the growth budget ends.
 
 With ``improve_budget`` a plan then seeks shorter verified paths (:mod:`~drd_planner.planner.anytime`).
 So the planner says "no path" only when the graph has none given the checks made (and growth found none
@@ -43,6 +45,8 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
+from drd_planner.planner.growth_samples import SegmentMaker
+from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
 from drd_planner.planner.no_path import edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
@@ -59,7 +63,13 @@ from drd_planner.planner.result import (
     trivial_result,
     unproven_result,
 )
-from drd_planner.planner.roadmap_growth import DEFAULT_GROWTH, GrowthSettings, RoadmapGrowth, lazy_search
+from drd_planner.planner.roadmap_growth import (
+    DEFAULT_GROWTH,
+    GraphGrowth,
+    GrowthSettings,
+    RoadmapGrowth,
+    lazy_search,
+)
 from drd_planner.planner.state_sampler import sampler_of
 
 #: Queries whose library and tree are kept (least recently used dropped first).
@@ -427,18 +437,23 @@ class Planner:
         reason = no_path_reason(query, checks, raw, along, report)
         return unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
 
-    def _growth(self, model: QueryModel) -> RoadmapGrowth | None:
-        """The growth of the query's graph, when the domain can sample valid states and growth is on."""
-        sampler = sampler_of(self._connector)
-        segment = getattr(self._connector, "segment", None)
-        if (
-            self.growth is None
-            or sampler is None
-            or segment is None
-            or model.query.graph.vertex_states is None
-        ):
+    def _growth(self, model: QueryModel) -> GraphGrowth | None:
+        """How the query's graph grows when it has no free path (None: it does not, or growth is off).
+
+        A domain that samples valid states grows its roadmap (the arm); a connector that can join a state to
+        more vertices gives an off-graph start or goal more joins (the helicopter).
+        """
+        if self.growth is None or model.query.graph.vertex_states is None:
             return None
-        return RoadmapGrowth(self.prior, model.query, self._connector, sampler, self._index(), self.growth)  # type: ignore[arg-type]
+        sampler = sampler_of(self._connector)
+        if sampler is not None and isinstance(self._connector, SegmentMaker):
+            return RoadmapGrowth(
+                self.prior, model.query, self._connector, sampler, self._index(), self.growth
+            )
+        joins = more_joins_of(self._connector)
+        if joins is not None and model.query.connected:
+            return JoinGrowth(self.prior, model.query, joins, self._index(), self.growth)
+        return None
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None

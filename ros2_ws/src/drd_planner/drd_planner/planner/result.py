@@ -81,7 +81,8 @@ class GrowthReport:
         checks: checks made after growth began (new edges and old ones alike, new vertices included).
         stop: why it stopped: ``path`` (a path was verified), ``start_blocked``, ``goal_blocked`` (that
             state itself is blocked: no path can exist; growth checks both first), ``rounds``, ``vertices``,
-            ``seconds``, ``checks`` (a growth budget), ``plan_checks``, ``plan_time`` (the plan's own budgets).
+            ``seconds``, ``checks`` (a growth budget), ``plan_checks``, ``plan_time`` (the plan's own budgets),
+            ``exhausted`` (nothing more to add: every flyable motion joining the start and goal was tried).
         query: the grown query: its graph (vertex states included; new vertices from the query's V on, new
             edges from its E on), training columns (new edges' imputed) and every motion edge (the query's
             joins and the grown edges, edge id -> (K, D) states, tail first).

@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -62,6 +63,7 @@ from drd_planner.planner.state_sampler import StateSampler
 __all__ = [
     "DEFAULT_GROWTH",
     "GROWTH_STAGE",
+    "GrowthLimits",
     "GrowthOutcome",
     "GrowthSettings",
     "RoadmapGrowth",
@@ -94,6 +96,8 @@ class GrowthSettings:
             longest edge).
         bridges: direct edges added per round between the nearest vertices of the start's and the goal's
             known-reachable parts (count; 0: none).
+        max_joins: motions joining an off-graph start or goal at most, when the connector can offer more
+            than its first ones (:mod:`~drd_planner.planner.join_growth`; count).
     """
 
     max_rounds: int = 40
@@ -108,12 +112,18 @@ class GrowthSettings:
     sigma_range: tuple[float, float] = (0.1, 0.6)
     reach_fraction: float = 1.0
     bridges: int = 8
+    max_joins: int = 512
 
     def __post_init__(self) -> None:
         counts = (self.max_rounds, self.max_vertices, self.samples_per_round, self.neighbours)
         shares = (self.start_share, self.goal_share, self.bridge_share)
         low, high = self.sigma_range
-        if min(counts) < 1 or self.bridges < 0 or (self.max_checks is not None and self.max_checks < 1):
+        if (
+            min(counts) < 1
+            or self.bridges < 0
+            or self.max_joins < 1
+            or (self.max_checks is not None and self.max_checks < 1)
+        ):
             raise ProblemError(
                 f"growth counts must be at least 1, got {counts} and max_checks {self.max_checks}"
             )
@@ -186,42 +196,51 @@ def lazy_search(
     )
 
 
-class RoadmapGrowth:
-    """Grows one query's graph until a path is verified or a budget ends (see the module docstring).
+@dataclass(frozen=True)
+class GrowthLimits:
+    """The plan's check budget and the earliest deadline (the plan's or the growth's own)."""
+
+    max_checks: int | None
+    deadline: float | None
+
+
+class GraphGrowth(ABC):
+    """The growth loop of one query's graph: grow, search lazily, until a path is verified or a budget ends.
+
+    Each round a subclass adds to the graph (:meth:`_grow`: new vertices and edges of a roadmap, or more
+    motions joining an off-graph start or goal); then the lazy graph search runs on the grown graph, reusing
+    every outcome known. The start's and the goal's own states are checked first.
 
     Args:
         prior: the prior (training worlds for the new edges' imputed outcomes, alpha and kappa).
         query: the query's graph after the graph stage found no path.
-        connector: makes the straight motions of new edges (``segment``).
-        sampler: the domain's valid states.
         index: points along the prior's graph edges (for the imputation).
-        settings: the growth's shape and budget.
+        settings: the growth's budget (and a subclass's shape).
     """
 
     def __init__(
         self,
         prior: WorldPrior,
         query: QueryGraph,
-        connector: SegmentMaker,
-        sampler: StateSampler,
         index: EdgeSampleIndex,
         settings: GrowthSettings = DEFAULT_GROWTH,
     ) -> None:
-        self.prior, self.connector, self.sampler, self.settings = prior, connector, sampler, settings
+        self.prior, self.settings = prior, settings
         self.grown = GrownGraph(query, index, prior.worlds)
-        scale = float(np.median(prior.graph.lengths)) if prior.graph.num_edges else 1.0
-        low, high = settings.sigma_range
-        self.mix = SampleMix(
-            settings.samples_per_round,
-            settings.start_share,
-            settings.goal_share,
-            settings.bridge_share,
-            (low * scale, high * scale),
-        )
-        self.reach = settings.reach_fraction * float(prior.graph.lengths.max(initial=scale))
         self.rounds = 0
         self.checks_at_start = 0
         self.state_checks = 0
+
+    @abstractmethod
+    def _grow(
+        self,
+        rng: np.random.Generator,
+        oracle: MotionOracle,
+        known: dict[int, bool],
+        checks: list[CheckRecord],
+        limits: GrowthLimits,
+    ) -> bool:
+        """Add to :attr:`grown` (one round); False when nothing more can be added (growth then stops)."""
 
     def run(
         self,
@@ -248,7 +267,7 @@ class RoadmapGrowth:
         self.checks_at_start = len(checks)
         own_deadline = None if settings.seconds is None else time.perf_counter() + settings.seconds
         ends = [d for d in (deadline, own_deadline) if d is not None]
-        limits = _Limits(max_checks, min(ends) if ends else None)
+        limits = GrowthLimits(max_checks, min(ends) if ends else None)
         stop = self._budget_stop(checks, max_checks, deadline, own_deadline)
         stop = stop or self._check_ends(oracle, known, checks)
         while not stop:
@@ -256,7 +275,9 @@ class RoadmapGrowth:
             if stop:
                 break
             self.rounds += 1
-            self._grow(rng, oracle, known, checks, limits)
+            if not self._grow(rng, oracle, known, checks, limits):
+                stop = "exhausted"
+                break
             query = self.grown.query()
             episode = lazy_search(
                 self.prior,
@@ -303,14 +324,85 @@ class RoadmapGrowth:
         )
         return next((name for name, over in ended if over), "")
 
+    def _check_ends(self, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]) -> str:
+        """Check the start's and the goal's own states first (their vertex edges, logged).
+
+        Returns ``start_blocked`` or ``goal_blocked`` when one is blocked (no path can exist), else "".
+        """
+        base = self.grown.base
+        for vertex, label in ((base.start, "start"), (base.goal, "goal")):
+            edge = self.grown.add_vertex_edge(vertex)
+            if not self._logged_check(edge, oracle, known, checks):
+                return f"{label}_blocked"
+        return ""
+
+    def _logged_check(
+        self, edge: int, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]
+    ) -> bool:
+        """Check the vertex edge ``edge`` (its one state) through the oracle, logged as a growth check."""
+        t0 = time.perf_counter()
+        free = bool(oracle.check_motion(self.grown.motions[edge]))
+        checks.append(
+            CheckRecord(len(checks), edge, free, GROWTH_STAGE, 0.0, (time.perf_counter() - t0) * 1e3)
+        )
+        known[edge] = free
+        self.state_checks += 1
+        return free
+
+    def _report(self, stop: str, checks: list[CheckRecord]) -> GrowthReport:
+        return GrowthReport(
+            rounds=self.rounds,
+            vertices_added=self.grown.vertices_added,
+            edges_added=self.grown.edges_added,
+            checks=len(checks) - self.checks_at_start,
+            stop=stop,
+            query=self.grown.query(),
+            state_checks=self.state_checks,
+        )
+
+
+class RoadmapGrowth(GraphGrowth):
+    """Grows a roadmap with new valid states where it is cut (see the module docstring).
+
+    Args:
+        prior: the prior (training worlds for the new edges' imputed outcomes, alpha and kappa).
+        query: the query's graph after the graph stage found no path.
+        connector: makes the straight motions of new edges (``segment``).
+        sampler: the domain's valid states.
+        index: points along the prior's graph edges (for the imputation).
+        settings: the growth's shape and budget.
+    """
+
+    def __init__(
+        self,
+        prior: WorldPrior,
+        query: QueryGraph,
+        connector: SegmentMaker,
+        sampler: StateSampler,
+        index: EdgeSampleIndex,
+        settings: GrowthSettings = DEFAULT_GROWTH,
+    ) -> None:
+        super().__init__(prior, query, index, settings)
+        self.connector, self.sampler = connector, sampler
+        scale = float(np.median(prior.graph.lengths)) if prior.graph.num_edges else 1.0
+        low, high = settings.sigma_range
+        self.mix = SampleMix(
+            settings.samples_per_round,
+            settings.start_share,
+            settings.goal_share,
+            settings.bridge_share,
+            (low * scale, high * scale),
+        )
+        self.reach = settings.reach_fraction * float(prior.graph.lengths.max(initial=scale))
+
     def _grow(
         self,
         rng: np.random.Generator,
         oracle: MotionOracle,
         known: dict[int, bool],
         checks: list[CheckRecord],
-        limits: _Limits,
-    ) -> None:
+        limits: GrowthLimits,
+    ) -> bool:
         """One round of new vertices and edges (see :mod:`~drd_planner.planner.growth_samples`).
 
         New valid states around the frontiers and between them, each checked (its vertex edge), the free
@@ -347,31 +439,7 @@ class RoadmapGrowth:
             grown.states, new_pairs(candidates, grown.edges), connector=self.connector, sampler=self.sampler
         )
         grown.add_edges(pairs, motions)
-
-    def _check_ends(self, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]) -> str:
-        """Check the start's and the goal's own states first (their vertex edges, logged).
-
-        Returns ``start_blocked`` or ``goal_blocked`` when one is blocked (no path can exist), else "".
-        """
-        base = self.grown.base
-        for vertex, label in ((base.start, "start"), (base.goal, "goal")):
-            edge = self.grown.add_vertex_edge(vertex)
-            if not self._logged_check(edge, oracle, known, checks):
-                return f"{label}_blocked"
-        return ""
-
-    def _logged_check(
-        self, edge: int, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]
-    ) -> bool:
-        """Check the vertex edge ``edge`` (its one state) through the oracle, logged as a growth check."""
-        t0 = time.perf_counter()
-        free = bool(oracle.check_motion(self.grown.motions[edge]))
-        checks.append(
-            CheckRecord(len(checks), edge, free, GROWTH_STAGE, 0.0, (time.perf_counter() - t0) * 1e3)
-        )
-        known[edge] = free
-        self.state_checks += 1
-        return free
+        return True
 
     def _check_states(
         self,
@@ -395,22 +463,3 @@ class RoadmapGrowth:
             if ok:
                 self.grown.mark_free(np.array([vertex]))
         return np.array(free, dtype=bool)
-
-    def _report(self, stop: str, checks: list[CheckRecord]) -> GrowthReport:
-        return GrowthReport(
-            rounds=self.rounds,
-            vertices_added=self.grown.vertices_added,
-            edges_added=self.grown.edges_added,
-            checks=len(checks) - self.checks_at_start,
-            stop=stop,
-            query=self.grown.query(),
-            state_checks=self.state_checks,
-        )
-
-
-@dataclass(frozen=True)
-class _Limits:
-    """The plan's check budget and the earliest deadline (the plan's or the growth's own)."""
-
-    max_checks: int | None
-    deadline: float | None

@@ -1,0 +1,85 @@
+"""More joins for an off-graph helicopter state when its first ones are all blocked (issue 29)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drd_planner.planner import load_prior
+from drd_planner.planner.dubins_connector import DubinsConnector
+from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
+from drd_planner.planner.planner import Planner
+from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.result import PlanStage, PlanStatus
+from drd_planner.planner.roadmap_growth import GrowthSettings
+
+PRIOR = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
+START = np.array([212.0, 33.0, 60.0, 2.9])  # flying west in an east-going lattice: its joins must turn
+
+
+class JoinWall:
+    """Every lattice edge free; a motion is blocked when it joins one of the ``blocked`` vertices."""
+
+    def __init__(self, prior: WorldPrior, blocked: set[int]) -> None:
+        self.states = prior.graph.vertex_states
+        self.blocked = blocked
+        self.motions = 0
+
+    def check(self, edge: int) -> bool:
+        return True
+
+    def check_motion(self, states: np.ndarray) -> bool:
+        self.motions += 1
+        if states.shape[0] == 1:  # the state itself
+            return True
+        assert self.states is not None
+        ends = np.flatnonzero(np.all(np.isclose(self.states[:, :3], states[-1, :3]), axis=1))
+        return not any(int(v) in self.blocked for v in ends)
+
+
+@pytest.fixture(scope="module")
+def prior() -> WorldPrior:
+    return load_prior(PRIOR)
+
+
+def _first_joins(planner: Planner, count: int) -> set[int]:
+    connector = planner.connector
+    assert isinstance(connector, DubinsConnector)
+    return set(connector.ranked(START, planner.prior.graph, outgoing=True)[:count].tolist())
+
+
+def test_blocked_first_joins_grow_to_a_free_one(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6)
+    assert more_joins_of(planner.connector) is not None
+    wall = JoinWall(prior, _first_joins(planner, 40))  # more than the first 16 and the next 16
+    result = planner.plan(START, int(prior.trees[0].goal), wall)
+    assert result.status is PlanStatus.FOUND and result.stage is PlanStage.GROW
+    assert result.growth is not None and result.growth.rounds == 2  # 16 + 16 + 32 joins offered
+    first = int(result.edges[0])
+    assert first in result.motions and np.allclose(result.motions[first][0], START)
+    assert wall.check_motion(result.motions[first])  # the join it flies is a free one
+    again = Planner(prior, snap_tolerance=1e-6).plan(
+        START, int(prior.trees[0].goal), JoinWall(prior, wall.blocked)
+    )
+    assert [(c.edge, c.free) for c in again.checks] == [(c.edge, c.free) for c in result.checks]
+    without = Planner(prior, snap_tolerance=1e-6, growth=None).plan(START, int(prior.trees[0].goal), wall)
+    assert without.status is PlanStatus.NO_PATH
+
+
+def test_when_every_join_is_blocked_the_reason_says_what_was_tried(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6, growth=GrowthSettings(max_joins=64))
+    wall = JoinWall(prior, _first_joins(planner, 10**6))
+    result = planner.plan(START, int(prior.trees[0].goal), wall)
+    assert result.status is PlanStatus.NO_PATH and result.growth is not None
+    assert result.growth.stop == "exhausted" and result.growth.edges_added == 64 - 16
+    assert "blocked" in result.reason and "64" in result.reason
+
+
+def test_join_growth_is_only_for_queries_with_off_graph_states(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6)
+    model = planner.query_model(0, int(prior.trees[0].goal))
+    assert not model.query.connected and planner._growth(model) is None
+    connected = planner.query_model(START, int(prior.trees[0].goal))
+    assert isinstance(planner._growth(connected), JoinGrowth)
