@@ -243,9 +243,9 @@ def test_the_explanation_names_the_terrain_or_the_obstacle_that_blocks(domain: H
     checker = domain.checker(_world(domain, heights=20.0, solids=(box,)))
     assert checker.explain_motion(np.array([[100.0, 0.0, 65.0, 0.0]])) == ""  # free
     below = checker.explain_motion(np.array([[100.0, 0.0, 15.0, 0.0]]))
-    assert below.startswith("below the terrain (ground at 20.0 m)") and "(100.0, 0.0, 15.0 m)" in below
+    assert below == "the terrain (below it, ground at 20.0 m) (100.0, 0.0, 15.0 m)"
     near = checker.explain_motion(np.array([[100.0, 0.0, 24.0, 0.0]]))
-    assert near.startswith("within the 7 m clearance of the terrain")
+    assert near.startswith("the terrain (within 7 m of it, ground at 20.0 m)")
     motion = np.array([[250.0, 0.0, 65.0, 0.0], [292.0, 0.0, 65.0, 0.0], [300.0, 0.0, 65.0, 0.0]])
     assert not checker.check_motion(motion)
     assert checker.explain_motion(motion) == "obstacle 'tower_7' at sample 2 of 3 (292.0, 0.0, 65.0 m)"

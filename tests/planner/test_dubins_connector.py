@@ -118,14 +118,13 @@ def test_states_outside_the_extent_are_refused_with_the_extent(lattice_graph: Ex
     assert inside
 
 
-def test_more_motions_continue_the_ranking_without_repeats(lattice_graph: ExplicitGraph) -> None:
+def test_motions_to_any_ranked_vertices_follow_the_ranking(lattice_graph: ExplicitGraph) -> None:
     connector = _connector(lattice_graph, k=6)
     start = np.array([150.0, -40.0, 50.0, 2.8])  # flying west in an east-going lattice: joins need turns
     ranked = connector.ranked(start, lattice_graph, outgoing=True)
     first = connector.connect(start, lattice_graph, outgoing=True)
-    then = connector.more_motions(start, lattice_graph, outgoing=True, skip=6, count=10)
+    then = connector.motions_to(start, lattice_graph, ranked[6:16], outgoing=True)
     assert [m.vertex for m in first + then] == ranked[:16].tolist()
     assert [m.length for m in first + then] == sorted(m.length for m in first + then)
-    tail = connector.more_motions(start, lattice_graph, outgoing=True, skip=ranked.size - 2, count=10)
-    assert [m.vertex for m in tail] == ranked[-2:].tolist()
-    assert connector.more_motions(start, lattice_graph, outgoing=True, skip=ranked.size, count=10) == []
+    assert len(set(ranked.tolist())) == ranked.size  # every vertex once
+    assert connector.motions_to(start, lattice_graph, ranked[:0], outgoing=True) == []

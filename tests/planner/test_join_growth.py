@@ -9,7 +9,7 @@ import pytest
 
 from drd_planner.planner import load_prior
 from drd_planner.planner.dubins_connector import DubinsConnector
-from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
+from drd_planner.planner.join_growth import JoinGrowth, more_joins_of, still_open
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanStage, PlanStatus
@@ -73,7 +73,7 @@ def test_when_every_join_is_blocked_the_reason_says_what_was_tried(prior: WorldP
     wall = JoinWall(prior, _first_joins(planner, 10**6))
     result = planner.plan(START, int(prior.trees[0].goal), wall)
     assert result.status is PlanStatus.NO_PATH and result.growth is not None
-    assert result.growth.stop == "exhausted" and result.growth.edges_added == 64 - 16
+    assert result.growth.stop == "exhausted" and result.growth.edges_added == 64 - 16  # max_joins 64
     assert "blocked" in result.reason and "64" in result.reason
 
 
@@ -83,3 +83,33 @@ def test_join_growth_is_only_for_queries_with_off_graph_states(prior: WorldPrior
     assert not model.query.connected and planner._growth(model) is None
     connected = planner.query_model(START, int(prior.trees[0].goal))
     assert isinstance(planner._growth(connected), JoinGrowth)
+
+
+def test_joins_go_only_where_the_other_end_can_still_be_reached(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6)
+    goal = int(prior.trees[0].goal)
+    into_goal = set(np.flatnonzero(prior.graph.edges[:, 1] == goal).tolist())
+
+    class GoalCutOff(JoinWall):
+        def check(self, edge: int) -> bool:
+            return edge not in into_goal  # the goal cannot be reached by any lattice edge
+
+    wall = GoalCutOff(prior, _first_joins(planner, 16) | {goal})  # no motion joins the goal either
+    result = planner.plan(START, goal, wall)
+    assert result.status is PlanStatus.NO_PATH and result.growth is not None
+    # Joins go only to vertices that may still reach the goal; as the edges into the goal turn out blocked there
+    # are none left, long before the 512 joins (or the 496 a join to every vertex would have made).
+    assert result.growth.stop == "exhausted" and result.growth.edges_added <= 32
+    known = result.outcomes()
+    assert all(known[e] is False for e in into_goal if e in known)
+
+
+def test_still_open_follows_direction_and_skips_blocked_edges() -> None:
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 1]])
+    open_edges = np.array([True, True, False, True])
+    forward = still_open(edges, 5, open_edges, 0, directed=True, reverse=False)
+    assert forward.tolist() == [True, True, True, False, False]
+    backward = still_open(edges, 5, open_edges, 1, directed=True, reverse=True)
+    assert backward.tolist() == [True, True, False, True, False]
+    both = still_open(edges, 5, open_edges, 2, directed=False, reverse=False)
+    assert both.tolist() == [True, True, True, True, False]

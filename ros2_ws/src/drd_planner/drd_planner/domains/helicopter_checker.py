@@ -204,9 +204,9 @@ class HelicopterChecker:
     def explain_motion(self, states: npt.ArrayLike) -> str:
         """What blocks a motion ((K, >= 3) samples, x, y, z m first; K = 1: one state), or "" when it is free.
 
-        The first blocked sample's cause as a user would fix it: below the terrain (with the ground height
-        there), within the clearance of the terrain, or the obstacles whose clearance it enters (each tested
-        alone, by its map name); for K > 1 also where along the motion. Slow by design (a test per obstacle):
+        The first blocked sample's cause as a user would fix it: the terrain (below it, or within the clearance
+        of it, with the ground height there), or the obstacles whose clearance it enters (each tested alone, by
+        its map name); for K > 1 also where along the motion; then the sample's position. Slow by design (a test per obstacle):
         the planner asks only after a plan failed.
         """
         xyz = np.asarray(states, dtype=np.float64)[:, :3]
@@ -227,10 +227,8 @@ class HelicopterChecker:
                 continue
             ground = float(terrain.surface_at(centre[:, :2], interpolation="triangles")[0])
             under = bool(terrain.below(centre, interpolation="triangles")[0])
-            causes.append(
-                f"{'below' if under else f'within the {clearance:g} m clearance of'} the terrain (ground at "
-                f"{ground:.1f} m)"
-            )
+            relation = "below it" if under else f"within {clearance:g} m of it"
+            causes.append(f"the terrain ({relation}, ground at {ground:.1f} m)")
         shown = ", ".join(causes[:MAX_CAUSES]) + (
             f" and {len(causes) - MAX_CAUSES} more" if len(causes) > MAX_CAUSES else ""
         )

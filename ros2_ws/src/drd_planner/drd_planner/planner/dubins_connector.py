@@ -173,20 +173,22 @@ class DubinsConnector:
         Raises:
             QueryError: the state is outside the extent, or a start has no heading.
         """
-        return self.more_motions(state, graph, outgoing=outgoing, skip=0, count=self._k)
+        return self.motions_to(
+            state, graph, self.ranked(state, graph, outgoing=outgoing)[: self._k], outgoing=outgoing
+        )
 
-    def more_motions(
-        self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool, skip: int, count: int
+    def motions_to(
+        self, state: FloatArray, graph: ExplicitGraph, vertices: IntArray, *, outgoing: bool
     ) -> list[Motion]:
-        """The motions to the next ``count`` vertices after the ``skip`` shortest (the ranking of :meth:`ranked`).
+        """The motions joining ``state`` and each of ``vertices`` (in that order; from the state if ``outgoing``).
 
-        :meth:`connect` gives the first ``neighbours``; the planner asks for more when they do not suffice.
+        :meth:`connect` joins the first ``neighbours`` of :meth:`ranked`; the planner asks for more of the ranking
+        when they do not suffice (:mod:`~drd_planner.planner.join_growth`).
         """
         states = vertex_states_of(graph)
-        order = self.ranked(state, graph, outgoing=outgoing)[skip : skip + count]
         free_heading = not math.isfinite(float(state[3]))
         out: list[Motion] = []
-        for v in order.tolist():
+        for v in np.asarray(vertices, dtype=np.int64).tolist():
             motion = self._motion(state, states[v], int(v), outgoing=outgoing, free_heading=free_heading)
             if motion is not None:
                 out.append(motion)

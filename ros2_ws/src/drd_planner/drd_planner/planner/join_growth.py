@@ -5,12 +5,17 @@ ones, :class:`~drd_planner.planner.dubins_connector.DubinsConnector`). When ever
 blocked - a wire or a no-fly zone right ahead, a state facing away from the lattice whose short motions all
 loop through an obstacle - the graph can still have a free path through a motion that was not among the
 first. Then, round after round (the loop of :class:`~drd_planner.planner.roadmap_growth.GraphGrowth`), the
-start and the goal get their next joins in the connector's own ranking (:meth:`more_motions`: as many again
-as they have, so 16, 32, 64, ...), each new motion an ordinary lazy edge with its imputed prior, and the
-lazy graph search runs again reusing every outcome. It stops at the first verified path, when the ranking is
-exhausted (every vertex a flyable motion reaches was offered: the planner's "no path" is then exact for
-single-motion joins), or at a budget (:class:`~drd_planner.planner.roadmap_growth.GrowthSettings`:
-``max_joins`` per state, rounds, seconds, checks, and the plan's own).
+start and the goal get their next joins in the connector's own ranking (as many again as they have: 16, 32,
+64, ...), each new motion an ordinary lazy edge with its imputed prior, and the lazy graph search runs again
+reusing every outcome.
+
+Only joins that can still lead somewhere are offered: a start is joined only to vertices from which the goal
+can still be reached over edges not known blocked, a goal only from vertices the start can still reach (one
+breadth-first search each round). So a goal cut off from everything stops the growth at once instead of
+joining the start to every vertex. It stops at the first verified path, when no such vertex is left in the
+ranking (the planner's "no path" is then exact for single-motion joins), or at a budget
+(:class:`~drd_planner.planner.roadmap_growth.GrowthSettings`: ``max_joins`` per state, rounds, seconds,
+checks, and the plan's own).
 """
 
 from __future__ import annotations
@@ -18,8 +23,10 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import breadth_first_order
 
-from drd_planner.arrays import FloatArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.planner.connect import EdgeSampleIndex, Motion, MotionOracle
@@ -27,28 +34,56 @@ from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.query_graph import QueryGraph
 from drd_planner.planner.roadmap_growth import DEFAULT_GROWTH, GraphGrowth, GrowthLimits, GrowthSettings
 
-__all__ = ["JoinGrowth", "MoreJoins", "more_joins_of"]
+__all__ = ["JoinGrowth", "MoreJoins", "more_joins_of", "still_open"]
 
 
 @runtime_checkable
 class MoreJoins(Protocol):
-    """A connector that can join a state to more vertices than its first ones, in a fixed ranking."""
+    """A connector that ranks every vertex it could join a state to, and joins any of them."""
 
     @property
     def neighbours(self) -> int:
-        """How many motions its ``connect`` gives at most (the first of the ranking)."""
+        """How many of the ranking its ``connect`` joins (the first ones)."""
         ...
 
-    def more_motions(
-        self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool, skip: int, count: int
+    def ranked(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> IntArray:
+        """(M,) the vertices a motion joins to ``state``, best first."""
+        ...
+
+    def motions_to(
+        self, state: FloatArray, graph: ExplicitGraph, vertices: IntArray, *, outgoing: bool
     ) -> list[Motion]:
-        """The motions to the next ``count`` ranked vertices after the first ``skip``."""
+        """The motions joining ``state`` and each of ``vertices``."""
         ...
 
 
 def more_joins_of(connector: object) -> MoreJoins | None:
     """The connector when it offers more joins (:class:`MoreJoins`), else None."""
     return connector if isinstance(connector, MoreJoins) else None
+
+
+def still_open(
+    edges: IntArray, num_vertices: int, open_edges: BoolArray, source: int, *, directed: bool, reverse: bool
+) -> BoolArray:
+    """(V,) the vertices reachable from ``source`` (that reach it when ``reverse``) over the ``open_edges``.
+
+    Args:
+        edges: (E, 2) vertex ids.
+        num_vertices: V.
+        open_edges: (E,) the edges that may be used (those not known blocked).
+        source: where the search starts.
+        directed: whether edges go only from their first vertex to their second.
+        reverse: search against the edges' direction.
+    """
+    u, v = edges[open_edges, 0], edges[open_edges, 1]
+    if not directed:
+        u, v = np.concatenate([u, v]), np.concatenate([v, u])
+    if reverse:
+        u, v = v, u
+    adjacency = csr_array((np.ones(u.size), (u, v)), shape=(num_vertices, num_vertices))
+    out = np.zeros(num_vertices, dtype=bool)
+    out[breadth_first_order(adjacency, source, directed=True, return_predecessors=False)] = True
+    return out
 
 
 class JoinGrowth(GraphGrowth):
@@ -72,13 +107,19 @@ class JoinGrowth(GraphGrowth):
     ) -> None:
         super().__init__(prior, query, index, settings)
         self.connector = connector
-        #: Per off-graph endpoint (its query vertex): (state, outgoing, joins offered so far).
-        self.offered: dict[int, tuple[FloatArray, bool, int]] = {
-            vertex: (np.asarray(state, dtype=np.float64), vertex == query.start, connector.neighbours)
-            for vertex, state in query.new_states.items()
-            if vertex in (query.start, query.goal)
-        }
-        self.exhausted: set[int] = set()
+        #: Per off-graph endpoint (its query vertex): its state, whether it is the start, and its ranking.
+        self.ends: dict[int, tuple[FloatArray, bool, IntArray]] = {}
+        #: Per off-graph endpoint: the prior's vertices it is joined to so far.
+        self.joined: dict[int, set[int]] = {}
+        for vertex, state in sorted(query.new_states.items()):
+            if vertex not in (query.start, query.goal):
+                continue
+            outgoing = vertex == query.start
+            array = np.asarray(state, dtype=np.float64)
+            self.ends[vertex] = (array, outgoing, connector.ranked(array, prior.graph, outgoing=outgoing))
+            edges = query.graph.edges
+            mine = edges[:, 0] == vertex if outgoing else edges[:, 1] == vertex
+            self.joined[vertex] = set((edges[mine, 1] if outgoing else edges[mine, 0]).tolist())
 
     def _grow(
         self,
@@ -88,24 +129,40 @@ class JoinGrowth(GraphGrowth):
         checks: list[CheckRecord],
         limits: GrowthLimits,
     ) -> bool:
-        """The next joins of each off-graph endpoint (as many again as it has); False when none is left."""
+        """As many joins again for each off-graph endpoint, to vertices that can still lead to the other end.
+
+        False when no endpoint has such a vertex left in its ranking (or its ``max_joins`` is reached).
+        """
+        grown, base = self.grown, self.grown.base
+        open_edges = np.ones(grown.edges.shape[0], dtype=bool)
+        open_edges[[e for e, free in known.items() if not free]] = False
         added = False
-        for vertex, (state, outgoing, offered) in sorted(self.offered.items()):
-            if vertex in self.exhausted:
+        for vertex, (state, outgoing, ranking) in self.ends.items():
+            joined = self.joined[vertex]
+            room = self.settings.max_joins - len(joined)
+            if room <= 0:
                 continue
-            count = min(offered, self.settings.max_joins - offered)
-            motions = self.connector.more_motions(
-                state, self.prior.graph, outgoing=outgoing, skip=offered, count=max(count, 0)
+            other = base.goal if outgoing else base.start
+            useful = still_open(
+                grown.edges,
+                grown.num_vertices,
+                open_edges,
+                other,
+                directed=base.graph.directed,
+                reverse=outgoing,
             )
-            self.offered[vertex] = (state, outgoing, offered + max(count, 0))
-            if len(motions) < count or count <= 0 or offered + count >= self.settings.max_joins:
-                self.exhausted.add(vertex)
+            fresh = np.array([v for v in ranking.tolist() if useful[v] and v not in joined], dtype=np.int64)
+            take = fresh[: min(max(len(joined), 1), room)]
+            if take.size == 0:
+                continue
+            motions = self.connector.motions_to(state, self.prior.graph, take, outgoing=outgoing)
+            joined.update(int(v) for v in take.tolist())
             if not motions:
                 continue
             pairs = np.array(
                 [(vertex, m.vertex) if outgoing else (m.vertex, vertex) for m in motions], dtype=np.int64
             )
             lengths = np.array([m.length for m in motions], dtype=np.float64)
-            self.grown.add_edges(pairs, [m.states for m in motions], lengths)
+            grown.add_edges(pairs, [m.states for m in motions], lengths)
             added = True
         return added
