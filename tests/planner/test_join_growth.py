@@ -20,7 +20,7 @@ START = np.array([212.0, 33.0, 60.0, 2.9])  # flying west in an east-going latti
 
 
 class JoinWall:
-    """Every lattice edge free; a motion is blocked when it joins one of the ``blocked`` vertices."""
+    """Every lattice edge free; a motion is blocked when it joins one of the ``blocked`` vertices (either end)."""
 
     def __init__(self, prior: WorldPrior, blocked: set[int]) -> None:
         self.states = prior.graph.vertex_states
@@ -35,8 +35,9 @@ class JoinWall:
         if states.shape[0] == 1:  # the state itself
             return True
         assert self.states is not None
-        ends = np.flatnonzero(np.all(np.isclose(self.states[:, :3], states[-1, :3]), axis=1))
-        return not any(int(v) in self.blocked for v in ends)
+        tail = np.all(np.isclose(self.states[:, :3], states[0, :3]), axis=1)
+        head = np.all(np.isclose(self.states[:, :3], states[-1, :3]), axis=1)
+        return not any(int(v) in self.blocked for v in np.flatnonzero(tail | head))
 
 
 @pytest.fixture(scope="module")
@@ -113,3 +114,15 @@ def test_still_open_follows_direction_and_skips_blocked_edges() -> None:
     assert backward.tolist() == [True, True, False, True, False]
     both = still_open(edges, 5, open_edges, 2, directed=False, reverse=False)
     assert both.tolist() == [True, True, True, True, False]
+
+
+def test_a_goal_without_heading_grows_its_joins_too(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6)
+    goal = np.array([478.0, -33.0, 70.0])  # x, y, z: any arrival heading
+    connector = planner.connector
+    assert isinstance(connector, DubinsConnector)
+    first = set(connector.ranked(np.append(goal, np.nan), prior.graph, outgoing=False)[:20].tolist())
+    result = planner.plan(0, goal, JoinWall(prior, first))
+    assert result.status is PlanStatus.FOUND and result.stage is PlanStage.GROW
+    last = result.motions[int(result.edges[-1])]
+    assert np.allclose(last[-1, :3], goal) and np.isfinite(last).all()

@@ -128,8 +128,12 @@ class GrownGraph:
         first = self.edges.shape[0]
         ids = np.arange(first, first + pairs.shape[0], dtype=np.int64)
         self.edges = np.vstack([self.edges, pairs.reshape(-1, 2)])
-        if lengths is None:
-            lengths = np.linalg.norm(self.states[pairs[:, 1]] - self.states[pairs[:, 0]], axis=1)
+        if lengths is None:  # a vertex edge (a self-loop) has no length, whatever its state holds (a NaN heading)
+            loops = pairs[:, 0] == pairs[:, 1]
+            lengths = np.zeros(pairs.shape[0])
+            lengths[~loops] = np.linalg.norm(
+                self.states[pairs[~loops, 1]] - self.states[pairs[~loops, 0]], axis=1
+            )
         self.lengths = np.concatenate([self.lengths, np.asarray(lengths, dtype=np.float64)])
         self.costs = np.concatenate([self.costs, np.full(pairs.shape[0], self._cost)])
         if self.worlds is not None and self.prior_worlds is not None:
