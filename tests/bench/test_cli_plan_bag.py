@@ -116,3 +116,25 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
 def test_world_is_still_required_for_datasets(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     assert main(["plan", "--dataset", str(tmp_path / "d.npz"), "--tree", str(TREE)]) == 2
     assert "--world is required" in _error(capsys)
+
+
+def test_a_corrupt_map_message_stops_the_plan_unless_asked_to_plan_as_the_node(
+    bag: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 33 item 6: 4,000 flipped bytes inside the terrain message planned and exited 0 without a word."""
+    rng = np.random.default_rng(6)
+    corrupt = []
+    for m in read_bag(bag):
+        if m.topic.endswith("terrain"):
+            data = np.array(m.message.data, dtype=np.uint8)
+            where = rng.choice(data.size, size=min(4000, data.size), replace=False)
+            data[where] ^= 0xFF
+            m.message.data = data
+        corrupt.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
+    broken = write_bag(tmp_path / "corrupt.mcap", corrupt)
+    assert main(["plan", "--bag", str(broken), "--tree", str(TREE)]) == 2
+    err = _error(capsys)
+    assert "terrain at" in err and "refused" in err and "--skip-refused-maps" in err
+    assert main(["plan", "--bag", str(broken), "--tree", str(TREE), "--skip-refused-maps"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "terrain none" in out and "  refused: terrain at" in out  # which maps it planned on, and why

@@ -260,6 +260,12 @@ def add_plan_parser(sub: Any) -> None:
         help="--bag: plan from the prior's start when the bag has no robot state (odom / joint_states) yet",
     )
     p.add_argument(
+        "--skip-refused-maps",
+        action="store_true",
+        help="--bag: plan on the maps before a map message the node would refuse (as the node does) instead of "
+        "stopping with its reason",
+    )
+    p.add_argument(
         "--query",
         type=query_arg,
         default=None,

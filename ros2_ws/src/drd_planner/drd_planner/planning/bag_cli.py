@@ -29,7 +29,9 @@ def cmd_plan_bag(args: argparse.Namespace) -> int:
 
     The plan starts at the robot's state in the bag before the request (``odom`` / ``joint_states``;
     ``--prior-start`` uses the prior's start when there is none) and goes to the request's goal as the
-    node reads it (:func:`drd_planner.planning.bag_plan.plan_bag_request`).
+    node reads it (:func:`drd_planner.planning.bag_plan.plan_bag_request`). A map message before the request
+    that the node would refuse (corrupt, another frame, over a limit) stops it with the reason, unless
+    ``--skip-refused-maps`` plans on the maps before it as the node does (the refusals are then listed).
     """
     from drd_msgs_py.bags import bag_frame, read_bag
     from drd_msgs_py.exceptions import MessageError
@@ -52,6 +54,12 @@ def cmd_plan_bag(args: argparse.Namespace) -> int:
         )
     except MessageError as exc:
         raise DrdError(str(exc)) from exc
+    if plan.maps.refused and not args.skip_refused_maps:  # a corrupt or foreign map: say so, plan nothing
+        raise DrdError(
+            f"bag {args.bag}: {plan.maps.refused[0]} ({len(plan.maps.refused)} map message(s) before request "
+            f"{args.request} refused; the node would plan on the maps before them, map version "
+            f"{plan.maps.snapshot.version}: --skip-refused-maps plans that way)"
+        )
     if plan.result.status == "refused":  # a start or goal the prior cannot serve
         raise DrdError(f"request {args.request} refused: {plan.result.message}")
     snapshot, request, result = plan.maps.snapshot, plan.request, plan.result
@@ -75,13 +83,19 @@ def cmd_plan_bag(args: argparse.Namespace) -> int:
     )
     print(f"  path edges: {list(result.path_edges)}")
     columns = "joint angles, rad" if session.is_arm else "x, y, z m; heading rad"
-    print(f"  path vertices ({columns}; 'state' is the request's own start or goal, joined by a motion):")
+    print(
+        f"  path vertices ({columns}; 'state' is a state off the graph: the request's own start or goal, or a "
+        "vertex roadmap growth added):"
+    )
     num_vertices = session.prior.graph.num_vertices
-    ends = {0: plan.start, len(result.path_vertices) - 1: plan.goal}
+    edges = list(result.path_edges)
     for k, vertex in enumerate(result.path_vertices):
-        state = (
-            session.vertex_state(vertex) if vertex < num_vertices else np.asarray(ends.get(k), dtype=float)
-        )
+        if vertex < num_vertices:
+            state = session.vertex_state(vertex)
+        else:  # where the path's motions meet it (a goal's heading is the one it arrives with)
+            state = (
+                session.edge_states(edges[k])[0] if k < len(edges) else session.edge_states(edges[k - 1])[-1]
+            )
         label = f"{vertex:5d}" if vertex < num_vertices else "state"
         print(f"    {label}: " + " ".join(f"{v:9.3f}" for v in state))
     return 0
