@@ -484,3 +484,25 @@ def test_a_plan_that_grew_the_roadmap_is_verified_with_session_ids_for_its_new_e
         2, {**snapshot.obstacles, "new": ((Box([0.1, 0.1, 0.1]), Pose(tool.tolist())),)}, None, 0.0
     )
     assert edge in affected_edges(session, result.path_edges, snapshot, moved)
+
+
+def test_a_start_below_the_terrain_or_far_outside_gets_its_own_reason(heli_prior: WorldPrior) -> None:
+    """Issue 33 item 7: one refusal ('outside the graph's reach') used to come back for four different causes."""
+    session = QuerySession(heli_prior, name="heli")
+    domain = session.domain
+    assert isinstance(domain, HelicopterDomain)
+    xs, ys = domain.frame.grid()
+    hill = domain.frame.heightfield(np.full((ys.size, xs.size), 55.0))  # a plateau at 55 m under every level
+    snapshot = MapSnapshot(1, {}, hill, session.margin)
+    below = session.plan(snapshot, np.array([120.0, 10.0, 45.0, 0.0]), HELI_GOAL)
+    assert below.status == "no_free_path"
+    assert (
+        "the start state itself is blocked" in below.message
+        and "the terrain (below it, ground at 55.0 m)" in below.message
+    )
+    far = session.plan(snapshot, np.array([4120.0, 10.0, 65.0, 0.0]), HELI_GOAL)
+    assert far.status == "refused" and "outside the lattice's horizontal extent" in far.message
+    off_line = session.plan(
+        _heli_snapshot(session, 101), session.vertex_state(0) + np.array([27.0, 2.0, 0.0, 0.0]), HELI_GOAL
+    )
+    assert off_line.status != "refused"  # 2 m off a lattice line joins the lattice
