@@ -409,3 +409,12 @@ def test_seeded_chunk_tasks_carry_no_source() -> None:
     plan = _plan(recipe, BuildOptions(chunk_size=4))
     assert [t.source_json for t in plan.tasks] == [None, None, None] and plan.source is None
     assert plan.tasks[0].seeds == tuple(int(s) for s in world_seeds(7, 10)[:4])
+
+
+def test_progress_is_announced_at_once_and_counted_in_worlds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 33 item 14: an arm build said nothing for 206 s, until its first chunk of worlds was checked."""
+    build_grid(tmp_path / "d.npz", progress=True)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines and lines[0] == "edge checks: 40 worlds"  # before any chunk is checked

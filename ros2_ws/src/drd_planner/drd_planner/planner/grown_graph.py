@@ -128,7 +128,7 @@ class GrownGraph:
         first = self.edges.shape[0]
         ids = np.arange(first, first + pairs.shape[0], dtype=np.int64)
         self.edges = np.vstack([self.edges, pairs.reshape(-1, 2)])
-        if lengths is None:  # a vertex edge (a self-loop) has no length, whatever its state holds (a NaN heading)
+        if lengths is None:  # a self-loop (vertex edge) has no length, even with a NaN heading
             loops = pairs[:, 0] == pairs[:, 1]
             lengths = np.zeros(pairs.shape[0])
             lengths[~loops] = np.linalg.norm(
