@@ -1,14 +1,97 @@
-"""The node's outputs: the plan summary's values (what monitors and the tests read)."""
+"""The node's outputs: plans sent serialized (decoded equal to the messages), the plan summary's values."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
 import pytest
 
 pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from nav_msgs.msg import Path
+from rclpy.serialization import deserialize_message
+from trajectory_msgs.msg import JointTrajectory
+
+from drd_msgs_py.factory import RclpyMessages
+from drd_msgs_py.plans import joint_trajectory_message
+from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QueryPlanResult
 from drd_planner.planning.session import SessionCheck
-from drd_planner.ros.outputs import plan_summary_values
+from drd_planner.ros.outputs import TRAJECTORY_JOINT_SPEED, PlannerOutputs, plan_summary_values
+
+
+class _Publisher:
+    def __init__(self, topic: str, sent: list[tuple[str, Any]]) -> None:
+        self.topic, self.sent, self.is_activated = topic, sent, True
+
+    def publish(self, msg: Any) -> None:
+        self.sent.append((self.topic, msg))
+
+    def get_subscription_count(self) -> int:
+        return 0
+
+
+class _Node:
+    """Stands in for the lifecycle node: its publishers record what they are given."""
+
+    def __init__(self) -> None:
+        self.sent: list[tuple[str, Any]] = []
+
+    def create_lifecycle_publisher(self, kind: Any, topic: str, qos: Any) -> _Publisher:
+        return _Publisher(topic, self.sent)
+
+    def create_publisher(self, kind: Any, topic: str, qos: Any) -> _Publisher:
+        return _Publisher(topic, self.sent)
+
+    def get_clock(self) -> Any:
+        return SimpleNamespace(now=lambda: SimpleNamespace(seconds_nanoseconds=lambda: (6, 7)))
+
+
+def test_a_helicopter_plan_goes_out_as_bytes_of_the_path_its_message_gives() -> None:
+    node = _Node()
+    outputs = PlannerOutputs(node, frame="map")
+    states = np.array([[0.0, 0.0, 50.0, 0.0], [10.0, 5.0, 55.0, 0.5], [20.0, 10.0, 60.0, 1.0]])
+    session = SimpleNamespace(is_arm=False)
+    sent = outputs.plan(session, SimpleNamespace(states=states), MapSnapshot(1), (4, 5))  # type: ignore[arg-type]
+    [(topic, data)] = node.sent
+    assert topic == "plan" and isinstance(data, bytes)
+    path = sent.path()
+    assert deserialize_message(data, Path) == path and len(path.poses) == 3
+    assert (path.header.frame_id, path.header.stamp.sec, path.poses[2].pose.position.z) == ("map", 4, 60.0)
+    outputs.withdraw(session)  # type: ignore[arg-type]
+    assert node.sent[-1][0] == "plan" and len(deserialize_message(node.sent[-1][1], Path).poses) == 0
+
+
+def test_an_arm_plan_sends_its_trajectory_then_its_tool_path() -> None:
+    node = _Node()
+    outputs = PlannerOutputs(node, frame="panda_link0")
+    q = np.linspace(0.0, 1.0, 14).reshape(7, 2)
+    tool = np.column_stack([q, np.ones(7)])
+    session = SimpleNamespace(
+        is_arm=True,
+        joint_names=("j1", "j2"),
+        domain=SimpleNamespace(resolution=0.05),
+        positions=lambda states, snapshot: tool,
+    )
+    sent = outputs.plan(session, SimpleNamespace(states=q), MapSnapshot(1), (4, 5))  # type: ignore[arg-type]
+    assert [topic for topic, _ in node.sent] == ["joint_trajectory", "plan"]
+    trajectory = deserialize_message(node.sent[0][1], JointTrajectory)
+    expected = joint_trajectory_message(
+        ["j1", "j2"],
+        q,
+        frame_id="panda_link0",
+        stamp=(4, 5),
+        seconds_per_point=0.05 / TRAJECTORY_JOINT_SPEED,
+        msgs=RclpyMessages(),
+    )
+    assert trajectory == expected and trajectory.points[1].time_from_start.nanosec == 100_000_000
+    path = deserialize_message(node.sent[1][1], Path)
+    assert path == sent.path() and [p.pose.position.z for p in path.poses] == [1.0] * 7
+    outputs.withdraw(session)  # type: ignore[arg-type]
+    assert [topic for topic, _ in node.sent[2:]] == ["plan", "joint_trajectory"]
+    assert deserialize_message(node.sent[3][1], JointTrajectory).joint_names == ["j1", "j2"]
 
 
 def _check(step: int, free: bool, stage: str) -> SessionCheck:

@@ -8,7 +8,8 @@ accepts rclpy and rosbags messages alike; building goes through a :class:`~drd_m
 Modules: :mod:`~drd_msgs_py.obstacles` (MarkerArray <-> marker shapes and poses), :mod:`~drd_msgs_py.terrain`
 (organized PointCloud2 <-> height grid), :mod:`~drd_msgs_py.shapes` (those plain types),
 :mod:`~drd_msgs_py.limits` (size limits of map messages), :mod:`~drd_msgs_py.plans` (path, check log,
-diagnostics, RViz markers), :mod:`~drd_msgs_py.bags` (rosbag2 MCAP reading and writing). Malformed input
+diagnostics, RViz markers), :mod:`~drd_msgs_py.cdr` (the path and joint trajectory serialized in bulk from
+arrays), :mod:`~drd_msgs_py.bags` (rosbag2 MCAP reading and writing). Malformed input
 raises :class:`~drd_msgs_py.exceptions.MessageError`. It imports nothing from drd_planner (which depends on it).
 """
 

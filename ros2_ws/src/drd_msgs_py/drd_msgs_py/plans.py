@@ -22,7 +22,10 @@ __all__ = [
     "edge_checks_message",
     "joint_trajectory_message",
     "path_message",
+    "path_poses",
     "summary_status",
+    "trajectory_positions",
+    "trajectory_times",
 ]
 
 OK, WARN, ERROR = 0, 1, 2
@@ -52,24 +55,70 @@ class CheckRecord:
     cached: bool = False
 
 
-def path_message(
-    states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
-) -> Any:
-    """``nav_msgs/Path`` through (K, >= 3) states; column 3 (if present) is the heading in radians."""
+def path_poses(states: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """(K, 7) poses x, y, z (m), qx, qy, qz, qw of (K, >= 3) states; column 3 (if present) is the heading in radians.
+
+    The one reading of plan states as poses, for :func:`path_message` and
+    :func:`~drd_msgs_py.cdr.path_cdr`: the orientation is the heading about z (no heading: identity).
+
+    Raises:
+        ValueError: ``states`` is not (K, >= 3).
+    """
     pts = np.asarray(states, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] < 3:
         raise ValueError(f"path states must be (K, >= 3), got {pts.shape}")
-    head = header(msgs, frame_id, stamp)
     yaw = pts[:, 3] if pts.shape[1] > 3 else np.zeros(len(pts))
-    rows = np.column_stack([pts[:, :3], np.sin(yaw / 2.0), np.cos(yaw / 2.0)]).tolist()
+    poses = np.zeros((len(pts), 7))
+    poses[:, :3] = pts[:, :3]
+    poses[:, 5] = np.sin(yaw / 2.0)
+    poses[:, 6] = np.cos(yaw / 2.0)
+    return poses
+
+
+def path_message(
+    states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
+) -> Any:
+    """``nav_msgs/Path`` through (K, >= 3) states; column 3 (if present) is the heading in radians.
+
+    Every pose shares the Path's header (frame and stamp). The node publishes the same message as
+    CDR bytes (:func:`~drd_msgs_py.cdr.path_cdr`, decoded equal); this builds the message object
+    (a ``get_plan`` response, bags, tests).
+    """
+    head = header(msgs, frame_id, stamp)
     poses = []
-    for x, y, z, qz, qw in rows:  # fill each new message's own fields: a tenth of the nested constructors
+    for x, y, z, _, _, qz, qw in path_poses(states).tolist():  # fill each new message's own fields
         stamped = msgs("geometry_msgs/msg/PoseStamped", header=head)
         position, orientation = stamped.pose.position, stamped.pose.orientation
         position.x, position.y, position.z = x, y, z
         orientation.x, orientation.y, orientation.z, orientation.w = 0.0, 0.0, qz, qw
         poses.append(stamped)
     return msgs("nav_msgs/msg/Path", header=head, poses=poses)
+
+
+def trajectory_positions(joint_names: Sequence[str], positions: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """(K, J) joint positions (radians) as float64, J = ``len(joint_names)``.
+
+    Raises:
+        ValueError: ``positions`` is not (K, J).
+    """
+    q = np.asarray(positions, dtype=np.float64)
+    if q.ndim != 2 or q.shape[1] != len(joint_names):
+        raise ValueError(f"positions must be (K, {len(joint_names)}), got {q.shape}")
+    return q
+
+
+def trajectory_times(count: int, seconds_per_point: float) -> npt.NDArray[np.int64]:
+    """(K, 2) ``time_from_start`` (sec, nanosec) of K evenly timed points: point k at k * ``seconds_per_point`` s.
+
+    nanosec is the fraction rounded half to even (as Python's ``round``), so the points of
+    :func:`joint_trajectory_message` and :func:`~drd_msgs_py.cdr.joint_trajectory_cdr` agree.
+    """
+    t = np.arange(count, dtype=np.float64) * float(seconds_per_point)
+    whole = np.trunc(t)
+    times = np.empty((count, 2), dtype=np.int64)
+    times[:, 0] = whole
+    times[:, 1] = np.rint((t - whole) * 1e9)
+    return times
 
 
 def joint_trajectory_message(
@@ -81,22 +130,19 @@ def joint_trajectory_message(
     seconds_per_point: float = 1.0,
     msgs: MessageFactory,
 ) -> Any:
-    """``trajectory_msgs/JointTrajectory`` through (K, J) joint positions (radians), evenly timed."""
-    q = np.asarray(positions, dtype=np.float64)
-    if q.ndim != 2 or q.shape[1] != len(joint_names):
-        raise ValueError(f"positions must be (K, {len(joint_names)}), got {q.shape}")
-    points = []
-    for k, row in enumerate(q):
-        t = k * seconds_per_point
-        points.append(
-            msgs(
-                "trajectory_msgs/msg/JointTrajectoryPoint",
-                positions=row.astype(np.float64),
-                time_from_start=msgs(
-                    "builtin_interfaces/msg/Duration", sec=int(t), nanosec=round((t - int(t)) * 1e9)
-                ),
-            )
+    """``trajectory_msgs/JointTrajectory`` through (K, J) joint positions (radians), evenly timed.
+
+    The node publishes the same message as CDR bytes (:func:`~drd_msgs_py.cdr.joint_trajectory_cdr`).
+    """
+    q = trajectory_positions(joint_names, positions)
+    points = [
+        msgs(
+            "trajectory_msgs/msg/JointTrajectoryPoint",
+            positions=row.copy(),  # its own array, not a view of the caller's
+            time_from_start=msgs("builtin_interfaces/msg/Duration", sec=sec, nanosec=nanosec),
         )
+        for row, (sec, nanosec) in zip(q, trajectory_times(len(q), seconds_per_point).tolist(), strict=True)
+    ]
     return msgs(
         "trajectory_msgs/msg/JointTrajectory",
         header=header(msgs, frame_id, stamp),

@@ -144,13 +144,13 @@ class ServiceOutputs(Protocol):
         """Send a served request out, stamped (sec, nanosec): ``publish(stamp)`` first, then the rest.
 
         ``publish`` publishes a found plan (through :meth:`plan`); returns what it returned: the
-        published plan message, or None.
+        published plan as :meth:`plan` returned it, or None.
         """
 
     def plan(
         self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> tuple[Any, bool]:
-        """Publish a found plan: the plan message, and whether it is now out there (False while inactive)."""
+        """Publish a found plan: what was sent (the node: its Path on demand), and whether it is out there (False while inactive)."""
 
     def kept(self, session: QuerySession, outcome: RecheckResult, snapshot: MapSnapshot) -> None:
         """Report that the published plan stays free on ``snapshot`` after a map update."""
@@ -354,7 +354,7 @@ class PlannerService:
                     raise
 
     def plan_now(self, goal: Goal, start: Goal | None, source: str = "get_plan") -> Any | None:
-        """Serve one request now (a service call): the published plan message, or None (the reason reported).
+        """Serve one request now (a service call): the published plan as :meth:`ServiceOutputs.plan` gave it, or None (the reason reported).
 
         ``start``: a pose start (helicopter); None: the robot's state.
         """
@@ -383,7 +383,7 @@ class PlannerService:
     def replan(self) -> tuple[Any | None, bool]:
         """Plan again to the published plan's goal from the robot's state now.
 
-        Returns the new plan message (None: none) and whether there was a published plan at all.
+        Returns the new published plan (None: none) and whether there was a published plan at all.
         """
         published = self._published
         if published is None:

@@ -389,7 +389,8 @@ class PlannerNode(LifecycleNode):
         except (MessageError, DrdError) as exc:
             self._report_error(f"get_plan refused: {exc}")
             return None
-        return service.plan_now(parsed, given)
+        sent = service.plan_now(parsed, given)  # published as bytes; the response needs the message
+        return None if sent is None else sent.path()
 
     def _on_replan(self, request: Any, response: Any) -> Any:
         """``replan`` (std_srvs/Trigger): plan again to the published plan's goal from the robot's state now."""

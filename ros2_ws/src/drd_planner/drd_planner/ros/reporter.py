@@ -18,6 +18,7 @@ from drd_planner.planning.replan import RecheckResult
 from drd_planner.planning.service import PlanRecord
 from drd_planner.planning.session import PlanResult
 from drd_planner.ros.guard import shorten
+from drd_planner.ros.node_log import NodeLog
 from drd_planner.ros.outputs import PlannerOutputs, plan_summary_values
 from drd_planner.ros.status import LastPlan
 
@@ -28,7 +29,8 @@ class NodeReporter:
     """The node's outputs of the planner service (see the module docstring).
 
     Args:
-        logger: the node's logger.
+        logger: the node's logger (written through :class:`~drd_planner.ros.node_log.NodeLog`: a line
+            after each plan must not cost milliseconds).
         outputs: the node's publishers.
         report_error: the node's error report, ``(text, topic)``.
     """
@@ -36,7 +38,7 @@ class NodeReporter:
     def __init__(
         self, logger: Any, outputs: PlannerOutputs, report_error: Callable[[str, str], None]
     ) -> None:
-        self._logger = logger
+        self._logger = NodeLog(logger)
         self._out = outputs
         self._report_error = report_error
         self.last_plan: LastPlan | None = None
