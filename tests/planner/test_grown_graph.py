@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.world_columns import WorldColumns
 from drd_planner.planner.connect import EdgeSampleIndex, imputed_outcomes
 from drd_planner.planner.grown_graph import GrownGraph, imputed_columns, new_pairs
 from drd_planner.planner.query_graph import QueryGraph
+from drd_planner.planner.query_worlds import QueryWorlds
 
 
 def _query() -> tuple[QueryGraph, np.ndarray]:
@@ -15,7 +17,7 @@ def _query() -> tuple[QueryGraph, np.ndarray]:
     edges = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
     graph = ExplicitGraph(edges, np.ones(4), 4, vertex_states=states)
     worlds = np.array([[True, False, True, True], [True, True, False, False], [False, True, True, True]])
-    return QueryGraph(graph, worlds, np.ones(4), 0, 2), worlds
+    return QueryGraph(graph, QueryWorlds(worlds, WorldColumns(worlds)), np.ones(4), 0, 2), worlds
 
 
 def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:

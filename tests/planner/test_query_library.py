@@ -1,4 +1,4 @@
-"""The online path library: each searched world's shortest free path, deterministic, bounded."""
+"""The online path library: each search world's shortest free path (from the goal's trees), deterministic."""
 
 from __future__ import annotations
 
@@ -9,7 +9,9 @@ import pytest
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.query_library import build_query_library, query_library
+from drd_planner.planner.goal_trees import SearchWorlds
+from drd_planner.planner.query_graph import Joins
+from drd_planner.planner.query_library import library_paths, query_library
 
 
 @pytest.fixture(scope="module")
@@ -17,6 +19,11 @@ def setup() -> tuple[object, np.ndarray]:
     problem = make_planar_problem(model="forest", num_worlds=120, seed=4)
     worlds = problem.require_worlds()
     return problem, worlds.X[worlds.train_ids]
+
+
+def _search(problem: object, X: np.ndarray, count: int = 10**6, seed: int = 0) -> SearchWorlds:
+    graph = problem.graph  # type: ignore[attr-defined]
+    return SearchWorlds(GraphArcs(graph), graph.lengths, X, seed=seed, count=count)
 
 
 def _shortest_length(graph: object, row: np.ndarray, s: int, g: int) -> float | None:
@@ -30,46 +37,41 @@ def _shortest_length(graph: object, row: np.ndarray, s: int, g: int) -> float | 
         return None
 
 
-def test_paths_are_free_shortest_paths_and_cover_every_connected_world(
+def test_paths_are_free_shortest_paths_and_cover_every_searched_world(
     setup: tuple[object, np.ndarray],
 ) -> None:
     problem, X = setup
     graph = problem.graph  # type: ignore[attr-defined]
     s, g = 2, 37
-    paths = build_query_library(
-        GraphArcs(graph), graph.lengths, X, s, g, max_paths=500, seed=0, max_searches=10**6
-    )
+    search = _search(problem, X)
+    paths = library_paths(search, s, g, max_paths=500)
     assert paths
     lengths = [float(graph.lengths[p].sum()) for p in paths]
     for p in paths:
-        valid = X[:, p].all(axis=1)
-        assert valid.any()  # each path is free in some training world
-    for h in range(X.shape[0]):
+        assert X[:, p].all(axis=1).any()  # each path is free in some training world
+    for h in search.worlds.tolist():
         best = _shortest_length(graph, X[h], s, g)
         free = [lengths[k] for k, p in enumerate(paths) if X[h, p].all()]
         if best is None:
             assert not free
-        else:  # with unlimited searches, every world's own shortest length is in the library
+        else:  # every searched world's own shortest length is in the library
             assert min(free) == pytest.approx(best)
 
 
-def test_search_budget_bounds_the_library(setup: tuple[object, np.ndarray]) -> None:
+def test_fewer_search_worlds_give_a_subset_of_the_paths(setup: tuple[object, np.ndarray]) -> None:
     problem, X = setup
-    graph = problem.graph  # type: ignore[attr-defined]
-    arcs = GraphArcs(graph)
-    small = build_query_library(arcs, graph.lengths, X, 2, 37, max_paths=500, seed=0, max_searches=3)
-    full = build_query_library(arcs, graph.lengths, X, 2, 37, max_paths=500, seed=0, max_searches=10**6)
+    small = library_paths(_search(problem, X, count=3), 2, 37, max_paths=500)
+    full = library_paths(_search(problem, X), 2, 37, max_paths=500)
     assert 1 <= len(small) <= 3 < len(full)
     as_tuples = {tuple(p.tolist()) for p in full}
-    assert all(tuple(p.tolist()) in as_tuples for p in small)  # the same worlds' paths
+    assert all(tuple(p.tolist()) in as_tuples for p in small)  # the same worlds come first in the order
 
 
 def test_deterministic_and_bounded(setup: tuple[object, np.ndarray]) -> None:
     problem, X = setup
     graph = problem.graph  # type: ignore[attr-defined]
-    arcs = GraphArcs(graph)
-    a = query_library(arcs, graph.edges, graph.lengths, X, 0, 40, max_paths=5, seed=3)
-    b = query_library(arcs, graph.edges, graph.lengths, X, 0, 40, max_paths=5, seed=3)
+    a = query_library(_search(problem, X, seed=3), graph.edges, 0, 40, start_vertex=0, max_paths=5)
+    b = query_library(_search(problem, X, seed=3), graph.edges, 0, 40, start_vertex=0, max_paths=5)
     assert a is not None and b is not None
     assert a.num_paths <= 5
     assert all(np.array_equal(x, y) for x, y in zip(a.path_edges, b.path_edges, strict=True))
@@ -78,13 +80,35 @@ def test_deterministic_and_bounded(setup: tuple[object, np.ndarray]) -> None:
         assert vp[0] == 0 and vp[-1] == 40
 
 
+def test_joined_start_and_goal_take_the_best_free_join(setup: tuple[object, np.ndarray]) -> None:
+    problem, X = setup
+    graph = problem.graph  # type: ignore[attr-defined]
+    search = _search(problem, X)
+    e, n = graph.num_edges, X.shape[0]
+    # A start joined to vertices 2 and 5, a goal joined from 37 and 40; joins to 2 and into 37 never free.
+    start = Joins(
+        np.array([2, 5]), np.array([1.0, 9.0]), np.array([e, e + 1]), np.tile([False, True], (n, 1))
+    )
+    goal = Joins(
+        np.array([37, 40]), np.array([1.0, 1.0]), np.array([e + 2, e + 3]), np.tile([False, True], (n, 1))
+    )
+    paths = library_paths(search, start, goal, max_paths=500)
+    assert paths
+    for p in paths:
+        assert p[0] == e + 1 and p[-1] == e + 3  # the only free joins
+        inner = p[1:-1]
+        assert X[:, inner].all(axis=1).any()
+        length = float(graph.lengths[inner].sum())
+        # some search world's shortest free path from the join's vertex to the goal's
+        worlds = [h for h in search.worlds.tolist() if X[h, inner].all()]
+        assert any(_shortest_length(graph, X[h], 5, 40) == pytest.approx(length) for h in worlds)
+
+
 def test_no_connecting_world_gives_no_library(setup: tuple[object, np.ndarray]) -> None:
     problem, X = setup
     graph = problem.graph  # type: ignore[attr-defined]
     none_free = np.zeros_like(X)
-    assert (
-        query_library(GraphArcs(graph), graph.edges, graph.lengths, none_free, 0, 40, max_paths=5, seed=0)
-        is None
-    )
+    none = _search(problem, none_free)
+    assert query_library(none, graph.edges, 0, 40, start_vertex=0, max_paths=5) is None
     with pytest.raises(ProblemError, match="same vertex"):
-        build_query_library(GraphArcs(graph), graph.lengths, X, 3, 3, max_paths=5, seed=0)
+        library_paths(_search(problem, X), 3, 3, max_paths=5)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -30,7 +30,6 @@ class ExplicitGraph:
     num_vertices: int
     directed: bool = False
     vertex_states: FloatArray | None = None
-    _lookup: dict[tuple[int, int], int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         edges = np.asarray(self.edges, dtype=np.int64)
@@ -52,14 +51,27 @@ class ExplicitGraph:
             object.__setattr__(self, "vertex_states", states)
         object.__setattr__(self, "edges", edges)
         object.__setattr__(self, "lengths", lengths)
-        lookup: dict[tuple[int, int], int] = {}
-        for eid, (u, v) in enumerate(edges.tolist()):
-            if (u, v) in lookup or (not self.directed and (v, u) in lookup):
+        if edges.shape[0] > 1:  # duplicates found at once (vectorised); the lookup is built on first use
+            pairs = edges if self.directed else np.sort(edges, axis=1)
+            keys = pairs[:, 0] * max(self.num_vertices, 1) + pairs[:, 1]
+            order = np.argsort(keys, kind="stable")
+            repeated = np.flatnonzero(keys[order][1:] == keys[order][:-1])
+            if repeated.size:
+                u, v = (int(x) for x in edges[order[repeated[0] + 1]])
                 raise ProblemError(f"duplicate edge ({u}, {v}) in graph")
-            lookup[(u, v)] = eid
-            if not self.directed:
-                lookup[(v, u)] = eid
-        object.__setattr__(self, "_lookup", lookup)
+
+    @property
+    def _lookup(self) -> dict[tuple[int, int], int]:
+        """(u, v) -> edge id (both orientations of an undirected edge), built on first use."""
+        cached: dict[tuple[int, int], int] | None = self.__dict__.get("_lookup_cache")
+        if cached is None:
+            cached = {}
+            for eid, (u, v) in enumerate(self.edges.tolist()):
+                cached[(u, v)] = eid
+                if not self.directed:
+                    cached[(v, u)] = eid
+            object.__setattr__(self, "_lookup_cache", cached)
+        return cached
 
     @property
     def num_edges(self) -> int:

@@ -78,6 +78,9 @@ class GraphArcs:
         self.u, self.v, self.edge = u[order], v[order], e[order]
         self._keys = keys[order]
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.u, minlength=n))]).astype(np.int64)
+        # One CSR structure for every shortest-path call: a call only writes the arc weights (inf deletes
+        # an arc: Dijkstra never relaxes it), instead of building a sparse matrix each time.
+        self._csr = sp.csr_array((np.zeros(self.u.size), self.v.copy(), self.indptr.copy()), shape=(n, n))
 
     @property
     def num_arcs(self) -> int:
@@ -94,11 +97,8 @@ class GraphArcs:
 
         Returns None when the goal is unreachable.
         """
-        w = edge_weights[self.edge]
-        keep = np.isfinite(w)
-        n = self.num_vertices
-        csr = sp.csr_array((w[keep], (self.u[keep], self.v[keep])), shape=(n, n))
-        dist, pred = dijkstra(csr, directed=True, indices=start, return_predecessors=True)
+        np.copyto(self._csr.data, np.asarray(edge_weights, dtype=np.float64)[self.edge])
+        dist, pred = dijkstra(self._csr, directed=True, indices=start, return_predecessors=True)
         if not np.isfinite(dist[goal]):
             return None
         return self.walk_back(pred, start, goal)

@@ -294,7 +294,7 @@ class _Improvement:
         self.blocked = np.zeros(graph.num_edges, dtype=bool)
         self.blocked[[e for e, free in self.outcome.items() if not free]] = True
         self.sampler = WorldSampler(
-            model.query.worlds,
+            None if model.query.worlds is None else model.query.worlds.dense,
             prior.world_weights,
             self.outcome,
             num_edges=graph.num_edges,

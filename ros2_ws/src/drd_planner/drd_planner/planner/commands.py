@@ -79,16 +79,11 @@ def query_tree(
     if prior.worlds is None:
         raise DrdError("this prior has no training worlds over every edge; rebuild it from its dataset")
     from drd_planner.core.lazysp import GraphArcs
+    from drd_planner.planner.goal_trees import SearchWorlds
 
+    search = SearchWorlds(GraphArcs(prior.graph), prior.graph.lengths, prior.worlds, seed=prior.library_seed)
     library = query_library(
-        GraphArcs(prior.graph),
-        prior.graph.edges,
-        prior.graph.lengths,
-        prior.worlds,
-        start,
-        goal,
-        max_paths=prior.max_paths,
-        seed=prior.library_seed,
+        search, prior.graph.edges, start, goal, start_vertex=start, max_paths=prior.max_paths
     )
     if library is None:
         raise DrdError(

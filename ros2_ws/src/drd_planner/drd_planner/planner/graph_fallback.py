@@ -32,6 +32,7 @@ import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.planner.query_worlds import QueryWorlds
 
 #: LazySP selector of the graph stage (see the module doc for the measurement behind it).
 FALLBACK_SELECTOR = "balanced"
@@ -42,7 +43,7 @@ DEFAULT_FALLBACK_KAPPA = 20.0
 
 
 def posterior_free_probability(
-    worlds: BoolArray | None,
+    worlds: QueryWorlds | BoolArray | None,
     weights: FloatArray | None,
     outcomes: Mapping[int, bool],
     *,
@@ -53,7 +54,7 @@ def posterior_free_probability(
     """(E,) P(edge free | outcomes): consistent training worlds, shrunk to the marginal, clamped on checks.
 
     Args:
-        worlds: (n, E) training outcomes, or None (then 1/2 on every unchecked edge).
+        worlds: (n, E) training outcomes (a query's, or a matrix), or None (then 1/2 on every unchecked edge).
         weights: (n,) prior weights, or None for uniform.
         outcomes: checked edges and their outcome.
         num_edges: E.
@@ -61,6 +62,18 @@ def posterior_free_probability(
         pseudo_count: kappa > 0.
     """
     theta = np.full(num_edges, 0.5)
+    if isinstance(worlds, QueryWorlds):
+        if weights is None:  # counts from the packed columns: a popcount per word, no pass over (n, E)
+            consistent = np.ones(worlds.num_worlds, dtype=bool)
+            for edge, free in outcomes.items():
+                consistent &= worlds.column(edge) == free
+            counts = worlds.free_counts(consistent)
+            data = (counts + pseudo_count * worlds.free_fraction) / (float(consistent.sum()) + pseudo_count)
+            theta = alpha * data + (1.0 - alpha) * 0.5
+            for edge, free in outcomes.items():
+                theta[edge] = 1.0 if free else 0.0
+            return np.asarray(theta, dtype=np.float64)
+        worlds = worlds.dense
     if worlds is not None:
         consistent = np.ones(worlds.shape[0], dtype=bool)
         for edge, free in outcomes.items():

@@ -137,9 +137,7 @@ class GrownGraph:
         self.lengths = np.concatenate([self.lengths, np.asarray(lengths, dtype=np.float64)])
         self.costs = np.concatenate([self.costs, np.full(pairs.shape[0], self._cost)])
         if self.worlds is not None and self.prior_worlds is not None:
-            self.worlds = np.concatenate(
-                [self.worlds, imputed_columns(self.index, self.prior_worlds, motions)], axis=1
-            )
+            self.worlds = self.worlds.with_columns(imputed_columns(self.index, self.prior_worlds, motions))
         self.motions.update({int(e): m for e, m in zip(ids.tolist(), motions, strict=True)})
         return ids
 

@@ -8,7 +8,9 @@ checked free in this plan:
    DiRECt tree, then BiSECt). A query with a precomputed tree uses that tree and its library unchanged;
    any other query gets a library built online from the prior's training worlds
    (:mod:`~drd_planner.planner.query_library`) and a DiRECt tree grown along the branch taken
-   (:class:`~drd_planner.core.online_tree.LazyDirectTree`). Both are cached per query (LRU).
+   (:class:`~drd_planner.core.online_tree.LazyDirectTree`; BiSECt from the root when the switch threshold is
+   1). Both are cached per query (LRU), and what does not depend on the query is built once per prior
+   (:mod:`~drd_planner.planner.query_models`).
 2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
    prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
 3. **growth**, when the graph has no free path: a domain that samples its valid states (the arm) gets new
@@ -27,31 +29,29 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeStatus, run_episode
-from drd_planner.core.lazysp import SELECTORS, GraphArcs, lazysp_name
+from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import POLICIES, TRAIN_WORLD_POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
-from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, QueryConnector, connector_for
+from drd_planner.planner.connect import MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.growth_samples import SegmentMaker
 from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
 from drd_planner.planner.no_path import edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
-from drd_planner.planner.query_graph import MotionDispatch, connected_query, prior_query
-from drd_planner.planner.query_library import query_library
+from drd_planner.planner.query_graph import MotionDispatch
 from drd_planner.planner.query_model import QueryModel
+from drd_planner.planner.query_models import DEFAULT_CACHE_SIZE, QueryModels
 from drd_planner.planner.result import (
     PlanResult,
     PlanStage,
@@ -72,8 +72,6 @@ from drd_planner.planner.roadmap_growth import (
 )
 from drd_planner.planner.state_sampler import sampler_of
 
-#: Queries whose library and tree are kept (least recently used dropped first).
-DEFAULT_CACHE_SIZE = 16
 #: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
 #: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
 PLAN_POLICIES = tuple(
@@ -107,17 +105,13 @@ class Planner:
         connect_states: bool = True,
         growth: GrowthSettings | None = DEFAULT_GROWTH,
     ) -> None:
-        if cache_size < 1:
-            raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
         self.prior = prior
         self._connector = (connector or connector_for(prior)) if connect_states else None
         free = getattr(self._connector, "free_goal_dims", ())
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
-        self._arcs = GraphArcs(prior.graph)
-        self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
-        self._cache_size = cache_size
-        self._expand = expand_threshold
-        self._sample_index: EdgeSampleIndex | None = None
+        self._models = QueryModels(
+            prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold
+        )
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
 
@@ -140,16 +134,18 @@ class Planner:
         """Use this switch threshold and leaf pseudo-count for every query from the next plan on.
 
         It overrides the prior's setting and the precomputed trees' own; the cache stays valid. A new
-        ``region_rule`` (None: keep) drops the cached online trees; precomputed trees keep their own rule.
+        ``region_rule`` (None: keep), or eta moving to or from 1 (BiSECt from the root or a DiRECt tree grown
+        online), drops the cached online trees; precomputed trees keep their own rule.
 
         Raises:
             ProblemError: eta outside (0, 1], a pseudo-count that is not positive, or an unknown rule.
         """
         rule = check_region_rule(region_rule or self.prior.region_rule)
         self._leaf_override = LeafSetting(eta, pseudo_count)
-        if rule != self.prior.region_rule:  # the cached online trees were built with the old rule
-            self._cache = OrderedDict((k, m) for k, m in self._cache.items() if m.precomputed is not None)
+        if rule != self.prior.region_rule or (eta >= 1.0) != (self.prior.eta >= 1.0):
+            self._models.drop_online()  # their trees were built for the old rule or switch threshold
         self.prior = dataclasses.replace(self.prior, eta=eta, pseudo_count=pseudo_count, region_rule=rule)
+        self._models.prior = self.prior
 
     def leaf(self, model: QueryModel) -> LeafSetting:
         """The eta and kappa of a query's library stage.
@@ -178,7 +174,11 @@ class Planner:
 
     def cached_queries(self) -> list[tuple[object, object]]:
         """The (start, goal) pairs in the cache, least recently used first."""
-        return list(self._cache)
+        return self._models.cached_queries()
+
+    def warm_up(self) -> None:
+        """Do the per-prior work of new queries now (packed worlds, search worlds), not in the first one."""
+        self._models.warm_up()
 
     def memory_bytes(self) -> dict[str, int]:
         """Approximate memory of the prior's arrays and of the cached query libraries, in bytes."""
@@ -187,7 +187,7 @@ class Planner:
         graph = int(prior.graph.edges.nbytes + prior.graph.lengths.nbytes)
         trees = sum(int(qt.tree.free_fraction.nbytes + qt.tree.edge.nbytes * 6) for qt in prior.trees)
         libraries = 0
-        for model in self._cache.values():
+        for model in self._models.cached_models():
             if model.library is not None:
                 libraries += sum(int(p.nbytes) * 2 for p in model.library.path_edges)
                 libraries += int(model.library.incidence.data.nbytes) * 3
@@ -204,69 +204,7 @@ class Planner:
             QueryError: the prior holds training worlds only for its precomputed queries, or a state
                 has no vertex within the connector's reach.
         """
-        key = (_cache_key(start), _cache_key(goal))
-        if key in self._cache:
-            self._cache.move_to_end(key)
-            return dataclasses.replace(self._cache[key], reused=True)
-        model = self._build_model(start, goal)
-        self._cache[key] = model
-        while len(self._cache) > self._cache_size:
-            self._cache.popitem(last=False)
-        return model
-
-    def _build_model(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
-        t0 = time.perf_counter()
-        prior = self.prior
-        qt = prior.tree_for(start, goal) if isinstance(start, int) and isinstance(goal, int) else None
-        if qt is not None:
-            theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
-            query = prior_query(prior, qt.start, qt.goal)
-            return QueryModel(
-                query,
-                qt.library,
-                qt.tree,
-                theta,
-                f"tree:{qt.name}",
-                time.perf_counter() - t0,
-                qt,
-            )
-        if prior.worlds is None:
-            served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
-            raise QueryError(
-                f"this prior came from a tree file that holds training worlds only for its own query "
-                f"({served}); to plan another query, rebuild it as a world prior with "
-                "`drd build-tree --dataset DATASET.npz --out PRIOR.npz`"
-            )
-        if isinstance(start, int) and isinstance(goal, int):
-            query, arcs, theta = prior_query(prior, start, goal), self._arcs, prior.edge_marginal
-        else:
-            query = connected_query(prior, start, goal, self._require_connector(), self._index())
-            assert query.worlds is not None
-            arcs = GraphArcs(query.graph)
-            theta = bias_from_worlds(query.worlds, prior.world_weights, alpha=prior.alpha)
-        assert query.worlds is not None
-        library = query_library(
-            arcs,
-            query.graph.edges,
-            query.graph.lengths,
-            query.worlds,
-            query.start,
-            query.goal,
-            max_paths=prior.max_paths,
-            seed=prior.library_seed,
-        )
-        tree = None
-        if library is not None:
-            tree = LazyDirectTree(
-                query.worlds,
-                library,
-                query.edge_costs,
-                weights=prior.world_weights,
-                expand_threshold=self._expand,
-                region_rule=prior.region_rule,
-            )
-        label = "connected" if query.connected else "online"
-        return QueryModel(query, library, tree, theta, label, time.perf_counter() - t0)
+        return self._models.get(start, goal)
 
     def _require_connector(self) -> QueryConnector:
         if self._connector is None:
@@ -275,15 +213,6 @@ class Planner:
                 f"connector, and domain {self.prior.domain!r} has none: give vertex ids or nearer states"
             )
         return self._connector
-
-    def _index(self) -> EdgeSampleIndex:
-        if self._sample_index is None:
-            self._sample_index = EdgeSampleIndex(
-                self.prior.graph,
-                self.prior.edge_trajectories,
-                position_dims=self._require_connector().position_dims,
-            )
-        return self._sample_index
 
     def plan(
         self,
@@ -448,11 +377,11 @@ class Planner:
         sampler = sampler_of(self._connector)
         if sampler is not None and isinstance(self._connector, SegmentMaker):
             return RoadmapGrowth(
-                self.prior, model.query, self._connector, sampler, self._index(), self.growth
+                self.prior, model.query, self._connector, sampler, self._models.sample_index(), self.growth
             )
         joins = more_joins_of(self._connector)
         if joins is not None and model.query.connected:
-            return JoinGrowth(self.prior, model.query, joins, self._index(), self.growth)
+            return JoinGrowth(self.prior, model.query, joins, self._models.sample_index(), self.growth)
         return None
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
@@ -477,11 +406,6 @@ class Planner:
 def _unwrapped(oracle: EdgeOracle) -> EdgeOracle:
     """The oracle a connected query's :class:`MotionDispatch` wraps (the oracle itself otherwise)."""
     return oracle.oracle if isinstance(oracle, MotionDispatch) else oracle
-
-
-def _cache_key(endpoint: int | FloatArray) -> object:
-    """A hashable key of a vertex id or a state (its exact float64 bytes)."""
-    return endpoint if isinstance(endpoint, int) else np.asarray(endpoint, dtype=np.float64).tobytes()
 
 
 def _check_plan_arguments(policy: str, max_checks: int | None, time_budget_s: float | None) -> None:

@@ -7,8 +7,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drd_planner.arrays import BoolArray, FloatArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.world_columns import WorldColumns
 from drd_planner.planner.connect import (
     EdgeSampleIndex,
     Motion,
@@ -18,6 +19,24 @@ from drd_planner.planner.connect import (
 )
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.query_worlds import QueryWorlds
+
+
+@dataclass(frozen=True)
+class Joins:
+    """The motions joining an off-graph start or goal to the graph.
+
+    Attributes:
+        vertices: (k,) the graph vertex at each motion's other end.
+        lengths: (k,) their lengths (the graph's unit).
+        edges: (k,) their edge ids in the query's graph.
+        free: (n, k) bool: each motion's imputed outcome in each training world (None without worlds).
+    """
+
+    vertices: IntArray
+    lengths: FloatArray
+    edges: IntArray
+    free: BoolArray | None
 
 
 @dataclass(frozen=True)
@@ -27,22 +46,26 @@ class QueryGraph:
     Attributes:
         graph: the prior's graph, plus a new vertex per off-graph state (ids from V on) and its motions
             (edge ids from E on).
-        worlds: (n, E') training outcomes, the new edges' imputed (:func:`imputed_outcomes`); None for a
-            prior without worlds over every edge.
+        worlds: the (n, E') training outcomes, the new edges' imputed (:func:`imputed_outcomes`) beside the
+            prior's (never a copy of them); None for a prior without worlds over every edge.
         edge_costs: (E',) check costs (a new edge costs the median of the graph's).
         start: start vertex id.
         goal: goal vertex id.
         motions: new edge id -> (K, D) states along it, tail first.
         new_states: new vertex id -> its (D,) state.
+        start_joins: the motions joining an off-graph start (None when the start is a graph vertex).
+        goal_joins: the motions joining an off-graph goal (None when the goal is a graph vertex).
     """
 
     graph: ExplicitGraph
-    worlds: BoolArray | None
+    worlds: QueryWorlds | None
     edge_costs: FloatArray
     start: int
     goal: int
     motions: Mapping[int, FloatArray] = field(default_factory=dict)
     new_states: Mapping[int, FloatArray] = field(default_factory=dict)
+    start_joins: Joins | None = None
+    goal_joins: Joins | None = None
 
     @property
     def connected(self) -> bool:
@@ -50,9 +73,10 @@ class QueryGraph:
         return bool(self.motions)
 
 
-def prior_query(prior: WorldPrior, start: int, goal: int) -> QueryGraph:
+def prior_query(prior: WorldPrior, start: int, goal: int, columns: WorldColumns | None) -> QueryGraph:
     """A query between two graph vertices: the prior's own graph and worlds (no copy)."""
-    return QueryGraph(prior.graph, prior.worlds, prior.edge_costs, start, goal)
+    worlds = None if prior.worlds is None or columns is None else QueryWorlds(prior.worlds, columns)
+    return QueryGraph(prior.graph, worlds, prior.edge_costs, start, goal)
 
 
 def connected_query(
@@ -61,6 +85,7 @@ def connected_query(
     goal: int | FloatArray,
     connector: QueryConnector,
     index: EdgeSampleIndex,
+    columns: WorldColumns | None,
 ) -> QueryGraph:
     """Join the off-graph start and/or goal state to the graph with the connector's motions.
 
@@ -74,6 +99,7 @@ def connected_query(
     motions: list[Motion] = []
     new_states: dict[int, FloatArray] = {}
     ends: dict[str, int] = {}
+    spans: dict[str, tuple[int, int]] = {}
     next_vertex = graph.num_vertices
     for label, value in (("start", start), ("goal", goal)):
         if isinstance(value, int):
@@ -89,6 +115,7 @@ def connected_query(
         next_vertex += 1
         new_states[vertex] = np.asarray(value, dtype=np.float64)
         ends[label] = vertex
+        spans[label] = (len(motions), len(motions) + len(found))
         for m in found:
             new_edges.append((vertex, m.vertex) if label == "start" else (m.vertex, vertex))
             motions.append(m)
@@ -99,14 +126,34 @@ def connected_query(
         -1, states.shape[1]
     )
     query_graph = ExplicitGraph(edges, lengths, next_vertex, graph.directed, np.vstack([states, extra]))
-    worlds = None
-    if prior.worlds is not None:
+    worlds: QueryWorlds | None = None
+    imputed: BoolArray | None = None
+    if prior.worlds is not None and columns is not None:
         imputed = np.column_stack([imputed_outcomes(index, prior.worlds, m.states) for m in motions])
-        worlds = np.concatenate([prior.worlds, imputed], axis=1)
+        worlds = QueryWorlds(prior.worlds, columns, imputed)
     cost = float(np.median(prior.edge_costs))
     costs = np.concatenate([prior.edge_costs, np.full(len(motions), cost)])
     by_edge = {num_edges + i: m.states for i, m in enumerate(motions)}
-    return QueryGraph(query_graph, worlds, costs, ends["start"], ends["goal"], by_edge, new_states)
+    joins = {
+        label: Joins(
+            np.array([m.vertex for m in motions[a:b]], dtype=np.int64),
+            np.array([m.length for m in motions[a:b]], dtype=np.float64),
+            np.arange(num_edges + a, num_edges + b, dtype=np.int64),
+            None if imputed is None else imputed[:, a:b],
+        )
+        for label, (a, b) in spans.items()
+    }
+    return QueryGraph(
+        query_graph,
+        worlds,
+        costs,
+        ends["start"],
+        ends["goal"],
+        by_edge,
+        new_states,
+        joins.get("start"),
+        joins.get("goal"),
+    )
 
 
 class MotionDispatch:

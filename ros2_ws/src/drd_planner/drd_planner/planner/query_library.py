@@ -2,26 +2,19 @@
 
 The authors' library (ALGORITHMS.md 6.1, item 3) is the union over worlds of each world's k shortest
 free paths, subsampled to m. Yen's k shortest paths over a thousand worlds take seconds; a planner
-asked for a new goal has a fraction of that. The online library keeps the idea with k = 1:
+asked for a new goal has milliseconds. The online library keeps the idea with k = 1:
 
-1. the distinct training worlds are visited in a seeded random order;
-2. each world contributes its shortest free start-goal path (one Dijkstra over its free edges);
-3. until m distinct paths are found (a seeded uniform subsample of the worlds, as the authors subsample
-   paths).
+1. a seeded sample of W distinct training worlds (:data:`~drd_planner.planner.goal_trees.SEARCH_WORLDS`,
+   the same for every query of a prior) is searched;
+2. each contributes its shortest free start-goal path, read off its reverse shortest-path tree of the goal
+   (:mod:`~drd_planner.planner.goal_trees`: all W trees in one batched search, kept per goal, so a replan to
+   the same goal from a new start only walks the trees);
+3. the first m distinct paths in the sample's order are the library.
 
-One Dijkstra costs about 0.25 ms on the 3 049-vertex SE(2) lattice, so a search in each of 900 worlds
-would take a quarter of a second. Three rules keep the searches few:
-
-- a world in which a path already found is free and as short as the shortest path of the whole graph
-  needs no search (no free path can be shorter: exact);
-- otherwise the shortest known path free in the world bounds the search radius (scipy's ``limit``:
-  exact);
-- at most ``max_searches`` Dijkstra calls are made: the library holds the shortest free paths of a seeded
-  subsample of the training worlds (worlds in which no start-goal path is free cost a full search and
-  give nothing, so an unbounded pass over them would dominate). A world left out is still served: some
-  library path is often free in it, and the planner's graph stage covers the rest.
-
-R follows from X (a path is valid in a world iff all its edges are free there).
+A start or goal off the graph is joined by motions (:mod:`~drd_planner.planner.connect`); in each world the
+start takes the join with the shortest free path behind it (its imputed outcome counts), and a goal's joins
+are arcs into an extra vertex of the search. R follows from X (a path is valid in a world iff all its edges
+are free there).
 """
 
 from __future__ import annotations
@@ -35,11 +28,8 @@ from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-
-#: The most Dijkstra calls for one library (about 0.2 ms each on the SE(2) lattice; see the module doc).
-DEFAULT_MAX_SEARCHES = 256
-#: Relative slack on the search radius so that a path exactly as long as the bound is still found.
-_LIMIT_RTOL = 1e-9
+from drd_planner.planner.goal_trees import GoalJoins, SearchWorlds
+from drd_planner.planner.query_graph import Joins
 
 
 class ShortestPaths:
@@ -77,71 +67,59 @@ class ShortestPaths:
         return arcs.walk_back(pred, start, goal)
 
 
-def build_query_library(
-    arcs: GraphArcs,
-    lengths: npt.ArrayLike,
-    worlds: npt.ArrayLike,
-    start: int,
-    goal: int,
-    *,
-    max_paths: int,
-    seed: int,
-    max_searches: int = DEFAULT_MAX_SEARCHES,
+def library_paths(
+    search: SearchWorlds, start: int | Joins, goal: int | Joins, *, max_paths: int
 ) -> list[IntArray]:
-    """Each visited training world's shortest free path, until ``max_paths`` distinct paths.
+    """The first ``max_paths`` distinct shortest free paths of the search worlds, from ``start`` to ``goal``.
 
     Args:
-        arcs: the graph's arcs.
-        lengths: (E,) edge lengths (the path length the library minimises).
-        worlds: (n, E) bool training worlds' outcomes (True = free).
-        start: start vertex id.
-        goal: goal vertex id (different from ``start``).
+        search: the prior's search worlds (trees kept per goal vertex).
+        start: a graph vertex, or the joins of an off-graph start.
+        goal: a graph vertex, or the joins of an off-graph goal.
         max_paths: m, the most paths kept.
-        seed: seed of the world order.
-        max_searches: the most Dijkstra calls (worlds searched).
 
     Returns:
-        Distinct paths as edge-id arrays in traversal order, sorted by edge-id tuple (deterministic);
-        empty when no training world has a free start-goal path.
+        Distinct paths as query edge-id arrays in traversal order, sorted by edge-id tuple (deterministic);
+        empty when no search world has a free path.
     """
-    x = np.asarray(worlds, dtype=bool)
-    length = np.asarray(lengths, dtype=np.float64)
-    if start == goal:
-        raise ProblemError(f"start and goal are the same vertex ({start}); no path has an edge to check")
     if max_paths < 1:
         raise ProblemError(f"max_paths must be at least 1, got {max_paths}")
-    search = ShortestPaths(arcs, length)
-    packed = np.packbits(x, axis=1)
-    _, first = np.unique(packed, axis=0, return_index=True)
-    order = first[np.random.default_rng(seed).permutation(first.size)]
+    if isinstance(start, int) and isinstance(goal, int) and start == goal:
+        raise ProblemError(f"start and goal are the same vertex ({start}); no path has an edge to check")
+    worlds = search.worlds
+    if isinstance(goal, Joins):
+        assert goal.free is not None  # a library needs training worlds
+        tree = search.joined_tree(GoalJoins(goal.vertices, goal.lengths, goal.free[worlds]))
+        into_goal = dict(zip(goal.vertices.tolist(), goal.edges.tolist(), strict=True))
+    else:
+        tree = search.tree(goal)
+        into_goal = {}
+    rows = np.arange(worlds.size)
+    if isinstance(start, Joins):
+        assert start.free is not None
+        behind = np.where(start.free[worlds], start.lengths[None, :] + tree.dist[:, start.vertices], np.inf)
+        choice = np.argmin(behind, axis=1)  # the first of equally short ones
+        reachable = np.isfinite(behind[rows, choice])
+        starts = np.where(reachable, start.vertices[choice], tree.goal)
+    else:
+        choice = np.zeros(worlds.size, dtype=np.int64)
+        reachable = np.ones(worlds.size, dtype=bool)
+        starts = np.full(worlds.size, int(start))
     found: dict[tuple[int, ...], IntArray] = {}
-    valid_in = np.zeros((x.shape[0], max_paths), dtype=bool)  # (n, m): found path k free in world h
-    found_length = np.full(max_paths, np.inf)
-    p0 = search.path(start, goal, None)
-    if p0 is None:
-        return []
-    lower = float(length[p0].sum())
-    searches = 0
-    for h in order.tolist():
+    for c, walk in enumerate(tree.walks(starts)):
         if len(found) >= max_paths:
             break
-        bound = float(found_length[valid_in[h]].min(initial=np.inf))
-        if bound <= lower * (1 + _LIMIT_RTOL):
-            continue  # a known free path is as short as any path can be
-        if searches >= max_searches:
-            break
-        limit = bound * (1 + _LIMIT_RTOL) if np.isfinite(bound) else np.inf
-        searches += 1
-        path = search.path(start, goal, x[h], limit=limit)
-        if path is None:
+        if walk is None or not reachable[c]:
             continue
-        key = tuple(path.tolist())
-        if key in found:
-            continue
-        k = len(found)
-        found[key] = path
-        valid_in[:, k] = x[:, path].all(axis=1)
-        found_length[k] = float(length[path].sum())
+        hops = walk if not into_goal else walk[:-1]  # the last hop of a joined goal is its motion
+        edges = [search.arcs.edge_of(hops[:-1], hops[1:])] if hops.size > 1 else []
+        if into_goal:
+            edges.append(np.array([into_goal[int(hops[-1])]], dtype=np.int64))
+        if isinstance(start, Joins):
+            edges.insert(0, np.array([int(start.edges[choice[c]])], dtype=np.int64))
+        path = np.concatenate(edges) if edges else np.zeros(0, dtype=np.int64)
+        if path.size:
+            found.setdefault(tuple(path.tolist()), path)
     return [found[k] for k in sorted(found)]
 
 
@@ -160,20 +138,21 @@ def vertex_sequence(edges: npt.NDArray[np.int64], start: int, path: IntArray) ->
 
 
 def query_library(
-    arcs: GraphArcs,
+    search: SearchWorlds,
     edges: npt.NDArray[np.int64],
-    lengths: npt.ArrayLike,
-    worlds: npt.ArrayLike,
-    start: int,
-    goal: int,
+    start: int | Joins,
+    goal: int | Joins,
     *,
+    start_vertex: int,
     max_paths: int,
-    seed: int,
 ) -> PathLibrary | None:
-    """:func:`build_query_library` as a :class:`PathLibrary` with vertex sequences (None when empty)."""
-    paths = build_query_library(arcs, lengths, worlds, start, goal, max_paths=max_paths, seed=seed)
+    """:func:`library_paths` as a :class:`PathLibrary` over the query's (E', 2) ``edges`` (None when empty).
+
+    ``start_vertex`` is the start's vertex in the query's graph (its own new vertex when it is joined).
+    """
+    paths = library_paths(search, start, goal, max_paths=max_paths)
     if not paths:
         return None
     return PathLibrary(
-        tuple(paths), int(np.asarray(lengths).size), tuple(vertex_sequence(edges, start, p) for p in paths)
+        tuple(paths), int(edges.shape[0]), tuple(vertex_sequence(edges, start_vertex, p) for p in paths)
     )

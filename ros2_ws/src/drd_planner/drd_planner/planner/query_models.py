@@ -1,0 +1,226 @@
+"""Every query's library and tree from one prior: what is per prior is built once, what is per query is cached.
+
+:class:`QueryModels` is where :class:`~drd_planner.planner.Planner` gets a query's
+:class:`~drd_planner.planner.query_model.QueryModel`: the precomputed tree's for a stored query, else one built
+now and kept (least recently used dropped first). The work that does not depend on the query is done once per
+prior, on first need (or at :meth:`QueryModels.warm_up`):
+
+- the packed columns of the training worlds (:class:`~drd_planner.core.world_columns.WorldColumns`: the
+  posterior's counts in milliseconds);
+- the search worlds and their block graph (:class:`~drd_planner.planner.goal_trees.SearchWorlds`: distinct
+  worlds found once, the libraries' searches batched and their trees kept per goal);
+- the graph's arcs and the points along its edges that impute the outcomes of new motions.
+
+A query whose switch threshold is 1 (validation picks it for new queries on every shipped prior: BiSECt from
+the root) gets a :class:`~drd_planner.core.root_tree.RootTree` instead of a DiRECt tree grown online.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections import OrderedDict
+
+import numpy as np
+
+from drd_planner.arrays import FloatArray
+from drd_planner.core.bisect import bias_from_worlds
+from drd_planner.core.lazysp import GraphArcs
+from drd_planner.core.online_tree import LazyDirectTree
+from drd_planner.core.root_tree import RootTree
+from drd_planner.core.tree import TreeNodes
+from drd_planner.core.world_columns import WorldColumns
+from drd_planner.exceptions import ProblemError
+from drd_planner.planner.connect import EdgeSampleIndex, QueryConnector
+from drd_planner.planner.endpoints import QueryError
+from drd_planner.planner.goal_trees import SearchWorlds
+from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.query_graph import QueryGraph, connected_query, prior_query
+from drd_planner.planner.query_library import query_library
+from drd_planner.planner.query_model import QueryModel
+
+__all__ = ["DEFAULT_CACHE_SIZE", "QueryModels"]
+
+#: Queries whose library and tree are kept (least recently used dropped first).
+DEFAULT_CACHE_SIZE = 16
+
+
+class QueryModels:
+    """The query models of one prior (see the module docstring).
+
+    Args:
+        prior: the prior (its setting may be replaced later: :attr:`prior` is read at each build).
+        connector: joins off-graph states (None: they are refused).
+        cache_size: queries kept.
+        expand_threshold: online DiRECt trees expand a node only while its fraction is at least this.
+    """
+
+    def __init__(
+        self,
+        prior: WorldPrior,
+        connector: QueryConnector | None,
+        *,
+        cache_size: int = DEFAULT_CACHE_SIZE,
+        expand_threshold: float,
+    ) -> None:
+        if cache_size < 1:
+            raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
+        self.prior = prior
+        self.connector = connector
+        self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
+        self._cache_size = cache_size
+        self._expand = expand_threshold
+        self._arcs: GraphArcs | None = None
+        self._columns: WorldColumns | None = None
+        self._search: SearchWorlds | None = None
+        self._index: EdgeSampleIndex | None = None
+
+    # ------------------------------------------------------------------------------------------------
+    # Per prior, once
+
+    @property
+    def arcs(self) -> GraphArcs:
+        """The prior graph's arcs."""
+        if self._arcs is None:
+            self._arcs = GraphArcs(self.prior.graph)
+        return self._arcs
+
+    @property
+    def columns(self) -> WorldColumns | None:
+        """The training worlds' packed columns (None for a prior without worlds over every edge)."""
+        if self._columns is None and self.prior.worlds is not None:
+            self._columns = WorldColumns(self.prior.worlds)
+        return self._columns
+
+    @property
+    def search(self) -> SearchWorlds:
+        """The search worlds of the online libraries."""
+        if self._search is None:
+            assert self.prior.worlds is not None
+            self._search = SearchWorlds(
+                self.arcs, self.prior.graph.lengths, self.prior.worlds, seed=self.prior.library_seed
+            )
+        return self._search
+
+    def sample_index(self) -> EdgeSampleIndex:
+        """Points along every graph edge, for the imputed outcomes of new motions.
+
+        Raises:
+            QueryError: there is no connector (no motions to impute).
+        """
+        if self.connector is None:
+            raise QueryError("this planner has no connector: states off the graph are refused")
+        if self._index is None:
+            self._index = EdgeSampleIndex(
+                self.prior.graph, self.prior.edge_trajectories, position_dims=self.connector.position_dims
+            )
+        return self._index
+
+    def warm_up(self) -> None:
+        """Build the per-prior work now (a node does it at configure, not in its first new request)."""
+        _ = self.arcs, self.columns
+        if self.prior.worlds is not None:
+            _ = self.search
+        if self.connector is not None and self.prior.graph.vertex_states is not None:
+            self.sample_index()
+
+    # ------------------------------------------------------------------------------------------------
+    # Per query, cached
+
+    def get(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
+        """The query's model (from the cache, a precomputed tree, or built now).
+
+        Raises:
+            QueryError: the prior holds training worlds only for its precomputed queries, or a state
+                cannot be joined to the graph.
+        """
+        key = (_cache_key(start), _cache_key(goal))
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return dataclasses.replace(self._cache[key], reused=True)
+        model = self._build(start, goal)
+        self._cache[key] = model
+        while len(self._cache) > self._cache_size:
+            self._cache.popitem(last=False)
+        return model
+
+    def cached_queries(self) -> list[tuple[object, object]]:
+        """The (start, goal) keys in the cache, least recently used first."""
+        return list(self._cache)
+
+    def cached_models(self) -> list[QueryModel]:
+        """The cached models, least recently used first."""
+        return list(self._cache.values())
+
+    def drop_online(self) -> None:
+        """Forget the models built online (their tree or library settings changed); precomputed ones stay."""
+        self._cache = OrderedDict((k, m) for k, m in self._cache.items() if m.precomputed is not None)
+
+    def _build(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
+        t0 = time.perf_counter()
+        prior = self.prior
+        qt = prior.tree_for(start, goal) if isinstance(start, int) and isinstance(goal, int) else None
+        if qt is not None:
+            theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
+            query = prior_query(prior, qt.start, qt.goal, self.columns)
+            return QueryModel(
+                query, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0, qt
+            )
+        if prior.worlds is None:
+            served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
+            raise QueryError(
+                f"this prior came from a tree file that holds training worlds only for its own query "
+                f"({served}); to plan another query, rebuild it as a world prior with "
+                "`drd build-tree --dataset DATASET.npz --out PRIOR.npz`"
+            )
+        if isinstance(start, int) and isinstance(goal, int):
+            query = prior_query(prior, start, goal, self.columns)
+        else:
+            if self.connector is None:
+                raise QueryError("this planner has no connector: states off the graph are refused")
+            query = connected_query(prior, start, goal, self.connector, self.sample_index(), self.columns)
+        library = query_library(
+            self.search,
+            query.graph.edges,
+            query.start if query.start_joins is None else query.start_joins,
+            query.goal if query.goal_joins is None else query.goal_joins,
+            start_vertex=query.start,
+            max_paths=prior.max_paths,
+        )
+        tree = None if library is None else self._tree(query, library)
+        label = "connected" if query.connected else "online"
+        return QueryModel(query, library, tree, self._theta(query), label, time.perf_counter() - t0)
+
+    def _theta(self, query: QueryGraph) -> FloatArray:
+        """(E',) BiSECt's training bias over the query's edges."""
+        prior, worlds = self.prior, query.worlds
+        assert worlds is not None
+        if not query.connected:
+            return prior.edge_marginal
+        if prior.world_weights is not None:  # weighted worlds: the whole matrix once
+            return bias_from_worlds(worlds.dense, prior.world_weights, alpha=prior.alpha)
+        theta: FloatArray = prior.alpha * worlds.free_fraction + (1.0 - prior.alpha) * 0.5
+        return theta
+
+    def _tree(self, query: QueryGraph, library: object) -> TreeNodes:
+        """BiSECt from the root when the online switch threshold is 1, else DiRECt grown online."""
+        from drd_planner.core.library import PathLibrary
+
+        assert isinstance(library, PathLibrary) and query.worlds is not None
+        prior = self.prior
+        if prior.eta >= 1.0:
+            outcomes = query.worlds.columns(library.library_edges)
+            return RootTree(outcomes, library, weights=prior.world_weights, region_rule=prior.region_rule)
+        return LazyDirectTree(
+            query.worlds.dense,
+            library,
+            query.edge_costs,
+            weights=prior.world_weights,
+            expand_threshold=self._expand,
+            region_rule=prior.region_rule,
+        )
+
+
+def _cache_key(endpoint: int | FloatArray) -> object:
+    """A hashable key of a vertex id or a state (its exact float64 bytes)."""
+    return endpoint if isinstance(endpoint, int) else np.asarray(endpoint, dtype=np.float64).tobytes()

@@ -1,0 +1,38 @@
+"""Packed world columns: free counts over any subset of worlds equal the plain sums."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from drd_planner.core.world_columns import WorldColumns, pack_rows
+from drd_planner.exceptions import ProblemError
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 200), e=st.integers(1, 30), seed=st.integers(0, 2**31))
+def test_counts_equal_the_sums_over_the_rows(n: int, e: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    x = rng.random((n, e)) < 0.6
+    columns = WorldColumns(x)
+    for _ in range(3):
+        rows = rng.random(n) < rng.random()
+        assert np.array_equal(columns.free_counts(rows), x[rows].sum(axis=0))
+    assert np.array_equal(columns.free_totals, x.sum(axis=0))
+    assert columns.num_worlds == n and columns.num_edges == e
+
+
+def test_rows_are_packed_little_endian_in_64_bit_words() -> None:
+    rows = np.zeros(70, dtype=bool)
+    rows[[0, 63, 64, 69]] = True
+    words = pack_rows(rows)
+    assert words.dtype == np.uint64 and words.size == 2
+    assert int(words[0]) == (1 << 0) | (1 << 63) and int(words[1]) == (1 << 0) | (1 << 5)
+
+
+def test_a_mask_of_another_size_is_refused() -> None:
+    columns = WorldColumns(np.ones((70, 3), dtype=bool))
+    with pytest.raises(ProblemError, match="70 worlds"):
+        columns.free_counts(np.ones(200, dtype=bool))
