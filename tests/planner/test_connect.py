@@ -10,7 +10,13 @@ from drd_planner.core.problem import Problem
 from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
 from drd_planner.domains.planar import PlanarChecker
 from drd_planner.planner import WorldPrior
-from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle, connector_for, imputed_outcomes
+from drd_planner.planner.connect import (
+    EdgeSampleIndex,
+    MotionOracle,
+    connector_for,
+    imputed_columns,
+    imputed_outcomes,
+)
 from drd_planner.planner.straight_connector import StraightConnector
 
 
@@ -152,3 +158,25 @@ def test_the_explanation_protocol_is_optional_and_the_arm_checker_has_it(small_a
     checker = small_arm.scene_checker(Scene(margin=0.0))  # type: ignore[attr-defined]
     assert isinstance(checker, MotionExplainer) and isinstance(checker, MotionOracle)
     assert not isinstance(TableOracle(np.ones(3, dtype=bool)), MotionExplainer)
+
+
+def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
+    from drd_planner.core.graph import ExplicitGraph
+
+    states = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    graph = ExplicitGraph(np.array([[0, 1], [1, 2], [2, 3], [3, 0]]), np.ones(4), 4, vertex_states=states)
+    worlds = np.array([[True, False, True, True], [True, True, False, False], [False, True, True, True]])
+    index = EdgeSampleIndex(graph, None, position_dims=2)
+    motions = [
+        np.linspace([0.1, 0.0], [0.9, 0.0], 5),
+        np.linspace([1.0, 0.2], [1.0, 0.8], 3),
+        np.array([[0.5, 1.0]]),
+    ]
+    columns = imputed_columns(index, worlds, motions)
+    expected = np.column_stack(
+        [imputed_outcomes(index, worlds, m) for m in motions]
+    )  # <= 8 samples: the same
+    np.testing.assert_array_equal(columns, expected)
+    assert imputed_columns(index, worlds, []).shape == (3, 0)
+    long = np.linspace([0.0, 0.1], [0.0, 0.9], 50)  # 50 samples voted through 8 evenly spread ones
+    assert imputed_columns(index, worlds, [long]).shape == (3, 1)

@@ -6,8 +6,8 @@ import numpy as np
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.planner.connect import EdgeSampleIndex, imputed_outcomes
-from drd_planner.planner.grown_graph import GrownGraph, imputed_columns, new_pairs
+from drd_planner.planner.connect import EdgeSampleIndex
+from drd_planner.planner.grown_graph import GrownGraph, new_pairs
 from drd_planner.planner.query_graph import QueryGraph
 from drd_planner.planner.query_worlds import QueryWorlds
 
@@ -18,22 +18,6 @@ def _query() -> tuple[QueryGraph, np.ndarray]:
     graph = ExplicitGraph(edges, np.ones(4), 4, vertex_states=states)
     worlds = np.array([[True, False, True, True], [True, True, False, False], [False, True, True, True]])
     return QueryGraph(graph, QueryWorlds(worlds, WorldColumns(worlds)), np.ones(4), 0, 2), worlds
-
-
-def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
-    query, worlds = _query()
-    index = EdgeSampleIndex(query.graph, None, position_dims=2)
-    motions = [
-        np.linspace([0.1, 0.0], [0.9, 0.0], 5),
-        np.linspace([1.0, 0.2], [1.0, 0.8], 3),
-        np.array([[0.5, 1.0]]),
-    ]
-    columns = imputed_columns(index, worlds, motions)
-    expected = np.column_stack(
-        [imputed_outcomes(index, worlds, m) for m in motions]
-    )  # <= 8 samples: the same
-    np.testing.assert_array_equal(columns, expected)
-    assert imputed_columns(index, worlds, []).shape == (3, 0)
 
 
 def test_new_pairs_are_sorted_unique_and_not_yet_edges() -> None:

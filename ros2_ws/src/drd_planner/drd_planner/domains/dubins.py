@@ -264,23 +264,24 @@ def dubins_path(start: Pose, end: Pose, *, radius: float, headings: HeadingRange
         chord = _mod2pi(chord)
     a, b = _mod2pi(start[2] - chord), _mod2pi(end[2] - chord)
     first = (float(start[0]), float(start[1]), float(start[2]))
-    best: DubinsPath | None = None
-    for word in _WORDS:
+    candidates: list[tuple[float, int, DubinsPath]] = []
+    for index, word in enumerate(_WORDS):
         params = _word_params(word, a, b, d)
         if params is None:
             continue
         segments = (params[0] * radius, params[1] * radius, params[2] * radius)
         path = DubinsPath(first, word, segments, float(radius), headings)
+        candidates.append((path.length, index, path))
+    # Shortest first (ties in word order): the first whose integrated end is the goal is the answer, so
+    # usually one word is integrated instead of six.
+    for _, _, path in sorted(candidates, key=lambda c: (c[0], c[1])):
         ex, ey, eh = path.end()
-        ok = (
+        if (
             math.hypot(ex - end[0], ey - end[1]) < 1e-6 * max(1.0, radius)
             and abs(float(wrap_angle(eh - end[2]))) < 1e-6
-        )
-        if ok and (best is None or path.length < best.length - 1e-12):
-            best = path
-    if best is None:  # cannot happen for finite input: RSR/LSL always exist
-        raise ProblemError(f"no Dubins path from {start} to {end}")
-    return best
+        ):
+            return path
+    raise ProblemError(f"no Dubins path from {start} to {end}")  # cannot happen: RSR/LSL always exist
 
 
 def _mod2pi_array(angle: FloatArray) -> FloatArray:

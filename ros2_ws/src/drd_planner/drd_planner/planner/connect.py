@@ -190,6 +190,26 @@ def imputed_outcomes(index: EdgeSampleIndex, worlds: BoolArray, states: FloatArr
     return np.asarray(worlds[:, nearest].mean(axis=1) >= 0.5, dtype=bool)
 
 
+def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray, motions: list[FloatArray]) -> BoolArray:
+    """(n, M) imputed outcomes of M motions in the n training worlds, all motions' samples matched at once.
+
+    The sample-weighted majority vote of :func:`imputed_outcomes` over at most
+    :data:`POINTS_PER_EDGE` evenly spread samples of each motion (as many as
+    the index has along each graph edge).
+    """
+    if not motions:
+        return np.zeros((worlds.shape[0], 0), dtype=bool)
+    points = [
+        m[np.unique(np.linspace(0, m.shape[0] - 1, POINTS_PER_EDGE).round().astype(np.int64))]
+        for m in motions
+    ]
+    counts = np.array([m.shape[0] for m in points])
+    nearest = index.nearest_edges(np.concatenate(points))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    free = np.add.reduceat(worlds[:, nearest].astype(np.int32), starts, axis=1)
+    return np.asarray(free >= 0.5 * counts, dtype=bool)
+
+
 def _straight(prior: WorldPrior) -> QueryConnector | None:
     from drd_planner.planner.straight_connector import straight_connector
 

@@ -7,7 +7,7 @@ plan's log like every other (a path never uses one: it has no length to offer). 
 to others (:attr:`GrownGraph.usable`).
 
 Each new edge's column of training outcomes is imputed like any motion's off the graph
-(:func:`imputed_columns`).
+(:func:`~drd_planner.planner.connect.imputed_columns`).
 """
 
 from __future__ import annotations
@@ -18,30 +18,10 @@ import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
-from drd_planner.planner.connect import POINTS_PER_EDGE, EdgeSampleIndex
+from drd_planner.planner.connect import EdgeSampleIndex, imputed_columns
 from drd_planner.planner.query_graph import QueryGraph
 
-__all__ = ["GrownGraph", "imputed_columns", "new_pairs"]
-
-
-def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray, motions: list[FloatArray]) -> BoolArray:
-    """(n, M) imputed outcomes of M motions in the n training worlds, all motions' samples matched at once.
-
-    The sample-weighted majority vote of :func:`~drd_planner.planner.connect.imputed_outcomes` over at most
-    :data:`~drd_planner.planner.connect.POINTS_PER_EDGE` evenly spread samples of each motion (as many as
-    the index has along each graph edge).
-    """
-    if not motions:
-        return np.zeros((worlds.shape[0], 0), dtype=bool)
-    points = [
-        m[np.unique(np.linspace(0, m.shape[0] - 1, POINTS_PER_EDGE).round().astype(np.int64))]
-        for m in motions
-    ]
-    counts = np.array([m.shape[0] for m in points])
-    nearest = index.nearest_edges(np.concatenate(points))
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    free = np.add.reduceat(worlds[:, nearest].astype(np.int32), starts, axis=1)
-    return np.asarray(free >= 0.5 * counts, dtype=bool)
+__all__ = ["GrownGraph", "new_pairs"]
 
 
 def new_pairs(candidates: IntArray, edges: IntArray) -> IntArray:

@@ -10,13 +10,7 @@ import numpy as np
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.planner.connect import (
-    EdgeSampleIndex,
-    Motion,
-    MotionOracle,
-    QueryConnector,
-    imputed_outcomes,
-)
+from drd_planner.planner.connect import EdgeSampleIndex, Motion, MotionOracle, QueryConnector, imputed_columns
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.query_worlds import QueryWorlds
@@ -129,7 +123,7 @@ def connected_query(
     worlds: QueryWorlds | None = None
     imputed: BoolArray | None = None
     if prior.worlds is not None and columns is not None:
-        imputed = np.column_stack([imputed_outcomes(index, prior.worlds, m.states) for m in motions])
+        imputed = imputed_columns(index, prior.worlds, [m.states for m in motions])
         worlds = QueryWorlds(prior.worlds, columns, imputed)
     cost = float(np.median(prior.edge_costs))
     costs = np.concatenate([prior.edge_costs, np.full(len(motions), cost)])

@@ -155,6 +155,7 @@ class QuerySession(DomainSession):
         self._tool_positions: tuple[RobotModel | None, FloatArray] | None = None
         for qt in prior.trees[:cache_size]:  # first use costs ~80 ms (bias, query graph): pay it here
             self._planner.query_model(qt.start, qt.goal)
+        self._planner.warm_up()  # the per-prior work of new queries, here rather than in the first one
 
     # ------------------------------------------------------------------------------------------------
     # What the node reads
