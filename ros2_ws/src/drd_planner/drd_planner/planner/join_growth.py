@@ -14,8 +14,8 @@ can still be reached over edges not known blocked, a goal only from vertices the
 breadth-first search each round). So a goal cut off from everything stops the growth at once instead of
 joining the start to every vertex. It stops at the first verified path, when no such vertex is left in the
 ranking (the planner's "no path" is then exact for single-motion joins), or at a budget
-(:class:`~drd_planner.planner.roadmap_growth.GrowthSettings`: ``max_joins`` per state, rounds, seconds,
-checks, and the plan's own).
+(:class:`~drd_planner.planner.roadmap_growth.GrowthSettings`: ``max_joins`` per state, none by default,
+rounds, seconds, checks, and the plan's own).
 """
 
 from __future__ import annotations
@@ -139,7 +139,8 @@ class JoinGrowth(GraphGrowth):
         added = False
         for vertex, (state, outgoing, ranking) in self.ends.items():
             joined = self.joined[vertex]
-            room = self.settings.max_joins - len(joined)
+            cap = self.settings.max_joins
+            room = ranking.size if cap is None else cap - len(joined)
             if room <= 0:
                 continue
             other = base.goal if outgoing else base.start

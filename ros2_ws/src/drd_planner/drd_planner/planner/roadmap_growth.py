@@ -97,7 +97,8 @@ class GrowthSettings:
         bridges: direct edges added per round between the nearest vertices of the start's and the goal's
             known-reachable parts (count; 0: none).
         max_joins: motions joining an off-graph start or goal at most, when the connector can offer more
-            than its first ones (:mod:`~drd_planner.planner.join_growth`; count).
+            than its first ones (:mod:`~drd_planner.planner.join_growth`; count; None: every vertex a flyable
+            motion reaches and that can still lead to the other end, within the time and check budgets).
     """
 
     max_rounds: int = 40
@@ -112,7 +113,7 @@ class GrowthSettings:
     sigma_range: tuple[float, float] = (0.1, 0.6)
     reach_fraction: float = 1.0
     bridges: int = 8
-    max_joins: int = 512
+    max_joins: int | None = None
 
     def __post_init__(self) -> None:
         counts = (self.max_rounds, self.max_vertices, self.samples_per_round, self.neighbours)
@@ -121,7 +122,7 @@ class GrowthSettings:
         if (
             min(counts) < 1
             or self.bridges < 0
-            or self.max_joins < 1
+            or (self.max_joins is not None and self.max_joins < 1)
             or (self.max_checks is not None and self.max_checks < 1)
         ):
             raise ProblemError(
