@@ -8,12 +8,22 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
 
-from drd_msgs_py.cdr import ENCAPSULATION, joint_trajectory_cdr, path_cdr
-from drd_msgs_py.factory import RclpyMessages, RosbagsMessages
-from drd_msgs_py.plans import joint_trajectory_message, path_message
+from drd_msgs_py.cdr import ENCAPSULATION, diagnostic_array_cdr, joint_trajectory_cdr, path_cdr
+from drd_msgs_py.factory import MessageFactory, RclpyMessages, RosbagsMessages
+from drd_msgs_py.plans import (
+    CheckRecord,
+    check_statuses,
+    diagnostics_message,
+    edge_checks_message,
+    joint_trajectory_message,
+    path_message,
+    summary_fields,
+    summary_status,
+)
 
 PATH = "nav_msgs/msg/Path"
 TRAJECTORY = "trajectory_msgs/msg/JointTrajectory"
+DIAGNOSTICS = "diagnostic_msgs/msg/DiagnosticArray"
 #: Frames of every length modulo 8 (each shifts the padding before a pose's float64 values), and UTF-8.
 FRAMES = ["", "m", "ma", "map", "odom", "world", "base_l", "panda_link0", "kärta"]
 JOINTS = [[], ["j"], ["a", "bb", "ccc"], [f"panda_joint{i}" for i in range(1, 8)]]
@@ -81,3 +91,59 @@ def test_bad_shapes_are_refused_as_the_message_builders_refuse_them() -> None:
         path_cdr(np.zeros((4, 2)), frame_id="map")
     with pytest.raises(ValueError, match=r"\(K, 2\)"):
         joint_trajectory_cdr(["a", "b"], np.zeros((4, 3)), frame_id="map")
+
+
+def _checks(count: int) -> list[CheckRecord]:
+    return [
+        CheckRecord(
+            k + 1,
+            40 + k,
+            k % 3 != 1,
+            ("tree", "bisect", "improve")[k % 3],
+            0.1234 * k,
+            (k, k + 7),
+            k % 2 == 0,
+        )
+        for k in range(count)
+    ]
+
+
+def _summary(msgs: MessageFactory | None) -> Any:
+    values = {
+        "tree": "heli_lines",
+        "checks": 8,
+        "total_s": "0.012345",
+        "result": "path_found",
+        "request": "goal_pose",
+    }
+    kwargs = {"ok": True, "message": "path of 7 edges", "values": values, "name": "drd_planner: plan"}
+    if msgs is None:
+        return summary_fields(**kwargs)  # type: ignore[arg-type]
+    return diagnostics_message([summary_status(**kwargs, msgs=msgs)], stamp=(8, 9), msgs=msgs)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("count", [0, 1, 2, 9])
+def test_check_log_bytes_are_rosbags_bytes_and_decode_to_edge_checks_message(
+    typestore: Any, count: int
+) -> None:
+    data = diagnostic_array_cdr(check_statuses(_checks(count), hardware_id="node"), stamp=(8, 9))
+    built = edge_checks_message(
+        _checks(count), stamp=(8, 9), hardware_id="node", msgs=RosbagsMessages(typestore)
+    )
+    assert bytes(typestore.serialize_cdr(built, DIAGNOSTICS)) == data
+    deserialize, msgs = _rclpy()
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    decoded = deserialize(data, DiagnosticArray)
+    assert decoded == edge_checks_message(_checks(count), stamp=(8, 9), hardware_id="node", msgs=msgs)
+    if count > 1:
+        assert decoded.status[1].level == b"\x02" and decoded.status[1].values[2].value == "0.123"
+
+
+def test_summary_bytes_are_rosbags_bytes_and_decode_to_the_summary(typestore: Any) -> None:
+    data = diagnostic_array_cdr([_summary(None)], stamp=(8, 9))
+    assert bytes(typestore.serialize_cdr(_summary(RosbagsMessages(typestore)), DIAGNOSTICS)) == data
+    deserialize, msgs = _rclpy()
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    assert deserialize(data, DiagnosticArray) == _summary(msgs)

@@ -10,12 +10,19 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Path
 from rclpy.serialization import deserialize_message
 from trajectory_msgs.msg import JointTrajectory
 
 from drd_msgs_py.factory import RclpyMessages
-from drd_msgs_py.plans import joint_trajectory_message
+from drd_msgs_py.plans import (
+    CheckRecord,
+    diagnostics_message,
+    edge_checks_message,
+    joint_trajectory_message,
+    summary_status,
+)
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QueryPlanResult
 from drd_planner.planning.session import SessionCheck
@@ -44,6 +51,9 @@ class _Node:
 
     def create_publisher(self, kind: Any, topic: str, qos: Any) -> _Publisher:
         return _Publisher(topic, self.sent)
+
+    def get_name(self) -> str:
+        return "planner"
 
     def get_clock(self) -> Any:
         return SimpleNamespace(now=lambda: SimpleNamespace(seconds_nanoseconds=lambda: (6, 7)))
@@ -96,6 +106,33 @@ def test_an_arm_plan_sends_its_trajectory_then_its_tool_path() -> None:
 
 def _check(step: int, free: bool, stage: str) -> SessionCheck:
     return SessionCheck(step, step, (0, 1), free, stage, 0.5, 0.1, False)
+
+
+def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
+    node, msgs = _Node(), RclpyMessages()
+    outputs = PlannerOutputs(node)
+    checks = (_check(1, True, "tree"), _check(2, False, "bisect"))
+    outputs.checks(SimpleNamespace(checks=checks), (4, 5))  # type: ignore[arg-type]
+    records = [
+        CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached) for c in checks
+    ]
+    assert node.sent[-1][0] == "edge_checks"
+    expected = edge_checks_message(records, stamp=(4, 5), msgs=msgs)
+    assert deserialize_message(node.sent[-1][1], DiagnosticArray) == expected
+    outputs.status("plan", ok=False, message="no free path", values={"checks": 2, "total_s": "0.5"})
+    [status] = deserialize_message(node.sent[-1][1], DiagnosticArray).status
+    assert node.sent[-1][0] == "/diagnostics" and status.name == "planner: plan" and status.level == b"\x02"
+    outputs.status("maps", ok=True, message="accepted", values={"map_version": 3}, stamp=(1, 2))
+    summary = summary_status(
+        ok=True,
+        message="accepted",
+        values={"map_version": 3},
+        name="planner: maps",
+        hardware_id="planner",
+        msgs=msgs,
+    )
+    expected = diagnostics_message([summary], stamp=(1, 2), msgs=msgs)
+    assert deserialize_message(node.sent[-1][1], DiagnosticArray) == expected
 
 
 def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:

@@ -18,11 +18,15 @@ from drd_msgs_py.factory import MessageFactory, header
 
 __all__ = [
     "CheckRecord",
+    "StatusFields",
+    "check_statuses",
     "checked_edges_markers",
     "edge_checks_message",
     "joint_trajectory_message",
     "path_message",
     "path_poses",
+    "status_message",
+    "summary_fields",
     "summary_status",
     "trajectory_positions",
     "trajectory_times",
@@ -151,8 +155,66 @@ def joint_trajectory_message(
     )
 
 
-def _key_values(msgs: MessageFactory, values: Mapping[str, Any]) -> list[Any]:
-    return [msgs("diagnostic_msgs/msg/KeyValue", key=str(k), value=str(v)) for k, v in values.items()]
+@dataclass(frozen=True)
+class StatusFields:
+    """One ``diagnostic_msgs/DiagnosticStatus`` as plain data.
+
+    What :func:`status_message` builds as a message and :func:`~drd_msgs_py.cdr.diagnostic_array_cdr`
+    writes as bytes, so both send the same status.
+
+    Attributes:
+        level: OK (0), WARN (1) or ERROR (2).
+        name: the status's name (``edge/<id>``, ``<node>: plan``, ...).
+        message: its one-line text.
+        hardware_id: what it is about (the node).
+        values: its key/value pairs as text, in order.
+    """
+
+    level: int
+    name: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...] = ()
+
+    @classmethod
+    def of(
+        cls, level: int, name: str, message: str, hardware_id: str, values: Mapping[str, Any]
+    ) -> StatusFields:
+        """The status with ``values`` as text (``str`` of each key and value)."""
+        return cls(level, name, message, hardware_id, tuple((str(k), str(v)) for k, v in values.items()))
+
+
+def status_message(fields: StatusFields, *, msgs: MessageFactory) -> Any:
+    """The ``diagnostic_msgs/DiagnosticStatus`` of ``fields``."""
+    return msgs(
+        "diagnostic_msgs/msg/DiagnosticStatus",
+        level=fields.level,
+        name=fields.name,
+        message=fields.message,
+        hardware_id=fields.hardware_id,
+        values=[msgs("diagnostic_msgs/msg/KeyValue", key=k, value=v) for k, v in fields.values],
+    )
+
+
+def check_statuses(checks: Sequence[CheckRecord], *, hardware_id: str = "drd_planner") -> list[StatusFields]:
+    """One status per check, in order: OK ``free`` or ERROR ``in collision``, with step, stage, check_ms, cached, u, v."""
+    return [
+        StatusFields.of(
+            OK if c.free else ERROR,
+            f"edge/{c.edge}",
+            "free" if c.free else "in collision",
+            hardware_id,
+            {
+                "step": c.step,
+                "stage": c.stage,
+                "check_ms": f"{c.check_ms:.3f}",
+                "cached": str(c.cached).lower(),
+                "u": c.endpoints[0],
+                "v": c.endpoints[1],
+            },
+        )
+        for c in checks
+    ]
 
 
 def edge_checks_message(
@@ -162,29 +224,24 @@ def edge_checks_message(
     hardware_id: str = "drd_planner",
     msgs: MessageFactory,
 ) -> Any:
-    """``diagnostic_msgs/DiagnosticArray``: one status per check, in order (OK = free, ERROR = blocked)."""
-    status = [
-        msgs(
-            "diagnostic_msgs/msg/DiagnosticStatus",
-            level=OK if c.free else ERROR,
-            name=f"edge/{c.edge}",
-            message="free" if c.free else "in collision",
-            hardware_id=hardware_id,
-            values=_key_values(
-                msgs,
-                {
-                    "step": c.step,
-                    "stage": c.stage,
-                    "check_ms": f"{c.check_ms:.3f}",
-                    "cached": str(c.cached).lower(),
-                    "u": c.endpoints[0],
-                    "v": c.endpoints[1],
-                },
-            ),
-        )
-        for c in checks
-    ]
+    """``diagnostic_msgs/DiagnosticArray``: one status per check, in order (:func:`check_statuses`)."""
+    status = [status_message(f, msgs=msgs) for f in check_statuses(checks, hardware_id=hardware_id)]
     return msgs("diagnostic_msgs/msg/DiagnosticArray", header=header(msgs, "", stamp), status=status)
+
+
+def summary_fields(
+    *,
+    ok: bool,
+    message: str,
+    values: Mapping[str, Any],
+    name: str = "drd_planner: plan",
+    hardware_id: str = "drd_planner",
+    level: int | None = None,
+) -> StatusFields:
+    """The status summarising a request (OK, or ERROR with the reason in ``message``; ``level`` overrides)."""
+    return StatusFields.of(
+        (OK if ok else ERROR) if level is None else level, name, message, hardware_id, values
+    )
 
 
 def summary_status(
@@ -197,15 +254,11 @@ def summary_status(
     level: int | None = None,
     msgs: MessageFactory,
 ) -> Any:
-    """One ``DiagnosticStatus`` summarising a request (OK, or ERROR with the reason in ``message``)."""
-    return msgs(
-        "diagnostic_msgs/msg/DiagnosticStatus",
-        level=(OK if ok else ERROR) if level is None else level,
-        name=name,
-        message=message,
-        hardware_id=hardware_id,
-        values=_key_values(msgs, values),
+    """One ``DiagnosticStatus`` summarising a request (:func:`summary_fields`)."""
+    fields = summary_fields(
+        ok=ok, message=message, values=values, name=name, hardware_id=hardware_id, level=level
     )
+    return status_message(fields, msgs=msgs)
 
 
 def diagnostics_message(

@@ -3,8 +3,9 @@
 ``plan``, ``joint_trajectory``, ``edge_checks`` and ``checked_edges`` are lifecycle publishers (silent
 until ``activate``); ``/diagnostics`` publishes in every state (errors, map reports, the heartbeat).
 Statuses are named after the node (:func:`~drd_planner.ros.status.status_name`). ``plan`` and
-``joint_trajectory`` go out serialized, written in bulk from the plan's arrays (:mod:`drd_msgs_py.cdr`):
-as message objects, a Path of 679 poses took 28 ms to build and convert, more than its plan.
+``joint_trajectory`` go out serialized, written in bulk from the plan's arrays, and so do the
+diagnostics (:mod:`drd_msgs_py.cdr`): as message objects, a Path of 679 poses took 28 ms to build and
+convert, more than its plan.
 """
 
 from __future__ import annotations
@@ -20,17 +21,16 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from drd_msgs_py.cdr import joint_trajectory_cdr, path_cdr
+from drd_msgs_py.cdr import diagnostic_array_cdr, joint_trajectory_cdr, path_cdr
 from drd_msgs_py.factory import RclpyMessages
 from drd_msgs_py.plans import (
     EDGE_COLOURS,
     CheckRecord,
+    check_statuses,
     checked_edges_markers,
-    diagnostics_message,
-    edge_checks_message,
     line_list_marker,
     path_message,
-    summary_status,
+    summary_fields,
 )
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QueryPlanResult
@@ -184,15 +184,10 @@ class PlannerOutputs:
     ) -> None:
         """Publish one ``<node>: <topic>`` status on ``/diagnostics``."""
         name = self._node.get_name()
-        status = summary_status(
-            ok=ok,
-            message=message,
-            values=values,
-            name=status_name(name, topic),
-            hardware_id=name,
-            msgs=self.msgs,
+        status = summary_fields(
+            ok=ok, message=message, values=values, name=status_name(name, topic), hardware_id=name
         )
-        self._diagnostics.publish(diagnostics_message([status], stamp=stamp or self.stamp(), msgs=self.msgs))
+        self._diagnostics.publish(diagnostic_array_cdr([status], stamp=stamp or self.stamp()))
 
     def plan(
         self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
@@ -235,7 +230,7 @@ class PlannerOutputs:
             CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
             for c in result.checks
         ]
-        self._checks.publish(edge_checks_message(records, stamp=stamp, msgs=self.msgs))
+        self._checks.publish(diagnostic_array_cdr(check_statuses(records), stamp=stamp))
 
     def markers(
         self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
