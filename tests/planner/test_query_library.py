@@ -112,3 +112,16 @@ def test_no_connecting_world_gives_no_library(setup: tuple[object, np.ndarray]) 
     assert query_library(none, graph.edges, 0, 40, start_vertex=0, max_paths=5) is None
     with pytest.raises(ProblemError, match="same vertex"):
         library_paths(_search(problem, X), 3, 3, max_paths=5)
+
+
+def test_a_goal_with_more_joins_than_spare_arcs_searches_through_the_first(
+    setup: tuple[object, np.ndarray],
+) -> None:
+    problem, X = setup
+    graph = problem.graph  # type: ignore[attr-defined]
+    search = _search(problem, X)
+    k = search.slots + 5
+    vertices = np.arange(k, dtype=np.int64)
+    goal = Joins(vertices, np.ones(k), graph.num_edges + vertices, np.ones((X.shape[0], k), dtype=bool))
+    paths = library_paths(search, 40 if 40 >= k else k + 1, goal, max_paths=50)
+    assert paths and all(int(p[-1]) < graph.num_edges + search.slots for p in paths)

@@ -89,8 +89,10 @@ def library_paths(
     worlds = search.worlds
     if isinstance(goal, Joins):
         assert goal.free is not None  # a library needs training worlds
-        tree = search.joined_tree(GoalJoins(goal.vertices, goal.lengths, goal.free[worlds]))
-        into_goal = dict(zip(goal.vertices.tolist(), goal.edges.tolist(), strict=True))
+        k = min(goal.vertices.size, search.slots)  # the first (best) joins; any others stay in the graph
+        free = goal.free[worlds][:, :k]
+        tree = search.joined_tree(GoalJoins(goal.vertices[:k], goal.lengths[:k], free))
+        into_goal = dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
     else:
         tree = search.tree(goal)
         into_goal = {}
