@@ -20,7 +20,7 @@ Each bag (one rosbag2 MCAP file, see ``drd_msgs_py.bags``) holds, at these offse
 - 4.0 s: request 2, to another goal: a query no tree was built for (a library and tree made online);
 - 5.0 s: the robot is between two vertices, halfway along an edge of the plan of request 2;
 - 5.5 s: request 3, from there (joined to the graph by a new, checked motion) back to the stored start
-  (arm), or on to the stored goal (helicopter: its lattice only flies forward).
+  (arm), or on to the stored goal (helicopter: flying on).
 
 The world seed is the first (from ``--first-seed``) whose first plan has at least one blocked check
 and on whose plan an added sphere blocks an edge yet leaves a free path; the goal of request 2 is the
@@ -241,9 +241,17 @@ def _reachable(graph: ExplicitGraph, free: npt.NDArray[np.bool_], source: int) -
 
 
 def _tour(
-    scenario: Scenario, session: QuerySession, msgs: RosbagsMessages, *, any_stop: bool = False
+    scenario: Scenario,
+    session: QuerySession,
+    msgs: RosbagsMessages,
+    *,
+    any_stop: bool = False,
+    onward: bool = False,
 ) -> Scenario | None:
-    """Add the moving robot and requests 2 (a new goal) and 3 (home from between two vertices).
+    """Add the moving robot and requests 2 (a new goal) and 3 (from between two vertices).
+
+    Request 3 goes home (the stored start), else on to the stored goal; with ``onward`` (the helicopter,
+    flying on) the other way round, whichever a joining motion reaches first.
 
     The robot stops at the middle vertex of request 1's plan; with ``any_stop``, else at the next nearest
     to the middle with a fitting goal (see :class:`HeliBag`).
@@ -258,7 +266,7 @@ def _tour(
     stops = sorted(range(1, len(path) - 1), key=lambda i: (abs(i - mid), i)) if any_stop else []
     for at in [mid, *(i for i in stops if i != mid)]:
         found = _tour_from(
-            scenario, session, msgs, snapshot, int(path[at]), _reachable(graph, free, path[at])
+            scenario, session, msgs, snapshot, int(path[at]), _reachable(graph, free, path[at]), onward
         )
         if found is not None:
             return found
@@ -272,6 +280,7 @@ def _tour_from(
     snapshot: Any,
     here: int,
     reachable: npt.NDArray[np.bool_],
+    onward: bool,
 ) -> Scenario | None:
     """:func:`_tour` with the robot stopped at vertex ``here``; ``reachable`` (V,): vertices it can reach.
 
@@ -293,11 +302,11 @@ def _tour_from(
         edge = max(inner, key=lambda e: (float(lengths[e]), -inner.index(e)))
         samples = session.edge_states(edge)
         between = samples[len(samples) // 2]
-        # Home (the arm), else on to the stored goal (the helicopter's lattice only flies forward).
+        ends = (int(session.domain.goal), home) if onward else (home, int(session.domain.goal))
         last = next(
             (
                 end
-                for end in (home, int(session.domain.goal))
+                for end in ends
                 if end != goal
                 and (plan := session.plan(snapshot, between, end, seed=PLAN_SEED)).ok
                 and plan.query == "connected"
@@ -379,7 +388,7 @@ def heli_scenario(
                 continue
             scenario = _finish(name, seed, session, frame, messages, edge, msgs)
             if scenario is not None:
-                scenario = _tour(scenario, session, msgs, any_stop=bag.any_stop)
+                scenario = _tour(scenario, session, msgs, any_stop=bag.any_stop, onward=True)
             if scenario is not None:
                 scenario.notes.append(
                     f"sphere r={HELI_SPHERE_RADIUS} m at {np.round(centre, 2).tolist()} (map)"

@@ -281,6 +281,21 @@ def test_sigint_and_sigterm_end_background_started_nodes_at_any_moment_within_2_
     assert not slow, slow
 
 
+def test_a_signal_while_the_node_modules_import_ends_the_process_at_once_with_status_130() -> None:
+    """No exception is raised into an import: one raised inside manifold3d's initialisation aborted (-6)."""
+    script = (
+        "import os, signal\n"
+        "from drd_planner.ros import planner_node\n"
+        "signal.signal(signal.SIGTERM, planner_node._interrupt)\n"
+        "planner_node._IMPORTING[0] = True\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "print('still running')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 130 and "still running" not in done.stdout, done
+    assert "Traceback" not in done.stderr, done.stderr
+
+
 def test_only_the_newest_served_requests_keep_their_map_snapshots(context: Any) -> None:
     node, peer = _node(context), Peer(context)
     with active_planner(context, node, peer) as executor:

@@ -2,13 +2,17 @@
 
 A node started in the background from a shell script inherits SIGINT *ignored*; until rclpy installs
 its handlers (after about a second of imports) such a signal was lost and the node ran on. Here
-SIGINT and SIGTERM are made to interrupt before anything heavy is imported, so a signal at any moment
-of the start ends the process (status 130 before the node runs, 0 once it spins). A signal is also
-recorded, because an import may swallow the KeyboardInterrupt it raises (trimesh's optional imports catch
-``BaseException``): it then ends the process once the imports are done. An import that the interrupt broke
-half-way and that fails on with another error (scipy.ndimage raised a NameError) ends it the same way, and
-so does any error of the start after a signal (rclpy's handler shuts the context down: creating the node
-then fails).
+SIGINT and SIGTERM are handled before anything heavy is imported, so a signal at any moment of the start
+ends the process (status 130 before the node runs, 0 once it spins).
+
+While the node's modules are imported, a signal ends the process at once (``os._exit(130)``): nothing
+is running yet that could lose work, and an exception raised into an import is not safe. A
+KeyboardInterrupt raised inside a compiled extension's initialisation (manifold3d, imported by trimesh,
+builds Python enums while it loads) aborted the interpreter (status -6); other imports swallowed it
+(trimesh's optional imports catch ``BaseException``) or failed on half-way (scipy.ndimage raised a
+NameError). Once the imports are done a signal raises KeyboardInterrupt; it is also recorded, and any
+error of the start after a signal (rclpy's handler shuts the context down: creating the node then fails)
+ends the process with status 130.
 
 Usage::
 
@@ -17,6 +21,7 @@ Usage::
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 from collections.abc import Sequence
@@ -36,13 +41,15 @@ parameters (--ros-args -p NAME:=VALUE, or a YAML file with --params-file):
 """
 
 
-#: Signals received before the node runs. The KeyboardInterrupt a signal raises can be swallowed by a
-#: library's import (trimesh wraps its optional imports in ``except BaseException``), so the signal is also
-#: recorded here and checked once the imports are done.
+#: Signals received after the imports, before the node runs (a KeyboardInterrupt can be lost on the way).
 _RECEIVED: list[int] = []
+#: True while the node's modules are imported: a signal then ends the process at once.
+_IMPORTING: list[bool] = [False]
 
 
 def _interrupt(signum: int, frame: FrameType | None) -> None:
+    if _IMPORTING[0]:
+        os._exit(130)
     _RECEIVED.append(signum)
     raise KeyboardInterrupt
 
@@ -74,9 +81,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 2
         try:
-            from drd_planner.ros.node import main as run_node
-
-            # A signal during the imports whose KeyboardInterrupt an import swallowed ends the start here.
+            _IMPORTING[0] = True
+            try:
+                from drd_planner.ros.node import main as run_node
+            finally:
+                _IMPORTING[0] = False
             status = 130 if _RECEIVED else run_node(args)
         except Exception:
             # After a signal any error of the start is the signal's: an import it broke half-way, or the
