@@ -77,6 +77,18 @@ def test_build_tree_validates_eta_and_kappa_on_random_queries(
     assert given.region_rule == "per_check" and given.trees[0].tree.region_rule == "per_check"
 
 
+def test_build_tree_says_when_eta_1_leaves_the_tree_unused(
+    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 33 item 10: eta 1 means BiSECt from the first check; the output says so and what would help."""
+    argv = ["build-tree", "--gccd", str(d2d1), "--kappa", "none"]
+    assert main([*argv, "--out", str(tmp_path / "one.npz"), "--eta", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert "this query's DiRECt tree is never used" in printed and "more worlds (now " in printed
+    assert main([*argv, "--out", str(tmp_path / "used.npz"), "--eta", "0.2"]) == 0
+    assert "never used" not in capsys.readouterr().out
+
+
 def _one_error_line(err: str) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1, err

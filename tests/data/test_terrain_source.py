@@ -27,7 +27,7 @@ ROWS, COLS, CELL = 60, 80, 30.0
 X0, Y0 = 450_000.0, 4_400_000.0  # the lower-left corner (UTM-like metres)
 
 
-def write_grid(path: Path, cell: float = CELL) -> Path:
+def write_grid(path: Path, cell: float = CELL, origin: tuple[float, float] = (X0, Y0)) -> Path:
     """A ROWS x COLS ESRI ASCII grid of seeded smooth hills (heights 1500-1800 m), rows north to south."""
     rng = np.random.default_rng(5)
     yy, xx = np.mgrid[0:ROWS, 0:COLS]
@@ -42,7 +42,8 @@ def write_grid(path: Path, cell: float = CELL) -> Path:
         )
     )
     header = (
-        f"ncols {COLS}\nnrows {ROWS}\nxllcorner {X0}\nyllcorner {Y0}\ncellsize {cell}\nNODATA_value -9999\n"
+        f"ncols {COLS}\nnrows {ROWS}\nxllcorner {origin[0]}\nyllcorner {origin[1]}\ncellsize {cell}\n"
+        "NODATA_value -9999\n"
     )
     rows = "\n".join(" ".join(f"{v:.2f}" for v in row) for row in heights[::-1])
     path.write_text(header + rows + "\n")
@@ -80,11 +81,23 @@ def test_flags_map_onto_terrain_spec_keys(grid: Path, tmp_path: Path) -> None:
     )
     scaled = terrain_keys(TerrainFile(str(grid), crop="as-is", crop_scale=(12.0, 15.0)), field)
     assert scaled["metres_per_cell"] == [12.0, 15.0] and "site" not in scaled
-    degrees = read_esri_ascii(write_grid(tmp_path / "geo.asc", cell=0.00083))
-    with pytest.raises(
-        DatasetError, match=r"cell size 0.00083 \(degrees\?\); give the metres per cell with --crop-scale"
-    ):
-        terrain_keys(TerrainFile(str(tmp_path / "geo.asc"), crop="as-is"), degrees)
+    # Issue 33 item 11: a geographic grid's cells are not square. At 40 degrees north a cell of 0.00083
+    # degrees spans about 71 m east-west and 92 m north-south: the crop takes both (no more 27 % error).
+    geo = write_grid(tmp_path / "geo.asc", cell=0.00083, origin=(-105.5, 40.0))
+    degrees = read_esri_ascii(geo)
+    at_40 = terrain_keys(TerrainFile(str(geo), site=(-105.45, 40.01), crop="as-is"), degrees)
+    east, north = at_40["metres_per_cell"][0], at_40["metres_per_cell"][0] * at_40["cell_aspect"]
+    assert east == pytest.approx(70.9, abs=0.1) and north == pytest.approx(92.1, abs=0.1)
+    assert at_40["metres_per_cell"][1] == east and at_40["relief"] is None
+    # --crop-scale sets the east-west metres; the aspect still comes from the latitude.
+    scaled_geo = terrain_keys(TerrainFile(str(geo), crop="as-is", crop_scale=(90.0, 90.0)), degrees)
+    assert scaled_geo["metres_per_cell"] == [90.0, 90.0] and scaled_geo["cell_aspect"] > 1.29
+    assert "cell_aspect" not in keys  # a projected grid's cells are square
+    nowhere = read_esri_ascii(
+        write_grid(tmp_path / "nowhere.asc", cell=0.00083)
+    )  # y values 4.4e6: not degrees
+    with pytest.raises(DatasetError, match=r"cell size 0.00083 \(degrees\?\) but its y values"):
+        terrain_keys(TerrainFile(str(tmp_path / "nowhere.asc"), crop="as-is"), nowhere)
 
 
 def test_a_domain_without_a_terrain_model_is_refused(grid: Path) -> None:

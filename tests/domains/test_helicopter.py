@@ -10,6 +10,7 @@ import pytest
 from drd_planner.domains.base import Domain, EdgeChecker, domain_from_spec
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.exceptions import ProblemError
+from drd_planner.geometry.terrain import Heightfield
 
 SMALL = {
     "lattice": {"x_range": [0, 400], "goal": [400, 0], "z_levels": [50, 80], "sample_spacing": 4.0},
@@ -104,3 +105,18 @@ def test_checker_refuses_other_worlds(domain: HelicopterDomain) -> None:
         domain.checker(np.zeros((3, 4)))
     with pytest.raises(ProblemError, match="unknown helicopter world model"):
         domain.make_world("ocean", 0)
+
+
+def test_a_terrain_elsewhere_or_in_another_datum_is_not_the_lattices(domain: HelicopterDomain) -> None:
+    """Issue 33 item 17: the world's own terrain fits; moved off the lattice or raised above it, it does not."""
+    terrain = domain.make_world("wires", 3).terrain
+    assert domain.terrain_mismatch(terrain) is None
+    far = Heightfield(terrain.origin + 20_000.0, terrain.cell_size, terrain.heights)
+    reason = domain.terrain_mismatch(far)
+    assert reason is not None and "do not overlap" in reason and "the prior's lattice x [0, 700] m" in reason
+    above_sea = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1600.0)  # heights above MSL
+    reason = domain.terrain_mismatch(above_sea)
+    assert reason is not None and "below it" in reason and "not above sea level" in reason
+    # Partly over the lattice, partly beyond it: the part over it decides, and it fits.
+    shifted = Heightfield(terrain.origin + np.array([600.0, 0.0]), terrain.cell_size, terrain.heights)
+    assert domain.terrain_mismatch(shifted) is None

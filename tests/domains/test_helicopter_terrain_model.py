@@ -67,3 +67,27 @@ def test_relief_null_keeps_the_grids_own_heights(tmp_path: Path) -> None:
     assert span <= 40.0 + 1e-6  # only shifted (and capped at the pads), never stretched
     with pytest.raises(ProblemError, match="relief"):
         TerrainParams(relief=(0.0, 10.0))
+
+
+def test_cells_longer_north_south_stretch_the_crop_along_y(tmp_path: Path) -> None:
+    """Issue 33 item 11: ``cell_aspect`` 2 makes a source row twice as long, so heights change half as fast in y."""
+    size = 120
+    heights = np.repeat(2.0 * np.arange(size, dtype=np.float64)[:, None], size, axis=1)  # 2 m per row
+    rows = "\n".join(" ".join(f"{v:.3f}" for v in row) for row in heights)
+    path = tmp_path / "ramp.asc"
+    path.write_text(
+        f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii"
+    )
+    frame = WorldFrame((0.0, 300.0), (-100.0, 100.0), 50.0, 25.0, ((0.0, 0.0, 65.0),), 6.0, 40.0)
+    common = {"path": str(path), "metres_per_cell": (10.0, 10.0), "relief": None, "rotation_deg": (0.0, 0.0)}
+    slopes = []
+    for aspect in (1.0, 2.0):
+        params = TerrainParams(**common, cell_aspect=aspect, mirror=0.0, site=(0.5, 0.5), nofly=0)  # type: ignore[arg-type]
+        drawn = TerrainModel().draw(np.random.default_rng(3), params, frame)
+        along_y = np.diff(drawn.terrain.heights, axis=0) / drawn.terrain.cell_size
+        slopes.append(float(np.median(np.abs(along_y))))
+        assert ("cell_aspect" in drawn.info) == (aspect != 1.0)
+    assert slopes[0] == pytest.approx(0.2, rel=1e-6)  # 2 m per 10 m row
+    assert slopes[1] == pytest.approx(0.1, rel=1e-6)  # 2 m per 20 m row
+    with pytest.raises(ProblemError, match="cell_aspect"):
+        TerrainParams(cell_aspect=0.0)

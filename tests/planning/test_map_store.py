@@ -13,13 +13,16 @@ from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.obstacles import obstacle_update
+from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Sphere
+from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.bag_plan import maps_at_request, maps_until
 from drd_planner.planning.map_intake import obstacle_parts
 from drd_planner.planning.map_limits import MapLimits
-from drd_planner.planning.map_store import MapStore
+from drd_planner.planning.map_store import MapStore, terrain_fit_of
 from drd_planner.planning.world_messages import obstacle_markers
 
 
@@ -110,3 +113,19 @@ def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: Ro
     assert store.apply("goal_pose", goal_message(rb, T0, (0.0, 0.0, 0.0)).message) is None
     assert store.apply("robot_description", rb("std_msgs/msg/String", data="<robot/>")) is None
     assert store.robot_description == "<robot/>" and not store.has_robot_loader
+
+
+def test_a_terrain_no_loaded_prior_can_stand_on_is_refused_and_the_maps_are_kept(rb: RosbagsMessages) -> None:
+    """Issue 33 item 17: a terrain 20 km off the helicopter lattice is refused with both extents named."""
+    heli = domain_from_spec("helicopter")
+    store = MapStore(frame_id="map", terrain_fit=terrain_fit_of([heli]))
+    good = store.apply("terrain", terrain_message(rb, T0).message)
+    assert good is not None and good.version == 1
+    far = Heightfield((20_000.0, 20_000.0), 10.0, np.zeros((4, 5)))
+    cloud = cloud_from_heightfield(far, frame_id="map", stamp=(1, 0), msgs=rb)
+    with pytest.raises(DrdError, match=r"not the prior's terrain: the terrain spans x \[20000, 20040\] m"):
+        store.apply("terrain", cloud)
+    assert store.snapshot is good
+    # A prior whose domain has no terrain model takes any terrain, so the pair takes this one.
+    both = MapStore(frame_id="map", terrain_fit=terrain_fit_of([heli, domain_from_spec("planar")]))
+    assert both.apply("terrain", cloud) is not None

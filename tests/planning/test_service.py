@@ -16,8 +16,12 @@ import numpy as np
 import pytest
 from conftest import REPO_ROOT
 
-from drd_msgs_py.bags import BagMessage, bag_requests, read_bag, topic_base
+from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, topic_base
 from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import RosbagsMessages
+from drd_msgs_py.terrain import cloud_from_heightfield
+from drd_planner.exceptions import DrdError
+from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request
 from drd_planner.planning.map_state import MapSnapshot
@@ -187,3 +191,30 @@ def test_a_plan_after_a_refused_map_says_so(messages: list[BagMessage]) -> None:
     service.take_map("obstacles", obstacles.message)  # a newer map accepted: the refusal is history
     service.plan_now(goal, None)
     assert "newer_map_refused" not in out.records[-1].request
+
+
+def test_a_terrain_above_every_vertex_is_refused_and_the_next_plan_says_so(
+    messages: list[BagMessage],
+) -> None:
+    """Issue 33 item 17: the bag's terrain raised to heights above sea level is not the prior's ground."""
+    out = Recorder()
+    service = _service(out)
+    first_request = bag_requests(messages)[0].position
+    for m in messages[:first_request]:
+        _feed(service, m)
+    goal = read_goal("goal_pose", messages[first_request].message, service.sessions, "map")
+    terrain = service.snapshot.terrain
+    assert terrain is not None
+    raised = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1600.0)
+    cloud = cloud_from_heightfield(
+        raised, frame_id="map", stamp=(1, 0), msgs=RosbagsMessages(jazzy_typestore())
+    )
+    used = service.snapshot.version
+    with pytest.raises(
+        DrdError, match="not the prior's terrain: every lattice vertex over the terrain lies below"
+    ):
+        service.take_map("terrain", cloud)
+    service.plan_now(goal, None)
+    record = out.records[-1]
+    assert record.result.ok and record.snapshot.version == used
+    assert record.request["newer_map_refused"].startswith("terrain refused: not the prior's terrain")

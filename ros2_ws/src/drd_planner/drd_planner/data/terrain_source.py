@@ -12,11 +12,16 @@ flag                  spec key (``models.terrain``)
                       (x0, y0) the centre of its lower-left cell)
 ``--site-jitter M``   ``site_jitter``: metres per axis a crop's centre may move from the site
 ``--crop as-is``      ``rotation_deg`` [0, 0], ``mirror`` 0, ``metres_per_cell`` [cell, cell] and ``relief``
-                      null: north up, not mirrored, one source cell = the grid's own cell size, the grid's own
-                      heights (only shifted to the drawn open fraction; the default ``random`` keeps the model's
-                      random rotation, mirror, scale and relief)
-``--crop-scale LO,HI`` ``metres_per_cell``: metres per source cell, drawn per world
+                      null: north up, not mirrored, one source cell = the grid's own cell size (a geographic
+                      grid's: its east-west metres at the site's latitude), the grid's own heights (only shifted
+                      to the drawn open fraction; the default ``random`` keeps the model's random rotation,
+                      mirror, scale and relief)
+``--crop-scale LO,HI`` ``metres_per_cell``: metres per source cell east-west, drawn per world
 ===================== ===================================================================================
+
+A geographic grid (cell size below 0.01: degrees of longitude and latitude) also sets ``cell_aspect``, how
+many times longer its cells are north-south than east-west at the site's latitude (the grid's middle without
+``--site``): at 40 degrees a 3-arc-second cell spans about 71 m east-west and 93 m north-south.
 
 The flags win over the same keys in ``--domain-spec``. The grid is hashed in the building process and checked
 again in every worker before it draws a world.
@@ -34,16 +39,36 @@ from drd_planner.data.world_sources import (
     records_from_json,
 )
 from drd_planner.domains.base import Domain, EdgeChecker
+from drd_planner.domains.helicopter_corridors_model import metres_per_degree
 from drd_planner.exceptions import DatasetError, GeometryError
 from drd_planner.geometry.terrain import Heightfield, read_esri_ascii
 
-__all__ = ["WORLD_MODEL", "TerrainWorlds", "open_worlds", "resolve", "site_fractions", "terrain_keys"]
+__all__ = [
+    "WORLD_MODEL",
+    "TerrainWorlds",
+    "geographic_cell",
+    "open_worlds",
+    "resolve",
+    "site_fractions",
+    "terrain_keys",
+]
 
 #: The world model a terrain file feeds (and the dataset's ``world_model`` field).
 WORLD_MODEL = TerrainFile.world_model
 
-#: Below this cell size a grid is taken to be geographic (degrees), where ``--crop as-is`` has no metre scale.
+#: Below this cell size a grid is taken to be geographic (degrees of longitude and latitude).
 _GEOGRAPHIC_CELL = 0.01
+
+
+def geographic_cell(grid: Heightfield, latitude_deg: float) -> tuple[float, float] | None:
+    """(east-west metres, north-south over east-west) of a geographic grid's cell at ``latitude_deg``.
+
+    None for a projected grid (cell size 0.01 or more: metres) or a latitude outside (-90, 90) degrees.
+    """
+    if float(grid.cell_size) >= _GEOGRAPHIC_CELL or not -90.0 < latitude_deg < 90.0:
+        return None
+    east, north = metres_per_degree(latitude_deg)
+    return float(grid.cell_size) * east, north / east
 
 
 def site_fractions(grid: Heightfield, site: tuple[float, float], path: str) -> list[float]:
@@ -68,20 +93,25 @@ def terrain_keys(request: TerrainFile, grid: Heightfield) -> dict[str, Any]:
     """The ``models.terrain`` keys the flags of ``request`` set (see the module docstring).
 
     Raises:
-        DatasetError: a site outside the grid, or ``--crop as-is`` on a grid whose cell size is not in metres.
+        DatasetError: a site outside the grid, or a geographic grid whose latitudes are not latitudes.
     """
     keys: dict[str, Any] = {"path": request.path}
     if request.site is not None:
         keys["site"] = site_fractions(grid, request.site, request.path)
     if request.site_jitter is not None:
         keys["site_jitter"] = float(request.site_jitter)
-    if request.crop == "as-is":
-        cell = float(grid.cell_size)
-        if cell < _GEOGRAPHIC_CELL and request.crop_scale is None:
+    _x0, _x1, y0, y1 = grid.extent
+    latitude = request.site[1] if request.site is not None else 0.5 * (y0 + y1)
+    geographic = geographic_cell(grid, latitude)
+    if float(grid.cell_size) < _GEOGRAPHIC_CELL:
+        if geographic is None:
             raise DatasetError(
-                f"--crop as-is: {request.path} has cell size {cell:g} (degrees?); give the metres per cell "
-                "with --crop-scale M"
+                f"--terrain: {request.path} has cell size {grid.cell_size:g} (degrees?) but its y values "
+                f"[{y0:g}, {y1:g}] are not latitudes in (-90, 90)"
             )
+        keys["cell_aspect"] = geographic[1]
+    if request.crop == "as-is":
+        cell = float(grid.cell_size) if geographic is None else geographic[0]
         keys.update(
             {"rotation_deg": [0.0, 0.0], "mirror": 0.0, "metres_per_cell": [cell, cell], "relief": None}
         )
@@ -108,7 +138,7 @@ def resolve(
 
     Raises:
         DatasetError: no ``terrain`` world model in the domain, no ``num_worlds``, an unreadable grid, a site
-            outside it, or ``--crop as-is`` on a geographic grid.
+            outside it, or a grid in degrees whose y values are not latitudes.
     """
     if WORLD_MODEL not in domain.world_models:
         raise DatasetError(

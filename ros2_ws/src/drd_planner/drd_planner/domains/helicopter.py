@@ -43,6 +43,7 @@ from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import ProblemError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
+from drd_planner.geometry.terrain import Heightfield
 
 __all__ = ["HelicopterDomain", "HelicopterParams"]
 
@@ -257,6 +258,37 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
             PlanningError: the position is not three finite numbers, or the yaw is not finite.
         """
         return state_from_pose(xyz, yaw)
+
+    def terrain_mismatch(self, terrain: Heightfield) -> str | None:
+        """Why ``terrain`` cannot be this lattice's ground, or None when it can.
+
+        Heights are taken as they come: metres above the lattice's own z = 0 (the datum its ``z_levels``
+        are given in), x and y in the planning frame whose origin is the lattice's. A terrain whose grid
+        does not reach the lattice's horizontal extent, or that lies above every vertex it reaches (its
+        heights in another datum, such as above sea level), is not this prior's.
+        """
+        states = np.asarray(self.graph.vertex_states, dtype=np.float64)
+        lo, hi = states[:, :3].min(axis=0), states[:, :3].max(axis=0)
+        x0, x1, y0, y1 = terrain.extent
+        where = (
+            f"the terrain spans x [{x0:.0f}, {x1:.0f}] m, y [{y0:.0f}, {y1:.0f}] m, the prior's lattice "
+            f"x [{lo[0]:.0f}, {hi[0]:.0f}] m, y [{lo[1]:.0f}, {hi[1]:.0f}] m"
+        )
+        if x1 < lo[0] or x0 > hi[0] or y1 < lo[1] or y0 > hi[1]:
+            return (
+                f"{where}: they do not overlap (terrain x, y are metres in the planning frame, whose origin "
+                "is the lattice's)"
+            )
+        ground = terrain.height_at(states[:, :2])
+        known = np.isfinite(ground)
+        if known.any() and bool(np.all(ground[known] > states[known, 2])):
+            return (
+                f"every lattice vertex over the terrain lies below it (terrain heights there "
+                f"{float(ground[known].min()):.0f} to {float(ground[known].max()):.0f} m, the lattice's "
+                f"altitudes {lo[2]:.0f} to {hi[2]:.0f} m): terrain heights are metres above the lattice's "
+                "z = 0, not above sea level or another datum"
+            )
+        return None
 
     def scene_checker(self, scene: Scene, robot: RobotModel | None = None) -> HelicopterChecker:
         """The edge checker of a ready scene (``robot`` is ignored: no arm)."""

@@ -3,8 +3,9 @@
 The elevation model (ESRI ASCII grid at ``path``; default
 :func:`~drd_planner.domains.helicopter_world_params.default_terrain_path`; any grid works, its own cell size is
 ignored) is cropped at a random place, rotated by a random angle (and mirrored with probability ``mirror``),
-resampled at ``metres_per_cell`` metres per source cell (compressing the real ~90 m cells so a corridor holds
-ridges and valleys), scaled so its 2-98 % height range spans ``relief`` metres (``relief`` null: the grid's
+resampled at ``metres_per_cell`` metres per source cell east-west and ``cell_aspect`` times that north-south
+(compressing the real ~90 m cells so a corridor holds ridges and valleys; a geographic grid's cells are longer
+north-south than east-west), scaled so its 2-98 % height range spans ``relief`` metres (``relief`` null: the grid's
 own heights, not scaled), and shifted so a fraction
 ``open_fraction`` of it lies at least the vehicle clearance below the start altitude. Within
 ``keep_clear_radius`` of the start and goal it is capped ``ground_gap`` below that (a smooth pad), so both are
@@ -90,18 +91,26 @@ def _bilinear_index(grid: FloatArray, fi: FloatArray, fj: FloatArray) -> FloatAr
 
 
 def _crop_centre(
-    rng: np.random.Generator, p: TerrainParams, shape: tuple[int, int], mpc: float, radius_cells: float
+    rng: np.random.Generator,
+    p: TerrainParams,
+    shape: tuple[int, int],
+    mpc: float,
+    radius: tuple[float, float],
 ) -> tuple[float, float] | None:
-    """The crop's centre (row, col) in fractional grid cells, or None when the crop leaves the grid."""
+    """The crop's centre (row, col) in fractional grid cells, or None when the crop leaves the grid.
+
+    ``radius``: the crop's half diagonal in (rows, cols) of source cells; ``mpc``: metres per cell east-west.
+    """
     rows, cols = shape
+    radius_rows, radius_cols = radius
     if p.site is None:
-        ci = rng.uniform(radius_cells, rows - 1 - radius_cells)
-        cj = rng.uniform(radius_cells, cols - 1 - radius_cells)
+        ci = rng.uniform(radius_rows, rows - 1 - radius_rows)
+        cj = rng.uniform(radius_cols, cols - 1 - radius_cols)
         return ci, cj
-    jitter_cells = p.site_jitter / mpc
-    ci = p.site[0] * (rows - 1) + rng.uniform(-jitter_cells, jitter_cells)
-    cj = p.site[1] * (cols - 1) + rng.uniform(-jitter_cells, jitter_cells)
-    inside = radius_cells <= ci <= rows - 1 - radius_cells and radius_cells <= cj <= cols - 1 - radius_cells
+    jitter_rows, jitter_cols = p.site_jitter / (mpc * p.cell_aspect), p.site_jitter / mpc
+    ci = p.site[0] * (rows - 1) + rng.uniform(-jitter_rows, jitter_rows)
+    cj = p.site[1] * (cols - 1) + rng.uniform(-jitter_cols, jitter_cols)
+    inside = radius_rows <= ci <= rows - 1 - radius_rows and radius_cols <= cj <= cols - 1 - radius_cols
     return (ci, cj) if inside else None
 
 
@@ -120,15 +129,23 @@ class _Window:
 
 
 def _sample_crop(
-    grid: FloatArray, window: _Window, centre: tuple[float, float], mpc: float, turn: tuple[float, bool]
+    grid: FloatArray,
+    window: _Window,
+    centre: tuple[float, float],
+    cell: tuple[float, float],
+    turn: tuple[float, bool],
 ) -> FloatArray:
-    """Source heights on the window, rotated by ``turn`` = (theta rad, mirrored) about the crop ``centre``."""
+    """Source heights on the window, rotated by ``turn`` = (theta rad, mirrored) about the crop ``centre``.
+
+    ``cell``: (metres per cell east-west, north-south over east-west) of the source grid.
+    """
     theta, flip = turn
+    mpc, aspect = cell
     dx, dy = (window.gx - window.centre[0]) / mpc, (window.gy - window.centre[1]) / mpc
     if flip:
         dx = -dx
     c, s = math.cos(theta), math.sin(theta)
-    return _bilinear_index(grid, centre[0] + s * dx + c * dy, centre[1] + c * dx - s * dy)
+    return _bilinear_index(grid, centre[0] + (s * dx + c * dy) / aspect, centre[1] + c * dx - s * dy)
 
 
 def _scale_and_shift(
@@ -170,15 +187,15 @@ class TerrainModel:
         window = _Window(frame)
         for _attempt in range(p.max_tries):
             mpc = draw_uniform(rng, p.metres_per_cell)
-            radius_cells = window.half_diag / mpc
-            if 2.0 * radius_cells > min(rows, cols) - 1:
+            radius = (window.half_diag / (mpc * p.cell_aspect), window.half_diag / mpc)
+            if 2.0 * radius[0] > rows - 1 or 2.0 * radius[1] > cols - 1:
                 continue
-            centre = _crop_centre(rng, p, (rows, cols), mpc, radius_cells)
+            centre = _crop_centre(rng, p, (rows, cols), mpc, radius)
             if centre is None:
                 continue
             theta = math.radians(draw_uniform(rng, p.rotation_deg))
             flip = bool(rng.random() < p.mirror)
-            heights = _sample_crop(grid, window, centre, mpc, (theta, flip))
+            heights = _sample_crop(grid, window, centre, (mpc, p.cell_aspect), (theta, flip))
             if np.isnan(heights).any():
                 continue
             heights, drawn = _scale_and_shift(rng, p, heights, window)
@@ -190,6 +207,8 @@ class TerrainModel:
                 "flipped": flip,
                 **drawn,
             }
+            if p.cell_aspect != 1.0:
+                info["cell_aspect"] = p.cell_aspect
             return ModelDraw(frame.heightfield(heights), (), (), info)
         raise ProblemError(
             f"terrain grid {path} ({rows} x {cols} cells) has no NaN-free window for a "

@@ -316,7 +316,11 @@ class TerrainParams(NoFlyParams):
 
     Attributes:
         path: the ESRI ASCII elevation grid to crop (file); null: the shared Front Range grid.
-        metres_per_cell: [lo, hi] metres one source grid cell spans after resampling (m).
+        metres_per_cell: [lo, hi] metres one source grid cell spans east-west (along a row) after resampling
+            (m).
+        cell_aspect: how many times longer a source cell is north-south than east-west (ratio): 1 for a
+            projected grid; a geographic grid's cells at latitude phi are about 1 / cos(phi) as long
+            north-south (``drd build-dataset --terrain`` sets it from the site's latitude).
         relief: [lo, hi] height span of the crop's 2-98 % height range after scaling (m); null: the grid's own
             heights, not scaled (only shifted to the open fraction).
         open_fraction: [lo, hi] share of the crop lying at least the vehicle clearance below the start
@@ -333,6 +337,7 @@ class TerrainParams(NoFlyParams):
 
     path: str | None = None
     metres_per_cell: Range = (15.0, 40.0)
+    cell_aspect: float = 1.0
     relief: Range | None = (80.0, 200.0)
     open_fraction: Range = (0.35, 0.85)
     ground_gap: Range = (0.0, 25.0)
@@ -361,6 +366,7 @@ class TerrainParams(NoFlyParams):
         _bounded(self, "mirror", 0.0, 1.0)
         _ranges(self, ("rotation_deg",))
         _ranges(self, ("metres_per_cell",), low=1e-9)
+        _bounded(self, "cell_aspect", 0.1, 10.0)
         if self.relief is not None:
             _ranges(self, ("relief",), low=1e-9)
         _ranges(self, ("ground_gap",))

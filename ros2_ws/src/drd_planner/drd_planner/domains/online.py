@@ -26,6 +26,7 @@ from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.exceptions import PlanningError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
+from drd_planner.geometry.terrain import Heightfield
 
 __all__ = [
     "BOX_SLACK",
@@ -137,6 +138,10 @@ class OnlineDomain(Domain[W], Protocol[W]):
         """Turns a ``robot_description`` URDF into an arm model for snapshots (None: no arm)."""
         ...
 
+    def terrain_mismatch(self, terrain: Heightfield) -> str | None:
+        """Why a terrain map cannot be this prior's ground (wrong place or datum), or None when it can be."""
+        ...
+
     def sweep_robot(self, robot: RobotModel | None) -> RobotModel | None:
         """The arm model a sweep must use for a snapshot's ``robot`` (None: the domain's own)."""
         ...
@@ -215,6 +220,10 @@ class OnlineDefaults(ABC):
 
     def robot_loader(self) -> Callable[[str], RobotModel] | None:
         """None: no arm."""
+        return None
+
+    def terrain_mismatch(self, terrain: Heightfield) -> str | None:
+        """None: a domain without a terrain model can use any terrain (it does not check against it)."""
         return None
 
     def state_from_position(self, xyz: npt.ArrayLike, yaw: float) -> FloatArray:

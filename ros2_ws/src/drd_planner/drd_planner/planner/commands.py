@@ -22,7 +22,7 @@ from drd_planner.core.worlds import WorldDatabase
 from drd_planner.exceptions import DrdError
 from drd_planner.planner.endpoints import EndpointResolver
 from drd_planner.planner.planner import Planner
-from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
+from drd_planner.planner.prior import LeafSetting, QueryTree, WorldPrior, prior_from_problem
 from drd_planner.planner.prior_file import load_prior, save_prior
 from drd_planner.planner.query_library import query_library
 from drd_planner.planner.result import PlanResult
@@ -159,6 +159,8 @@ def build_prior(
                 "eta": setting.note,
             },
         )
+    if not getattr(args, "prior", None):
+        lines += unused_tree_note(prior.leaf_for(own), prior.num_worlds)
     trees = list(prior.trees)
     for query in args.query or ():
         start, goal = resolve_query(prior, query)
@@ -174,7 +176,29 @@ def build_prior(
         )
         lines += ["  " + line for line in note.splitlines()]
         prior = dataclasses.replace(prior, trees=tuple(trees))
+        lines += unused_tree_note(prior.leaf_for(qt), prior.num_worlds)
     return prior, lines
+
+
+def unused_tree_note(leaf: LeafSetting, num_worlds: int) -> list[str]:
+    """A note when a query's validated eta is 1: its DiRECt tree is then never used (BiSECt from check 1).
+
+    Args:
+        leaf: the eta and kappa the query plans with (``WorldPrior.leaf_for``).
+        num_worlds: the prior's training worlds.
+
+    Returns:
+        No line when the tree is used (eta < 1), else the note's lines.
+    """
+    if leaf.eta < 1.0:
+        return []
+    return [
+        "  note: validation chose eta 1, so this query's DiRECt tree is never used: BiSECt chooses every check "
+        "(no eta made the validation episodes need fewer checks).",
+        f"  A tree pays when its first checks tell the training worlds apart: more worlds (now {num_worlds}; "
+        "--worlds), a longer query across the map (--query START,GOAL) whose paths cross what varies "
+        "between worlds, or a world model with more uncertainty where the paths run.",
+    ]
 
 
 def cmd_build_tree(

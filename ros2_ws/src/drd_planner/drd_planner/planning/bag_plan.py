@@ -19,7 +19,7 @@ from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader
+from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader, TerrainFit, terrain_fit_of
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
@@ -61,10 +61,15 @@ class BagMaps:
 
 
 def _apply_maps(
-    messages: Sequence[BagMessage], *, frame_id: str, margin: float, robot_loader: RobotLoader | None
+    messages: Sequence[BagMessage],
+    *,
+    frame_id: str,
+    margin: float,
+    robot_loader: RobotLoader | None,
+    terrain_fit: TerrainFit | None,
 ) -> BagMaps:
     """The maps after the map messages of ``messages``, applied by a :class:`MapStore` as the node does."""
-    store = MapStore(frame_id=frame_id, margin=margin, robot_loader=robot_loader)
+    store = MapStore(frame_id=frame_id, margin=margin, robot_loader=robot_loader, terrain_fit=terrain_fit)
     refused: list[str] = []
     applied = 0
     for m in messages:
@@ -87,6 +92,7 @@ def maps_until(
     frame_id: str,
     margin: float,
     robot_loader: RobotLoader | None = None,
+    terrain_fit: TerrainFit | None = None,
 ) -> BagMaps:
     """The maps after every map message at or before ``time_ns`` (time-ordered ``messages``).
 
@@ -97,9 +103,12 @@ def maps_until(
         margin: collision margin of the snapshot (metres; the session's ``margin``).
         robot_loader: turns a ``robot_description`` URDF into the snapshot's robot (a session's
             ``robot_loader``); None keeps only the text.
+        terrain_fit: refuses a terrain that cannot be the prior's (:func:`~drd_planner.planning.map_store.terrain_fit_of`).
     """
     upto = [m for m in messages if m.time_ns <= time_ns]
-    return _apply_maps(upto, frame_id=frame_id, margin=margin, robot_loader=robot_loader)
+    return _apply_maps(
+        upto, frame_id=frame_id, margin=margin, robot_loader=robot_loader, terrain_fit=terrain_fit
+    )
 
 
 def maps_at_request(
@@ -109,6 +118,7 @@ def maps_at_request(
     frame_id: str,
     margin: float,
     robot_loader: RobotLoader | None = None,
+    terrain_fit: TerrainFit | None = None,
 ) -> tuple[BagMaps, BagRequest]:
     """The maps in force when the ``index``-th (0-based) request arrives, and that request.
 
@@ -119,7 +129,11 @@ def maps_at_request(
     """
     request = request_at(messages, index)
     maps = _apply_maps(
-        messages[: request.position], frame_id=frame_id, margin=margin, robot_loader=robot_loader
+        messages[: request.position],
+        frame_id=frame_id,
+        margin=margin,
+        robot_loader=robot_loader,
+        terrain_fit=terrain_fit,
     )
     return maps, request
 
@@ -200,7 +214,12 @@ def plan_bag_request(
         PlanningError: no robot state before the request, or no maps yet.
     """
     maps, request = maps_at_request(
-        messages, index, frame_id=frame, margin=session.margin, robot_loader=session.robot_loader
+        messages,
+        index,
+        frame_id=frame,
+        margin=session.margin,
+        robot_loader=session.robot_loader,
+        terrain_fit=terrain_fit_of([session.domain]),
     )
     goal = request_goal(session, request, frame)
     state, notes = robot_state_at(session, messages[: request.position], request.time_ns, frame)

@@ -34,7 +34,7 @@ from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.domains.online import OnlineDomain
 from drd_planner.exceptions import DatasetError, DrdError
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.map_store import MAP_SOURCES, MapStore
+from drd_planner.planning.map_store import MAP_SOURCES, MapStore, terrain_fit_of
 
 __all__ = [
     "DEFAULT_FRAME",
@@ -92,7 +92,12 @@ def bag_snapshots(record: FileRecord, *, frame: str, domain: OnlineDomain[Any]) 
         messages = read_bag(record.path)
     except MessageError as exc:
         raise DatasetError(str(exc)) from exc
-    store = MapStore(frame_id=frame, margin=domain.margin, robot_loader=domain.robot_loader())
+    store = MapStore(
+        frame_id=frame,
+        margin=domain.margin,
+        robot_loader=domain.robot_loader(),
+        terrain_fit=terrain_fit_of([domain]),
+    )
     out: list[BagSnapshot] = []
     for m in messages:
         base = topic_base(m.topic)

@@ -7,7 +7,9 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   markers become collision parts (:mod:`~drd_planner.planning.map_intake`), and the update is applied to the
   obstacle map (ADD replaces ``ns/id``, DELETE removes it, DELETEALL clears); obstacles the update does not
   touch keep their parts objects, so a snapshot's scene rebuilds only what changed;
-- ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits);
+- ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
+  unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in the planning frame, or
+  above every vertex: heights in another datum);
 - ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
   (an arm prior), else the text is only kept.
 
@@ -18,20 +20,47 @@ why) and leaves the maps as they were. Every snapshot of one store shares the st
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.topics import topic_base
+from drd_planner.domains.online import OnlineDomain
+from drd_planner.exceptions import DrdError
 from drd_planner.geometry.robot import RobotModel
+from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot, Parts
 
-__all__ = ["MAP_SOURCES", "MapStore", "RobotLoader"]
+__all__ = ["MAP_SOURCES", "MapStore", "RobotLoader", "TerrainFit", "terrain_fit_of"]
 
 #: Turns a ``robot_description`` URDF into an arm model (limits applied by whoever made it).
 RobotLoader = Callable[[str], RobotModel]
+#: Why a terrain cannot be the loaded priors' ground, or None when it can be.
+TerrainFit = Callable[[Heightfield], str | None]
+
+
+def terrain_fit_of(domains: Sequence[OnlineDomain[Any]]) -> TerrainFit:
+    """The fit of a terrain to the loaded priors: refused only when every prior's domain says why not.
+
+    Args:
+        domains: the loaded priors' domains (:meth:`OnlineDomain.terrain_mismatch`; an arm's takes any).
+    """
+
+    def fit(terrain: Heightfield) -> str | None:
+        reasons = [domain.terrain_mismatch(terrain) for domain in domains]
+        if not reasons or any(reason is None for reason in reasons):
+            return None
+        return (
+            "; ".join(f"prior {i}: {reason}" for i, reason in enumerate(reasons))
+            if len(reasons) > 1
+            else reasons[0]
+        )
+
+    return fit
+
+
 #: The map topics (base names) a store applies.
 MAP_SOURCES = ("obstacles", "terrain", "robot_description")
 
@@ -44,6 +73,7 @@ class MapStore:
         margin: collision margin of the snapshots' scenes, metres.
         limits: size limits of map messages, and how unknown terrain counts.
         robot_loader: turns a ``robot_description`` into the snapshot's arm; None: the text is only kept.
+        terrain_fit: why a terrain is not the priors' ground (:func:`terrain_fit_of`); None: any terrain is taken.
     """
 
     def __init__(
@@ -53,10 +83,12 @@ class MapStore:
         margin: float = 0.0,
         limits: MapLimits = MapLimits.DEFAULT,
         robot_loader: RobotLoader | None = None,
+        terrain_fit: TerrainFit | None = None,
     ) -> None:
         self.frame_id = frame_id
         self.limits = limits
         self._robot_loader = robot_loader
+        self._terrain_fit = terrain_fit
         self._snapshot = MapSnapshot(0, margin=margin)
         self._obstacles: dict[str, Obstacle] = {}
         self._parts: dict[str, Parts] = {}
@@ -115,8 +147,11 @@ class MapStore:
         return self._snapshot
 
     def apply_terrain(self, msg: Any) -> MapSnapshot:
-        """Apply a terrain cloud; the new snapshot."""
+        """Apply a terrain cloud; the new snapshot (DrdError: no loaded prior can take it as its ground)."""
         terrain = terrain_from_cloud(msg, frame_id=self.frame_id, limits=self.limits)
+        mismatch = None if self._terrain_fit is None else self._terrain_fit(terrain)
+        if mismatch is not None:
+            raise DrdError(f"not the prior's terrain: {mismatch}")
         self._snapshot = self._snapshot.with_terrain(terrain)
         return self._snapshot
 

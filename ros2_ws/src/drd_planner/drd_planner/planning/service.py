@@ -36,7 +36,7 @@ from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.map_store import MapStore, RobotLoader
+from drd_planner.planning.map_store import MapStore, RobotLoader, terrain_fit_of
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.replan import RecheckResult, recheck_plan
 from drd_planner.planning.requests import (
@@ -207,6 +207,7 @@ class PlannerService:
             margin=margin,
             limits=limits,
             robot_loader=robot_loader_of(self._sessions, limits),
+            terrain_fit=terrain_fit_of([s.domain for s in self._sessions]),
         )
         self._snapshot = self.maps.snapshot
         self._robot_states: dict[bool, FloatArray] = {}  # is_arm -> the latest robot state
