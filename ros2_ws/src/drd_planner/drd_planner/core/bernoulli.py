@@ -15,15 +15,28 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.region_rule import ProofOrder, region_scores
+from drd_planner.core.path_rows import library_rows
+from drd_planner.core.proof_order import ProofOrder
+from drd_planner.core.region_rule import check_region_rule
 from drd_planner.exceptions import ProblemError
 
 #: theta is clamped into [THETA_EPS, 1 - THETA_EPS] so that no untested path has p = 1 or 0.
 THETA_EPS = 1e-9
 
 
+def _probabilities(values: FloatArray) -> bool:
+    """True when every value lies in [0, 1] (NaN does not)."""
+    return bool(values.min(initial=0.0) >= 0.0 and values.max(initial=1.0) <= 1.0)
+
+
 class BernoulliLibraryState:
     """Clamped bias and per-path log p_i for one episode.
+
+    An outcome updates only the paths through its edge: log p_i loses the edge's log theta (free), or
+    the paths die (blocked). A new bias (:meth:`set_theta`, the posterior leaf) updates the bias of the
+    edges whose value changed and makes log p_i of every path the sum of log theta over its untested
+    edges again, as a state built from scratch holds it. The proof cost of the ``"per_check"`` region
+    rule is kept the same way (:class:`~drd_planner.core.proof_order.ProofOrder`).
 
     Args:
         library: the m paths.
@@ -39,21 +52,30 @@ class BernoulliLibraryState:
         observations: Mapping[int, bool] | None = None,
     ) -> None:
         th = np.asarray(theta, dtype=np.float64).ravel()
-        if th.shape != (library.num_edges,) or not np.all((th >= 0) & (th <= 1)):
+        if th.shape != (library.num_edges,) or not _probabilities(th):
             raise ProblemError(f"theta must be ({library.num_edges},) values in [0, 1]")
-        th = np.clip(th, THETA_EPS, 1.0 - THETA_EPS)
         self._library = library
         self._csc = library.incidence_csc
         self._csr = library.incidence
-        self._theta = th
-        self._log_theta = np.log(th)
-        self._log_1m_theta = np.log1p(-th)
+        self._rows = library_rows(library)
+        lib = self._rows.edges
+        self._theta = np.minimum(np.maximum(th, THETA_EPS), 1.0 - THETA_EPS)
+        # log theta and log(1 - theta) of the library edges (no path reads the others: 0 there).
+        self._log_theta = np.zeros(th.size)
+        self._log_theta[lib] = np.log(self._theta[lib])
+        self._log_1m_theta = np.zeros(th.size)
+        self._log_1m_theta[lib] = np.log1p(-self._theta[lib])
+        self._untested_log_theta = self._log_theta.copy()  # 0 once an edge is tested
         self._proof_order: ProofOrder | None = None
         self._tested = np.zeros(library.num_edges, dtype=bool)
         self._alive = np.ones(library.num_paths, dtype=bool)
+        self._num_alive = library.num_paths
+        self._num_proven = 0  # alive paths with every edge checked free
         self._remaining = np.diff(self._csr.indptr).astype(np.int64)
         self._logp = np.asarray(self._csr @ self._log_theta, dtype=np.float64)
+        self._differenced = False  # some log p_i was updated by difference since the last sum
         self._alive_through = np.diff(self._csc.indptr).astype(np.int64)
+        self._through: dict[int, IntArray] = {}  # edge -> its alive paths when last asked
         for edge, free in (observations or {}).items():
             self.observe(edge, free)
 
@@ -69,23 +91,24 @@ class BernoulliLibraryState:
 
     def solved(self) -> bool:
         """True when some path is proven free or every path is dead."""
-        return not self._alive.any() or bool(np.any(self._alive & (self._remaining == 0)))
+        return self._num_alive == 0 or self._num_proven > 0
 
     def most_probable_path(self) -> int:
         """i* = argmax over alive paths of p_i (first index on ties): the MaxProbReg path."""
-        return int(np.argmax(np.where(self._alive, self._logp, -np.inf)))
+        return int(np.where(self._alive, self._logp, -np.inf).argmax())
 
     def region_path(self, rule: str, edge_costs: FloatArray) -> int:
         """The alive path the region rule ``rule`` picks (:mod:`drd_planner.core.region_rule`).
 
-        ``"probability"`` is :meth:`most_probable_path`; ``"per_check"`` ranks by p_i per expected check.
+        ``"probability"`` is :meth:`most_probable_path`; ``"per_check"`` ranks by p_i per expected check
+        (:class:`~drd_planner.core.proof_order.ProofOrder`, built on first use with ``edge_costs``).
         """
-        if rule == "probability":
+        if check_region_rule(rule) == "probability":
             return self.most_probable_path()
-        if self._proof_order is None:  # sorted once per bias
-            self._proof_order = ProofOrder(self._csr.indptr, self._csr.indices, self._theta, edge_costs)
-        costs = self._proof_order.costs(self._tested, self._alive)
-        return int(np.argmax(region_scores(rule, self.log_path_probability, costs)))
+        if self._proof_order is None:
+            self._proof_order = ProofOrder(self._rows, self._theta, edge_costs, checked=self._tested)
+        alive = np.flatnonzero(self._alive)
+        return self._proof_order.best_path(self._logp[alive], alive)
 
     def untested_edges_of(self, path: int) -> IntArray:
         """Sorted untested edges of ``path``."""
@@ -104,42 +127,69 @@ class BernoulliLibraryState:
             paths: the alive path of each entry (increasing within a candidate).
         """
         cand = np.asarray(candidates, dtype=np.int64)
-        starts = self._csc.indptr[cand]
-        lengths = self._csc.indptr[cand + 1] - starts
-        seg = np.repeat(np.arange(cand.size), lengths)
-        offsets = np.arange(seg.size) - np.repeat(np.cumsum(lengths) - lengths, lengths)
-        paths = self._csc.indices[np.repeat(starts, lengths) + offsets].astype(np.int64)
-        keep = self._alive[paths]
-        return seg[keep], paths[keep]
+        if cand.size == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        paths = np.concatenate([self._alive_paths_through(e) for e in cand.tolist()])
+        return np.arange(cand.size).repeat(self._alive_through[cand]), paths
 
-    def set_theta(self, theta: npt.ArrayLike) -> None:
-        """Replace the bias of the untested edges and recompute every path's log p_i.
+    def _alive_paths_through(self, edge: int) -> IntArray:
+        """The alive paths through ``edge``, ascending (kept per edge until one of them dies)."""
+        paths = self._through.get(edge)
+        if paths is None or paths.size != self._alive_through[edge]:  # alive paths only ever die
+            column = self._csc.indices[self._csc.indptr[edge] : self._csc.indptr[edge + 1]]
+            paths = np.asarray(column[self._alive[column]], dtype=np.int64)
+            self._through[edge] = paths
+        return paths
 
-        Observed edges stay clamped to their outcome; dead paths stay dead.
+    def set_theta(self, theta: npt.ArrayLike, *, edges: npt.ArrayLike | None = None) -> None:
+        """Replace the bias and make log p_i of every path the sum over its untested edges again.
+
+        Observed edges stay clamped to their outcome; dead paths stay dead. The sums are skipped when
+        neither the bias nor any log p_i changed since they were last made.
+
+        Args:
+            theta: (E,) new bias in [0, 1]; with ``edges``, one value per edge of ``edges``.
+            edges: the edges ``theta`` is for (the others keep their bias), or None for all.
         """
         th = np.asarray(theta, dtype=np.float64).ravel()
-        if th.shape != self._theta.shape or not np.all((th >= 0) & (th <= 1)):
-            raise ProblemError(f"theta must be ({self._theta.size},) values in [0, 1]")
-        th = np.clip(th, THETA_EPS, 1.0 - THETA_EPS)
-        self._theta = th
-        self._log_theta = np.log(th)
-        self._log_1m_theta = np.log1p(-th)
-        self._proof_order = None
-        self._logp = np.asarray(self._csr @ np.where(self._tested, 0.0, self._log_theta), dtype=np.float64)
+        where = np.arange(self._theta.size) if edges is None else np.asarray(edges, dtype=np.int64).ravel()
+        if th.shape != where.shape or not _probabilities(th):
+            raise ProblemError(f"theta must be ({where.size},) values in [0, 1]")
+        th = np.minimum(np.maximum(th, THETA_EPS), 1.0 - THETA_EPS)
+        if (th != self._theta[where]).any():
+            log_theta = np.log(th)
+            self._theta[where] = th
+            self._log_theta[where] = log_theta
+            self._log_1m_theta[where] = np.log1p(-th)
+            self._untested_log_theta[where] = np.where(self._tested[where], 0.0, log_theta)
+            if self._proof_order is not None:
+                self._proof_order.set_theta(self._theta)
+        elif not self._differenced:
+            return
+        # The sum of log theta over each path's untested edges, in row order (as a new state sums it).
+        self._logp = np.asarray(self._csr @ self._untested_log_theta, dtype=np.float64)
+        self._differenced = False
 
     def observe(self, edge: int, free: bool) -> None:
         """Clamp ``edge`` to its outcome and update the paths through it."""
         if self._tested[edge]:
             return
         self._tested[edge] = True
+        self._untested_log_theta[edge] = 0.0
         paths = self._csc.indices[self._csc.indptr[edge] : self._csc.indptr[edge + 1]]
+        if self._proof_order is not None:
+            self._proof_order.mark_checked(edge, paths)
         if free:
             self._logp[paths] -= self._log_theta[edge]
             self._remaining[paths] -= 1
-            self._logp[paths[self._remaining[paths] == 0]] = 0.0
-        else:
-            dying = paths[self._alive[paths]]
-            self._alive[dying] = False
-            for p in dying.tolist():
-                row = self._csr.indices[self._csr.indptr[p] : self._csr.indptr[p + 1]]
-                self._alive_through[row] -= 1
+            proven = paths[self._remaining[paths] == 0]
+            self._logp[proven] = 0.0
+            self._num_proven += int(proven.size)  # every edge checked free: alive
+            self._differenced = True
+            return
+        dying = paths[self._alive[paths]]
+        if dying.size == 0:
+            return
+        self._alive[dying] = False
+        self._num_alive -= int(dying.size)
+        self._alive_through[self._rows.edges] -= self._rows.edge_counts(dying)

@@ -79,23 +79,21 @@ class Bisect(BernoulliLibraryState):
         """Normalised expected gain g(e) / c(e) for each candidate edge (ALGORITHMS.md 2.3)."""
         cand = np.asarray(candidates, dtype=np.int64)
         seg, paths = self.alive_incidence(cand)
-        n = np.bincount(seg, minlength=cand.size).astype(np.float64)
         logp = self._logp[paths]
         lq = self._log_theta[cand]
-        l1q = self._log_1m_theta[cand]
         log_blocked = log1mexp(logp)  # log(1 - p_i)
         # log(1 - p_i / theta_e); exactly -inf when e is the path's last untested edge.
-        last = self._remaining[paths] == 1
-        log_rest = np.where(last, -np.inf, log1mexp(np.minimum(logp - lq[seg], 0.0)))
+        log_rest = log1mexp(np.minimum(logp - lq[seg], 0.0))
+        log_rest[self._remaining[paths] == 1] = -np.inf
         sum_blocked = np.bincount(seg, weights=log_blocked, minlength=cand.size)
-        rest_neg_inf = np.bincount(seg, weights=np.isneginf(log_rest), minlength=cand.size) > 0
-        sum_rest = np.bincount(
-            seg, weights=np.where(np.isneginf(log_rest), 0.0, log_rest), minlength=cand.size
-        )
-        sum_rest[rest_neg_inf] = -np.inf
+        rest_neg_inf = log_rest == -np.inf
+        log_rest[rest_neg_inf] = 0.0
+        sum_rest = np.bincount(seg, weights=log_rest, minlength=cand.size)
+        sum_rest[np.bincount(seg[rest_neg_inf], minlength=cand.size) > 0] = -np.inf
+        n = self._alive_through[cand]  # alive paths through each candidate (the entries per segment)
         k = self._exponent_factor * n + 1.0
         l1 = k * lq + sum_rest - sum_blocked
-        l0 = k * l1q - sum_blocked
+        l0 = k * self._log_1m_theta[cand] - sum_blocked
         gain = -np.expm1(np.logaddexp(l1, l0))
         return np.asarray(gain / self._costs[cand], dtype=np.float64)
 

@@ -204,9 +204,9 @@ class DirectBisectPolicy:
         self._observed[edge] = free
         if self._bisect is not None:
             self._bisect.observe(edge, free)
-            if self._posterior is not None:
+            if self._posterior is not None:  # the bias of the library edges, updated when worlds drop
                 self._posterior.observe(edge, free)
-                self._bisect.set_theta(self._posterior.theta())
+                self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)
             return
         if edge != self._walker.edge():
             raise PolicyError(

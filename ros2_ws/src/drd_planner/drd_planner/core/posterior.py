@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray, IntArray
+from drd_planner.core.world_columns import WorldColumns, pack_rows
 from drd_planner.exceptions import ProblemError
 
 
@@ -69,22 +70,47 @@ class TrainingOutcomes:
         self.marginal: FloatArray = (
             self.free_mass / self.total_mass if self.total_mass > 0 else np.full(lib.size, 0.5)
         )
+        self._episodes = 0
+        self._columns: WorldColumns | None = None
 
     @property
     def num_worlds(self) -> int:
         """N."""
         return int(self.world_free.shape[0])
 
+    def episode_columns(self) -> WorldColumns | None:
+        """The packed columns an episode's posterior counts with, or None to count over rows.
+
+        Packing costs about one pass over the (n, K) outcomes, so it is done when a second episode asks
+        (a tree's outcomes serve every episode of its query), never for outcomes used once. Weighted
+        worlds are always summed over rows: bits cannot weigh them.
+        """
+        if not self.uniform:
+            return None
+        self._episodes += 1
+        if self._episodes < 2:
+            return None
+        if self._columns is None:
+            self._columns = WorldColumns(self.world_free)
+        return self._columns
+
     def free_mass_of(self, rows: IntArray) -> FloatArray:
         """(K,) weighted count of ``rows`` in which each library edge is free."""
         x = self.world_free[rows]
-        if self.uniform:
-            return np.asarray(x.sum(axis=0), dtype=np.float64)
+        if self.uniform:  # bytes summed into int32 counts: exact, and faster than bool -> int64
+            return np.asarray(x.view(np.uint8).sum(axis=0, dtype=np.int32), dtype=np.float64)
         return np.asarray(self.weights[rows] @ x, dtype=np.float64)
 
 
 class ConsistentWorldsBias:
     """theta from the training worlds consistent with the observations so far, shrunk by kappa.
+
+    An outcome drops the worlds it contradicts and theta is recomputed only after that. The consistent
+    worlds are a packed bit mask when the outcomes have packed columns
+    (:meth:`TrainingOutcomes.episode_columns`): an outcome is then one AND of the mask with the edge's
+    column, and the free counts a popcount of every column within the mask. Otherwise they are a list
+    of rows whose free masses are updated by the dropped rows (or, for uniform weights, counted again
+    over the kept ones when they are fewer). Counts of uniform worlds are integers, the same either way.
 
     Args:
         outcomes: the training worlds (shared by all episodes on one tree).
@@ -105,38 +131,91 @@ class ConsistentWorldsBias:
             raise ProblemError(f"pseudo_count must be a positive number of worlds; got {pseudo_count}")
         self._o = outcomes
         self._kappa = float(pseudo_count)
+        self._kappa_marginal = self._kappa * outcomes.marginal
         self._alpha = alpha
-        self._consistent = np.ones(outcomes.num_worlds, dtype=bool)
+        self._columns = outcomes.episode_columns()
+        all_worlds = np.ones(outcomes.num_worlds, dtype=bool)
+        self._mask = pack_rows(all_worlds)  # the consistent worlds as bits (with packed columns)
+        self._rows: IntArray = np.flatnonzero(all_worlds)  # ... as ascending rows (without)
+        self._count = outcomes.num_worlds
         self._mass = outcomes.total_mass
         self._free_mass = outcomes.free_mass.copy()
+        self._library_theta: FloatArray | None = None  # None: to compute
         for edge, free in (observations or {}).items():
             self.observe(edge, free)
 
     @property
     def num_consistent(self) -> int:
         """How many training worlds agree with every observation so far."""
-        return int(self._consistent.sum())
+        return self._count
 
-    def observe(self, edge: int, free: bool) -> None:
-        """Drop the worlds that disagree with ``edge`` being ``free`` (no-op off the library)."""
+    @property
+    def library_edges(self) -> IntArray:
+        """(K,) the edges :meth:`library_theta` is for."""
+        return self._o.library_edges
+
+    def observe(self, edge: int, free: bool) -> bool:
+        """Drop the worlds that disagree with ``edge`` being ``free`` (no-op off the library).
+
+        Returns:
+            True when some world was dropped (theta changed).
+        """
         col = int(self._o.column[edge]) if 0 <= edge < self._o.num_edges else -1
         if col < 0:
-            return
-        dropping = np.flatnonzero(self._consistent & (self._o.world_free[:, col] != free))
-        if dropping.size == 0:
-            return
-        self._consistent[dropping] = False
-        if not self._consistent.any():
+            return False
+        changed = self._drop_bits(col, free) if self._columns is not None else self._drop_rows(col, free)
+        if changed:
+            self._library_theta = None
+        return changed
+
+    def _drop_bits(self, col: int, free: bool) -> bool:
+        """:meth:`observe` on the packed mask: True when some world was dropped."""
+        assert self._columns is not None
+        column = self._columns.bits[col]
+        kept = self._mask & (column if free else ~column)
+        if (kept == self._mask).all():
+            return False
+        self._mask = kept
+        self._count = int(np.bitwise_count(kept).sum())
+        if self._count == 0:
             self._mass, self._free_mass = 0.0, np.zeros_like(self._free_mass)
-            return
-        self._mass -= float(self._o.weights[dropping].sum())
-        self._free_mass = self._free_mass - self._o.free_mass_of(dropping)
+        else:
+            self._mass = float(self._count)
+            counts = np.bitwise_count(self._columns.bits & kept).sum(axis=1, dtype=np.int64)
+            self._free_mass = counts.astype(np.float64)
+        return True
+
+    def _drop_rows(self, col: int, free: bool) -> bool:
+        """:meth:`observe` on the list of rows: True when some world was dropped."""
+        agree = self._o.world_free[self._rows, col] == free
+        if agree.all():
+            return False
+        dropping, kept = self._rows[~agree], self._rows[agree]
+        self._rows = kept
+        self._count = int(kept.size)
+        if kept.size == 0:
+            self._mass, self._free_mass = 0.0, np.zeros_like(self._free_mass)
+        elif self._o.uniform and kept.size < dropping.size:
+            self._mass = float(kept.size)
+            self._free_mass = self._o.free_mass_of(kept)
+        else:
+            self._mass -= float(self._o.weights[dropping].sum())
+            self._free_mass = self._free_mass - self._o.free_mass_of(dropping)
+        return True
+
+    def library_theta(self) -> FloatArray:
+        """(K,) bias of the :attr:`library_edges` (computed after a change only; do not modify)."""
+        if self._library_theta is None:
+            mass = max(self._mass, 0.0)
+            free = np.maximum(self._free_mass, 0.0)
+            data = (free + self._kappa_marginal) / (mass + self._kappa)
+            self._library_theta = (
+                self._alpha * np.minimum(np.maximum(data, 0.0), 1.0) + (1.0 - self._alpha) * 0.5
+            )
+        return self._library_theta
 
     def theta(self) -> FloatArray:
         """(E,) bias; 0.5 off the library."""
-        mass = max(self._mass, 0.0)
-        free = np.maximum(self._free_mass, 0.0)
-        data = (free + self._kappa * self._o.marginal) / (mass + self._kappa)
         theta = np.full(self._o.num_edges, 0.5)
-        theta[self._o.library_edges] = self._alpha * np.clip(data, 0.0, 1.0) + (1.0 - self._alpha) * 0.5
+        theta[self._o.library_edges] = self.library_theta()
         return theta

@@ -38,13 +38,14 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.path_rows import PathRows
+from drd_planner.core.proof_order import ProofOrder
 from drd_planner.exceptions import ProblemError
 
 __all__ = [
     "DEFAULT_REGION_RULE",
     "REGION_RULES",
     "NodeRegionInputs",
-    "ProofOrder",
     "check_region_rule",
     "expected_proof_costs",
     "node_region_path",
@@ -62,50 +63,6 @@ def check_region_rule(rule: str) -> str:
     if rule not in REGION_RULES:
         raise ProblemError(f"unknown region rule {rule!r}; known: {', '.join(REGION_RULES)}")
     return rule
-
-
-class ProofOrder:
-    """Every path's edges in the order that resolves it cheapest (c_e / (1 - theta_e) ascending).
-
-    The order depends only on theta and the costs, so it is sorted once per bias; :meth:`costs` then
-    only drops the checked edges and the paths not asked for (the rest keep their order).
-
-    Args:
-        indptr: (m + 1,) CSR row pointers of the path-edge incidence.
-        indices: (nnz,) edge ids of each path, row by row.
-        theta: (E,) probability that each edge is free, in (0, 1).
-        edge_costs: (E,) positive check costs.
-    """
-
-    def __init__(
-        self,
-        indptr: npt.NDArray[np.integer],
-        indices: npt.NDArray[np.integer],
-        theta: FloatArray,
-        edge_costs: FloatArray,
-    ) -> None:
-        self.num_paths = int(indptr.size - 1)
-        row = np.repeat(np.arange(self.num_paths, dtype=np.int64), np.diff(indptr))
-        edge = np.asarray(indices, dtype=np.int64)
-        th = theta[edge]
-        order = np.lexsort((edge, edge_costs[edge] / np.maximum(1.0 - th, 1e-300), row))
-        self.row, self.edge = row[order], edge[order]
-        self.cost = np.asarray(edge_costs[self.edge], dtype=np.float64)
-        self.log_theta = np.log(th[order])
-
-    def costs(self, done: BoolArray, rows: BoolArray) -> FloatArray:
-        """E_i of each path in ``rows`` (m,) with the ``done`` (E,) edges already checked; 0 elsewhere."""
-        keep = rows[self.row] & ~done[self.edge]
-        row, log_th, cost = self.row[keep], self.log_theta[keep], self.cost[keep]
-        costs = np.zeros(self.num_paths, dtype=np.float64)
-        if row.size == 0:
-            return costs
-        starts = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
-        before = np.cumsum(log_th) - log_th  # sum of log theta over all earlier entries
-        lengths = np.diff(np.r_[starts, row.size])
-        within = before - np.repeat(before[starts], lengths)  # ... over the earlier ones of the same path
-        costs[row[starts]] = np.add.reduceat(cost * np.exp(within), starts)
-        return costs
 
 
 def expected_proof_costs(
@@ -129,7 +86,8 @@ def expected_proof_costs(
     Returns:
         (m,) float64 expected cost (0 for a path with nothing left to check or not in ``rows``).
     """
-    return ProofOrder(indptr, indices, theta, edge_costs).costs(done, rows)
+    rows_table = PathRows(indptr, indices, np.asarray(theta).size)
+    return ProofOrder(rows_table, theta, edge_costs, checked=done).costs(rows)
 
 
 def region_scores(rule: str, log_p: FloatArray, proof_costs: FloatArray) -> FloatArray:
