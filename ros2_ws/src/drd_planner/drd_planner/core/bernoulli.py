@@ -65,14 +65,16 @@ class BernoulliLibraryState:
         self._log_theta[lib] = np.log(self._theta[lib])
         self._log_1m_theta = np.zeros(th.size)
         self._log_1m_theta[lib] = np.log1p(-self._theta[lib])
-        self._untested_log_theta = self._log_theta.copy()  # 0 once an edge is tested
+        # log theta of the library edges by library-local index, 0 once tested and in the pad slot K.
+        self._untested_log_theta = np.append(self._log_theta[lib], 0.0)
         self._proof_order: ProofOrder | None = None
         self._tested = np.zeros(library.num_edges, dtype=bool)
         self._alive = np.ones(library.num_paths, dtype=bool)
+        self._alive_ids = np.arange(library.num_paths, dtype=np.int64)  # flatnonzero(self._alive)
         self._num_alive = library.num_paths
         self._num_proven = 0  # alive paths with every edge checked free
         self._remaining = np.diff(self._csr.indptr).astype(np.int64)
-        self._logp = np.asarray(self._csr @ self._log_theta, dtype=np.float64)
+        self._logp = self._path_sums()
         self._differenced = False  # some log p_i was updated by difference since the last sum
         self._alive_through = np.diff(self._csc.indptr).astype(np.int64)
         self._through: dict[int, IntArray] = {}  # edge -> its alive paths when last asked
@@ -107,7 +109,7 @@ class BernoulliLibraryState:
             return self.most_probable_path()
         if self._proof_order is None:
             self._proof_order = ProofOrder(self._rows, self._theta, edge_costs, checked=self._tested)
-        alive = np.flatnonzero(self._alive)
+        alive = self._alive_ids
         return self._proof_order.best_path(self._logp[alive], alive)
 
     def untested_edges_of(self, path: int) -> IntArray:
@@ -161,21 +163,34 @@ class BernoulliLibraryState:
             self._theta[where] = th
             self._log_theta[where] = log_theta
             self._log_1m_theta[where] = np.log1p(-th)
-            self._untested_log_theta[where] = np.where(self._tested[where], 0.0, log_theta)
+            self._untested_log_theta[self._rows.column[where]] = np.where(self._tested[where], 0.0, log_theta)
+            self._untested_log_theta[-1] = 0.0  # the pad slot, in case ``edges`` named non-library edges
             if self._proof_order is not None:
                 self._proof_order.set_theta(self._theta)
         elif not self._differenced:
             return
-        # The sum of log theta over each path's untested edges, in row order (as a new state sums it).
-        self._logp = np.asarray(self._csr @ self._untested_log_theta, dtype=np.float64)
+        if self._num_alive == self._library.num_paths:
+            self._logp = self._path_sums()
+        else:  # the dead paths' log p_i is never read again
+            self._logp[self._alive_ids] = self._path_sums(self._alive_ids)
         self._differenced = False
+
+    def _path_sums(self, paths: IntArray | None = None) -> FloatArray:
+        """(r,) sum of log theta over the untested edges of ``paths`` (None: all m), each in path order.
+
+        Accumulated down the columns of the library's table (:mod:`~drd_planner.core.path_rows`), one
+        term after the other as a sparse row sum adds them (a ``sum`` could add one column pairwise),
+        so a path's sum does not depend on which paths are summed with it.
+        """
+        table = self._rows.table if paths is None else self._rows.table[:, paths]
+        return np.asarray(self._untested_log_theta[table].cumsum(axis=0)[-1], dtype=np.float64)
 
     def observe(self, edge: int, free: bool) -> None:
         """Clamp ``edge`` to its outcome and update the paths through it."""
         if self._tested[edge]:
             return
         self._tested[edge] = True
-        self._untested_log_theta[edge] = 0.0
+        self._untested_log_theta[self._rows.column[edge]] = 0.0  # the pad slot for a non-library edge
         paths = self._csc.indices[self._csc.indptr[edge] : self._csc.indptr[edge + 1]]
         if self._proof_order is not None:
             self._proof_order.mark_checked(edge, paths)
@@ -191,5 +206,6 @@ class BernoulliLibraryState:
         if dying.size == 0:
             return
         self._alive[dying] = False
+        self._alive_ids = self._alive_ids[self._alive[self._alive_ids]]
         self._num_alive -= int(dying.size)
         self._alive_through[self._rows.edges] -= self._rows.edge_counts(dying)

@@ -130,41 +130,46 @@ class ProofOrder:
         :meth:`costs` (a path with nothing left to check scores +inf), with E_i computed only for the
         paths the bounds of the module docstring leave in: the last choice and the most probable paths
         are scored first; their best score is the bar. A path can reach the bar only if log p_i - log c
-        does (cheap, every path), and then only if log p_i - log L_i does (for the few left); those
-        are scored too, and the best of all scored wins.
+        does (cheap, every path), and then only if log p_i - log L_i does; the best of those is scored.
 
         Args:
             log_p: (r,) log p_i of ``paths`` (finite: alive paths).
             paths: (r,) ascending path ids, r >= 1.
         """
-        first = np.zeros(paths.size, dtype=bool)
-        if paths.size > _FIRST_SCORED:
-            first[log_p.argpartition(paths.size - _FIRST_SCORED)[-_FIRST_SCORED:]] = True
-        else:
-            first[:] = True
-        last = int(np.searchsorted(paths, self._last))
-        if last < paths.size and paths[last] == self._last:
-            first[last] = True
-        with np.errstate(divide="ignore"):  # E_i = 0: nothing left to check, the path scores +inf
-            score = np.full(paths.size, -np.inf)
-            score[first] = log_p[first] - np.log(self._costs_of(paths[first]))
-            bar = score.max()
-            rest = np.flatnonzero((log_p - self._log_cheapest >= bar) & ~first)
-            if rest.size:
-                rest = rest[log_p[rest] - self._log_lower_bounds(paths[rest]) >= bar]
-            if rest.size:
-                score[rest] = log_p[rest] - np.log(self._costs_of(paths[rest]))
-        self._last = int(paths[int(score.argmax())])
+        if paths.size > _FIRST_SCORED + 1:
+            first = log_p.argpartition(paths.size - _FIRST_SCORED)[-_FIRST_SCORED:]
+            last = int(np.searchsorted(paths, self._last))
+            if last < paths.size and paths[last] == self._last:
+                first = np.append(first, last)
+            bar = float(self._scores(log_p[first], paths[first]).max())
+            if bar == np.inf:  # a path with nothing left to check: the first such path wins
+                left = np.flatnonzero(self._left[paths] == 0)[:1]
+            else:  # every path scoring >= bar passes both bounds (the first ones' E_i are cached)
+                left = np.flatnonzero(log_p - self._log_cheapest >= bar)
+                left = left[log_p[left] - self._log_lower_bounds(paths[left]) >= bar]
+            log_p, paths = log_p[left], paths[left]
+        self._last = int(paths[int(self._scores(log_p, paths).argmax())])
         return self._last
+
+    def _scores(self, log_p: FloatArray, paths: IntArray) -> FloatArray:
+        """(r,) log p_i - log E_i of ``paths`` (+inf where E_i = 0: nothing left to check)."""
+        costs = self._costs_of(paths)
+        log_e = np.full(paths.size, -np.inf)
+        np.log(costs, out=log_e, where=costs > 0.0)
+        return np.asarray(log_p - log_e, dtype=np.float64)
 
     def _log_lower_bounds(self, paths: IntArray) -> FloatArray:
         """(r,) log L_i of ``paths``, L_i shrunk by :data:`_BOUND_MARGIN` (-inf: nothing left to check)."""
         # q: the smallest factor of each path (checked edges and the pad count 1); n: its unchecked edges.
         q = self._factor[self._rows.table[:, paths]].min(axis=0)
         n = self._left[paths]
-        ratio = np.where(q < 1.0, q, 0.5)  # sum_{k<n} q^k = (1 - q^n) / (1 - q), without cancelling
+        full = q >= 1.0  # every factor 1: L_i = n_i c (0 when nothing is left to check)
+        ratio = np.where(full, 0.5, q)  # sum_{k<n} q^k = (1 - q^n) / (1 - q), without cancelling
         geometric = -np.expm1(n * np.log1p(ratio - 1.0)) / (1.0 - ratio)
-        return np.asarray(np.log(np.where(q < 1.0, geometric, n) * self._scale), dtype=np.float64)
+        geometric[full] = n[full]
+        out = np.full(paths.size, -np.inf)
+        np.log(geometric * self._scale, out=out, where=geometric > 0.0)
+        return out
 
     def _costs_of(self, paths: IntArray) -> FloatArray:
         """(r,) E_i of ``paths``, recomputed for those out of date (and sorted again after a new bias)."""
