@@ -127,3 +127,67 @@ def test_posterior_leaf_bias_follows_the_consistent_worlds(planar) -> None:  # t
     theta[lib] = expected
     fresh = Bisect(problem.library, theta, problem.edge_costs, observations={edge: free})
     assert policy.select() == fresh.select()
+
+
+@pytest.mark.parametrize(("seed", "weighted"), [(0, False), (1, False), (2, True)])
+def test_updates_per_outcome_equal_the_bias_of_the_consistent_worlds(seed: int, weighted: bool) -> None:
+    rng = np.random.default_rng(seed)
+    worlds = rng.random((150, 40)) < 0.7
+    lib = np.sort(rng.choice(50, size=40, replace=False))
+    weights = rng.uniform(0.0, 2.0, 150) if weighted else None
+    outcomes = TrainingOutcomes(worlds, lib, 50, weights=weights)
+    w = outcomes.weights
+    # The first episode on the outcomes keeps rows, the later ones packed columns (uniform weights).
+    for _episode in range(3):
+        bias = ConsistentWorldsBias(outcomes, pseudo_count=5.0, alpha=0.99)
+        consistent = np.ones(150, dtype=bool)
+        truth = worlds[int(rng.integers(150))]
+        for edge in rng.permutation(50)[:25].tolist():
+            col = int(np.searchsorted(lib, edge))
+            on_library = col < lib.size and lib[col] == edge
+            free = bool(truth[col]) if on_library and rng.random() < 0.9 else bool(rng.random() < 0.5)
+            bias.observe(edge, free)
+            if on_library:
+                consistent &= worlds[:, col] == free
+            mass = w[consistent].sum()
+            data = (w[consistent] @ worlds[consistent] + 5.0 * outcomes.marginal) / (mass + 5.0)
+            expected = np.full(50, 0.5)
+            expected[lib] = 0.99 * np.clip(data, 0.0, 1.0) + 0.005
+            assert bias.num_consistent == int(consistent.sum())
+            np.testing.assert_allclose(bias.theta(), expected, rtol=1e-12, atol=0.0)
+            np.testing.assert_array_equal(bias.library_theta(), bias.theta()[lib])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_outcomes_and_new_biases_keep_log_p_as_a_fresh_state_sums_it(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    num_edges = 40
+    paths = tuple(rng.choice(num_edges - 4, size=int(rng.integers(2, 9)), replace=False) for _ in range(25))
+    library = PathLibrary(paths, num_edges)
+    costs = rng.uniform(0.5, 2.0, num_edges)
+    lib = library.library_edges
+    theta = rng.uniform(0.2, 0.95, num_edges)
+    moved = Bisect(library, theta, costs, region_rule="per_check")
+    observations: dict[int, bool] = {}
+    for edge in rng.permutation(lib)[:12].tolist():
+        if moved.solved():
+            break
+        moved.select()  # builds and keeps the proof order
+        free = bool(rng.random() < 0.7)
+        moved.observe(edge, free)
+        observations[edge] = free
+        if rng.random() < 0.7:  # a new bias for the library edges (the posterior leaf)
+            theta[lib] = np.where(rng.random(lib.size) < 0.8, rng.uniform(0.2, 0.95, lib.size), theta[lib])
+            moved.set_theta(theta[lib], edges=lib)
+        fresh = Bisect(library, theta, costs, observations=observations, region_rule="per_check")
+        fresh.set_theta(theta)
+        moved.set_theta(theta)
+        alive = fresh.alive
+        assert moved.alive.tolist() == alive.tolist()
+        assert moved.log_path_probability.tolist() == fresh.log_path_probability.tolist()
+        log_theta = np.log(np.clip(theta, 1e-9, 1 - 1e-9))
+        for i in np.flatnonzero(alive).tolist():
+            untested = [e for e in paths[i].tolist() if e not in observations]
+            assert moved.log_path_probability[i] == pytest.approx(log_theta[untested].sum(), abs=1e-12)
+        if not fresh.solved():
+            assert moved.select() == fresh.select()
