@@ -178,12 +178,12 @@ class BernoulliLibraryState:
     def _path_sums(self, paths: IntArray | None = None) -> FloatArray:
         """(r,) sum of log theta over the untested edges of ``paths`` (None: all m), each in path order.
 
-        Accumulated down the columns of the library's table (:mod:`~drd_planner.core.path_rows`), one
-        term after the other as a sparse row sum adds them (a ``sum`` could add one column pairwise),
-        so a path's sum does not depend on which paths are summed with it.
+        Accumulated along the rows of the library's table (:attr:`~drd_planner.core.path_rows.PathRows.by_path`),
+        one term after the other as a sparse row sum adds them (a ``sum`` may add pairwise), so a
+        path's sum does not depend on which paths are summed with it.
         """
-        table = self._rows.table if paths is None else self._rows.table[:, paths]
-        return np.asarray(self._untested_log_theta[table].cumsum(axis=0)[-1], dtype=np.float64)
+        table = self._rows.by_path if paths is None else self._rows.by_path[paths]
+        return np.asarray(self._untested_log_theta[table].cumsum(axis=1)[:, -1], dtype=np.float64)
 
     def observe(self, edge: int, free: bool) -> None:
         """Clamp ``edge`` to its outcome and update the paths through it."""

@@ -33,6 +33,7 @@ class PathRows:
         column: (E,) int64 library-local index of each edge; K for an edge no path uses.
         table: (L, m) int64: ``table[j, i]`` is the local index of path i's j-th edge, K past its end;
             L is the longest path's length.
+        by_path: (m, L) int64, the same table path by path (row i: path i's edges), contiguous.
     """
 
     def __init__(
@@ -50,6 +51,7 @@ class PathRows:
         row = np.repeat(np.arange(self.num_paths, dtype=np.int64), lengths)
         position = np.arange(edge.size, dtype=np.int64) - np.repeat(ptr[:-1], lengths)
         self.table[position, row] = self.column[edge]
+        self.by_path: IntArray = np.ascontiguousarray(self.table.T)
 
     @property
     def pad(self) -> int:

@@ -181,7 +181,10 @@ class ConsistentWorldsBias:
             self._mass, self._free_mass = 0.0, np.zeros_like(self._free_mass)
         else:
             self._mass = float(self._count)
-            counts = np.bitwise_count(self._columns.bits & kept).sum(axis=1, dtype=np.int64)
+            words = np.flatnonzero(kept)  # late in an episode the few worlds left fill few words
+            bits = self._columns.bits if 2 * words.size > kept.size else self._columns.bits[:, words]
+            within = kept if bits.shape[1] == kept.size else kept[words]
+            counts = np.bitwise_count(bits & within).sum(axis=1, dtype=np.int64)
             self._free_mass = counts.astype(np.float64)
         return True
 

@@ -161,7 +161,7 @@ class ProofOrder:
     def _log_lower_bounds(self, paths: IntArray) -> FloatArray:
         """(r,) log L_i of ``paths``, L_i shrunk by :data:`_BOUND_MARGIN` (-inf: nothing left to check)."""
         # q: the smallest factor of each path (checked edges and the pad count 1); n: its unchecked edges.
-        q = self._factor[self._rows.table[:, paths]].min(axis=0)
+        q = self._factor[self._rows.by_path[paths]].min(axis=1)
         n = self._left[paths]
         full = q >= 1.0  # every factor 1: L_i = n_i c (0 when nothing is left to check)
         ratio = np.where(full, 0.5, q)  # sum_{k<n} q^k = (1 - q^n) / (1 - q), without cancelling
