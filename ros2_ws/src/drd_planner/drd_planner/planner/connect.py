@@ -67,7 +67,7 @@ class MotionExplainer(Protocol):
     - when every edge joining the start (or goal) was checked blocked, it asks whether that state itself is
       blocked: ``explain_motion`` of the (1, D) state ("" means free, anything else is quoted as the cause);
       without this protocol, ``check_motion`` of it;
-    - with this protocol it also explains the blocked motions joining that end (up to 8 other blocked edges
+    - with this protocol it also explains the (up to 8 shortest) blocked motions joining that end (up to 8 other blocked edges
       around the smaller known-reachable side when neither end is walled in), counted per cause, with the
       ``" at sample ..."`` suffix dropped: so a cause should read the same for every motion it blocks.
 

@@ -36,7 +36,8 @@ __all__ = ["EdgeStates", "edge_states_of", "no_path_reason"]
 
 #: (K, D) states along an edge of the query's graph, or None when unknown.
 EdgeStates = Callable[[int], FloatArray | None]
-#: Blocked edges around the cut whose causes are looked up, at most.
+#: Blocked edges (around the cut, or joining an endpoint) whose causes are looked up, at most: each explanation
+#: is a collision query of its own, and an endpoint joined by thousands of motions must not take minutes.
 MAX_EXPLAINED = 8
 
 
@@ -119,10 +120,10 @@ def _endpoint_text(
             return f"{what}, and the {label} state itself is blocked"
     if explainer is None:
         return f"{what}; the {label} state itself is free"
-    motions = [m for m in (along(int(e)) for e in incident.tolist()) if m is not None]
-    return (
-        f"{what}; the {label} state itself is free, the motions are blocked by {_causes(explainer, motions)}"
-    )
+    shortest = incident[np.argsort(lengths, kind="stable")][:MAX_EXPLAINED]
+    motions = [m for m in (along(int(e)) for e in shortest.tolist()) if m is not None]
+    which = "the motions" if len(motions) == incident.size else f"the {len(motions)} shortest motions"
+    return f"{what}; the {label} state itself is free, {which} are blocked by {_causes(explainer, motions)}"
 
 
 def _cut_text(query: QueryGraph, outcome: dict[int, bool], oracle: EdgeOracle, along: EdgeStates) -> str:
