@@ -26,7 +26,9 @@ def test_per_prior_work_is_done_once_and_models_are_cached(prior: WorldPrior) ->
     models = QueryModels(
         dataclasses.replace(prior, eta=1.0), straight_connector(prior), expand_threshold=0.01
     )
+    assert "edge_marginal" not in models.prior.__dict__
     models.warm_up()
+    assert "edge_marginal" in models.prior.__dict__  # BiSECt's bias over the prior: no first query pays it
     search, columns = models.search, models.columns
     first = models.get(3, 40)
     assert models.search is search and models.columns is columns

@@ -19,6 +19,9 @@ from drd_planner.core.library import PathLibrary
 from drd_planner.core.logmath import log1mexp
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 
+#: Worlds whose outcomes are turned into floats at a time by a weighted :func:`bias_from_worlds`.
+_ROWS_PER_BLOCK = 64
+
 
 def bias_from_worlds(
     X: npt.ArrayLike, weights: npt.ArrayLike | None = None, *, alpha: float = 0.99
@@ -36,12 +39,17 @@ def bias_from_worlds(
     xa = np.asarray(X, dtype=bool)
     if xa.shape[0] == 0:
         return np.full(xa.shape[1], 0.5)
-    w = np.ones(xa.shape[0]) if weights is None else np.asarray(weights, dtype=np.float64)
+    if weights is None:  # free counts straight from the booleans (no (n, E) float copy: 450 MB at real scale)
+        mean = np.count_nonzero(xa, axis=0).astype(np.float64) / xa.shape[0]
+        return np.asarray(alpha * mean + (1.0 - alpha) * 0.5, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
     total = w.sum()
     if total <= 0:
         return np.full(xa.shape[1], 0.5)
-    mean = (w @ xa.astype(np.float64)) / total
-    return np.asarray(alpha * mean + (1.0 - alpha) * 0.5, dtype=np.float64)
+    weighted = np.zeros(xa.shape[1])
+    for lo in range(0, xa.shape[0], _ROWS_PER_BLOCK):  # a bounded float copy at a time
+        weighted += w[lo : lo + _ROWS_PER_BLOCK] @ xa[lo : lo + _ROWS_PER_BLOCK].astype(np.float64)
+    return np.asarray(alpha * (weighted / total) + (1.0 - alpha) * 0.5, dtype=np.float64)
 
 
 class Bisect(BernoulliLibraryState):

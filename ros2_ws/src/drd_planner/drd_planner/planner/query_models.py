@@ -120,7 +120,7 @@ class QueryModels:
         """Build the per-prior work now (a node does it at configure, not in its first new request)."""
         _ = self.arcs, self.columns
         if self.prior.worlds is not None:
-            _ = self.search
+            _ = self.search, self.prior.edge_marginal
         if self.connector is not None and self.prior.graph.vertex_states is not None:
             self.sample_index()
 
