@@ -6,12 +6,13 @@ import dataclasses
 
 import numpy as np
 import pytest
+from conftest import REPO_ROOT
 
 from drd_planner import prior_from_problem
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.root_tree import RootTree
 from drd_planner.data.planar_problem import make_planar_problem
-from drd_planner.planner import WorldPrior
+from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planner.query_models import QueryModels
 from drd_planner.planner.straight_connector import straight_connector
 
@@ -63,3 +64,12 @@ def test_a_joined_query_keeps_the_priors_worlds_and_adds_only_its_columns(prior:
     assert model.theta.shape == (worlds.num_edges,)
     expected = prior.alpha * worlds.dense.mean(axis=0) + (1 - prior.alpha) * 0.5
     assert np.allclose(model.theta, expected)
+
+
+def test_warm_up_searches_the_stored_queries_goals() -> None:
+    """A robot leaving the stored route asks for the stored goal's reverse trees first: made at configure."""
+    shipped = load_prior(REPO_ROOT / "trees" / "heli_wires.npz")
+    models = QueryModels(shipped, None, expand_threshold=0.01)
+    assert models.search.goals_kept == ()
+    models.warm_up()
+    assert models.search.goals_kept == tuple(qt.goal for qt in shipped.trees) == (730,)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -50,3 +53,52 @@ def test_main_job_plans_prints_the_check_logs_records_and_draws(
 def test_main_job_refuses_a_missing_bag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--bag", str(tmp_path / "none.mcap"), "--out", str(tmp_path)]) == 2
     assert "planner_demo: error:" in capsys.readouterr().err
+
+
+def _story(out: str) -> list[str]:
+    """The printed plans without their times: what served each, the checks, the paths."""
+    keep = ("plan ", "  served by:", "  check ", "  path:", "  -> ")
+    lines = [line for line in out.splitlines() if line.startswith(keep)]
+    # Times vary from run to run; everything else must not.
+    return [re.sub(r"\(\d+\.\d ms\)|\d+\.\d+ ms|\s+\d+\.\d{3} ms", "T", line) for line in lines]
+
+
+def test_two_demos_at_once_beside_a_cpu_hog_tell_the_same_story_on_private_domains(tmp_path: Path) -> None:
+    """Issue 31 (3): no shared domain, no dependence on timing (a loaded machine once lost the replan)."""
+    demo = Path(sys.executable).parent / "planner_demo"
+    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        runs = [
+            subprocess.Popen(
+                [
+                    str(demo),
+                    "--tree",
+                    "heli_wires",
+                    "--bag",
+                    "heli_wires",
+                    "--no-pictures",
+                    "--out",
+                    str(tmp_path / k),
+                ],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
+            for k in ("a", "b")
+        ]
+        outs = [run.communicate(timeout=240)[0] for run in runs]
+    finally:
+        hog.kill()
+        hog.wait()
+    assert [run.returncode for run in runs] == [0, 0], outs
+    domains = [re.search(r"ROS domain (\d+) \(private\)", out) for out in outs]
+    assert all(domains) and domains[0].group(1) != domains[1].group(1)  # type: ignore[union-attr]
+    stories = [_story(out) for out in outs]
+    assert stories[0] == stories[1]
+    assert [line.split(" on ")[0] for line in stories[0] if line.startswith("plan ")] == [
+        "plan 0: goal_pose",
+        "plan 1: map_update",
+        "plan 2: goal_pose",
+        "plan 3: goal_pose",
+        "plan 4: goal_pose",
+    ]

@@ -64,9 +64,14 @@ def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[Repl
     try:
         assert node.trigger_configure().name == "SUCCESS", node.errors
         assert node.trigger_activate().name == "SUCCESS"
-        # After the bag, until the node has answered everything (the real-scale lattice's last request
-        # builds its library and tree online, about 0.6 s on an idle 2-core machine, more under load).
-        options = ReplayOptions(record=out, settle=1.0, settle_until=lambda: node.planning_idle)
+        # Stepped by events (each message once the node took the ones before and answered: on a loaded
+        # machine a request sent by the clock alone was coalesced with the next), then until it answered.
+        options = ReplayOptions(
+            record=out,
+            settle=1.0,
+            settle_until=lambda: node.planning_idle,
+            ready=lambda published: node.inputs_taken >= published and node.planning_idle,
+        )
         summary = replay_bag(bag, context=ctx, nodes=[node], options=options)
     except BaseException:
         node.destroy_node()
@@ -186,6 +191,42 @@ def test_arm_bag_replays_into_the_node_and_matches_drd_plan(context: Any, tmp_pa
     try:
         _check_requests(summary, bag, out, "arm_table_clutter.npz", "panda_link0")
         assert not node.errors, node.errors
+    finally:
+        node.destroy_node()
+
+
+def test_a_stepped_replay_waits_until_the_node_took_each_message_and_answered(
+    context: Any, tmp_path: Path
+) -> None:
+    """Issue 31 (3): at 50x speed every request still follows its maps and the previous answer."""
+    bag = BAGS / "heli_wires.mcap"
+    if not bag.is_file():
+        pytest.skip(f"{bag} not generated")
+    params = [
+        Parameter("tree_paths", value=[str(TREES / "heli_wires.npz")]),
+        Parameter("frame_id", value="map"),
+    ]
+    node = PlannerNode(context=context, parameter_overrides=params)
+    asked: list[tuple[int, int, bool]] = []
+
+    def ready(published: int) -> bool:
+        asked.append((published, node.inputs_taken, node.planning_idle))
+        return node.inputs_taken >= published and node.planning_idle
+
+    try:
+        assert node.trigger_configure().name == "SUCCESS" and node.trigger_activate().name == "SUCCESS"
+        options = ReplayOptions(
+            record=tmp_path / "o.mcap", rate=50.0, settle_until=lambda: node.planning_idle, ready=ready
+        )
+        summary = replay_bag(bag, context=context, nodes=[node], options=options)
+        assert len(summary.published) == 10 and node.inputs_taken == 10
+        # Every message after the first went out only once the node had taken all before it and was idle.
+        last = {n: (taken, idle) for n, taken, idle in asked}
+        assert sorted(last) == list(range(1, 10))
+        assert all(taken >= n and idle for n, (taken, idle) in last.items())
+        # The story in order: the four requests and the replan after the blocking update, each planned.
+        logs = [m.message for m in read_bag(tmp_path / "o.mcap") if m.topic == "/edge_checks"]
+        assert len(logs) == 5 and all(log.status for log in logs)
     finally:
         node.destroy_node()
 

@@ -208,6 +208,11 @@ class SearchWorlds:
         """W, the worlds searched."""
         return int(self.worlds.size)
 
+    @property
+    def goals_kept(self) -> tuple[int, ...]:
+        """The graph goals whose reverse trees are kept, least recently used first."""
+        return tuple(self._trees)
+
     def tree(self, goal: int) -> GoalTree:
         """The reverse trees of a graph vertex ``goal`` (kept for the next query to the same goal)."""
         known = self._trees.get(int(goal))

@@ -117,10 +117,16 @@ class QueryModels:
         return self._index
 
     def warm_up(self) -> None:
-        """Build the per-prior work now (a node does it at configure, not in its first new request)."""
+        """Build the per-prior work now (a node does it at configure, not in its first new request).
+
+        That includes the reverse trees of the precomputed queries' goals: a robot that leaves the stored
+        route (a start off the graph, a replan from a vertex the tree was not built for) asks for them first.
+        """
         _ = self.arcs, self.columns
         if self.prior.worlds is not None:
             _ = self.search, self.prior.edge_marginal
+            for qt in self.prior.trees:
+                self.search.tree(qt.goal)
         if self.connector is not None and self.prior.graph.vertex_states is not None:
             self.sample_index()
 

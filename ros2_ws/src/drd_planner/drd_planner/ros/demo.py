@@ -7,6 +7,13 @@ the request again), records everything the node publishes into ``OUT/outputs.mca
 plan with its per-check log and writes a picture of each (``OUT/plan_<k>.png``: terrain, wires, no-fly
 zones, checked edges green/red, the plan).
 
+It runs on a private ROS domain (:func:`~drd_planner.ros.private_domain.private_domain`: one where no other
+node on this host is seen, discovery limited to this host) so it neither publishes into a robot stack nor hears
+one; ``--domain-id N`` runs it on domain N instead (e.g. to watch it in rviz). The bag is stepped by events:
+each message waits until the node has taken the ones before it and answered every request, so the story
+(plan, blocking obstacle and replan, the goal again, a new goal, a start off the graph) happens in that order
+on any machine, however loaded.
+
 Defaults: the real-scale helicopter prior (``trees/heli_lines.npz``: power-line corridors, known no-fly
 zones and registration error over 2.5 km of real terrain, 20 999 lattice edges) and ``bags/heli_lines.mcap``;
 ``--tree heli_wires --bag heli_wires`` runs the small Wires corridor, ``--tree arm_table_clutter --bag
@@ -32,6 +39,7 @@ from drd_planner.exceptions import DrdError
 from drd_planner.planning.service import PlanRecord
 from drd_planner.planning.shipped import resolve_bag_path
 from drd_planner.ros.node import PlannerNode
+from drd_planner.ros.private_domain import private_domain
 from drd_planner.ros.replay import ReplayOptions, replay_bag
 
 __all__ = ["main", "print_record"]
@@ -96,6 +104,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="policy seed (default 0)")
     parser.add_argument("--no-pictures", action="store_true", help="skip the pictures (no matplotlib needed)")
+    parser.add_argument(
+        "--domain-id",
+        type=int,
+        default=None,
+        help="ROS domain to run on (default: a private one where no other node is seen)",
+    )
     return parser
 
 
@@ -107,11 +121,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         bag_path = resolve_bag_path(args.bag)
         bag = open_bag(bag_path)
         frame = bag_frame(read_bag(bag_path)) or "map"
+        if args.domain_id is not None and not 0 <= args.domain_id <= 232:
+            raise DrdError(f"--domain-id must lie in [0, 232], got {args.domain_id}")
+        domain_id = private_domain() if args.domain_id is None else args.domain_id
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
+    print(f"ROS domain {domain_id}" + (" (private)" if args.domain_id is None else ""))
     context = rclpy.context.Context()
-    rclpy.init(context=context)
+    rclpy.init(context=context, domain_id=domain_id)
     node = PlannerNode(
         context=context,
         parameter_overrides=[
@@ -131,9 +149,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         record = args.out / "outputs.mcap"
         print(f"replaying {bag_path} into the planner node (frame {frame!r}, tree {node.sessions[0].name})")
-        # After the bag, wait until the node has answered every request, however slow this machine is.
+        # Each message after the node took the ones before and answered; after the bag, until it answered.
         options = ReplayOptions(
-            record=record, overwrite=True, rate=args.rate, settle_until=lambda: node.planning_idle
+            record=record,
+            overwrite=True,
+            rate=args.rate,
+            settle_until=lambda: node.planning_idle,
+            ready=lambda published: node.inputs_taken >= published and node.planning_idle,
         )
         summary = replay_bag(bag, context=context, nodes=[node], options=options)
         print(

@@ -15,6 +15,7 @@ available in the current state (ros2/rclpy#1209, fixed upstream by #1319):
 from __future__ import annotations
 
 import sys
+from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
@@ -49,13 +50,17 @@ def _report_safely(report: Report, text: str) -> None:
             pass
 
 
-def guard_callback(callback: Callable[..., None], *, name: str, report: Report) -> Callable[..., None]:
+def guard_callback(
+    callback: Callable[..., None], *, name: str, report: Report, taken: Counter[str] | None = None
+) -> Callable[..., None]:
     """``callback`` (a subscription or timer callback) that reports any exception instead of raising it.
 
     Args:
         callback: takes the message (a timer's: nothing); its arguments are passed through.
         name: the topic or timer, quoted in the report.
         report: the node's error reporter (log, ``/diagnostics``, history).
+        taken: counts ``name`` once per call when the callback has returned (or failed): the messages a node
+            has taken, for a replay that waits for them.
     """
 
     def guarded(*args: Any) -> None:
@@ -65,6 +70,9 @@ def guard_callback(callback: Callable[..., None], *, name: str, report: Report) 
             _report_safely(
                 report, f"{name}: internal error, input dropped (the node goes on): {_describe(exc)}"
             )
+        finally:
+            if taken is not None:
+                taken[name] += 1
 
     return guarded
 

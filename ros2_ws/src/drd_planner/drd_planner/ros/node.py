@@ -37,6 +37,7 @@ from __future__ import annotations
 import sys
 import threading
 import time
+from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
@@ -112,6 +113,7 @@ class PlannerNode(LifecycleNode):
         self._ros_services: list[Any] = []
         self._lock = threading.Lock()  # the error list
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
+        self._taken: Counter[str] = Counter()  # messages taken per subscribed topic
         self._out = PlannerOutputs(self)  # lifecycle publishers; /diagnostics in every state
         self._reporter = NodeReporter(self.get_logger(), self._out, self._report_error)
         self._errors: list[str] = []
@@ -150,6 +152,11 @@ class PlannerNode(LifecycleNode):
     def planning_idle(self) -> bool:
         """True when the planning thread has served every request and map wake-up so far."""
         return self._worker.idle
+
+    @property
+    def inputs_taken(self) -> int:
+        """Messages its subscriptions (maps, robot state, requests) have taken so far, accepted or refused."""
+        return sum(self._taken.values())
 
     @property
     def history(self) -> tuple[PlanRecord, ...]:
@@ -245,7 +252,7 @@ class PlannerNode(LifecycleNode):
             self.create_subscription(
                 kind,
                 name,
-                guard_callback(callback, name=name, report=self._report_to(topic)),
+                guard_callback(callback, name=name, report=self._report_to(topic), taken=self._taken),
                 qos,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
             )

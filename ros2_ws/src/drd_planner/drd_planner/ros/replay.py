@@ -197,6 +197,11 @@ class ReplayOptions:
             ``planning_idle``: every request answered, however slow the machine), at most
             ``settle_limit`` seconds more; then spin :data:`ANSWER_S` so its last outputs are recorded.
         settle_limit: the most seconds spent waiting for ``settle_until``.
+        ready: steps the bag by events: before each message after the first, spin until ``ready(n)`` holds,
+            ``n`` the messages published so far (e.g. the planner took them all and answered: a request
+            then always follows the maps before it and the previous answer, on any machine), at most
+            ``settle_limit`` seconds per message; the bag's timing still spaces the messages. None: by the
+            clock alone.
 
     Raises:
         ValueError: ``rate``, ``settle`` or ``wait`` out of range.
@@ -212,6 +217,7 @@ class ReplayOptions:
     require_listener: bool = False
     settle_until: Callable[[], bool] | None = None
     settle_limit: float = 60.0
+    ready: Callable[[int], bool] | None = None
 
     def __post_init__(self) -> None:
         rate, settle, wait = self.rate, self.settle, self.wait
@@ -324,7 +330,14 @@ class _Replayer:
         """Publish every message at its bag time divided by ``rate``, spinning in between."""
         published: list[Published] = []
         t0 = self.timeline.start()
+        ready = self.options.ready
         for raw in self.contents.messages:
+            if ready is not None and published:
+                waited = time.monotonic()
+                end = waited + self.options.settle_limit
+                while not ready(len(published)) and time.monotonic() < end:
+                    self.executor.spin_once(timeout_sec=_SPIN_S)
+                t0 += time.monotonic() - waited  # the bag's spacing goes on from here
             due = t0 + (raw.time_ns - self.start_ns) / 1e9 / self.options.rate
             while (left := due - time.monotonic()) > 0:
                 self.executor.spin_once(timeout_sec=min(left, 0.05))
