@@ -184,6 +184,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         suite_markdown,
     )
 
+    if args.check_cost_ms is not None and args.queries is None:
+        raise DrdError("--check-cost-ms times random queries: give --queries N too")
     if args.queries is not None:
         from drd_planner.bench.query_cli import cmd_bench_queries
 
@@ -435,6 +437,14 @@ def _add_bench_parser(sub: Any) -> None:
         help="N random (start, goal) queries (the dataset's own first) against test worlds, through the "
         "Planner (online library and DiRECt, graph fallback); policies default to "
         "direct_bisect,bisect,lazysp_set,lazysp,check_all",
+    )
+    p.add_argument(
+        "--check-cost-ms",
+        default=None,
+        metavar="C[,C...]",
+        help="with --queries: also time every policy to a verified plan with C ms of CPU added to each check "
+        "(stored, new and off-graph queries; median and mean CPU and wall ms per C in the JSON's "
+        "policies.NAME.time_ms.C)",
     )
     _tree_options(p)
     p.set_defaults(func=cmd_bench)

@@ -49,7 +49,7 @@ from drd_planner.planner.growth_samples import SegmentMaker
 from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
 from drd_planner.planner.no_path import edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
-from drd_planner.planner.query_graph import MotionDispatch
+from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.query_models import DEFAULT_CACHE_SIZE, QueryModels
 from drd_planner.planner.result import (
@@ -179,6 +179,29 @@ class Planner:
     def warm_up(self) -> None:
         """Do the per-prior work of new queries now (packed worlds, search worlds), not in the first one."""
         self._models.warm_up()
+
+    def forget_queries(self) -> None:
+        """Drop the libraries and trees built online for past queries, so the next plan of any query is new.
+
+        The per-prior work (:meth:`warm_up`) and the precomputed trees stay. Benchmarks call it so that every
+        policy pays a new query's library and tree itself.
+        """
+        self._models.drop_online()
+
+    def query_graph(self, start: Endpoint, goal: Endpoint) -> QueryGraph:
+        """The graph a query plans over, without its library or imputed training outcomes.
+
+        The prior's graph, plus a new vertex per off-graph state and the connector's motions joining it. What a graph-search peer (LazySP, checking everything) plans on; :meth:`plan` builds the same joins.
+
+        Raises:
+            QueryError: a state that cannot be joined (no connector, or no vertex within its reach).
+        """
+        s = self._endpoints.snap(start, "start")
+        g = self._endpoints.snap(goal, "goal")
+        if isinstance(s, int) and isinstance(g, int):
+            return prior_query(self.prior, s, g, None)
+        connector = self._require_connector()
+        return connected_query(self.prior, s, g, connector, self._models.sample_index(), None)
 
     def memory_bytes(self) -> dict[str, int]:
         """Approximate memory of the prior's arrays and of the cached query libraries, in bytes."""
