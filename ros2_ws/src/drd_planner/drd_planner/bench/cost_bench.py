@@ -66,14 +66,16 @@ def run_cost_episodes(
     policies: Sequence[str] = DEFAULT_COST_POLICIES,
     seed: int = 0,
     progress: bool | None = None,
+    rows: dict[int, FullRow] | None = None,
 ) -> list[EpisodeTime]:
     """Every policy on every query at every cost; ``oracle_of(world)`` makes a fresh oracle of a world.
 
-    Query i's library policies use seed ``seed + i`` (same seed, same checks at every cost).
+    Query i's library policies use seed ``seed + i`` (same seed, same checks at every cost). ``rows``: the
+    worlds' :class:`FullRow` already made (``check_all`` makes the others).
     """
     check_cost_policies(policies)
     planner.warm_up()
-    rows: dict[int, FullRow] = {}
+    rows = dict(rows or {})
     out: list[EpisodeTime] = []
     if queries:  # first use of every code path (imports, caches) before anything is timed
         first = queries[0]

@@ -14,7 +14,7 @@ Policies:
 - ``lazysp``: LazySP (forward selector, no check cap) on the query's graph;
 - ``check_all``: every edge of the query's graph checked, then the shortest free path. Its checks of the
   prior's E edges do not depend on the query, so they are made (and timed) once per world
-  (:func:`full_row`) and charged to each of its queries, with ``E x C`` ms added for the check cost
+  (:func:`full_row`, batched) and charged to each of its queries, with ``E x C`` ms added for the check cost
   instead of busy-waiting it E times; a joined query's motions are checked in the episode, at cost C.
 
 A plan counts as **verified** only when every edge of its path was checked free in that episode.
@@ -98,9 +98,16 @@ class FullRow:
 
 
 def full_row(oracle: EdgeOracle, num_edges: int) -> FullRow:
-    """Check every edge ``0..num_edges-1`` with ``oracle``, timed."""
+    """Check every edge ``0..num_edges-1`` with ``oracle``, timed.
+
+    Batched when it has ``check_many`` (a domain's edge checker: how checking everything is done), else one
+    by one.
+    """
 
     def run() -> BoolArray:
+        many = getattr(oracle, "check_many", None)
+        if many is not None:
+            return np.asarray(many(np.arange(num_edges)), dtype=bool)
         return np.array([bool(oracle.check(e)) for e in range(num_edges)], dtype=bool)
 
     outcomes, spent = timed(run)

@@ -423,6 +423,7 @@ def run_ompl_lazyprm_live(
     seed: int = 0,
     time_limit_s: float = 60.0,
     embedding: EmbeddingName = "auto",
+    check_costs_ms: Sequence[float] = (0.0,),
 ) -> dict[str, Any]:
     """Run LazyPRM on ``graph`` once per world, each edge answered by the domain's live edge checker.
 
@@ -435,9 +436,12 @@ def run_ompl_lazyprm_live(
         seed: OMPL's RNG seed.
         time_limit_s: wall-clock limit of one world's solve, in seconds.
         embedding: ``auto``, ``coords`` or ``index`` (see :func:`embed_vertices`).
+        check_costs_ms: solve each world once per cost, each distinct edge check spending that many ms of
+            CPU on top of the checker (:mod:`drd_planner.bench.check_cost`), a new checker per solve.
 
     Returns:
-        ``{"peer", "ompl", "embedding", "domain", "worlds": [per world: label, checks, checked_edges,
+        ``{"peer", "ompl", "embedding", "domain", "worlds": [per world and cost (world-major): label,
+        check_cost_ms, cpu_s (the solve's CPU time), checks, checked_edges,
         checked_free, success (OMPL solved and every path edge was checked free), path_edges, wall_s
         (the solve, checks included), check_s (inside the checker), ...], "total_wall_s"}``.
 
@@ -458,7 +462,9 @@ def run_ompl_lazyprm_live(
             "spec": dict(live.spec),
             "worlds": [w.to_json() for w in live.worlds],
         },
+        "check_costs_ms": [float(c) for c in check_costs_ms],
     }
+    solves = [(recipe, float(c)) for recipe in live.worlds for c in check_costs_ms]
     rows = np.zeros((0, graph.num_edges), dtype=bool)
     t0 = time.perf_counter()
     records, returncode = _run_worker(
@@ -466,16 +472,18 @@ def run_ompl_lazyprm_live(
         embedded.states,
         rows,
         config,
-        timeout_s=300.0 + len(live.worlds) * (time_limit_s + 5.0),
-        expected=len(live.worlds),
+        timeout_s=300.0 + len(solves) * (time_limit_s + 5.0),
+        expected=len(solves),
     )
     blocks = []
-    for record, recipe in zip(records, live.worlds, strict=True):
+    for record, (recipe, _) in zip(records, solves, strict=True):
         row = np.zeros(graph.num_edges, dtype=bool)
         row[np.asarray(record["checked_edges"], dtype=np.int64)] = np.asarray(
             record["checked_free"], dtype=bool
         )
-        blocks.append({"label": recipe.label, **_world_block(record, graph, row, int(start), int(goal))})
+        block = _world_block(record, graph, row, int(start), int(goal))
+        extra = {"check_cost_ms": record.get("check_cost_ms", 0.0), "cpu_s": record.get("cpu_s")}
+        blocks.append({"label": recipe.label, **extra, **block})
     return {
         "peer": PEER_NAME,
         "ompl": message,

@@ -36,6 +36,7 @@ How LazyPRM is made to search exactly our graph:
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import sys
@@ -152,18 +153,36 @@ def _run(request: Path, config_path: Path, out: IO[str]) -> None:
         goal_state[k] = float(coords[int(config["goal"]), k])
     session = _Session(ob, og, si, roadmap, (start_state, goal_state), vertex, book, config)
     answers = _live_answers(graph, config["live"]) if "live" in config else _table_answers(config, rows)
-    for world, answer in answers:
-        out.write(json.dumps(session.solve(world, answer)) + "\n")
-        out.flush()
+    costs = [float(c) for c in config.get("check_costs_ms", [0.0])]
+    for world, answer_of in answers:
+        for cost in costs:  # a fresh answer (a fresh checker: they may cache) per check cost
+            record = session.solve(world, _with_cost(answer_of(), cost))
+            out.write(json.dumps({**record, "check_cost_ms": cost}) + "\n")
+            out.flush()
     out.write(json.dumps({"done": True}) + "\n")
     out.flush()
     del validator, keep_alive  # OMPL held them (the validator, the roadmap's states) until here
 
 
-def _table_answers(config: dict[str, Any], rows: npt.NDArray[np.bool_]) -> Iterator[tuple[int, EdgeAnswer]]:
-    """``(world id, answer)`` per requested world, answered from its (E,) row of X."""
+def _with_cost(answer: EdgeAnswer, cost_ms: float) -> EdgeAnswer:
+    """``answer`` after ``cost_ms`` ms of CPU per call (:func:`drd_planner.bench.check_cost.burn_cpu_ms`)."""
+    if cost_ms <= 0.0:
+        return answer
+    from drd_planner.bench.check_cost import burn_cpu_ms
+
+    def costly(edge: int) -> bool:
+        burn_cpu_ms(cost_ms)
+        return answer(edge)
+
+    return costly
+
+
+def _table_answers(
+    config: dict[str, Any], rows: npt.NDArray[np.bool_]
+) -> Iterator[tuple[int, Callable[[], EdgeAnswer]]]:
+    """``(world id, answer maker)`` per requested world, answered from its (E,) row of X."""
     for world, row in zip(config["world_ids"], rows, strict=True):
-        yield int(world), _row_answer(row)
+        yield int(world), functools.partial(_row_answer, row)
 
 
 def _row_answer(row: npt.NDArray[np.bool_]) -> EdgeAnswer:
@@ -175,8 +194,10 @@ def _row_answer(row: npt.NDArray[np.bool_]) -> EdgeAnswer:
     return answer
 
 
-def _live_answers(graph: ExplicitGraph, live: dict[str, Any]) -> Iterator[tuple[int, EdgeAnswer]]:
-    """``(world index, answer)`` per world recipe, answered by the domain's edge checker on that world."""
+def _live_answers(
+    graph: ExplicitGraph, live: dict[str, Any]
+) -> Iterator[tuple[int, Callable[[], EdgeAnswer]]]:
+    """``(world index, answer maker)`` per world recipe: each answer a new edge checker of the domain there."""
     from drd_planner.bench.world_recipes import WorldRecipe
     from drd_planner.domains.base import domain_from_spec
 
@@ -190,7 +211,13 @@ def _live_answers(graph: ExplicitGraph, live: dict[str, Any]) -> Iterator[tuple[
     if worlds and graph.num_edges:  # first use in this process (imports, caches): not in any world's time
         domain.checker(worlds[0]).check(0)
     for index, world in enumerate(worlds):
-        yield index, domain.checker(world).check
+        yield index, functools.partial(_checker_answer, domain, world)
+
+
+def _checker_answer(domain: Any, world: Any) -> EdgeAnswer:
+    """The ``check`` of a new edge checker of ``domain`` on ``world``."""
+    answer: EdgeAnswer = domain.checker(world).check
+    return answer
 
 
 def _space_information(
@@ -269,7 +296,7 @@ class _Session:
         planner.setup()
         milestones_before, edges_before = int(planner.milestoneCount()), int(planner.edgeCount())
         time_limit = float(self.config["time_limit_s"])
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
 
         def stop(t0: float = t0, planner: Any = planner) -> bool:
             # Iteration 1 runs the lazy search to a path or to a disconnected start and goal;
@@ -277,7 +304,7 @@ class _Session:
             return int(planner.getIterationCount()) >= 2 or time.perf_counter() - t0 > time_limit
 
         status = planner.solve(ob.PlannerTerminationCondition(ob.PlannerTerminationConditionFn(stop)))
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         solved = pdef.hasExactSolution()
         return {
             "world": world,
@@ -298,6 +325,7 @@ class _Session:
             "edges_before": edges_before,
             "edges_after": int(planner.edgeCount()),
             "wall_s": wall,
+            "cpu_s": cpu,
         }
 
     def _path_vertices(self, pdef: Any) -> list[int]:

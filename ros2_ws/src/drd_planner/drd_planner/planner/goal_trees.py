@@ -227,6 +227,10 @@ class SearchWorlds:
             self._trees.popitem(last=False)
         return tree
 
+    def forget_trees(self) -> None:
+        """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
+        self._trees.clear()
+
     def joined_tree(self, joins: GoalJoins) -> GoalTree:
         """The reverse trees of an off-graph goal joined by ``joins`` (not kept: the goal is a state)."""
         k = int(joins.vertices.size)

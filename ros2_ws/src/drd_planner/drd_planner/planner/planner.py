@@ -181,12 +181,12 @@ class Planner:
         self._models.warm_up()
 
     def forget_queries(self) -> None:
-        """Drop the libraries and trees built online for past queries, so the next plan of any query is new.
+        """Forget past queries, so that the next plan of any query is new.
 
-        The per-prior work (:meth:`warm_up`) and the precomputed trees stay. Benchmarks call it so that every
+        Drops the libraries and trees built online and the reverse search trees kept for past goals. The per-prior work (:meth:`warm_up`) and the precomputed trees stay. Benchmarks call it so that every
         policy pays a new query's library and tree itself.
         """
-        self._models.drop_online()
+        self._models.forget_queries()
 
     def query_graph(self, start: Endpoint, goal: Endpoint) -> QueryGraph:
         """The graph a query plans over, without its library or imputed training outcomes.

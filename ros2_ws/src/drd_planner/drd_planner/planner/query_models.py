@@ -158,6 +158,12 @@ class QueryModels:
         """The cached models, least recently used first."""
         return list(self._cache.values())
 
+    def forget_queries(self) -> None:
+        """Drop the online models and the goal trees kept for past goals: every next query is new."""
+        self.drop_online()
+        if self._search is not None:
+            self._search.forget_trees()
+
     def drop_online(self) -> None:
         """Forget the models built online (their tree or library settings changed); precomputed ones stay."""
         self._cache = OrderedDict((k, m) for k, m in self._cache.items() if m.precomputed is not None)
