@@ -302,3 +302,18 @@ def test_new_queries_use_the_priors_region_rule(problem: Problem, prior: WorldPr
             if result.found:
                 outcomes = result.outcomes()
                 assert all(outcomes[int(e)] for e in result.edges)
+
+
+def test_forgotten_queries_are_new_again_and_the_query_graph_is_the_priors(
+    problem: Problem, prior: WorldPrior
+) -> None:
+    planner = Planner(prior)
+    assert problem.worlds is not None
+    row = problem.worlds.X[int(problem.worlds.test_ids[0])]
+    first = planner.plan(3, 40, TableOracle(row))
+    planner.forget_queries()
+    again = planner.plan(3, 40, TableOracle(row))
+    assert not again.query_cached and [c.edge for c in again.checks] == [c.edge for c in first.checks]
+    assert planner.plan(3, 40, TableOracle(row)).query_cached
+    query = planner.query_graph(3, 40)
+    assert query.graph is prior.graph and (query.start, query.goal) == (3, 40) and not query.connected
