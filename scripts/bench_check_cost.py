@@ -10,7 +10,7 @@ checker):
 
 - ``stored``: the prior's precomputed query, once per world;
 - ``new``: random vertex pairs (start uniform, goal among the vertices the start reaches in at least half
-  of 200 training worlds), each with a free path in its world;
+  of 200 training worlds, ``--reach``), each with a free path in its world;
 - ``off_graph``: random states that are not graph vertices, start and goal (uniform in the box of the
   vertex states, heading included; kept when the state itself is free in the world, the Planner can join
   it and the query has a free path), planned through the Planner's public API, which joins them;
@@ -85,9 +85,9 @@ def held_out_worlds(
 
 
 def new_queries(
-    prior: WorldPrior, rows: dict[int, FullRow], count: int, rng: np.random.Generator
+    prior: WorldPrior, rows: dict[int, FullRow], count: int, rng: np.random.Generator, reach: float = 0.5
 ) -> list[CostQuery]:
-    """Random vertex pairs connected in at least half of a training sample and free in their world."""
+    """Random vertex pairs connected in at least ``reach`` of a training sample and free in their world."""
     assert prior.worlds is not None
     graph = prior.graph
     sample = prior.worlds[
@@ -102,7 +102,7 @@ def new_queries(
         start = int(rng.integers(graph.num_vertices))
         fraction = reachable_fraction(graph, sample, start)
         fraction[start] = 0.0
-        goals = np.flatnonzero(fraction >= 0.5)
+        goals = np.flatnonzero(fraction >= reach)
         if goals.size == 0:
             continue
         goal = int(rng.choice(goals))
@@ -186,7 +186,7 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
     planner = Planner(prior)
     stored = prior.trees[0]
     queries = [CostQuery("stored", stored.start, stored.goal, w) for w in range(len(worlds))]
-    queries += new_queries(prior, rows, args.new, rng)
+    queries += new_queries(prior, rows, args.new, rng, args.reach)
     queries += off_graph_queries(planner, domain, worlds, rows, args.off_graph, rng)
     kinds = {k: sum(q.kind == k for q in queries) for k in ("stored", "new", "off_graph")}
     print(f"{name}: queries {kinds} ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
@@ -248,6 +248,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--new", type=int, default=8, help="random vertex-pair queries per prior")
     parser.add_argument("--off-graph", type=int, default=8, help="random off-graph queries per prior")
     parser.add_argument("--seed", type=int, default=0, help="seed of the queries and the policies")
+    parser.add_argument("--reach", type=float, default=0.5, help="new queries: training fraction connected")
     parser.add_argument("--world-seed", type=int, default=0, help="first world seed (held out: see above)")
     parser.add_argument("--no-ompl", action="store_true", help="skip ompl_lazyprm")
     parser.add_argument("--json", type=Path, default=None)
