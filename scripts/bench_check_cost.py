@@ -21,7 +21,7 @@ checker and the same per-check cost in its worker (vertex queries only: its road
 state). Query i runs against world i mod W. Times are CPU ms of the process that plans (the OMPL worker's
 own for LazyPRM); medians over the queries of a kind that every method verified at every C.
 
-Usage: python scripts/bench_check_cost.py [--priors heli_wires,heli_lines,arm_table_clutter]
+Usage: python scripts/bench_check_cost.py [--priors heli_wires,heli_terrain,heli_lines,arm_table_clutter]
     [--costs 0,0.2,1,5] [--worlds 4] [--new 8] [--off-graph 8] [--seed 0] [--world-seed 0] [--no-ompl]
     [--json FILE] [--markdown FILE]
 """
@@ -55,7 +55,12 @@ from drd_planner.planner.query_sampling import REACH_SAMPLE, reachable_fraction
 
 REPO = Path(__file__).resolve().parents[1]
 #: The world model each shipped prior was built from (trees/README.md).
-WORLD_MODELS = {"heli_wires": "wires", "heli_lines": "corridors", "arm_table_clutter": "table_clutter"}
+WORLD_MODELS = {
+    "heli_wires": "wires",
+    "heli_terrain": "terrain",
+    "heli_lines": "corridors",
+    "arm_table_clutter": "table_clutter",
+}
 POLICIES = ("direct_bisect", "bisect", "lazysp", "check_all")
 
 
@@ -123,12 +128,13 @@ def off_graph_queries(
     states = planner.prior.graph.vertex_states
     assert states is not None
     low, high = states.min(axis=0), states.max(axis=0)
+    checkers = [domain.checker(w) for w in worlds]  # one per world: building one costs more than many checks
     out: list[CostQuery] = []
     for _ in range(400 * count):
         if len(out) == count:
             break
         world = len(out) % len(worlds)
-        checker = domain.checker(worlds[world])
+        checker = checkers[world]
         ends = [rng.uniform(low, high) for _ in range(2)]
         if not all(checker.check_motion(e[None, :]) for e in ends):
             continue

@@ -437,7 +437,8 @@ def run_ompl_lazyprm_live(
         time_limit_s: wall-clock limit of one world's solve, in seconds.
         embedding: ``auto``, ``coords`` or ``index`` (see :func:`embed_vertices`).
         check_costs_ms: solve each world once per cost, each distinct edge check spending that many ms of
-            CPU on top of the checker (:mod:`drd_planner.bench.check_cost`), a new checker per solve.
+            CPU on top of the checker (:mod:`drd_planner.bench.check_cost`), a new checker per solve, after
+            one untimed solve on the first world (the first solve's one-off work is in no record).
 
     Returns:
         ``{"peer", "ompl", "embedding", "domain", "worlds": [per world and cost (world-major): label,

@@ -183,7 +183,8 @@ class Planner:
     def forget_queries(self) -> None:
         """Forget past queries, so that the next plan of any query is new.
 
-        Drops the libraries and trees built online and the reverse search trees kept for past goals. The per-prior work (:meth:`warm_up`) and the precomputed trees stay. Benchmarks call it so that every
+        Drops the libraries and trees built online and the reverse search trees kept for past goals. The
+        per-prior work (:meth:`warm_up`) and the precomputed trees stay. Benchmarks call it so that every
         policy pays a new query's library and tree itself.
         """
         self._models.forget_queries()
@@ -191,7 +192,8 @@ class Planner:
     def query_graph(self, start: Endpoint, goal: Endpoint) -> QueryGraph:
         """The graph a query plans over, without its library or imputed training outcomes.
 
-        The prior's graph, plus a new vertex per off-graph state and the connector's motions joining it. What a graph-search peer (LazySP, checking everything) plans on; :meth:`plan` builds the same joins.
+        The prior's graph, plus a new vertex per off-graph state and the connector's motions joining it.
+        What a graph-search peer (LazySP, checking everything) plans on; :meth:`plan` builds the same joins.
 
         Raises:
             QueryError: a state that cannot be joined (no connector, or no vertex within its reach).
