@@ -2,7 +2,8 @@
 # Set up a virtual environment with both packages and run one job.
 #   scripts/run.sh demo    the main job: the planner node on the bundled real-scale helicopter bag heli_lines (planner_demo)
 #   scripts/run.sh test    the whole suite: ruff, mypy, pytest
-# Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv when missing).
+# Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv, and cmake, g++ and the
+# Python headers for the nav2_msgs build, with apt when missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -36,6 +37,9 @@ extras="plots,test"
 [ "$job" = test ] && extras="plots,test,peer"
 "$py" -m pip install -q --disable-pip-version-check \
   -e ros2_ws/src/drd_msgs_py -e "ros2_ws/src/drd_planner[$extras]" -r requirements-dev.txt
+# Nav2's planner interface (compute_path_to_pose, is_path_valid) needs nav2_msgs: a ROS install's, or the
+# two interfaces built into the venv once (about 1-2 minutes; cached, skipped on later runs).
+bash scripts/build_nav2_msgs.sh "$venv"
 
 case "$job" in
   demo)
