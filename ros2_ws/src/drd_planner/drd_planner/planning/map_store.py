@@ -33,7 +33,7 @@ from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot, Parts
 
-__all__ = ["MAP_SOURCES", "MapStore", "RobotLoader", "TerrainFit", "terrain_fit_of"]
+__all__ = ["MAP_SOURCES", "MapStore", "RobotLoader", "TerrainFit", "robot_loader_of", "terrain_fit_of"]
 
 #: Turns a ``robot_description`` URDF into an arm model (limits applied by whoever made it).
 RobotLoader = Callable[[str], RobotModel]
@@ -164,3 +164,15 @@ class MapStore:
         self._description = text
         self._snapshot = self._snapshot.with_robot(robot)
         return self._snapshot
+
+
+def robot_loader_of(sessions: Sequence[Any], limits: MapLimits) -> RobotLoader | None:
+    """The arm prior's ``robot_description`` reader with ``limits`` (None: no arm prior is loaded).
+
+    ``sessions``: the loaded priors (:class:`~drd_planner.planning.query_session.QuerySession`).
+    """
+    arm = next((s for s in sessions if s.is_arm), None)
+    loader: Any = None if arm is None else arm.robot_loader
+    if loader is None:
+        return None
+    return lambda text: loader(text, limits=limits)  # type: ignore[no-any-return]

@@ -42,6 +42,7 @@ from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
 from drd_planner.planner.result import PlanStatus
+from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.domain_view import DomainSession, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_support import (
@@ -320,9 +321,9 @@ class QuerySession(DomainSession):
     # Planning
 
     def plan(
-        self, snapshot: MapSnapshot, start: Endpoint, goal: Endpoint, *, seed: int = 0
+        self, snapshot: MapSnapshot, start: Endpoint, goal: Endpoint, *, seed: int = 0, cancel: Cancel = None
     ) -> QueryPlanResult:
-        """Plan from ``start`` to ``goal`` (vertex ids or (D,) states) on ``snapshot``.
+        """Plan from ``start`` to ``goal`` (vertex ids or (D,) states) on ``snapshot``; ``cancel`` stops it.
 
         Returns:
             ``ok`` only with a verified path (status ``path_found``); otherwise status ``no_free_path``,
@@ -331,11 +332,12 @@ class QuerySession(DomainSession):
 
         Raises:
             PlanningError: the snapshot has no terrain and no obstacles yet (no maps).
+            PlanCancelled: ``cancel`` was set; the plan stopped before its next check.
             UnverifiedPathError: never, unless the bookkeeping is broken (then nothing is returned).
         """
         t0 = time.perf_counter()
         cache = self._outcomes(snapshot)
-        oracle = SnapshotOracle(self.checker(snapshot), cache, self._motions)
+        oracle = SnapshotOracle(self.checker(snapshot), cache, self._motions, cancel)
         t_prepared = time.perf_counter()
         result = self._planner.plan(
             start,

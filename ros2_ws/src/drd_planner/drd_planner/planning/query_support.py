@@ -26,6 +26,7 @@ from drd_planner.domains.online import OnlineDomain
 from drd_planner.domains.pose_states import wrap_angle
 from drd_planner.exceptions import PlanningError, PriorFileError, UnverifiedPathError
 from drd_planner.planner.prior import WorldPrior
+from drd_planner.planning.cancel import CancelToken
 from drd_planner.planning.domain_view import domain_from_stored_spec
 
 #: Motions a session remembers (for ``edge_states`` and re-checks of published plans); oldest dropped first.
@@ -124,14 +125,23 @@ class SnapshotOracle:
     motion ids start at E). ``timings`` and ``motion_calls`` record what this oracle was asked.
     """
 
-    def __init__(self, checker: EdgeChecker, cache: dict[int, bool], motions: MotionRegistry) -> None:
+    def __init__(
+        self,
+        checker: EdgeChecker,
+        cache: dict[int, bool],
+        motions: MotionRegistry,
+        cancel: CancelToken | None = None,
+    ) -> None:
         self._checker = checker
         self._cache = cache
         self._motions = motions
+        self._cancel = cancel  # read before every answer: a cancelled plan stops before its next check
         self.timings: dict[int, tuple[float, bool]] = {}  # session edge id -> (check ms, cached)
         self.motion_calls: list[int] = []  # session motion ids, in the order they were checked
 
     def _answer(self, key: int, run: Callable[[], bool]) -> bool:
+        if self._cancel is not None:
+            self._cancel.check(len(self.timings))  # PlanCancelled once the requester cancelled
         known = self._cache.get(key)
         if known is not None:
             self.timings[key] = (0.0, True)

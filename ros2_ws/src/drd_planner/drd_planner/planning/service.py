@@ -34,9 +34,11 @@ from drd_planner.arrays import FloatArray
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
+from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.map_store import MapStore, RobotLoader, terrain_fit_of
+from drd_planner.planning.map_store import MapStore, robot_loader_of, terrain_fit_of
+from drd_planner.planning.plan_outcome import PlanOutcome, RefusedPart
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.replan import RecheckResult, recheck_plan
 from drd_planner.planning.requests import (
@@ -49,15 +51,8 @@ from drd_planner.planning.requests import (
 )
 from drd_planner.planning.session import PlanResult
 
-__all__ = [
-    "HISTORY_LENGTH",
-    "SNAPSHOTS_KEPT",
-    "LiveSettings",
-    "PlanRecord",
-    "PlannerService",
-    "Published",
-    "ServiceOutputs",
-]
+__all__ = ["HISTORY_LENGTH", "SNAPSHOTS_KEPT", "LiveSettings", "PlanRecord", "PlannerService", "Published"]
+__all__ += ["ServiceOutputs"]
 
 #: Characters of a refused map's reason a plan summary quotes.
 MAX_REFUSAL_TEXT = 300
@@ -159,15 +154,6 @@ class ServiceOutputs(Protocol):
         """Take the published plan back (an empty plan)."""
 
 
-def robot_loader_of(sessions: Sequence[QuerySession], limits: MapLimits) -> RobotLoader | None:
-    """The arm prior's ``robot_description`` reader with ``limits`` (None: no arm prior is loaded)."""
-    arm = next((s for s in sessions if s.is_arm), None)
-    loader: Any = None if arm is None else arm.robot_loader
-    if loader is None:
-        return None
-    return lambda text: loader(text, limits=limits)  # type: ignore[no-any-return]
-
-
 class PlannerService:
     """See the module docstring.
 
@@ -224,6 +210,11 @@ class PlannerService:
     def sessions(self) -> tuple[QuerySession, ...]:
         """The loaded priors."""
         return self._sessions
+
+    @property
+    def planning_lock(self) -> threading.Lock:
+        """Held by every plan and re-check (one at a time: the priors' caches); hold it to check."""
+        return self._planning
 
     @property
     def snapshot(self) -> MapSnapshot:
@@ -355,31 +346,39 @@ class PlannerService:
                     raise
 
     def plan_now(self, goal: Goal, start: Goal | None, source: str = "get_plan") -> Any | None:
-        """Serve one request now (a service call): the published plan as :meth:`ServiceOutputs.plan` gave it, or None (the reason reported).
+        """:meth:`serve_request`'s published plan as :meth:`ServiceOutputs.plan` gave it, or None (the reason reported)."""
+        return self.serve_request(goal, start, source).sent
 
-        ``start``: a pose start (helicopter); None: the robot's state.
+    def serve_request(
+        self, goal: Goal, start: Goal | None, source: str = "get_plan", *, cancel: Cancel = None
+    ) -> PlanOutcome:
+        """Serve one request now (a service call or action goal) and say what it came to.
+
+        ``start``: a pose start (helicopter); None: the robot's state. ``cancel`` stops the plan between two
+        checks (:class:`~drd_planner.planning.cancel.PlanCancelled` is raised; nothing is published).
         """
         session = pick_session(self._sessions, goal)
         if session is None:
-            self._out.error(f"{source} refused: no loaded prior plans for {goal.describe()}")
-            return None
+            return self._refuse(f"{source} refused: no loaded prior plans for {goal.describe()}", "prior")
         start_state = None
         if start is not None:
-            if session.is_arm:
-                self._out.error(f"{source} refused: an arm's start comes from joint_states, not a pose")
-                return None
+            if session.is_arm or start.yaw is None:
+                arm = "an arm's start comes from joint_states, not a pose"
+                why = arm if session.is_arm else "a start pose needs its orientation (the vehicle's yaw)"
+                return self._refuse(f"{source} refused: {why}", "start")
             assert start.position is not None
-            if start.yaw is None:
-                self._out.error(f"{source} refused: a start pose needs its orientation (the vehicle's yaw)")
-                return None
             start_state = state_from_pose(start.position, start.yaw)
         received = time.perf_counter()
         with self._planning:
-            path = self._plan_and_publish(
-                session, goal, start_state, {"request": source}, wait_s=time.perf_counter() - received
-            )
+            values, wait_s = {"request": source}, time.perf_counter() - received
+            outcome = self._plan_and_publish(session, goal, start_state, values, wait_s=wait_s, cancel=cancel)
         self._wake()  # re-check it if a map arrived while it was planned
-        return path
+        return outcome
+
+    def _refuse(self, text: str, part: RefusedPart) -> PlanOutcome:
+        """Report a request refused before planning (``part``: what it is about)."""
+        self._out.error(text)
+        return PlanOutcome(refusal=text, refused=part)
 
     def replan(self) -> tuple[Any | None, bool]:
         """Plan again to the published plan's goal from the robot's state now.
@@ -390,9 +389,9 @@ class PlannerService:
         if published is None:
             return None, False
         with self._planning:
-            path = self._plan_and_publish(published.session, published.goal, None, {"request": "replan"})
+            outcome = self._plan_and_publish(published.session, published.goal, None, {"request": "replan"})
         self._wake()
-        return path, True
+        return outcome.sent, True
 
     # ------------------------------------------------------------------------------------------------
     # Planning and publishing
@@ -419,20 +418,23 @@ class PlannerService:
         values: dict[str, Any],
         *,
         wait_s: float = 0.0,
-    ) -> Any | None:
+        cancel: Cancel = None,
+    ) -> PlanOutcome:
         """Plan on the current snapshot and send the result out; ``wait_s``: how long the request waited."""
         snapshot = self._snapshot
+        part: RefusedPart = "start"
         try:
             begin = start if start is not None else self._start_for(session)
+            part = "goal"
             end = goal_endpoint(session, goal, snapshot, self._tolerances)
-            result = session.plan(snapshot, begin, end, seed=self._live().seed)
+            part = "maps"
+            result = session.plan(snapshot, begin, end, seed=self._live().seed, cancel=cancel)
         except DrdError as exc:
-            self._out.error(f"{values.get('request', 'request')} refused: {exc}")
-            return None
+            return self._refuse(f"{values.get('request', 'request')} refused: {exc}", part)
         # A start or goal the prior cannot serve is a refused request, not a plan.
         if result.status == "refused":
             self._out.error(f"{values.get('request', 'request')} refused: {result.message}")
-            return None
+            return PlanOutcome(result=result, session=session, snapshot=snapshot)
         refused = self._refused
         if refused is not None and refused[0] >= snapshot.version:
             values = {**values, "newer_map_refused": refused[1]}
@@ -447,7 +449,8 @@ class PlannerService:
                 self._published = Published(session, result, snapshot, goal)
             return path
 
-        return self._out.result(record, wait_s=wait_s, publish=publish)
+        sent = self._out.result(record, wait_s=wait_s, publish=publish)
+        return PlanOutcome(sent, result, session=session, snapshot=snapshot)
 
     def _remember(self, record: PlanRecord) -> None:
         """Add ``record`` to the history; the record :data:`SNAPSHOTS_KEPT` back lets go of its snapshot."""
@@ -480,7 +483,7 @@ class PlannerService:
         elif (
             self._plan_and_publish(
                 session, published.goal, None, {"request": "map_update", "replan_reason": reason}
-            )
+            ).sent
             is None
         ):
             self._withdraw(session, snapshot, why="no replacement was found")

@@ -1,0 +1,106 @@
+"""Nav2's planner error codes for what a request came to: one code per failure, as Nav2's planner server.
+
+Nav2's ``ComputePathToPose`` result (Jazzy) carries one ``error_code`` and an ``error_msg``. The planner
+says why a plan failed in its own vocabulary (:class:`~drd_planner.planning.plan_outcome.PlanOutcome`: a
+refusal before planning and what it was about, or the plan's ``status`` and ``message``);
+:func:`nav2_error` maps it:
+
+==================================================  ======================
+what happened                                       Nav2 code
+==================================================  ======================
+a verified path                                     ``NONE``
+``planner_id`` names no loaded prior (the action)   ``INVALID_PLANNER``
+no loaded prior plans for the goal                  ``INVALID_PLANNER``
+no start: no robot state yet, a start pose the      ``TF_ERROR`` (Nav2: "unable to get start pose")
+prior cannot take, or a pose in another frame
+start outside the graph's extent (refused)          ``START_OUTSIDE_MAP``
+goal outside the graph's extent, or no roadmap      ``GOAL_OUTSIDE_MAP``
+vertex within the goal tolerance
+no free path, every motion at the start blocked     ``START_OCCUPIED``
+no free path, every motion at the goal blocked      ``GOAL_OCCUPIED``
+``max_checks`` or ``time_budget_s`` ran out         ``TIMEOUT``
+no free path otherwise                              ``NO_VALID_PATH``
+no maps yet, a malformed request, anything else     ``UNKNOWN``
+==================================================  ======================
+
+When both ends are walled in, the start's code wins (Nav2's result lists its codes in priority order,
+start before goal). A cancelled plan has no code: the goal ends CANCELED, as in Nav2.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from drd_planner.planning.plan_outcome import PlanOutcome
+
+__all__ = ["NAV2_CODES", "Nav2Error", "nav2_error"]
+
+#: Nav2 Jazzy's ``ComputePathToPose.Result`` error codes (nav2_msgs/action/ComputePathToPose.action).
+NAV2_CODES = {
+    "NONE": 0,
+    "UNKNOWN": 200,
+    "INVALID_PLANNER": 201,
+    "TF_ERROR": 202,
+    "START_OUTSIDE_MAP": 203,
+    "GOAL_OUTSIDE_MAP": 204,
+    "START_OCCUPIED": 205,
+    "GOAL_OCCUPIED": 206,
+    "TIMEOUT": 207,
+    "NO_VALID_PATH": 208,
+}
+
+#: A refusal of the planner (its ``message``) that puts the start or the goal outside the graph's extent
+#: (the lattice connector: "goal position (...) m is outside the lattice's horizontal extent ...",
+#: "start altitude ... is outside the lattice's altitude band ...").
+_OUTSIDE = re.compile(r"\b(start|goal) (?:position|altitude|state)\b[^;]*\bis outside\b")
+#: A no-path reason's endpoint rule (:mod:`drd_planner.planner.no_path`): "the goal state itself is
+#: blocked", "all 12 edges joining the start [...] to the graph (...) were checked blocked".
+_BLOCKED = (
+    re.compile(r"\bthe (start|goal) state itself is blocked\b"),
+    re.compile(r"\ball \d+ edges joining the (start|goal)\b[^;]*\bwere checked blocked\b"),
+)
+_REFUSED_PART = {
+    "prior": "INVALID_PLANNER",
+    "start": "TF_ERROR",
+    "goal": "GOAL_OUTSIDE_MAP",
+    "maps": "UNKNOWN",
+}
+
+
+@dataclass(frozen=True)
+class Nav2Error:
+    """One Nav2 error: the code's name (a key of :data:`NAV2_CODES`) and the text for ``error_msg``."""
+
+    name: str
+    text: str
+
+    @property
+    def code(self) -> int:
+        """The code's number (uint16)."""
+        return NAV2_CODES[self.name]
+
+
+def _endpoint_code(pattern_hits: set[str], suffix: str) -> str | None:
+    """``START_<suffix>`` when the start is named, else ``GOAL_<suffix>``; None when neither."""
+    for end in ("start", "goal"):
+        if end in pattern_hits:
+            return f"{end.upper()}_{suffix}"
+    return None
+
+
+def nav2_error(outcome: PlanOutcome) -> Nav2Error:
+    """The Nav2 error of a served request (``NONE`` with a verified path); see the module docstring."""
+    result = outcome.result
+    if result is None:
+        return Nav2Error(_REFUSED_PART.get(outcome.refused, "UNKNOWN"), outcome.refusal)
+    if result.ok:
+        return Nav2Error("NONE", "")
+    message = result.message
+    if result.status == "refused":
+        name = _endpoint_code({m.group(1) for m in _OUTSIDE.finditer(message)}, "OUTSIDE_MAP")
+        return Nav2Error(name or "UNKNOWN", message)
+    if result.status in ("max_checks", "time_budget"):
+        return Nav2Error("TIMEOUT", f"{result.status.replace('_', ' ')} ran out: {message}")
+    hits = {m.group(1) for pattern in _BLOCKED for m in pattern.finditer(message)}
+    return Nav2Error(_endpoint_code(hits, "OCCUPIED") or "NO_VALID_PATH", message)
