@@ -10,6 +10,7 @@ Interface (DESIGN.md section 6; names relative to the node namespace):
   ``joint_states`` (JointState, arm), best effort;
 - services ``get_plan`` (``nav_msgs/srv/GetPlan``: as ``goal_pose``, from ``start`` when its frame is set)
   and ``replan`` (``std_srvs/srv/Trigger``: the published plan's goal again, from the robot's state now);
+  Nav2's ``compute_path_to_pose`` action and ``is_path_valid`` service (:mod:`drd_planner.ros.nav2_host`);
 - publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
   ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
   status per check) and ``checked_edges`` (MarkerArray) are lifecycle publishers (silent until
@@ -69,6 +70,7 @@ from drd_planner.planning.service import LiveSettings, PlannerService, PlanRecor
 from drd_planner.planning.session import PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.nav2_host import Nav2Host
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs
 from drd_planner.ros.parameters import (
     PARAMETERS,
@@ -111,6 +113,7 @@ class PlannerNode(LifecycleNode):
         self._frame = "map"
         self._subs: list[Any] = []
         self._ros_services: list[Any] = []
+        self._nav2: Nav2Host | None = None  # Nav2's planner interface, while active
         self._lock = threading.Lock()  # the error list
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
         self._taken: Counter[str] = Counter()  # messages taken per subscribed topic
@@ -268,6 +271,7 @@ class PlannerNode(LifecycleNode):
                 (Trigger, "replan", self._on_replan),
             )
         ]
+        self._nav2 = None if self._service is None else Nav2Host.start(self, self._service, report=report)
         durability = "transient_local" if maps is LATCHED else "volatile"
         self.get_logger().info(
             f"active: maps on {', '.join(sub.topic_name for sub in self._subs[:3])} ({durability}); "
@@ -300,6 +304,7 @@ class PlannerNode(LifecycleNode):
         super().destroy_node()
 
     def _drop_interfaces(self) -> None:
+        self._nav2 = self._nav2.stop() if self._nav2 is not None else None  # its running plans cancelled
         if not self._worker.stop():
             self.get_logger().warning("the planning thread did not end within 30 s")
         for sub in self._subs:
