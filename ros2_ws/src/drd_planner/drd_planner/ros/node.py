@@ -301,6 +301,7 @@ class PlannerNode(LifecycleNode):
     def destroy_node(self) -> None:
         """Stop the planning thread (a plan running after :data:`SHUTDOWN_WAIT_S` is abandoned), destroy the node."""
         self._worker.stop(timeout=SHUTDOWN_WAIT_S)
+        self._nav2 = self._nav2.stop() if self._nav2 is not None else None
         super().destroy_node()
 
     def _drop_interfaces(self) -> None:
