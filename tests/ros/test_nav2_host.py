@@ -191,3 +191,20 @@ def test_a_nav2_client_plans_fails_with_codes_asks_validity_and_cancels(
         assert len(checks) == begun + made  # no check after the cancel
         assert len(peer.plans) == published  # the cancelled plan published nothing
         assert not [e for e in node.errors if "internal error" in e], node.errors
+
+
+def test_without_nav2_msgs_the_node_runs_without_the_interface_and_says_why(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from drd_planner.ros import nav2_host
+
+    def missing() -> tuple[Any, Any]:
+        raise ImportError("No module named 'nav2_msgs'")
+
+    monkeypatch.setattr(nav2_host, "nav2_interfaces", missing)
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    peer = Peer(context)
+    with active_planner(context, node, peer):
+        assert node._nav2 is None
+        names = [name for name, _ in node.get_service_names_and_types()]
+        assert "/get_plan" in names and "/is_path_valid" not in names

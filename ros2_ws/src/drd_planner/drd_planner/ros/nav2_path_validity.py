@@ -55,7 +55,7 @@ class PathValidityService:
         self._served = served
         self._report = report
         self._server = node.create_service(service_type, SERVICE_NAME, self._on_request, callback_group=group)
-        self.name = self._server.srv_name
+        self.name = f"{node.get_namespace().rstrip('/')}/{SERVICE_NAME}"
 
     def _on_request(self, request: Any, response: Any) -> Any:
         path = request.path
