@@ -26,7 +26,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.topics import topic_base
@@ -39,8 +39,8 @@ from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MapStore, robot_loader_of, terrain_fit_of
 from drd_planner.planning.plan_outcome import PlanOutcome, RefusedPart
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.replan import RecheckResult, recheck_plan
+from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
     Goal,
@@ -49,10 +49,17 @@ from drd_planner.planning.requests import (
     pick_session,
     read_robot_state,
 )
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.service_outputs import PlanRecord, Published, ServiceOutputs
 
-__all__ = ["HISTORY_LENGTH", "SNAPSHOTS_KEPT", "LiveSettings", "PlanRecord", "PlannerService", "Published"]
-__all__ += ["ServiceOutputs"]
+__all__ = [
+    "HISTORY_LENGTH",
+    "SNAPSHOTS_KEPT",
+    "LiveSettings",
+    "PlanRecord",
+    "PlannerService",
+    "Published",
+    "ServiceOutputs",
+]
 
 #: Characters of a refused map's reason a plan summary quotes.
 MAX_REFUSAL_TEXT = 300
@@ -82,34 +89,6 @@ class LiveSettings:
 
 
 @dataclass(frozen=True)
-class PlanRecord:
-    """One served request, as kept in :attr:`PlannerService.history`.
-
-    Attributes:
-        session: the prior that planned it.
-        result: the plan (or why there is none) with its check log.
-        snapshot: the maps it was planned on (None once :data:`SNAPSHOTS_KEPT` newer records exist).
-        request: where it came from (``goal_pose``, ``goal_joints``, ``get_plan``, ``replan``,
-            ``map_update``) and the other summary values of the request.
-    """
-
-    session: QuerySession
-    result: QueryPlanResult
-    snapshot: MapSnapshot | None
-    request: dict[str, Any]
-
-
-@dataclass(frozen=True)
-class Published:
-    """The plan out there now: what a map update must re-check, and its goal for a replan."""
-
-    session: QuerySession
-    result: PlanResult
-    snapshot: MapSnapshot
-    goal: Goal
-
-
-@dataclass(frozen=True)
 class _Request:
     """A goal waiting to be planned: the prior that serves it, the goal, where it came from."""
 
@@ -119,39 +98,6 @@ class _Request:
     stamp: str
     coalesced: int = 0
     received: float = 0.0  # time.perf_counter() when the request was taken
-
-
-class ServiceOutputs(Protocol):
-    """Where the service's results and reports go (the node: its publishers, log and ``/diagnostics``)."""
-
-    def error(self, text: str, topic: str = "plan") -> None:
-        """Report a refused input or a failure (``topic``: ``plan``, ``maps`` or ``node``)."""
-
-    def info(self, text: str) -> None:
-        """Log a line."""
-
-    def warning(self, text: str) -> None:
-        """Log a warning."""
-
-    def result(
-        self, record: PlanRecord, *, wait_s: float, publish: Callable[[tuple[int, int]], Any | None]
-    ) -> Any | None:
-        """Send a served request out, stamped (sec, nanosec): ``publish(stamp)`` first, then the rest.
-
-        ``publish`` publishes a found plan (through :meth:`plan`); returns what it returned: the
-        published plan as :meth:`plan` returned it, or None.
-        """
-
-    def plan(
-        self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
-    ) -> tuple[Any, bool]:
-        """Publish a found plan: what was sent (the node: its Path on demand), and whether it is out there (False while inactive)."""
-
-    def kept(self, session: QuerySession, outcome: RecheckResult, snapshot: MapSnapshot) -> None:
-        """Report that the published plan stays free on ``snapshot`` after a map update."""
-
-    def withdraw(self, session: QuerySession) -> None:
-        """Take the published plan back (an empty plan)."""
 
 
 class PlannerService:

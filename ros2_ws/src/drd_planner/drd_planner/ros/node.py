@@ -1,6 +1,6 @@
 """The ``drd_planner`` lifecycle node (rclpy): maps and the robot's state in, lazily checked plans out.
 
-Interface (DESIGN.md section 6; names relative to the node namespace):
+Interface (names relative to the node namespace):
 
 - subscriptions (after ``activate``): ``obstacles`` (MarkerArray), ``terrain`` (PointCloud2) and
   ``robot_description`` (String, arm), reliable depth 1, transient_local (``map_subscribe_transient_local``
@@ -35,26 +35,20 @@ of its edges was checked free on the snapshot it was planned on.
 
 from __future__ import annotations
 
-import sys
 import threading
 import time
 from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 from nav_msgs.msg import Path as PathMsg
 from nav_msgs.srv import GetPlan
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
@@ -85,15 +79,13 @@ from drd_planner.ros.reporter import NodeReporter
 from drd_planner.ros.status import HEARTBEAT_PERIOD_S, heartbeat_values, map_values
 from drd_planner.ros.subscription_qos import REQUESTS, ROBOT_STATE, VOLATILE_MAPS
 
-__all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode", "main"]
+__all__ = ["LATCHED", "REQUESTS", "PlanRecord", "PlannerNode"]
 
 
 #: Seconds between two reports of the same refused robot-state message (odometry streams fast).
 STATE_ERROR_PERIOD_S = 5.0
 #: Seconds :meth:`PlannerNode.destroy_node` waits for a running plan.
 SHUTDOWN_WAIT_S = 1.0
-#: Longest executor wait (seconds) of ``planner_node``'s spin loop.
-SPIN_TIMEOUT_S = 0.25
 #: What a refused map message leaves unchanged, per map topic.
 _UNCHANGED = {
     "obstacles": "map unchanged",
@@ -464,42 +456,3 @@ class PlannerNode(LifecycleNode):
         with self._lock:
             self._errors = [*self._errors[-99:], text]
         self._out.status(topic, ok=False, message=text, values={})
-
-
-def main(args: list[str] | None = None) -> int:
-    """Run the lifecycle node until SIGINT / SIGTERM (``autostart:=true`` configures and activates it).
-
-    The ``planner_node`` console script (:mod:`drd_planner.ros.planner_node`) installs the signal
-    handlers and parses ``--help`` before it imports this module. Without ``autostart`` the node waits
-    for the lifecycle services (``ros2 lifecycle set``). One executor thread takes maps and requests
-    while the node's planning thread plans. Returns the exit status: 0, or 2 when the parameters given
-    on the command line are refused.
-    """
-    rclpy.init(args=args)
-    try:
-        node = PlannerNode()
-    except (ParameterException, ValueError, TypeError) as exc:  # an override outside its range or type
-        print(f"planner_node: error: {shorten(str(exc))}", file=sys.stderr)
-        try_shutdown()
-        return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        if bool(node.get_parameter("autostart").value):
-            if node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
-                node.trigger_activate()
-            else:
-                node.get_logger().error("autostart: configure failed; the node waits unconfigured")
-        context = node.context
-        while context.ok():  # short waits: a signal that only Python saw still ends the loop soon
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except rclpy_implementation.RCLError:  # a signal shut the context down mid-transition: the end asked for
-        if node.context.ok():
-            raise
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        try_shutdown()
-    return 0

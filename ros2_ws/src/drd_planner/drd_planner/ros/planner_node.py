@@ -83,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             _IMPORTING[0] = True
             try:
-                from drd_planner.ros.node import main as run_node
+                from drd_planner.ros.node_process import main as run_node
             finally:
                 _IMPORTING[0] = False
             status = 130 if _RECEIVED else run_node(args)
