@@ -20,7 +20,7 @@ plain data of :mod:`drd_msgs_py.shapes`; turning them into collision geometry is
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypedDict
 
@@ -30,6 +30,7 @@ from drd_msgs_py.arrays import FloatArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_msgs_py.limits import DEFAULT_LIMITS, MessageLimits
+from drd_msgs_py.marker_cdr import CdrMarker, read_marker_array
 from drd_msgs_py.shapes import (
     BoxData,
     CylinderData,
@@ -52,6 +53,7 @@ __all__ = [
     "markers_from_obstacles",
     "obstacle_update",
     "pose_from_msg",
+    "same_obstacle",
 ]
 
 
@@ -91,6 +93,8 @@ class Obstacle:
         kind: the marker type name (``CUBE``, ``LINE_STRIP``, ...).
         points: the marker's point count (LINE_STRIP points, TRIANGLE_LIST vertices; 0 for other types).
         label: where it came from, for error texts (``marker 3 (ns/1)``).
+        content: the marker's serialized type, pose, scale and points when it was read from bytes
+            (:attr:`CdrMarker.content`), else empty: equal non-empty contents make equal obstacles.
     """
 
     key: str
@@ -99,6 +103,27 @@ class Obstacle:
     kind: str
     points: int = 0
     label: str = field(default="", compare=False)
+    content: bytes = field(default=b"", compare=False, repr=False)
+
+
+def same_obstacle(a: Obstacle, b: Obstacle) -> bool:
+    """Whether two obstacles are the same marker: key, kind, pose and shape equal (arrays element by element).
+
+    Obstacles read from bytes with equal :attr:`Obstacle.content` are the same without looking further.
+    """
+    if a is b or (a.content and a.content == b.content and a.key == b.key):
+        return True
+    if (a.key, a.kind, a.points, a.pose) != (b.key, b.kind, b.points, b.pose) or type(a.shape) is not type(
+        b.shape
+    ):
+        return False
+    if isinstance(a.shape, LineStripData) and isinstance(b.shape, LineStripData):
+        return a.shape.diameter == b.shape.diameter and np.array_equal(a.shape.points, b.shape.points)
+    if isinstance(a.shape, MeshData) and isinstance(b.shape, MeshData):
+        return np.array_equal(a.shape.vertices, b.shape.vertices) and np.array_equal(
+            a.shape.faces, b.shape.faces
+        )
+    return a.shape == b.shape
 
 
 @dataclass(frozen=True)
@@ -163,8 +188,13 @@ def _finite(values: Sequence[float], what: str) -> tuple[float, ...]:
 def pose_from_msg(msg: Any, what: str) -> PoseData:
     """A ``geometry_msgs/Pose`` as :class:`PoseData`; NaN/inf or a non-unit quaternion raise MessageError."""
     p, q = msg.position, msg.orientation
-    position = _finite((p.x, p.y, p.z), f"{what} position")
-    quat = _finite((q.x, q.y, q.z, q.w), f"{what} orientation")
+    return _pose_data((p.x, p.y, p.z), (q.x, q.y, q.z, q.w), what)
+
+
+def _pose_data(xyz: Sequence[float], xyzw: Sequence[float], what: str) -> PoseData:
+    """The :class:`PoseData` of a position and a quaternion (see :func:`pose_from_msg`)."""
+    position = _finite(xyz, f"{what} position")
+    quat = _finite(xyzw, f"{what} orientation")
     norm = math.sqrt(sum(v * v for v in quat))
     if abs(norm - 1.0) > QUATERNION_TOL:
         raise MessageError(f"{what} orientation is not a unit quaternion (norm {norm:.6g})")
@@ -172,6 +202,11 @@ def pose_from_msg(msg: Any, what: str) -> PoseData:
 
 
 def _points(msg: Any, what: str) -> FloatArray:
+    if isinstance(msg, CdrMarker):
+        bad = np.flatnonzero(~np.isfinite(msg.points).all(axis=1))
+        if bad.size:
+            _finite(msg.points[bad[0]].tolist(), f"{what} point {bad[0]}")  # raises, naming the point
+        return np.array(msg.points, dtype=np.float64)
     pts = [_finite((p.x, p.y, p.z), f"{what} point {i}") for i, p in enumerate(msg.points)]
     return np.asarray(pts, dtype=np.float64).reshape(-1, 3)
 
@@ -217,8 +252,12 @@ def _round_shape(kind: int, scale: tuple[float, ...], what: str) -> ShapeData:
 def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
     kind = int(marker.type)
     name = _TYPE_NAMES.get(kind, f"type {kind}")
-    pose = pose_from_msg(marker.pose, what)
-    scale = _finite((marker.scale.x, marker.scale.y, marker.scale.z), f"{what} scale")
+    if isinstance(marker, CdrMarker):
+        pose = _pose_data(marker.values[:3], marker.values[3:7], what)
+        scale = _finite(marker.values[7:], f"{what} scale")
+    else:
+        pose = pose_from_msg(marker.pose, what)
+        scale = _finite((marker.scale.x, marker.scale.y, marker.scale.z), f"{what} scale")
     shape: ShapeData
     if kind in (CUBE, SPHERE, CYLINDER):
         shape = _round_shape(kind, scale, what)
@@ -232,7 +271,8 @@ def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
             f"{what}: unsupported marker type {name}; use CUBE, SPHERE, CYLINDER, LINE_STRIP or TRIANGLE_LIST"
         )
     points = len(marker.points) if kind in (LINE_STRIP, TRIANGLE_LIST) else 0
-    return Obstacle(key, shape, pose, name, points, label=what)
+    content = marker.content if isinstance(marker, CdrMarker) else b""
+    return Obstacle(key, shape, pose, name, points, label=what, content=content)
 
 
 #: Longest marker namespace accepted (characters); the obstacle map keeps every ``ns/id`` as a key.
@@ -241,14 +281,16 @@ MAX_NAMESPACE_CHARS = 256
 
 def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence[Any]:
     """The markers of ``msg`` once every frame and the array's size are checked (see :func:`obstacle_update`)."""
-    markers = getattr(msg, "markers", None)
+    markers = read_marker_array(msg, limits) if isinstance(msg, bytes | bytearray | memoryview) else None
+    markers = getattr(msg, "markers", None) if markers is None else markers
     if markers is None:
         raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
     if len(markers) > limits.max_markers:
         raise MessageError(limits.refusal("max_markers", f"the MarkerArray has {len(markers)} markers"))
     line_points = triangles = text_bytes = 0
     for i, marker in enumerate(markers):
-        ns, frame = str(marker.ns), str(marker.header.frame_id)
+        ns = str(marker.ns)
+        frame = marker.frame_id if isinstance(marker, CdrMarker) else str(marker.header.frame_id)
         text_bytes += len(ns) + len(frame) + len(str(marker.text)) + len(str(marker.mesh_resource))
         if text_bytes > limits.max_message_bytes:
             raise MessageError(
@@ -274,17 +316,29 @@ def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence
     return markers  # type: ignore[no-any-return]
 
 
-def obstacle_update(msg: Any, *, frame_id: str, limits: MessageLimits = DEFAULT_LIMITS) -> ObstacleUpdate:
-    """Validate a MarkerArray (rclpy or rosbags) and turn it into an :class:`ObstacleUpdate`.
+def obstacle_update(
+    msg: Any,
+    *,
+    frame_id: str,
+    limits: MessageLimits = DEFAULT_LIMITS,
+    held: Mapping[str, Obstacle] | None = None,
+) -> ObstacleUpdate:
+    """Validate a MarkerArray (rclpy, rosbags or serialized) and turn it into an :class:`ObstacleUpdate`.
 
     Every marker's frame is checked first (a DELETEALL in another frame refuses the array like any other
     marker), then the array's size against ``limits`` (markers, LINE_STRIP points, TRIANGLE_LIST triangles,
     counted from the markers' lengths), and only then are shapes built.
 
+    A marker the same as the obstacle ``held`` under its key gives that obstacle object (a caller keeps
+    what it built from it): when both were read from bytes and their :attr:`Obstacle.content` is equal,
+    without validating the marker again (the same bytes passed the same checks), else once its new obstacle
+    is :func:`same_obstacle` as the held one.
+
     Args:
-        msg: ``visualization_msgs/MarkerArray``.
+        msg: ``visualization_msgs/MarkerArray``, or its serialized bytes (:mod:`drd_msgs_py.marker_cdr`).
         frame_id: the planning frame; every marker must be in it (no TF lookups here).
         limits: size limits of one array (and, in :meth:`ObstacleUpdate.apply`, of the map).
+        held: the obstacle map the update applies to, key ``ns/id`` (None: build every obstacle).
 
     Raises:
         MessageError: a marker in another frame, an array over a size limit (the text names the limit's
@@ -303,7 +357,12 @@ def obstacle_update(msg: Any, *, frame_id: str, limits: MessageLimits = DEFAULT_
         elif action == DELETE:
             operations.append(("delete", key))
         elif action == ADD:
-            obstacles[key] = _obstacle(marker, key, what)
+            old = None if held is None else held.get(key)
+            if old is not None and old.content and old.content == getattr(marker, "content", None):
+                obstacles[key] = old
+            else:
+                new = _obstacle(marker, key, what)
+                obstacles[key] = old if old is not None and same_obstacle(old, new) else new
             operations.append(("add", key))
         else:
             raise MessageError(f"{what}: unsupported marker action {action} (ADD=0, DELETE=2, DELETEALL=3)")

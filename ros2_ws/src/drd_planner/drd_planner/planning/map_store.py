@@ -6,7 +6,10 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
 - ``obstacles`` (MarkerArray): :func:`drd_msgs_py.obstacles.obstacle_update` validates the whole array, the new
   markers become collision parts (:mod:`~drd_planner.planning.map_intake`), and the update is applied to the
   obstacle map (ADD replaces ``ns/id``, DELETE removes it, DELETEALL clears); obstacles the update does not
-  touch keep their parts objects, so a snapshot's scene rebuilds only what changed;
+  touch, and those it gives again unchanged (a latched topic sends the whole map each time), keep their
+  Obstacle and parts objects, so only what changed is built and a snapshot's scene rebuilds only that.
+  Serialized bytes (a raw subscription) are read by :mod:`drd_msgs_py.marker_cdr`, and a marker whose
+  bytes equal those of the held obstacle is not read further;
 - ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
   unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in the planning frame, or
   above every vertex: heights in another datum);
@@ -134,14 +137,18 @@ class MapStore:
         return None
 
     def apply_obstacles(self, msg: Any) -> MapSnapshot:
-        """Apply a MarkerArray (see the module docstring); the new snapshot."""
-        update = obstacle_update(msg, frame_id=self.frame_id, limits=self.limits)
-        added = {key: obstacle_parts(o) for key, o in update.obstacles.items()}
+        """Apply a MarkerArray, as message or serialized bytes (see the module docstring); the new snapshot.
+
+        Only the obstacles that differ from the held one of their key get new parts: a marker equal to the
+        held obstacle keeps its :class:`Obstacle` (:func:`~drd_msgs_py.obstacles.obstacle_update`) and its parts.
+        """
+        update = obstacle_update(msg, frame_id=self.frame_id, limits=self.limits, held=self._obstacles)
         obstacles = update.apply(self._obstacles)  # refuses a map that grows beyond a limit
-        self._parts = {
-            key: added[key] if o is update.obstacles.get(key) else self._parts[key]
-            for key, o in obstacles.items()
+        held = self._obstacles
+        parts = {
+            key: self._parts[key] if o is held.get(key) else obstacle_parts(o) for key, o in obstacles.items()
         }
+        self._parts = parts
         self._obstacles = obstacles
         self._snapshot = self._snapshot.with_obstacles(self._parts)
         return self._snapshot

@@ -2,7 +2,7 @@
 
 Interface (names relative to the node namespace):
 
-- subscriptions (after ``activate``): ``obstacles`` (MarkerArray), ``terrain`` (PointCloud2) and
+- subscriptions (after ``activate``): ``obstacles`` (MarkerArray, taken raw: serialized bytes), ``terrain`` (PointCloud2) and
   ``robot_description`` (String, arm), reliable depth 1, transient_local (``map_subscribe_transient_local``
   true, the default) or volatile (false: hears volatile publishers too), with QoS override parameters;
   requests ``goal_pose`` (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and
@@ -250,6 +250,7 @@ class PlannerNode(LifecycleNode):
                 guard_callback(callback, name=name, report=self._report_to(topic), taken=self._taken),
                 qos,
                 qos_overriding_options=QoSOverridingOptions.with_default_policies(),
+                raw=kind is MarkerArray,  # serialized: read in one pass, unchanged markers kept (map_store)
             )
             for kind, name, callback, qos, topic in topics
         ]
