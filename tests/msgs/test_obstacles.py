@@ -10,11 +10,36 @@ import pytest
 
 import drd_msgs_py.obstacles as obstacles_module
 from drd_msgs_py.exceptions import MessageError
+from drd_msgs_py.factory import RclpyMessages, RosbagsMessages
 from drd_msgs_py.limits import MessageLimits
-from drd_msgs_py.obstacles import CUBE, LINE_STRIP, markers_from_obstacles, obstacle_update
+from drd_msgs_py.obstacles import CUBE, LINE_STRIP, markers_from_obstacles, obstacle_update, same_obstacle
 from drd_msgs_py.shapes import BoxData, CylinderData, LineStripData, MeshData, PoseData, SphereData
 
 FRAME = "map"
+
+
+class SerializedMessages(RosbagsMessages):
+    """rosbags messages, except that a MarkerArray comes out serialized (what the node's raw subscription gets)."""
+
+    def __call__(self, type_name: str, /, **fields: Any) -> Any:
+        msg = super().__call__(type_name, **fields)
+        if type_name == "visualization_msgs/msg/MarkerArray":
+            return bytes(self.typestore.serialize_cdr(msg, type_name))
+        return msg
+
+
+@pytest.fixture(params=["rosbags", "rclpy", "serialized"])
+def msgs(request: pytest.FixtureRequest) -> object:
+    """Every conversion with rosbags dataclasses, rclpy classes and serialized arrays (drd_msgs_py.marker_cdr)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    if request.param == "rclpy":
+        pytest.importorskip("visualization_msgs.msg", reason="rclpy message wheels not installed")
+        return RclpyMessages()
+    store = get_typestore(Stores.ROS2_JAZZY)
+    return SerializedMessages(store) if request.param == "serialized" else RosbagsMessages(store)
+
+
 TET = MeshData(
     np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64),
     np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]], dtype=np.int64),
@@ -244,6 +269,8 @@ def test_marker_strings_are_bounded_and_never_quoted_whole(msgs: Any) -> None:
     with pytest.raises(MessageError, match=r"marker 0: its ns has 300 characters .*at most 256") as info:
         obstacle_update(_cubes(msgs, 1, ns=long_ns), frame_id=FRAME)
     assert len(str(info.value)) < 300
+    if isinstance(msgs, SerializedMessages):
+        pytest.skip("edits the markers of an array (the serialized strings: tests/msgs/test_marker_cdr.py)")
     array = _cubes(msgs, 3)
     for marker in array.markers:
         marker.text = "t" * 1000
@@ -255,3 +282,30 @@ def test_marker_strings_are_bounded_and_never_quoted_whole(msgs: Any) -> None:
     with pytest.raises(MessageError, match="frame") as info:
         obstacle_update(array, frame_id=FRAME)
     assert len(str(info.value)) < 300
+
+
+def test_a_marker_equal_to_the_held_obstacle_gives_the_held_object(msgs: Any) -> None:
+    """Issue 33 item 5: every shape kind, given again unchanged, is the held obstacle; any change is a new one."""
+    held = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
+    again = obstacle_update(_world(msgs), frame_id=FRAME, held=held).apply(held)
+    assert all(again[key] is held[key] for key in held)
+    assert all(
+        same_obstacle(again[key], obstacle_update(_world(msgs), frame_id=FRAME).obstacles[key])
+        for key in held
+    )
+    bent = WIRE.copy()
+    bent[2, 2] += 1e-9
+    changed = markers_from_obstacles(
+        [
+            ("wire/5", LineStripData(bent, 0.05), PoseData()),
+            ("mesh/4", TET, PoseData((-5, 0, 1e-9))),
+            ("box/1", BoxData((2, 3, 4.5)), held["box/1"].pose),
+            ("ball/2", SphereData(1.5), PoseData((5, 5, 5))),
+        ],
+        frame_id=FRAME,
+        msgs=msgs,
+        delete_all_first=False,
+    )
+    update = obstacle_update(changed, frame_id=FRAME, held=held).obstacles
+    assert [key for key in update if update[key] is held[key]] == ["ball/2"]
+    assert not any(same_obstacle(update[key], held[key]) for key in ("wire/5", "mesh/4", "box/1"))

@@ -9,15 +9,17 @@ import numpy as np
 import pytest
 from bag_messages import SEC, T0, goal_message, obstacles_message, terrain_message
 
+import drd_msgs_py.obstacles as obstacles_module
+import drd_planner.planning.map_store as map_store_module
 from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, write_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages
-from drd_msgs_py.obstacles import obstacle_update
+from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.terrain import cloud_from_heightfield
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.pose import Pose
-from drd_planner.geometry.shapes import Sphere
+from drd_planner.geometry.shapes import Box, Sphere
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.bag_plan import maps_at_request, maps_until
 from drd_planner.planning.map_intake import obstacle_parts
@@ -129,3 +131,64 @@ def test_a_terrain_no_loaded_prior_can_stand_on_is_refused_and_the_maps_are_kept
     # A prior whose domain has no terrain model takes any terrain, so the pair takes this one.
     both = MapStore(frame_id="map", terrain_fit=terrain_fit_of([heli, domain_from_spec("planar")]))
     assert both.apply("terrain", cloud) is not None
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 33 item 5: a latched topic re-sends the whole map; an update costs what changed
+
+
+def _grid_of_cubes(rb: RosbagsMessages, count: int, *, moved: float = 0.0, serialized: bool) -> Any:
+    """DELETEALL then ``count`` 1 m cubes 3 m apart along x at z = 5 m, cube ``box/7`` ``moved`` metres along x."""
+    cubes = [
+        (f"box/{k}", Box((1.0, 1.0, 1.0)), Pose((3.0 * k + (moved if k == 7 else 0.0), 0.0, 5.0)))
+        for k in range(count)
+    ]
+    msg = obstacle_markers(cubes, frame_id="map", msgs=rb)
+    if serialized:  # as the node's raw subscription takes it
+        return bytes(rb.typestore.serialize_cdr(msg, "visualization_msgs/msg/MarkerArray"))
+    return msg
+
+
+@pytest.mark.parametrize("serialized", [False, True], ids=["message", "serialized"])
+@pytest.mark.parametrize("count", [40, 400])
+def test_a_republished_map_builds_only_the_moved_marker(
+    rb: RosbagsMessages, monkeypatch: pytest.MonkeyPatch, count: int, serialized: bool
+) -> None:
+    """The whole map again with one cube moved: one obstacle's parts built (not ``count``), the scene has it moved.
+
+    Counts of work, not seconds: the same at 40 and 400 cubes. A serialized array is not even converted
+    again except for the moved marker (the same bytes passed the same checks).
+    """
+    store = MapStore(frame_id="map", limits=MapLimits(max_markers=count + 1))
+    first = store.apply_obstacles(_grid_of_cubes(rb, count, serialized=serialized))
+    assert first.scene.spheres_collide_mask([[21.0, 0.0, 5.0]], 0.2).tolist() == [True]
+    built: list[str] = []
+    converted: list[str] = []
+    real_parts, real_obstacle = map_store_module.obstacle_parts, obstacles_module._obstacle
+
+    def counted_parts(obstacle: Obstacle) -> Any:
+        built.append(obstacle.key)
+        return real_parts(obstacle)
+
+    def counted_obstacle(marker: Any, key: str, what: str) -> Obstacle:
+        converted.append(key)
+        return real_obstacle(marker, key, what)
+
+    monkeypatch.setattr(map_store_module, "obstacle_parts", counted_parts)
+    monkeypatch.setattr(obstacles_module, "_obstacle", counted_obstacle)
+    second = store.apply_obstacles(_grid_of_cubes(rb, count, moved=1.5, serialized=serialized))
+    assert built == ["box/7"]
+    assert converted == (["box/7"] if serialized else [f"box/{k}" for k in range(count)])
+    assert second.version == 2 and set(second.obstacles) == set(first.obstacles)
+    assert all(second.obstacles[k] is first.obstacles[k] for k in first.obstacles if k != "box/7")
+    assert store.obstacles["box/7"].pose.position == (22.5, 0.0, 5.0)
+    # The moved cube's new place (x 22 to 23) is blocked, its old place (x 20.5 to 21.5) free
+    probes = [[22.5, 0.0, 5.0], [21.0, 0.0, 5.0], [24.0, 0.0, 5.0]]
+    assert second.scene.spheres_collide_mask(probes, 0.2).tolist() == [True, False, True]
+    built.clear()
+    converted.clear()
+    third = store.apply_obstacles(_grid_of_cubes(rb, count, moved=1.5 + 1e-9, serialized=serialized))
+    assert built == ["box/7"]  # a nanometre is a change: never kept as equal
+    assert converted == (["box/7"] if serialized else [f"box/{k}" for k in range(count)])
+    assert third.obstacles["box/7"] is not second.obstacles["box/7"]
+    assert third.scene.spheres_collide_mask(probes, 0.2).tolist() == [True, False, True]
