@@ -12,8 +12,8 @@ from conftest import SHARED_DATA
 
 from drd_planner.exceptions import GeometryError
 from drd_planner.geometry.kinematics import ForwardKinematics
-from drd_planner.geometry.robot import RobotModel, build_sphere_groups
-from drd_planner.geometry.urdf_model import parse_collision_spheres
+from drd_planner.geometry.robot import RobotModel, _excluded_pairs, build_sphere_groups
+from drd_planner.geometry.urdf_model import parse_collision_spheres, parse_srdf
 
 PANDA = SHARED_DATA / "panda"
 READY = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
@@ -177,3 +177,82 @@ def test_hierarchical_self_collision_equals_brute_force(panda: RobotModel) -> No
     fast = panda.self_collision(q)
     assert np.array_equal(fast, panda.self_collision_brute_force(q))
     assert 0.02 < fast.mean() < 0.5  # random configurations: some, not most, self-collide
+
+
+# --------------------------------------------------------------------------------------------------
+# Issue 33 item 5: a description's pairs cost what they are, not the square of its links
+
+
+def _with_extra_links(
+    count: int, parents: tuple[str, ...] = ("panda_hand", "panda_link3", "panda_link5", "panda_link0")
+) -> str:
+    """The spherized Panda with ``count`` one- or two-sphere links fixed to ``parents`` in turn."""
+    extra = "".join(
+        f'<link name="extra_{k}"><collision><geometry><sphere radius="0.01"/></geometry></collision>'
+        + (
+            '<collision><origin xyz="0.01 0 0"/><geometry><sphere radius="0.02"/></geometry></collision>'
+            if k % 3 == 0
+            else ""
+        )
+        + f'</link><joint name="extra_joint_{k}" type="fixed"><parent link="{parents[k % len(parents)]}"/>'
+        f'<child link="extra_{k}"/><origin xyz="0 0 {0.001 * k}"/></joint>'
+        for k in range(count)
+    )
+    return panda_text("panda_spherized.urdf").replace("</robot>", extra + "</robot>")
+
+
+@pytest.mark.parametrize("srdf", [False, True], ids=["parent-child", "srdf"])
+def test_pairs_of_many_links_equal_their_definition(srdf: bool) -> None:
+    """Checked link pairs, sphere pairs and group pairs against the pair-by-pair definitions."""
+    robot = RobotModel.from_urdf(_with_extra_links(40), srdf=panda_text("panda.srdf") if srdf else None)
+    chain, spheres = robot.chain, robot.spheres
+    names = sorted({chain.link_names[i] for i in spheres.link_index})
+    frame = {name: chain.link_frames[chain.link_index(name)] for name in names}
+    if srdf:
+        excluded = set(parse_srdf(panda_text("panda.srdf")).disabled_pairs)
+    else:
+        excluded = {(min(a, b), max(a, b)) for a, b in chain.parent_child}
+    expected = [
+        (a, b)
+        for i, a in enumerate(names)
+        for b in names[i + 1 :]
+        if frame[a] != frame[b] and (a, b) not in excluded
+    ]
+    assert list(robot.checked_link_pairs) == expected
+    checked = {(chain.link_index(a), chain.link_index(b)) for a, b in expected}
+    checked |= {(b, a) for a, b in checked}
+    link = spheres.link_index.tolist()
+    brute = [
+        (i, j) for i in range(len(link)) for j in range(i + 1, len(link)) if (link[i], link[j]) in checked
+    ]
+    assert robot.self_pairs.tolist() == [list(p) for p in brute]
+    groups = robot._self_groups
+    group_link = groups.link_index.tolist()
+    group_brute = [
+        (a, b)
+        for a in range(groups.count)
+        for b in range(a + 1, groups.count)
+        if (group_link[a], group_link[b]) in checked
+    ]
+    assert robot._group_pairs.tolist() == [list(p) for p in group_brute]
+    members = [
+        groups.members[groups.offsets[g] : groups.offsets[g + 1]].tolist() for g in range(groups.count)
+    ]
+    sphere_pairs = [(a, b) for ga, gb in group_brute for a in members[ga] for b in members[gb]]
+    assert list(zip(robot._pair_a.tolist(), robot._pair_b.tolist(), strict=True)) == sphere_pairs
+    assert robot._pair_offsets[-1] == len(sphere_pairs)
+
+
+@pytest.mark.parametrize("count", [100, 400])
+def test_links_of_one_frame_are_not_listed_as_pairs(count: int) -> None:
+    """The links fixed to one frame are left out where pairs are made, not listed: the excluded set is the joints.
+
+    Before, ``count`` links on the hand listed their count^2 / 2 same-frame pairs (80,000 at 400 links, 32
+    million at 8,000), the part of a description's cost that grew with the square of its links; the pairs
+    checked (each extra link with the links of other frames) grow with the links.
+    """
+    robot = RobotModel.from_urdf(_with_extra_links(count, ("panda_hand",)))
+    assert len(_excluded_pairs(robot.chain, None)) <= len(robot.chain.parent_child)
+    per_frame = np.bincount(robot.chain.link_frames)
+    assert int((per_frame * (per_frame - 1) // 2).sum()) > count**2 // 2  # what the old set held, at least
+    assert len(robot.checked_link_pairs) < 15 * count

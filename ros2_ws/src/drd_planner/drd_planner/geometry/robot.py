@@ -67,24 +67,76 @@ def _attach_spheres(chain: KinematicChain, spheres: CollisionSpheres) -> SphereM
 
 
 def _excluded_pairs(chain: KinematicChain, srdf: SrdfInfo | None) -> set[tuple[str, str]]:
-    """Link pairs (sorted) never checked for self-collision."""
-    names = chain.link_names
-    excluded = {
-        (min(a, b), max(a, b))
-        for i, a in enumerate(names)
-        for j, b in enumerate(names)
-        if i < j and chain.link_frames[i] == chain.link_frames[j]
-    }
+    """Link pairs (sorted) never checked for self-collision besides those of one moving frame.
+
+    The pairs of one frame never move apart and are left out where pairs are made
+    (:func:`_checked_link_pairs`), not listed here: L links in one frame are L^2 / 2 pairs.
+    """
     if srdf is None:
-        excluded |= {(min(a, b), max(a, b)) for a, b in chain.parent_child}
-    else:
-        unknown = sorted({n for pair in srdf.disabled_pairs for n in pair} - set(names))
-        if unknown:
-            raise GeometryError(
-                f"SRDF disables collisions of links the URDF does not have: {', '.join(unknown)}"
-            )
-        excluded |= set(srdf.disabled_pairs)
-    return excluded
+        return {(min(a, b), max(a, b)) for a, b in chain.parent_child}
+    unknown = sorted({n for pair in srdf.disabled_pairs for n in pair} - set(chain.link_names))
+    if unknown:
+        raise GeometryError(f"SRDF disables collisions of links the URDF does not have: {', '.join(unknown)}")
+    return set(srdf.disabled_pairs)
+
+
+def _checked_link_pairs(
+    chain: KinematicChain, spheres: SphereModel, excluded: set[tuple[str, str]]
+) -> tuple[tuple[str, str], ...]:
+    """Pairs (sorted names, in sorted order) of links with spheres in different moving frames, not ``excluded``.
+
+    Made frame pair by frame pair, so the work follows the pairs made, not the square of the links.
+    """
+    names = sorted({chain.link_names[i] for i in spheres.link_index.tolist()})
+    by_frame: dict[int, list[int]] = {}
+    for position, name in enumerate(names):
+        by_frame.setdefault(int(chain.link_frames[chain.link_index(name)]), []).append(position)
+    frames = list(by_frame.values())
+    pairs = sorted(
+        (min(i, j), max(i, j))
+        for x, ours in enumerate(frames)
+        for theirs in frames[x + 1 :]
+        for i in ours
+        for j in theirs
+    )
+    return tuple((names[i], names[j]) for i, j in pairs if (names[i], names[j]) not in excluded)
+
+
+def _products(
+    first: IntArray, first_count: IntArray, second: IntArray, second_count: IntArray
+) -> tuple[IntArray, IntArray]:
+    """Every pair of K products of ranges, product by product (first range outer): (x, y) positions.
+
+    Product k pairs ``[first[k], first[k] + first_count[k])`` with ``[second[k], second[k] + second_count[k])``;
+    the arrays are (K,) int64, the results (P,) with P = sum of first_count * second_count (numpy, no loop).
+    """
+    sizes = first_count * second_count
+    k = np.repeat(np.arange(len(sizes)), sizes)
+    local = np.arange(int(sizes.sum()), dtype=np.int64) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    return first[k] + local // second_count[k], second[k] + local % second_count[k]
+
+
+def _owner_pairs(owner: IntArray, owner_pairs: set[tuple[int, int]]) -> IntArray:
+    """(P, 2) index pairs i < j, sorted by i then j, whose owners ``(owner[i], owner[j])`` are in ``owner_pairs``.
+
+    ``owner_pairs`` is symmetric (both orders listed). The pairs of all owner pairs are made at once
+    (:func:`_products`): the work follows the P pairs made, not the square of ``len(owner)``.
+    """
+    order = np.argsort(owner, kind="stable")
+    size = int(owner.max()) + 1 if len(owner) else 0
+    counts = np.bincount(owner, minlength=size).astype(np.int64)
+    starts = np.cumsum(counts) - counts
+    known = [(min(a, b), max(a, b)) for a, b in owner_pairs if 0 <= min(a, b) and max(a, b) < size]
+    chunks = [np.zeros((0, 2), dtype=np.int64)]
+    for a in sorted({a for a, b in known if a == b}):  # one owner with itself (not made by from_urdf)
+        ours = order[starts[a] : starts[a] + counts[a]]
+        i, j = np.triu_indices(len(ours), 1)
+        chunks.append(np.stack([ours[i], ours[j]], axis=1))
+    cross = np.array(sorted({(a, b) for a, b in known if a != b}), dtype=np.int64).reshape(-1, 2)
+    x, y = _products(starts[cross[:, 0]], counts[cross[:, 0]], starts[cross[:, 1]], counts[cross[:, 1]])
+    chunks.append(np.sort(np.stack([order[x], order[y]], axis=1), axis=1))
+    pairs = np.concatenate(chunks).astype(np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -201,36 +253,18 @@ class RobotModel:
         self._self_group_map = self.fk.point_map(self._self_groups.frame_index, self._self_groups.centres)
         checked = {(chain.link_index(a), chain.link_index(b)) for a, b in checked_link_pairs}
         checked |= {(b, a) for a, b in checked}
-        link_of = spheres.link_index
-        self.self_pairs: IntArray = np.array(
-            [
-                (i, j)
-                for i in range(spheres.count)
-                for j in range(i + 1, spheres.count)
-                if (int(link_of[i]), int(link_of[j])) in checked
-            ],
-            dtype=np.int64,
-        ).reshape(-1, 2)
+        self.self_pairs: IntArray = _owner_pairs(spheres.link_index, checked)
         self._init_group_pairs(checked)
 
     def _init_group_pairs(self, checked: set[tuple[int, int]]) -> None:
         """Self-collision group pairs of checked link pairs, and their sphere pairs in CSR form."""
         g = self._self_groups
-        group_pairs: list[tuple[int, int]] = []
-        sphere_a: list[int] = []
-        sphere_b: list[int] = []
-        offsets = [0]
-        for ga in range(g.count):
-            for gb in range(ga + 1, g.count):
-                if (int(g.link_index[ga]), int(g.link_index[gb])) not in checked:
-                    continue
-                group_pairs.append((ga, gb))
-                for a in g.members[g.offsets[ga] : g.offsets[ga + 1]].tolist():
-                    for b in g.members[g.offsets[gb] : g.offsets[gb + 1]].tolist():
-                        sphere_a.append(a)
-                        sphere_b.append(b)
-                offsets.append(len(sphere_a))
-        self._group_pairs = np.array(group_pairs, dtype=np.int64).reshape(-1, 2)
+        self._group_pairs = _owner_pairs(g.link_index, checked)
+        ga, gb = self._group_pairs[:, 0], self._group_pairs[:, 1]
+        sizes = np.diff(g.offsets)
+        x, y = _products(g.offsets[ga], sizes[ga], g.offsets[gb], sizes[gb])
+        sphere_a, sphere_b = g.members[x], g.members[y]
+        offsets = np.concatenate([[0], np.cumsum(sizes[ga] * sizes[gb])])
         self._group_pair_limit = (g.radii[self._group_pairs[:, 0]] + g.radii[self._group_pairs[:, 1]]) ** 2
         self._pair_offsets = np.array(offsets, dtype=np.int64)
         self._pair_a = np.array(sphere_a, dtype=np.int64)
@@ -270,14 +304,7 @@ class RobotModel:
             tip_link = info.chains[name][1]
         chain = parse_urdf_chain(urdf, tip_link=tip_link)
         spheres = _attach_spheres(chain, parse_collision_spheres(sphere_urdf if sphere_urdf else urdf))
-        excluded = _excluded_pairs(chain, info)
-        with_spheres = sorted({chain.link_names[i] for i in spheres.link_index})
-        checked = tuple(
-            (a, b)
-            for i, a in enumerate(with_spheres)
-            for b in with_spheres[i + 1 :]
-            if (min(a, b), max(a, b)) not in excluded
-        )
+        checked = _checked_link_pairs(chain, spheres, _excluded_pairs(chain, info))
         named: dict[str, FloatArray] = {}
         if info is not None:
             for (state_group, state), values in info.group_states.items():

@@ -23,6 +23,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -92,10 +93,15 @@ class KinematicChain:
         Raises:
             GeometryError: no such link.
         """
-        try:
-            return self.link_names.index(name)
-        except ValueError:
-            raise GeometryError(f"robot {self.robot_name!r} has no link {name!r}") from None
+        index = self._link_indices.get(name)
+        if index is None:
+            raise GeometryError(f"robot {self.robot_name!r} has no link {name!r}")
+        return index
+
+    @cached_property
+    def _link_indices(self) -> dict[str, int]:
+        """Link name -> its first index in :attr:`link_names` (a lookup per name, not a scan: L links, L lookups)."""
+        return {name: i for i, name in reversed(list(enumerate(self.link_names)))}
 
 
 @dataclass(frozen=True)
