@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 from typing import Any
 
@@ -12,7 +13,7 @@ from drd_msgs_py.bags import jazzy_typestore
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.limits import MessageLimits
-from drd_msgs_py.marker_cdr import read_marker_array
+from drd_msgs_py.marker_cdr import CdrMarker, MarkerArrayReader, read_marker_array
 from drd_msgs_py.obstacles import obstacle_update
 
 ARRAY = "visualization_msgs/msg/MarkerArray"
@@ -145,3 +146,47 @@ def test_serialized_strings_count_against_the_message_limit(rb: RosbagsMessages)
     with pytest.raises(MessageError, match="frame") as info:
         obstacle_update(far, frame_id="map")
     assert len(str(info.value)) < 300
+
+
+def _fields(marker: CdrMarker) -> tuple[Any, ...]:
+    return (*marker[:6], marker.points.tolist(), marker.content, marker.text, marker.mesh_resource)
+
+
+def test_a_reader_reuses_unchanged_markers_and_reads_as_a_fresh_read(rb: RosbagsMessages) -> None:
+    """Seeded edits (move, resize a string, insert, delete, another endianness): equal to reading anew each time."""
+    rng = np.random.default_rng(5)
+    markers = [_marker(rb, k) for k in range(30)]
+    reader = MarkerArrayReader()
+    previous: list[CdrMarker] = []
+    for step in range(60):
+        edit = step % 6
+        k = int(rng.integers(len(markers)))
+        if edit == 0:  # one marker moved: every other one is the kept object
+            pose = rb("geometry_msgs/msg/Pose", position=rb("geometry_msgs/msg/Point", x=float(rng.normal())))
+            markers[k] = dataclasses.replace(markers[k], pose=pose)
+        elif edit == 1:  # a longer string: every later marker shifts
+            markers[k] = _marker(rb, k, ns="s" * int(rng.integers(9)), text="x" * int(rng.integers(5)))
+        elif edit == 2:
+            markers.insert(k, _marker(rb, int(rng.integers(40))))
+        elif edit == 3 and len(markers) > 5:
+            del markers[k]
+        little = edit != 4
+        data = _serialized(rb, markers, little_endian=little)
+        got = reader.read(data)
+        fresh = read_marker_array(data)
+        assert [_fields(m) for m in got] == [_fields(m) for m in fresh], step
+        kept = sum(1 for m in got if any(m is p for p in previous))
+        if edit == 0 and little and step % 12 != 0:
+            assert kept >= len(markers) - 1, (step, kept)
+        previous = got
+    same = reader.read(data)
+    assert all(a is b for a, b in zip(same, previous, strict=True))
+
+
+def test_a_reader_refusing_an_array_keeps_the_last_one(rb: RosbagsMessages) -> None:
+    reader = MarkerArrayReader()
+    data = _serialized(rb, [_marker(rb, k) for k in range(6)])
+    first = reader.read(data)
+    with pytest.raises(MessageError, match="ends inside"):
+        reader.read(data[:-9])
+    assert all(a is b for a, b in zip(reader.read(data), first, strict=True))

@@ -11,6 +11,7 @@ from bag_messages import SEC, T0, goal_message, obstacles_message, terrain_messa
 
 import drd_msgs_py.obstacles as obstacles_module
 import drd_planner.planning.map_store as map_store_module
+from drd_msgs_py import marker_cdr
 from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, write_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages
@@ -174,11 +175,20 @@ def test_a_republished_map_builds_only_the_moved_marker(
         converted.append(key)
         return real_obstacle(marker, key, what)
 
+    read: list[int] = []
+    real_read = marker_cdr._Reader.marker
+
+    def counted_read(reader: Any, i: int) -> Any:
+        read.append(i)
+        return real_read(reader, i)
+
     monkeypatch.setattr(map_store_module, "obstacle_parts", counted_parts)
     monkeypatch.setattr(obstacles_module, "_obstacle", counted_obstacle)
+    monkeypatch.setattr(marker_cdr._Reader, "marker", counted_read)
     second = store.apply_obstacles(_grid_of_cubes(rb, count, moved=1.5, serialized=serialized))
     assert built == ["box/7"]
     assert converted == (["box/7"] if serialized else [f"box/{k}" for k in range(count)])
+    assert read == ([8] if serialized else [])  # the bytes of the others are unchanged: not read again
     assert second.version == 2 and set(second.obstacles) == set(first.obstacles)
     assert all(second.obstacles[k] is first.obstacles[k] for k in first.obstacles if k != "box/7")
     assert store.obstacles["box/7"].pose.position == (22.5, 0.0, 5.0)

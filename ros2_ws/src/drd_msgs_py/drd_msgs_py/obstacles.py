@@ -30,7 +30,7 @@ from drd_msgs_py.arrays import FloatArray
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import MessageFactory, header
 from drd_msgs_py.limits import DEFAULT_LIMITS, MessageLimits
-from drd_msgs_py.marker_cdr import CdrMarker, read_marker_array
+from drd_msgs_py.marker_cdr import CdrMarker, MarkerArrayReader, read_marker_array
 from drd_msgs_py.shapes import (
     BoxData,
     CylinderData,
@@ -279,9 +279,13 @@ def _obstacle(marker: Any, key: str, what: str) -> Obstacle:
 MAX_NAMESPACE_CHARS = 256
 
 
-def _checked_markers(msg: Any, frame_id: str, limits: MessageLimits) -> Sequence[Any]:
+def _checked_markers(
+    msg: Any, frame_id: str, limits: MessageLimits, reader: MarkerArrayReader | None = None
+) -> Sequence[Any]:
     """The markers of ``msg`` once every frame and the array's size are checked (see :func:`obstacle_update`)."""
-    markers = read_marker_array(msg, limits) if isinstance(msg, bytes | bytearray | memoryview) else None
+    markers = None
+    if isinstance(msg, bytes | bytearray | memoryview):
+        markers = read_marker_array(msg, limits) if reader is None else reader.read(msg, limits)
     markers = getattr(msg, "markers", None) if markers is None else markers
     if markers is None:
         raise MessageError("expected a visualization_msgs/MarkerArray (no 'markers' field)")
@@ -322,6 +326,7 @@ def obstacle_update(
     frame_id: str,
     limits: MessageLimits = DEFAULT_LIMITS,
     held: Mapping[str, Obstacle] | None = None,
+    reader: MarkerArrayReader | None = None,
 ) -> ObstacleUpdate:
     """Validate a MarkerArray (rclpy, rosbags or serialized) and turn it into an :class:`ObstacleUpdate`.
 
@@ -339,13 +344,15 @@ def obstacle_update(
         frame_id: the planning frame; every marker must be in it (no TF lookups here).
         limits: size limits of one array (and, in :meth:`ObstacleUpdate.apply`, of the map).
         held: the obstacle map the update applies to, key ``ns/id`` (None: build every obstacle).
+        reader: reads serialized bytes, reusing the markers of the array it read last where their bytes are
+            unchanged (:class:`~drd_msgs_py.marker_cdr.MarkerArrayReader`); None: :func:`read_marker_array`.
 
     Raises:
         MessageError: a marker in another frame, an array over a size limit (the text names the limit's
             parameter), a marker of an unsupported type or action, with NaN or infinite numbers, a non-unit
             quaternion, a zero or negative size, too few points.
     """
-    markers = _checked_markers(msg, frame_id, limits)
+    markers = _checked_markers(msg, frame_id, limits, reader)
     operations: list[tuple[str, str]] = []
     obstacles: dict[str, Obstacle] = {}
     for i, marker in enumerate(markers):

@@ -8,8 +8,9 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   obstacle map (ADD replaces ``ns/id``, DELETE removes it, DELETEALL clears); obstacles the update does not
   touch, and those it gives again unchanged (a latched topic sends the whole map each time), keep their
   Obstacle and parts objects, so only what changed is built and a snapshot's scene rebuilds only that.
-  Serialized bytes (a raw subscription) are read by :mod:`drd_msgs_py.marker_cdr`, and a marker whose
-  bytes equal those of the held obstacle is not read further;
+  Serialized bytes (a raw subscription) are read by :mod:`drd_msgs_py.marker_cdr`, only the markers whose
+  bytes changed since the last array (:class:`~drd_msgs_py.marker_cdr.MarkerArrayReader`), and a marker
+  whose content equals that of the held obstacle is not validated again;
 - ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
   unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in the planning frame, or
   above every vertex: heights in another datum);
@@ -26,6 +27,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+from drd_msgs_py.marker_cdr import MarkerArrayReader
 from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.topics import topic_base
 from drd_planner.domains.online import OnlineDomain
@@ -96,6 +98,7 @@ class MapStore:
         self._obstacles: dict[str, Obstacle] = {}
         self._parts: dict[str, Parts] = {}
         self._description: str | None = None
+        self._reader = MarkerArrayReader()  # serialized arrays: re-reads only the markers whose bytes changed
 
     @property
     def snapshot(self) -> MapSnapshot:
@@ -142,7 +145,9 @@ class MapStore:
         Only the obstacles that differ from the held one of their key get new parts: a marker equal to the
         held obstacle keeps its :class:`Obstacle` (:func:`~drd_msgs_py.obstacles.obstacle_update`) and its parts.
         """
-        update = obstacle_update(msg, frame_id=self.frame_id, limits=self.limits, held=self._obstacles)
+        update = obstacle_update(
+            msg, frame_id=self.frame_id, limits=self.limits, held=self._obstacles, reader=self._reader
+        )
         obstacles = update.apply(self._obstacles)  # refuses a map that grows beyond a limit
         held = self._obstacles
         parts = {
