@@ -104,6 +104,10 @@ def test_content_is_the_shape_and_pose_only(rb: RosbagsMessages) -> None:
     assert a.content == b.content and a.content != c.content
     wider = read_marker_array(_serialized(rb, [_marker(rb, 3, scale=rb("geometry_msgs/msg/Vector3", x=9.0))]))
     assert wider[0].content != a.content
+    big = read_marker_array(_serialized(rb, [base], little_endian=False))[0]
+    assert (
+        big.values == a.values and big.content[0] != a.content[0]
+    )  # one number, two byte orders: told apart
 
 
 def test_every_truncation_is_refused_as_a_message_error(rb: RosbagsMessages) -> None:

@@ -8,10 +8,11 @@ that subscribes to the array raw (``create_subscription(..., raw=True)``) gets i
 
 - ``ns``, ``id``, ``type``, ``action``, the header's ``frame_id``, ``text`` and ``mesh_resource``;
 - ``values``: the pose (position x, y, z, quaternion x, y, z, w) then the scale (x, y, z), 10 floats;
-- ``points``: the (K, 3) points, a float64 view of the bytes (no copy);
-- ``content``: the bytes of ``type``, ``pose``, ``scale`` and ``points`` as they arrived. Two markers with
-  the same content bytes make the same obstacle (the same numbers bit for bit), so a consumer that holds an
-  obstacle built from equal content can keep it without reading or validating the marker again.
+- ``points``: the (K, 3) points, float64 (a copy: a marker holds no reference to the message's buffer);
+- ``content``: the byte order (``<`` or ``>``), then the bytes of ``type``, ``pose``, ``scale`` and
+  ``points`` as they arrived. Two markers with the same content make the same obstacle (the same numbers
+  bit for bit), so a consumer that holds an obstacle built from equal content can keep it without reading
+  or validating the marker again.
 
 Encoding (ROS 2's serialized message; see :mod:`drd_msgs_py.cdr`): plain CDR (XCDR1), little- or big-endian
 as the 4-byte encapsulation header says; numbers aligned to their size counted from the end of that header;
@@ -74,7 +75,7 @@ class CdrMarker(NamedTuple):
         frame_id: its header's frame.
         values: pose position (x, y, z) metres, quaternion (x, y, z, w), scale (x, y, z) metres: 10 floats.
         points: (K, 3) float64 points (marker frame, metres), read-only.
-        content: the serialized ``type``, ``pose``, ``scale`` and ``points`` (equal bytes: equal obstacle).
+        content: the byte order, then the serialized ``type``, ``pose``, ``scale`` and ``points`` (equal: equal obstacle).
         text, mesh_resource: its strings of those names (counted against ``max_message_bytes``).
     """
 
@@ -100,6 +101,9 @@ class _Reader:
         self._3i = struct.Struct(endian + "3i").unpack_from
         self._10d = struct.Struct(endian + "10d").unpack_from
         self.point_dtype = np.dtype(endian + "f8")
+        self.tag = (
+            endian.encode()
+        )  # starts every content: equal bytes in another byte order are other numbers
 
     def _fail(self, pos: int, what: str) -> MessageError:
         return MessageError(f"serialized MarkerArray ends inside {what} (byte {pos} of {len(self.data)})")
@@ -168,9 +172,8 @@ class _Reader:
             raise self._fail(pos, f"marker {i} {field}") from None
         except UnicodeDecodeError:
             raise MessageError(f"marker {i} {field} is not UTF-8") from None
-        content = (
-            data[first + 4 : first + 8] + data[pose : pose + _POSE_SCALE] + data[start : start + 24 * count]
-        )
+        content = self.tag + data[first + 4 : first + 8] + data[pose : pose + _POSE_SCALE]
+        content += data[start : start + 24 * count]
         frame_id, ns, text, mesh_resource = strings
         return CdrMarker(ns, ident, kind, action, frame_id, values, points, content, text, mesh_resource)
 
