@@ -15,7 +15,10 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in the planning frame, or
   above every vertex: heights in another datum);
 - ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
-  (an arm prior), else the text is only kept.
+  (an arm prior), else the text is only kept;
+- ``monitored_planning_scene`` (moveit_msgs PlanningScene, full or diff): its collision objects become
+  collision parts (:class:`~drd_planner.planning.moveit_world.MoveItWorld`, keys ``moveit:<id>``) beside the
+  MarkerArray obstacles; an octomap or anything else the world refuses raises and changes nothing.
 
 Each accepted message makes the next snapshot version; a refused one raises
 (:class:`~drd_msgs_py.exceptions.MessageError` or :class:`~drd_planner.exceptions.DrdError`, the text says
@@ -37,6 +40,7 @@ from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
 from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot, Parts
+from drd_planner.planning.moveit_world import MoveItWorld
 
 __all__ = ["MAP_SOURCES", "MapStore", "RobotLoader", "TerrainFit", "robot_loader_of", "terrain_fit_of"]
 
@@ -67,7 +71,7 @@ def terrain_fit_of(domains: Sequence[OnlineDomain[Any]]) -> TerrainFit:
 
 
 #: The map topics (base names) a store applies.
-MAP_SOURCES = ("obstacles", "terrain", "robot_description")
+MAP_SOURCES = ("obstacles", "terrain", "robot_description", "monitored_planning_scene")
 
 
 class MapStore:
@@ -99,6 +103,7 @@ class MapStore:
         self._parts: dict[str, Parts] = {}
         self._description: str | None = None
         self._reader = MarkerArrayReader()  # serialized arrays: re-reads only the markers whose bytes changed
+        self._moveit = MoveItWorld(frame_id=frame_id, limits=limits)
 
     @property
     def snapshot(self) -> MapSnapshot:
@@ -137,6 +142,8 @@ class MapStore:
             return self.apply_terrain(msg)
         if base == "robot_description":
             return self.apply_robot_description(str(msg.data))
+        if base == "monitored_planning_scene":
+            return self.apply_planning_scene(msg)
         return None
 
     def apply_obstacles(self, msg: Any) -> MapSnapshot:
@@ -155,7 +162,22 @@ class MapStore:
         }
         self._parts = parts
         self._obstacles = obstacles
-        self._snapshot = self._snapshot.with_obstacles(self._parts)
+        self._snapshot = self._snapshot.with_obstacles({**self._parts, **self._moveit.parts()})
+        return self._snapshot
+
+    def apply_planning_scene(self, msg: Any) -> MapSnapshot:
+        """Apply a MoveIt ``PlanningScene`` (see the module docstring); the new snapshot.
+
+        Parts of objects the scene did not touch are kept as they were (the scene cache rebuilds only
+        what changed).
+        """
+        before = self._snapshot.obstacles
+        self._moveit.apply(msg)  # refuses without changing anything
+        moveit = self._moveit.parts()
+        for key, parts in moveit.items():
+            if before.get(key) == parts:
+                moveit[key] = before[key]
+        self._snapshot = self._snapshot.with_obstacles({**self._parts, **moveit})
         return self._snapshot
 
     def apply_terrain(self, msg: Any) -> MapSnapshot:

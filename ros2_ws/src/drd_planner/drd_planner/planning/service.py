@@ -300,14 +300,16 @@ class PlannerService:
     ) -> PlanOutcome:
         """Serve one request now (a service call or action goal) and say what it came to.
 
-        ``start``: a pose start (helicopter); None: the robot's state. ``cancel`` stops the plan between two
-        checks (:class:`~drd_planner.planning.cancel.PlanCancelled` is raised; nothing is published).
+        ``start``: a pose start (helicopter) or joint angles (arm); None: the robot's state. ``cancel`` stops
+        the plan between two checks (:class:`~drd_planner.planning.cancel.PlanCancelled` is raised; nothing is published).
         """
         session = pick_session(self._sessions, goal)
         if session is None:
             return self._refuse(f"{source} refused: no loaded prior plans for {goal.describe()}", "prior")
         start_state = None
-        if start is not None:
+        if start is not None and session.is_arm and start.joints is not None:
+            start_state = start.joints  # joint angles given with the request (MoveIt's start state)
+        elif start is not None:
             if session.is_arm or start.yaw is None:
                 arm = "an arm's start comes from joint_states, not a pose"
                 why = arm if session.is_arm else "a start pose needs its orientation (the vehicle's yaw)"

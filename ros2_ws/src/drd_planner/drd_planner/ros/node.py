@@ -11,6 +11,7 @@ Interface (names relative to the node namespace):
 - services ``get_plan`` (``nav_msgs/srv/GetPlan``: as ``goal_pose``, from ``start`` when its frame is set)
   and ``replan`` (``std_srvs/srv/Trigger``: the published plan's goal again, from the robot's state now);
   Nav2's ``compute_path_to_pose`` action and ``is_path_valid`` service (:mod:`drd_planner.ros.nav2_host`);
+  MoveIt's ``monitored_planning_scene`` topic and ``plan_kinematic_path`` service, arm (:mod:`drd_planner.ros.moveit_host`);
 - publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
   ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
   status per check) and ``checked_edges`` (MarkerArray) are lifecycle publishers (silent until
@@ -64,6 +65,7 @@ from drd_planner.planning.service import LiveSettings, PlannerService, PlanRecor
 from drd_planner.planning.session import PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.moveit_host import MoveItHost
 from drd_planner.ros.nav2_host import Nav2Host
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs
 from drd_planner.ros.parameters import (
@@ -91,6 +93,7 @@ _UNCHANGED = {
     "obstacles": "map unchanged",
     "terrain": "map unchanged",
     "robot_description": "the arm model is unchanged",
+    "monitored_planning_scene": "map unchanged",
 }
 
 
@@ -106,6 +109,7 @@ class PlannerNode(LifecycleNode):
         self._subs: list[Any] = []
         self._ros_services: list[Any] = []
         self._nav2: Nav2Host | None = None  # Nav2's planner interface, while active
+        self._moveit: MoveItHost | None = None  # MoveIt's scene topic and plan_kinematic_path, while active
         self._lock = threading.Lock()  # the error list
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
         self._taken: Counter[str] = Counter()  # messages taken per subscribed topic
@@ -265,6 +269,13 @@ class PlannerNode(LifecycleNode):
             )
         ]
         self._nav2 = None if self._service is None else Nav2Host.start(self, self._service, report=report)
+        scenes = self._map_callback("monitored_planning_scene")
+        on_scene = guard_callback(scenes, name="monitored_planning_scene", report=self._report_to("maps"))
+        self._moveit = (
+            None
+            if self._service is None
+            else MoveItHost.start(self, self._service, on_scene=on_scene, report=report)
+        )
         durability = "transient_local" if maps is LATCHED else "volatile"
         self.get_logger().info(
             f"active: maps on {', '.join(sub.topic_name for sub in self._subs[:3])} ({durability}); "
@@ -295,10 +306,12 @@ class PlannerNode(LifecycleNode):
         """Stop the planning thread (a plan running after :data:`SHUTDOWN_WAIT_S` is abandoned), destroy the node."""
         self._worker.stop(timeout=SHUTDOWN_WAIT_S)
         self._nav2 = self._nav2.stop() if self._nav2 is not None else None
+        self._moveit = self._moveit.stop() if self._moveit is not None else None
         super().destroy_node()
 
     def _drop_interfaces(self) -> None:
         self._nav2 = self._nav2.stop() if self._nav2 is not None else None  # its running plans cancelled
+        self._moveit = self._moveit.stop() if self._moveit is not None else None
         if not self._worker.stop():
             self.get_logger().warning("the planning thread did not end within 30 s")
         for sub in self._subs:
