@@ -3,7 +3,7 @@
 #   scripts/run.sh demo    the main job: the planner node on the bundled real-scale helicopter bag heli_lines (planner_demo)
 #   scripts/run.sh test    the whole suite: ruff, mypy, pytest
 # Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv, and cmake, g++ and the
-# Python headers for the nav2_msgs build, with apt when missing).
+# Python headers for the nav2_msgs and moveit_msgs builds, with apt when missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,6 +40,9 @@ extras="plots,test"
 # Nav2's planner interface (compute_path_to_pose, is_path_valid) needs nav2_msgs: a ROS install's, or the
 # two interfaces built into the venv once (about 1-2 minutes; cached, skipped on later runs).
 bash scripts/build_nav2_msgs.sh "$venv"
+# MoveIt's scene topic and plan_kinematic_path (arm) need moveit_msgs: a ROS install's, or its PlanningScene and
+# GetMotionPlan subset built into the venv once (3 small packages, about 3-7 minutes on 2 cores; cached).
+bash scripts/build_moveit_msgs.sh "$venv"
 
 case "$job" in
   demo)

@@ -161,3 +161,20 @@ def test_map_store_holds_scene_objects_beside_marker_obstacles() -> None:
     with pytest.raises(GeometryError, match="octomap"):
         store.apply("monitored_planning_scene", scene(octomap=b"\x01"))
     assert store.snapshot is second
+
+
+def test_a_marker_update_keeps_the_scene_objects_and_a_scene_keeps_the_markers() -> None:
+    pytest.importorskip("visualization_msgs.msg", reason="the MarkerArray type (ROS or the PyPI wheels)")
+    from drd_msgs_py.factory import RclpyMessages
+    from drd_planner.geometry.pose import Pose
+    from drd_planner.planning.world_messages import obstacle_markers
+
+    store = MapStore(frame_id=FRAME)
+    store.apply("monitored_planning_scene", scene(obj("a", primitives=[primitive(2, 0.1)])))
+    markers = obstacle_markers([("m/1", Box((1.0, 1.0, 1.0)), Pose())], frame_id=FRAME, msgs=RclpyMessages())
+    after_markers = store.apply("obstacles", markers)
+    assert after_markers is not None and {"moveit:a", "m/1"} <= set(after_markers.obstacles)
+    after_scene = store.apply("monitored_planning_scene", scene(obj("b", primitives=[primitive(2, 0.1)])))
+    assert after_scene is not None
+    assert "moveit:a" not in after_scene.obstacles  # a full scene replaced the scene's objects
+    assert {"moveit:b", "m/1"} <= set(after_scene.obstacles)
