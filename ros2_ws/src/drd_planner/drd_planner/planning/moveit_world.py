@@ -6,8 +6,9 @@ scene monitor does:
 
 - a full scene (``is_diff`` false) replaces the world by its objects; a diff changes it object by object;
 - each ``CollisionObject`` has an ``operation``: ADD (a new object, replacing one of the same id), REMOVE (an
-  empty id removes every object), APPEND (shapes added to an object, or a new one), MOVE (the object to a new
-  ``pose``, its shapes keeping their places relative to it);
+  empty id removes every object), APPEND (shapes added to an object, relative to its pose as it is, the
+  message's pose unread, as in MoveIt; or a new object), MOVE (the object to a new ``pose``, its shapes keeping
+  their places relative to it);
 - shapes: ``shape_msgs/SolidPrimitive`` BOX (x, y, z), SPHERE (radius), CYLINDER (**height, radius**, along
   local z), and ``shape_msgs/Mesh`` (triangles); each shape's pose (and each subframe's) is relative to the
   object's ``pose``, in metres; an all-zero (unset) quaternion means no rotation, as in MoveIt.
@@ -257,9 +258,6 @@ class MoveItWorld:
                 raise GeometryError(f"{where} has no primitives or meshes")
             objects[name] = MoveItObject(pose, shapes, subframes)
             return
-        # APPEND to an existing object: the new shapes are placed by the message's pose, kept relative to
-        # the object's own pose
-        to_old = old.pose.inverse().compose(pose)
-        moved = tuple((shape, to_old.compose(relative)) for shape, relative in shapes)
-        extra = {key: to_old.compose(p) for key, p in subframes.items()}
-        objects[name] = MoveItObject(old.pose, old.shapes + moved, {**old.subframes, **extra})
+        # APPEND to an existing object: as MoveIt's World::addToObject, the new shapes (and subframes) are
+        # relative to the object's own pose; the message's pose is not read
+        objects[name] = MoveItObject(old.pose, old.shapes + shapes, {**old.subframes, **subframes})
