@@ -6,8 +6,9 @@
 # - otherwise three interface packages are built in order with the PyPI ROS build tools
 #   (interfaces/requirements-build.txt) and Debian's cmake and g++, and installed into the venv itself:
 #   interfaces/object_recognition_msgs (ObjectType), interfaces/octomap_msgs (Octomap, OctomapWithPose) and
-#   interfaces/moveit_msgs (26 messages and GetMotionPlan); a few minutes on 2 cores, once: a stamp of
-#   the sources in share/moveit_msgs skips the build next time.
+#   interfaces/moveit_msgs (26 messages and GetMotionPlan), for Python only (no C++ type supports:
+#   DRD_PYTHON_ONLY); 202 s on 2 busy cores (101 s of CPU), once: a stamp of the sources in
+#   share/moveit_msgs skips the build next time.
 # scripts/build_nav2_msgs.sh has installed cmake, g++ and the build tools before (run.sh calls it first).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -71,7 +72,8 @@ for pkg in "${packages[@]}"; do
   echo "moveit_msgs: [$step/${#packages[@]}] $pkg: configure, compile ($jobs jobs), install (log: $log)" >&2
   AMENT_PREFIX_PATH="$venv" cmake -S "interfaces/$pkg" -B "$build" \
     -DCMAKE_INSTALL_PREFIX="$venv" -DCMAKE_PREFIX_PATH="$venv" -DCMAKE_BUILD_TYPE=Release \
-    -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$py" -DDRD_PYTHON_INCLUDES="$includes" >"$log" 2>&1 ||
+    -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$py" -DDRD_PYTHON_INCLUDES="$includes" -DDRD_PYTHON_ONLY=ON \
+    >"$log" 2>&1 ||
     fail configure
   AMENT_PREFIX_PATH="$venv" cmake --build "$build" -j "$jobs" >>"$log" 2>&1 || fail compile
   cmake --install "$build" >>"$log" 2>&1 || fail install

@@ -41,7 +41,7 @@ extras="plots,test"
 # two interfaces built into the venv once (about 1-2 minutes; cached, skipped on later runs).
 bash scripts/build_nav2_msgs.sh "$venv"
 # MoveIt's scene topic and plan_kinematic_path (arm) need moveit_msgs: a ROS install's, or its PlanningScene and
-# GetMotionPlan subset built into the venv once (3 small packages, about 3-7 minutes on 2 cores; cached).
+# GetMotionPlan subset built into the venv once (3 small packages, about 2-3.5 minutes on 2 cores; cached).
 bash scripts/build_moveit_msgs.sh "$venv"
 
 case "$job" in
