@@ -105,6 +105,20 @@ def main() -> None:
     scenes.publish(octomap)
     say(step="octomap")
     assert sys.stdin.readline().strip() == "refused"
+    diff = PlanningScene(is_diff=True)  # a second box, at the goal, added by a diff
+    at_goal = box_scene(scenario["frame"], scenario["goal_box"]).world.collision_objects[0]
+    at_goal.id = "at_goal"
+    diff.world.collision_objects = [at_goal]
+    scenes.publish(diff)
+    say(step="diff")
+    assert sys.stdin.readline().strip() == "applied"
+    answer = wait(node, planner.call_async(request(scenario))).motion_plan_response
+    say(
+        step="goal_blocked",
+        code=answer.error_code.val,
+        message=answer.error_code.message,
+        points=len(answer.trajectory.joint_trajectory.points),
+    )
     say(step="imports", drd=sorted(m for m in sys.modules if m.startswith("drd")))
     node.destroy_node()
     rclpy.shutdown()

@@ -5,8 +5,9 @@ against a real planner node with the arm prior in this process, over DDS on a do
 publishes a full planning scene whose box blocks the straight joint motion from start to goal, calls
 ``plan_kinematic_path`` with a start state and joint goal constraints, and gets a timed trajectory from that
 start to that goal whose every segment the arm's own checker finds free on that scene (and the straight
-motion it avoided blocked); a position goal is INVALID_GOAL_CONSTRAINTS (no inverse kinematics), and a scene
-with an octomap is refused with its reason, the maps unchanged.
+motion it avoided blocked); a position goal is INVALID_GOAL_CONSTRAINTS (no inverse kinematics); a scene
+with an octomap is refused with its reason, the maps unchanged; a diff adding a box at the goal makes the same
+request GOAL_IN_COLLISION.
 """
 
 from __future__ import annotations
@@ -145,6 +146,7 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
             "start": start.tolist(),
             "goal": goal.tolist(),
             "box": {"center": center.tolist(), "size": [BOX_M] * 3},
+            "goal_box": {"center": session.positions(goal[None, :])[0].tolist(), "size": [BOX_M] * 3},
         }
         process = subprocess.Popen(
             [sys.executable, str(CLIENT), json.dumps(scenario)],
@@ -182,6 +184,16 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
             )
             assert node.snapshot.version == version  # the maps unchanged
             _say(process, "refused")
+
+            assert _next(executor, lines, process) == {"step": "diff"}
+            assert spin_until(
+                executor, lambda: {"moveit:blocker", "moveit:at_goal"} <= set(node.snapshot.obstacles), 60
+            )
+            _say(process, "applied")
+            blocked = _next(executor, lines, process)
+            assert (blocked["code"], blocked["points"]) == (-12, 0), (
+                blocked
+            )  # GOAL_IN_COLLISION, no trajectory
             assert _next(executor, lines, process) == {"step": "imports", "drd": []}
             assert process.wait(timeout=30) == 0
         finally:
