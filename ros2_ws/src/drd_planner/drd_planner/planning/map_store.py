@@ -162,7 +162,7 @@ class MapStore:
         }
         self._parts = parts
         self._obstacles = obstacles
-        self._snapshot = self._snapshot.with_obstacles({**self._parts, **self._moveit.parts()})
+        self._snapshot = self._snapshot.with_obstacles({**self._parts, **self._moveit_parts()})
         return self._snapshot
 
     def apply_planning_scene(self, msg: Any) -> MapSnapshot:
@@ -171,14 +171,18 @@ class MapStore:
         Parts of objects the scene did not touch are kept as they were (the scene cache rebuilds only
         what changed).
         """
-        before = self._snapshot.obstacles
         self._moveit.apply(msg)  # refuses without changing anything
+        self._snapshot = self._snapshot.with_obstacles({**self._parts, **self._moveit_parts()})
+        return self._snapshot
+
+    def _moveit_parts(self) -> dict[str, Parts]:
+        """The MoveIt objects' parts; an object's parts equal to the current snapshot's stay those objects."""
+        before = self._snapshot.obstacles
         moveit = self._moveit.parts()
         for key, parts in moveit.items():
             if before.get(key) == parts:
                 moveit[key] = before[key]
-        self._snapshot = self._snapshot.with_obstacles({**self._parts, **moveit})
-        return self._snapshot
+        return moveit
 
     def apply_terrain(self, msg: Any) -> MapSnapshot:
         """Apply a terrain cloud; the new snapshot (DrdError: no loaded prior can take it as its ground)."""
