@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from scipy.sparse import csr_array
 from scipy.spatial import cKDTree
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
@@ -205,8 +206,14 @@ def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray, motions: list[Flo
     ]
     counts = np.array([m.shape[0] for m in points])
     nearest = index.nearest_edges(np.concatenate(points))
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    free = np.add.reduceat(worlds[:, nearest].astype(np.int32), starts, axis=1)
+    # Per motion, the number of its samples whose nearest edge is free in each world: a sparse (M, U) count
+    # matrix over the U distinct nearest edges times their (U, n) outcomes (never an (n, sum K) copy).
+    edges, column = np.unique(nearest, return_inverse=True)
+    owner = np.repeat(np.arange(len(points)), counts)
+    samples = csr_array(
+        (np.ones(nearest.size, dtype=np.float32), (owner, column.ravel())), shape=(len(points), edges.size)
+    )
+    free = np.asarray(samples @ worlds[:, edges].T.astype(np.float32)).T
     return np.asarray(free >= 0.5 * counts, dtype=bool)
 
 

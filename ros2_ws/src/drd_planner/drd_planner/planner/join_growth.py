@@ -153,7 +153,8 @@ class JoinGrowth(GraphGrowth):
                 reverse=outgoing,
             )
             fresh = np.array([v for v in ranking.tolist() if useful[v] and v not in joined], dtype=np.int64)
-            take = fresh[: min(max(len(joined), 1), room)]
+            batch = fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
+            take = fresh[: min(batch, room)]
             if take.size == 0:
                 continue
             motions = self.connector.motions_to(state, self.prior.graph, take, outgoing=outgoing)

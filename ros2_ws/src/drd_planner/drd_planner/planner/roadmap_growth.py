@@ -114,6 +114,7 @@ class GrowthSettings:
     reach_fraction: float = 1.0
     bridges: int = 8
     max_joins: int | None = None
+    join_batch: int | None = None
 
     def __post_init__(self) -> None:
         counts = (self.max_rounds, self.max_vertices, self.samples_per_round, self.neighbours)
@@ -123,6 +124,7 @@ class GrowthSettings:
             min(counts) < 1
             or self.bridges < 0
             or (self.max_joins is not None and self.max_joins < 1)
+            or (self.join_batch is not None and self.join_batch < 1)
             or (self.max_checks is not None and self.max_checks < 1)
         ):
             raise ProblemError(
