@@ -153,7 +153,9 @@ class JoinGrowth(GraphGrowth):
                 reverse=outgoing,
             )
             fresh = np.array([v for v in ranking.tolist() if useful[v] and v not in joined], dtype=np.int64)
-            batch = fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
+            batch = (
+                fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
+            )
             take = fresh[: min(batch, room)]
             if take.size == 0:
                 continue
