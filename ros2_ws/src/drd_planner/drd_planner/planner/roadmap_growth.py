@@ -99,6 +99,10 @@ class GrowthSettings:
         max_joins: motions joining an off-graph start or goal at most, when the connector can offer more
             than its first ones (:mod:`~drd_planner.planner.join_growth`; count; None: every vertex a flyable
             motion reaches and that can still lead to the other end, within the time and check budgets).
+        join_batch: joins offered per off-graph endpoint in a join-growth round (count): as many as it
+            already has, at least this many, in the order of their weight under the prior (a vectorised sketch
+            of each motion, :func:`~drd_planner.planner.join_growth.prior_ranking`); None: every join left at
+            once (a flyable motion to each lattice vertex is built and imputed: seconds on ``heli_lines``).
     """
 
     max_rounds: int = 40
@@ -114,7 +118,7 @@ class GrowthSettings:
     reach_fraction: float = 1.0
     bridges: int = 8
     max_joins: int | None = None
-    join_batch: int | None = None
+    join_batch: int | None = 64
 
     def __post_init__(self) -> None:
         counts = (self.max_rounds, self.max_vertices, self.samples_per_round, self.neighbours)
