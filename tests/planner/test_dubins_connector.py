@@ -128,3 +128,30 @@ def test_motions_to_any_ranked_vertices_follow_the_ranking(lattice_graph: Explic
     assert [m.length for m in first + then] == sorted(m.length for m in first + then)
     assert len(set(ranked.tolist())) == ranked.size  # every vertex once
     assert connector.motions_to(start, lattice_graph, ranked[:0], outgoing=True) == []
+
+
+@pytest.mark.parametrize(
+    ("state", "outgoing"),
+    [
+        (np.array([212.0, 33.0, 60.0, 2.9]), True),
+        (np.array([212.0, 33.0, 60.0, -0.7]), False),
+        (np.array([212.0, 33.0, 60.0, np.nan]), False),
+    ],
+)
+def test_sketches_lie_on_the_motions_they_stand_for(
+    lattice_graph: ExplicitGraph, state: np.ndarray, outgoing: bool
+) -> None:
+    connector = _connector(lattice_graph)
+    vertices = connector.ranked(state, lattice_graph, outgoing=outgoing)[:40]
+    fractions = np.linspace(0.0, 1.0, 5)
+    lengths, points = connector.sketches(
+        state, lattice_graph, vertices, outgoing=outgoing, fractions=fractions
+    )
+    motions = connector.motions_to(state, lattice_graph, vertices, outgoing=outgoing)
+    assert points.shape == (vertices.size, 5, 3) and len(motions) == vertices.size
+    assert np.allclose(lengths, [m.length for m in motions], atol=1e-6)
+    for motion, sketch in zip(motions, points, strict=True):
+        assert np.allclose(sketch[[0, -1]], motion.states[[0, -1], :3], atol=1e-6)
+        if math.isfinite(state[3]):  # the sketch is on the flown curve (a free heading's is the chord)
+            gaps = np.linalg.norm(motion.states[:, None, :3] - sketch[None, :, :], axis=2).min(axis=0)
+            assert gaps.max() < 5.0  # within one sample spacing of the motion's samples

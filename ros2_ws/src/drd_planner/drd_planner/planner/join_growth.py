@@ -99,7 +99,7 @@ def prior_ranking(
     The weight is the graph fallback's: -log theta + lambda * length / mean edge length, with theta the
     share of training worlds (weighted as the prior weights them) in which the sketched motion's imputed
     outcome is free (:func:`~drd_planner.planner.connect.imputed_columns`; at least 1e-3). Ties keep the
-    connector's order.
+    connector's order; a prior without training worlds keeps the connector's order.
 
     Args:
         ranking: (M,) vertex ids in the connector's order.
@@ -108,7 +108,7 @@ def prior_ranking(
         index: points along the prior's graph edges.
         prior: its training worlds, weights and graph lengths.
     """
-    if ranking.size == 0:
+    if ranking.size == 0 or prior.worlds is None:  # no training worlds: the connector's order
         return ranking
     free = imputed_columns(index, prior.worlds, list(points))
     theta = np.average(free, axis=0, weights=prior.world_weights)
