@@ -23,13 +23,15 @@ plan. Times are CPU seconds of this process (``time.process_time``), the query's
 
 Usage:
     python scripts/bench_heli_states.py [--priors heli_wires,heli_lines] [--states 20] [--seed 1]
-        [--offsets 0,2,10,30,50] [--reference-joins 96] [--free-states] [--json FILE] [--markdown FILE]
+        [--offsets 0,2,10,30,50] [--reference-joins 96] [--join-batch 64] [--free-states] [--json FILE]
+        [--markdown FILE]
 
 ``--free-states`` redraws a state that is in collision on its world (counted as redrawn) until it is clear, so
 every state counts towards "planned / path exists" (on ``heli_lines`` three states in four drawn in the altitude
 band lie below the terrain).
 
-Seeds: the defaults of the connector were chosen on ``--seed 0`` states; the README's table is ``--seed 1``.
+Seeds: the defaults of the connector and of the join growth (``--join-batch``) were chosen on ``--seed 0``
+states; the README's table is ``--seed 1``.
 """
 
 from __future__ import annotations
@@ -116,7 +118,8 @@ def run_prior(name: str, args: argparse.Namespace) -> dict[str, Any]:
     prior = load_prior(ROOT / "trees" / f"{name}.npz")
     domain = rebuild_domain(prior, name)
     model = WORLD_MODELS[name]
-    planner = Planner(prior, snap_tolerance=1e-6)
+    batch = None if args.join_batch == 0 else args.join_batch
+    planner = Planner(prior, snap_tolerance=1e-6, growth=GrowthSettings(join_batch=batch))
     own = dubins_connector(prior)
     assert own is not None
     reference = Planner(
@@ -238,6 +241,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--reference-joins", type=int, default=96, help="joins of the reference planner")
+    parser.add_argument(
+        "--join-batch",
+        type=int,
+        default=GrowthSettings().join_batch or 0,
+        help="the planner's GrowthSettings.join_batch (0: every join at once)",
+    )
     parser.add_argument(
         "--free-states",
         action="store_true",
