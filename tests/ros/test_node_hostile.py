@@ -380,7 +380,7 @@ def test_a_signal_during_the_autostart_transition_ends_the_node_with_status_0(
     and rclpy raised RCLError. Here configure shuts the context down as that handler does."""
     import rclpy
 
-    from drd_planner.ros import node as node_module
+    from drd_planner.ros import node_process as node_module
 
     configure = PlannerNode.on_configure
 
@@ -402,7 +402,7 @@ def test_an_import_that_a_signal_broke_half_way_ends_the_start_with_130(
     from drd_planner.ros import planner_node
 
     before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    monkeypatch.setitem(sys.modules, "drd_planner.ros.node", None)  # its import now fails
+    monkeypatch.setitem(sys.modules, "drd_planner.ros.node_process", None)  # its import now fails
     args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]
     try:
         monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGINT)])
@@ -420,7 +420,7 @@ def test_a_start_that_fails_after_a_signal_ends_with_130(monkeypatch: pytest.Mon
     creating the node raised RCLError. After a recorded signal any error of the start is that signal."""
     from rclpy.impl.implementation_singleton import rclpy_implementation
 
-    from drd_planner.ros import node as node_module
+    from drd_planner.ros import node_process as node_module
     from drd_planner.ros import planner_node
 
     def failing_start(args: list[str]) -> int:
