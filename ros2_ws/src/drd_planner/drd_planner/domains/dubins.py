@@ -290,31 +290,29 @@ def _mod2pi_array(angle: FloatArray) -> FloatArray:
     return np.asarray(np.where(out > _TWO_PI - 1e-9, 0.0, out), dtype=np.float64)
 
 
-def _word_lengths(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
-    """(6, N) normalised lengths t + p + q of each word (order of ``_WORDS``; inf where a word does not exist)."""
+def _word_segments(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
+    """(6, N, 3) normalised segment lengths t, p, q of each word (inf where the word does not exist)."""
     sa, sb, ca, cb, cab = np.sin(a), np.sin(b), np.cos(a), np.cos(b), np.cos(a - b)
-    out = np.full((len(_WORDS), a.size), np.inf)
+    out = np.full((len(_WORDS), a.size, 3), np.inf)
     with np.errstate(invalid="ignore"):
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)  # LSL
         tmp = np.arctan2(cb - ca, d + sa - sb)
-        ok = p2 >= -_EPS
-        out[0] = np.where(
-            ok, _mod2pi_array(-a + tmp) + np.sqrt(np.maximum(p2, 0.0)) + _mod2pi_array(b - tmp), np.inf
-        )
+        words = [(p2 >= -_EPS, _mod2pi_array(-a + tmp), np.sqrt(np.maximum(p2, 0.0)), _mod2pi_array(b - tmp))]
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
         tmp = np.arctan2(ca - cb, d - sa + sb)
-        ok = p2 >= -_EPS
-        out[1] = np.where(
-            ok, _mod2pi_array(a - tmp) + np.sqrt(np.maximum(p2, 0.0)) + _mod2pi_array(-b + tmp), np.inf
+        words.append(
+            (p2 >= -_EPS, _mod2pi_array(a - tmp), np.sqrt(np.maximum(p2, 0.0)), _mod2pi_array(-b + tmp))
         )
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
         p = np.sqrt(np.maximum(p2, 0.0))
         tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
-        out[2] = np.where(p2 >= -_EPS, _mod2pi_array(-a + tmp) + p + _mod2pi_array(-b + tmp), np.inf)
+        words.append((p2 >= -_EPS, _mod2pi_array(-a + tmp), p, _mod2pi_array(-b + tmp)))
         p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)  # RSL
         p = np.sqrt(np.maximum(p2, 0.0))
         tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, p)
-        out[3] = np.where(p2 >= -_EPS, _mod2pi_array(a - tmp) + p + _mod2pi_array(b - tmp), np.inf)
+        words.append((p2 >= -_EPS, _mod2pi_array(a - tmp), p, _mod2pi_array(b - tmp)))
+        for row, (ok, t, p, q) in enumerate(words):
+            out[row] = np.where(ok[:, None], np.column_stack([t, p, q]), np.inf)
         for row, sign in ((4, 1.0), (5, -1.0)):  # RLR, LRL
             cosine = (6.0 - d * d + 2.0 * cab + 2.0 * sign * d * (sa - sb)) / 8.0
             ok = np.abs(cosine) <= 1.0 + _EPS
@@ -325,8 +323,32 @@ def _word_lengths(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
             else:
                 t = _mod2pi_array(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2.0)
                 q = _mod2pi_array(b - a - t + p)
-            out[row] = np.where(ok, t + p + q, np.inf)
+            out[row] = np.where(ok[:, None], np.column_stack([t, p, q]), np.inf)
     return out
+
+
+def _word_lengths(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
+    """(6, N) normalised lengths t + p + q of each word (order of ``_WORDS``; inf where a word does not exist)."""
+    return np.asarray(_word_segments(a, b, d).sum(axis=2), dtype=np.float64)
+
+
+def _chord_frame(
+    starts: npt.ArrayLike, ends: npt.ArrayLike, radius: float
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """(N, 3) starts and ends broadcast, their headings a, b (N,) from the chord, and d (N,) in radii.
+
+    Raises:
+        ProblemError: a radius that is not positive and finite.
+    """
+    s = np.atleast_2d(np.asarray(starts, dtype=np.float64))
+    e = np.atleast_2d(np.asarray(ends, dtype=np.float64))
+    s, e = np.broadcast_arrays(s, e)
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
+    dx, dy = e[:, 0] - s[:, 0], e[:, 1] - s[:, 1]
+    d = np.hypot(dx, dy) / radius
+    chord = np.where(d > 0.0, np.arctan2(dy, dx), 0.0)
+    return s, e, _mod2pi_array(s[:, 2] - chord), _mod2pi_array(e[:, 2] - chord), d
 
 
 def dubins_lengths(starts: npt.ArrayLike, ends: npt.ArrayLike, *, radius: float) -> FloatArray:
@@ -340,15 +362,7 @@ def dubins_lengths(starts: npt.ArrayLike, ends: npt.ArrayLike, *, radius: float)
         ends: (N, 3) or (3,) poses.
         radius: turning radius (length unit, > 0).
     """
-    s = np.atleast_2d(np.asarray(starts, dtype=np.float64))
-    e = np.atleast_2d(np.asarray(ends, dtype=np.float64))
-    s, e = np.broadcast_arrays(s, e)
-    if not (math.isfinite(radius) and radius > 0.0):
-        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
-    dx, dy = e[:, 0] - s[:, 0], e[:, 1] - s[:, 1]
-    d = np.hypot(dx, dy) / radius
-    chord = np.where(d > 0.0, np.arctan2(dy, dx), 0.0)
-    a, b = _mod2pi_array(s[:, 2] - chord), _mod2pi_array(e[:, 2] - chord)
+    _, _, a, b, d = _chord_frame(starts, ends, radius)
     return np.asarray(_word_lengths(a, b, d).min(axis=0) * radius, dtype=np.float64)
 
 

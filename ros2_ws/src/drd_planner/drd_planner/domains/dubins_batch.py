@@ -12,14 +12,11 @@ Units: the length unit of the poses and radius; headings in radians.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray
-from drd_planner.domains.dubins import _EPS, _WORDS, _mod2pi_array, wrap_angle
-from drd_planner.exceptions import ProblemError
+from drd_planner.domains.dubins import _WORDS, _chord_frame, _word_segments, wrap_angle
 
 __all__ = ["dubins_sketches"]
 
@@ -27,37 +24,6 @@ __all__ = ["dubins_sketches"]
 _SIGNS = np.array([[1, 0, 1], [-1, 0, -1], [1, 0, -1], [-1, 0, 1], [-1, 1, -1], [1, -1, 1]], dtype=np.float64)
 #: How far (times max(1, radius)) an integrated end may lie from the target for a word to count.
 _END_TOLERANCE = 1e-6
-
-
-def _word_segments(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
-    """(6, N, 3) normalised segment lengths t, p, q of each word (inf where the word does not exist)."""
-    sa, sb, ca, cb, cab = np.sin(a), np.sin(b), np.cos(a), np.cos(b), np.cos(a - b)
-    out = np.full((len(_WORDS), a.size, 3), np.inf)
-    with np.errstate(invalid="ignore"):
-        for row, sign in ((0, 1.0), (1, -1.0)):  # LSL, RSR
-            p2 = 2.0 + d * d - 2.0 * cab + 2.0 * sign * d * (sa - sb)
-            tmp = np.arctan2(sign * (cb - ca), d + sign * (sa - sb))
-            t, q = _mod2pi_array(-sign * (a - tmp)), _mod2pi_array(sign * (b - tmp))
-            ok = p2 >= -_EPS
-            out[row] = np.where(ok[:, None], np.column_stack([t, np.sqrt(np.maximum(p2, 0.0)), q]), np.inf)
-        for row, sign in ((2, 1.0), (3, -1.0)):  # LSR, RSL
-            p2 = -2.0 + d * d + 2.0 * cab + 2.0 * sign * d * (sa + sb)
-            p = np.sqrt(np.maximum(p2, 0.0))
-            tmp = np.arctan2(-sign * (ca + cb), d + sign * (sa + sb)) - np.arctan2(-2.0 * sign, p)
-            t, q = _mod2pi_array(-sign * (a - tmp)), _mod2pi_array(-sign * (b - tmp))
-            out[row] = np.where((p2 >= -_EPS)[:, None], np.column_stack([t, p, q]), np.inf)
-        for row, sign in ((4, 1.0), (5, -1.0)):  # RLR, LRL
-            cosine = (6.0 - d * d + 2.0 * cab + 2.0 * sign * d * (sa - sb)) / 8.0
-            ok = np.abs(cosine) <= 1.0 + _EPS
-            p = _mod2pi_array(2.0 * math.pi - np.arccos(np.clip(cosine, -1.0, 1.0)))
-            if sign > 0:
-                t = _mod2pi_array(a - np.arctan2(ca - cb, d - sa + sb) + p / 2.0)
-                q = _mod2pi_array(a - b - t + p)
-            else:
-                t = _mod2pi_array(-a - np.arctan2(ca - cb, d + sa - sb) + p / 2.0)
-                q = _mod2pi_array(b - a - t + p)
-            out[row] = np.where(ok[:, None], np.column_stack([t, p, q]), np.inf)
-    return out
 
 
 def _integrate(
@@ -94,15 +60,7 @@ def dubins_sketches(
     Returns:
         (N,) path lengths and (N, P, 3) poses (x, y, heading wrapped to [-pi, pi)).
     """
-    s = np.atleast_2d(np.asarray(starts, dtype=np.float64))
-    e = np.atleast_2d(np.asarray(ends, dtype=np.float64))
-    s, e = np.broadcast_arrays(s, e)
-    if not (math.isfinite(radius) and radius > 0.0):
-        raise ProblemError(f"turning radius must be positive and finite, got {radius}")
-    dx, dy = e[:, 0] - s[:, 0], e[:, 1] - s[:, 1]
-    d = np.hypot(dx, dy) / radius
-    chord = np.where(d > 0.0, np.arctan2(dy, dx), 0.0)
-    a, b = _mod2pi_array(s[:, 2] - chord), _mod2pi_array(e[:, 2] - chord)
+    s, e, a, b, d = _chord_frame(starts, ends, radius)
     segments = _word_segments(a, b, d) * radius  # (6, N, 3)
     lengths = segments.sum(axis=2)  # (6, N), inf where a word does not exist
     valid = np.isfinite(lengths)
