@@ -22,6 +22,8 @@ def test_counts_equal_the_sums_over_the_rows(n: int, e: int, seed: int) -> None:
         assert np.array_equal(columns.free_counts(rows), x[rows].sum(axis=0))
     assert np.array_equal(columns.free_totals, x.sum(axis=0))
     assert columns.num_worlds == n and columns.num_edges == e
+    edges = rng.integers(0, e, size=7)  # repeats allowed
+    assert np.array_equal(columns.rows_of(edges), x[:, edges].T)
 
 
 def test_rows_are_packed_little_endian_in_64_bit_words() -> None:

@@ -7,6 +7,7 @@ import pytest
 
 from drd_planner import Planner, PlanStatus, TableOracle, prior_from_problem
 from drd_planner.core.problem import Problem
+from drd_planner.core.world_columns import WorldColumns
 from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
 from drd_planner.domains.planar import PlanarChecker
 from drd_planner.planner import WorldPrior
@@ -177,6 +178,8 @@ def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
         [imputed_outcomes(index, worlds, m) for m in motions]
     )  # <= 8 samples: the same
     np.testing.assert_array_equal(columns, expected)
+    np.testing.assert_array_equal(imputed_columns(index, WorldColumns(worlds), motions), expected)  # packed
     assert imputed_columns(index, worlds, []).shape == (3, 0)
+    assert imputed_columns(index, WorldColumns(worlds), []).shape == (3, 0)
     long = np.linspace([0.0, 0.1], [0.0, 0.9], 50)  # 50 samples voted through 8 evenly spread ones
     assert imputed_columns(index, worlds, [long]).shape == (3, 1)

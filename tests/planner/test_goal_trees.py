@@ -8,8 +8,10 @@ import pytest
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.goal_trees import GOAL_TREES_KEPT, GoalJoins, SearchWorlds, distinct_rows
-from drd_planner.planner.query_library import ShortestPaths
+from drd_planner.planner import goal_trees
+from drd_planner.planner.goal_trees import GOAL_TREES_KEPT, JoinMotions, SearchWorlds, distinct_rows
+from drd_planner.planner.query_graph import Joins
+from drd_planner.planner.query_library import ShortestPaths, library_paths
 
 
 def _grid(directed: bool) -> tuple[ExplicitGraph, np.ndarray]:
@@ -59,13 +61,13 @@ def test_trees_are_kept_per_goal_and_a_joined_goal_leaves_the_graph_as_it_was() 
     assert search.tree(20) is not first  # dropped, rebuilt with the same numbers
     assert np.array_equal(search.tree(20).dist, first.dist)
     w = search.num_worlds
-    joins = GoalJoins(np.array([14, 21]), np.array([0.5, 0.25]), np.tile([True, False], (w, 1)))
+    joins = JoinMotions(np.array([14, 21]), np.array([0.5, 0.25]), np.tile([True, False], (w, 1)))
     joined = search.joined_tree(joins)
     assert joined.goal == 36  # the extra vertex of each block
     assert np.allclose(joined.dist[:, 14], 0.5)  # only the first join is free
     assert np.array_equal(search.tree(20).dist, first.dist)  # the shared graph is unchanged
     with pytest.raises(ProblemError, match="join outcomes"):
-        search.joined_tree(GoalJoins(np.array([14]), np.array([1.0]), np.ones((w + 1, 1), dtype=bool)))
+        search.joined_tree(JoinMotions(np.array([14]), np.array([1.0]), np.ones((w + 1, 1), dtype=bool)))
 
 
 def test_distinct_rows_are_found_exactly() -> None:
@@ -76,3 +78,51 @@ def test_distinct_rows_are_found_exactly() -> None:
     _, reference = np.unique(x, axis=0, return_index=True)
     assert np.array_equal(first, np.sort(reference))
     assert distinct_rows(np.zeros((0, 5), dtype=bool)).size == 0
+
+
+def _libraries(
+    monkeypatch: pytest.MonkeyPatch, radius: float, graph: ExplicitGraph, x: np.ndarray
+) -> list[list[tuple[int, ...]]]:
+    """Every query's library with the first search radius set to ``radius`` (a fresh search per radius)."""
+    monkeypatch.setattr(goal_trees, "FIRST_RADIUS", radius)
+    search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
+    rng = np.random.default_rng(9)
+    out = []
+    for _ in range(12):
+        goal = int(rng.integers(36))
+        for _ in range(3):  # replans to the same goal: the kept tree widened where a start is not covered
+            start = int(rng.integers(36))
+            if start != goal:
+                out.append([tuple(p.tolist()) for p in library_paths(search, start, goal, max_paths=500)])
+            vertices = rng.choice(36, size=3, replace=False)
+            joins = Joins(
+                vertices, rng.uniform(0.2, 3.0, 3), np.arange(3) + 999, rng.random((x.shape[0], 3)) < 0.7
+            )
+            out.append([tuple(p.tolist()) for p in library_paths(search, joins, goal, max_paths=500)])
+    return out
+
+
+@pytest.mark.parametrize("directed", [False, True])
+def test_searching_only_as_far_as_the_start_gives_the_paths_of_whole_trees(
+    monkeypatch: pytest.MonkeyPatch, directed: bool
+) -> None:
+    graph, x = _grid(directed)
+    whole = _libraries(monkeypatch, np.inf, graph, x)
+    assert sum(len(paths) for paths in whole) > 100
+    for radius in (0.5, 1.0, 1.25, 2.0):  # below 1 every world is widened; 1 widens all but straight paths
+        assert _libraries(monkeypatch, radius, graph, x) == whole
+
+
+def test_a_bounded_tree_covers_what_it_reached_and_is_widened_in_place() -> None:
+    graph, x = _grid(False)
+    search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
+    tree = search.tree(35, 28)  # a start two rows from the goal: a small part of the grid searched
+    assert tree.covers(28).all()
+    bounded = np.isfinite(tree.radius)  # the others were widened: 28 lay beyond their radius (a detour)
+    assert 0 < bounded.sum() < search.num_worlds
+    assert not np.isfinite(tree.dist[bounded, 0]).any()  # the far corner lies beyond every bounded radius
+    assert not tree.covers(0)[bounded].any()
+    assert search.tree(35, 0) is tree  # widened in place for the far start
+    assert np.isinf(tree.radius).all()
+    reference = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1).tree(35)
+    assert np.array_equal(tree.dist, reference.dist) and np.array_equal(tree.hop, reference.hop)

@@ -11,8 +11,16 @@ Dijkstra from the goal's copy in every block at once (``min_only``: the blocks d
 distance is its own world's) computes all W trees in C: about 0.1 ms per world on the real-scale helicopter
 lattice (3935 vertices, 20 999 edges), against 0.17 ms for one search and the Python around it.
 
+**Searched only as far as the start.** A search for a start s explores, in every world, only the vertices at
+most ``FIRST_RADIUS`` times s's distance to the goal over the arcs free in any search world (a lower bound of every
+world's): on short queries a small part of the graph. Within that radius the distances and next hops are
+exactly those of an unbounded search; a world whose start lies beyond it (a long detour) is searched again
+without bound, as is every world a later start of the same goal is not covered in (:meth:`GoalTree.covers`).
+So a replan from along the route walks the kept trees, and any start gets the same paths as unbounded trees.
+
 **A goal off the graph** is the extra vertex ``B - 1`` of each block; the motions joining it (their vertex,
-length and imputed outcome per world) are written into the block graph's spare arcs for that search only.
+length and imputed outcome per world) are written into the block graph's spare arcs for that search only (it
+is searched without bound).
 
 The search worlds: the distinct training worlds (rows compared through a 64-bit hash, then exactly) in a
 seeded order, the first W of them.
@@ -33,11 +41,12 @@ from drd_planner.core.lazysp import GraphArcs
 from drd_planner.exceptions import ProblemError
 
 __all__ = [
+    "FIRST_RADIUS",
     "GOAL_JOIN_SLOTS",
     "GOAL_TREES_KEPT",
     "SEARCH_WORLDS",
-    "GoalJoins",
     "GoalTree",
+    "JoinMotions",
     "SearchWorlds",
     "distinct_rows",
 ]
@@ -48,6 +57,8 @@ SEARCH_WORLDS = 256
 GOAL_JOIN_SLOTS = 64
 #: Goals whose trees a :class:`SearchWorlds` keeps (least recently used dropped first).
 GOAL_TREES_KEPT = 8
+#: A new goal's first search radius, as a multiple of the start's distance over the arcs free in any search world.
+FIRST_RADIUS = 1.25
 #: A reverse tree's next hop where there is none (the goal itself, or a vertex that cannot reach it).
 NO_HOP = -1
 
@@ -90,11 +101,11 @@ def distinct_rows(x: npt.ArrayLike) -> IntArray:
 
 
 @dataclass(frozen=True)
-class GoalJoins:
-    """The motions joining an off-graph goal to the graph, for a search from it.
+class JoinMotions:
+    """The motions joining an off-graph state (a goal, or a start) to the graph.
 
     Attributes:
-        vertices: (k,) the graph vertex each motion comes from.
+        vertices: (k,) the graph vertex at each motion's other end.
         lengths: (k,) their lengths (the graph's unit).
         free: (W, k) bool: whether each motion counts as free in each search world (imputed).
     """
@@ -106,50 +117,89 @@ class GoalJoins:
 
 @dataclass(frozen=True)
 class GoalTree:
-    """The reverse shortest-path trees of one goal in every search world.
+    """The reverse shortest-path trees of one goal in every search world (searched as far as ``radius``).
 
     Attributes:
         goal: the goal's vertex in a block (``B - 1`` for an off-graph goal).
-        dist: (W, B) distance of each vertex to the goal in each world (inf: it cannot reach it).
-        hop: (W, B) the next vertex on its shortest free path to the goal (:data:`NO_HOP` at the goal or
-            where the goal is unreachable).
+        dist: (W, B) distance of each vertex to the goal in each world (inf: it cannot reach it, or lies beyond
+            the world's radius).
+        hop: (W, B) int32, the next vertex on its shortest free path to the goal (:data:`NO_HOP` at the goal,
+            where the goal is unreachable, or beyond the radius).
+        radius: (W,) how far each world was searched (the graph's length unit; inf: the whole graph). Within it
+            ``dist`` and ``hop`` are those of an unbounded search. :meth:`SearchWorlds.tree` widens the rows of a
+            kept tree in place (to inf) when a later start needs it; rows never change otherwise.
     """
 
     goal: int
     dist: FloatArray
-    hop: IntArray
+    hop: npt.NDArray[np.int32]
+    radius: FloatArray
+
+    def covers(self, start: int | JoinMotions) -> BoolArray:
+        """(W,) whether each world's shortest free path from ``start`` can be read off this tree.
+
+        A vertex start is covered where it was reached or the world was searched without bound. A joined
+        start (``free`` (W, k)) is covered where no free motion's vertex beyond the radius could beat the best
+        one within it (the best free motion is then exactly chosen, :meth:`best_joins`).
+        """
+        whole = np.isinf(self.radius)
+        if not isinstance(start, JoinMotions):
+            return np.asarray(whole | np.isfinite(self.dist[:, int(start)]), dtype=bool)
+        reached = np.isfinite(self.dist[:, start.vertices])  # (W, k)
+        best = np.min(
+            np.where(start.free & reached, start.lengths[None, :] + self.dist[:, start.vertices], np.inf), 1
+        )
+        # A motion to a vertex beyond the radius is at least its length plus the radius long.
+        floor = np.where(start.free & ~reached, start.lengths[None, :] + self.radius[:, None], np.inf)
+        return np.asarray(whole | (best <= floor.min(axis=1)), dtype=bool)
+
+    def best_joins(self, start: JoinMotions) -> tuple[IntArray, BoolArray]:
+        """Per world, the free motion with the shortest free path behind it (the first of equally short ones).
+
+        Returns:
+            (W,) the motion's index (0 where none), (W,) whether a free path exists.
+        """
+        behind = np.where(start.free, start.lengths[None, :] + self.dist[:, start.vertices], np.inf)
+        choice = np.asarray(np.argmin(behind, axis=1), dtype=np.int64)
+        reachable = np.isfinite(behind[np.arange(behind.shape[0]), choice])
+        return choice, np.asarray(reachable, dtype=bool)
 
     def walks(self, starts: IntArray) -> list[IntArray | None]:
         """Per world the vertex sequence from ``starts[w]`` to the goal, or None when it cannot reach it.
 
         Args:
-            starts: (W,) a start vertex per world (the same one, or each world's best join).
+            starts: (W,) a start vertex per world (the same one, or each world's best join); each must be
+                covered (:meth:`covers`).
+        """
+        table, lengths = self.walk_table(starts)
+        return [None if n == 0 else np.asarray(table[w, :n], dtype=np.int64) for w, n in enumerate(lengths)]
+
+    def walk_table(self, starts: IntArray) -> tuple[npt.NDArray[np.int32], IntArray]:
+        """The walks of :meth:`walks` as one table.
+
+        Returns:
+            (W, L) int32 vertex sequences from ``starts[w]`` to the goal, the goal repeated after each walk's
+            end, and (W,) each walk's vertex count (0 where the goal cannot be reached).
         """
         num = self.dist.shape[0]
         rows = np.arange(num)
+        starts = np.asarray(starts, dtype=np.int64)
         reach = np.isfinite(self.dist[rows, starts])
-        cur = np.where(reach, starts, self.goal)
+        cur = np.where(reach, starts, self.goal).astype(np.int32)
         steps = [cur]
+        count = reach.astype(np.int64)
         while True:
-            moving = cur != self.goal
-            if not moving.any():
+            moving = np.flatnonzero(cur != self.goal)
+            if moving.size == 0:
                 break
             nxt = cur.copy()
-            nxt[moving] = self.hop[rows[moving], cur[moving]]
+            nxt[moving] = self.hop[moving, cur[moving]]
             if np.any(nxt[moving] == NO_HOP):  # never: a finite distance has a complete walk
                 raise ProblemError("a reverse shortest-path tree has a broken walk")
+            count[moving] += 1
             cur = nxt
             steps.append(cur)
-        table = np.stack(steps, axis=1)  # (W, L + 1), the goal repeated after each walk's end
-        out: list[IntArray | None] = []
-        for w in range(num):
-            if not reach[w]:
-                out.append(None)
-                continue
-            seq = table[w]
-            end = int(np.argmax(seq == self.goal))
-            out.append(np.asarray(seq[: end + 1], dtype=np.int64))
-        return out
+        return np.stack(steps, axis=1), count
 
 
 class SearchWorlds:
@@ -195,12 +245,13 @@ class SearchWorlds:
         rows = np.concatenate([arcs.v[which] + copies * block, spare_rows])
         cols = np.concatenate([arcs.u[which] + copies * block, spare_cols.ravel()])
         data = np.concatenate([arc_length[which], np.full(num * self.slots, np.inf)])
-        graph = sp.csr_array((data, (rows, cols)), shape=(num * block, num * block))
-        graph.sort_indices()
-        self._graph = graph
+        self._graph = _csr32(data, rows, cols, num * block)
         # Where each block's spare arcs sit in the CSR arrays (its goal vertex's row: all of that row).
         goal_rows = np.arange(num) * block + v
-        self._slots = graph.indptr[goal_rows][:, None] + np.arange(self.slots)[None, :]
+        self._slots = self._graph.indptr[goal_rows][:, None] + np.arange(self.slots)[None, :]
+        # The arcs free in any search world, reversed: distances on it bound every world's from below.
+        anywhere = free.any(axis=0)
+        self._union = _csr32(arc_length[anywhere], arcs.v[anywhere], arcs.u[anywhere], v)
         self._trees: OrderedDict[int, GoalTree] = OrderedDict()
 
     @property
@@ -213,26 +264,38 @@ class SearchWorlds:
         """The graph goals whose reverse trees are kept, least recently used first."""
         return tuple(self._trees)
 
-    def tree(self, goal: int) -> GoalTree:
-        """The reverse trees of a graph vertex ``goal`` (kept for the next query to the same goal)."""
-        known = self._trees.get(int(goal))
-        if known is not None:
-            self._trees.move_to_end(int(goal))
-            return known
-        if not 0 <= int(goal) < self.arcs.num_vertices:
-            raise ProblemError(f"goal vertex {goal} outside [0, {self.arcs.num_vertices})")
-        tree = self._search(int(goal))
-        self._trees[int(goal)] = tree
-        while len(self._trees) > GOAL_TREES_KEPT:
-            self._trees.popitem(last=False)
-        return tree
+    def tree(self, goal: int, start: int | JoinMotions | None = None) -> GoalTree:
+        """The reverse trees of a graph vertex ``goal``, covering ``start`` in every world (kept per goal).
+
+        Args:
+            goal: the goal vertex.
+            start: the start the trees are read for (a vertex, or the motions joining an off-graph start with
+                ``free`` (W, k)); a new goal is searched as far as it needs (:data:`FIRST_RADIUS`), and the
+                worlds a kept tree does not cover it in are searched again without bound. None: the whole graph.
+        """
+        goal = int(goal)
+        known = self._trees.get(goal)
+        if known is None:
+            if not 0 <= goal < self.arcs.num_vertices:
+                raise ProblemError(f"goal vertex {goal} outside [0, {self.arcs.num_vertices})")
+            known = self._search(goal, self._graph, limit=self._first_radius(goal, start))
+            self._trees[goal] = known
+            while len(self._trees) > GOAL_TREES_KEPT:
+                self._trees.popitem(last=False)
+        else:
+            self._trees.move_to_end(goal)
+        if start is None:
+            self._widen(known, ~np.isinf(known.radius))
+        else:
+            self._widen(known, ~known.covers(start))
+        return known
 
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()
 
-    def joined_tree(self, joins: GoalJoins) -> GoalTree:
-        """The reverse trees of an off-graph goal joined by ``joins`` (not kept: the goal is a state)."""
+    def joined_tree(self, joins: JoinMotions) -> GoalTree:
+        """The reverse trees of an off-graph goal joined by ``joins`` (the whole graph; not kept)."""
         k = int(joins.vertices.size)
         if k > self.slots:
             raise ProblemError(f"at most {self.slots} motions into a goal can be searched, got {k}")
@@ -245,20 +308,58 @@ class SearchWorlds:
         indices[slots] = joins.vertices[None, :] + offsets
         data[slots] = np.where(joins.free, joins.lengths[None, :], np.inf)
         graph = sp.csr_array((data, indices, self._graph.indptr), shape=self._graph.shape)
-        return self._search(self.block - 1, graph)
+        return self._search(self.block - 1, graph, limit=np.inf)
 
-    def _search(self, goal: int, graph: sp.csr_array | None = None) -> GoalTree:
-        num, block = self.num_worlds, self.block
-        sources = np.arange(num) * block + goal
+    def _first_radius(self, goal: int, start: int | JoinMotions | None) -> float:
+        """How far a new goal's first search goes for ``start``: inf for the whole graph."""
+        if start is None:
+            return np.inf
+        bound = dijkstra(self._union, directed=True, indices=goal)
+        if isinstance(start, JoinMotions):
+            near = float(np.min(start.lengths + bound[start.vertices], initial=np.inf))
+        else:
+            near = float(bound[int(start)])
+        return FIRST_RADIUS * near  # inf where no world can reach the goal at all: search everything once
+
+    def _widen(self, tree: GoalTree, worlds: BoolArray) -> None:
+        """Search ``worlds`` (W,) of a kept tree again without bound, in place."""
+        again = np.flatnonzero(worlds)
+        if again.size == 0:
+            return
+        full = self._search(tree.goal, self._graph, limit=np.inf, worlds=again)
+        tree.dist[again] = full.dist
+        tree.hop[again] = full.hop
+        tree.radius[again] = np.inf
+
+    def _search(
+        self, goal: int, graph: sp.csr_array, *, limit: float, worlds: IntArray | None = None
+    ) -> GoalTree:
+        """Dijkstra from ``goal`` in each of ``worlds`` (all when None) as far as ``limit``.
+
+        Returns the rows of those worlds only, in their order.
+        """
+        block = self.block
+        chosen = np.arange(self.num_worlds) if worlds is None else worlds
+        sources = chosen * block + goal
         dist, pred, _ = dijkstra(
-            self._graph if graph is None else graph,
-            directed=True,
-            indices=sources,
-            min_only=True,
-            return_predecessors=True,
+            graph, directed=True, indices=sources, min_only=True, return_predecessors=True, limit=limit
         )
-        dist = np.asarray(dist, dtype=np.float64).reshape(num, block)
-        hop = np.asarray(pred, dtype=np.int64).reshape(num, block)
-        local = hop - (np.arange(num) * block)[:, None]
-        hop = np.where(hop >= 0, local, NO_HOP)
-        return GoalTree(goal, dist, hop)
+        if worlds is None:
+            dist_rows = np.asarray(dist, dtype=np.float64).reshape(chosen.size, block)
+            hop = np.asarray(pred, dtype=np.int32).reshape(chosen.size, block)
+        else:  # only the chosen blocks: min_only searches never leave the blocks of their sources
+            cells = (chosen * block)[:, None] + np.arange(block)[None, :]
+            dist_rows = np.asarray(dist[cells], dtype=np.float64)
+            hop = np.asarray(pred[cells], dtype=np.int32)
+        hop -= (chosen * block)[:, None].astype(np.int32)  # in place: a block's own vertex numbers
+        np.maximum(hop, NO_HOP, out=hop)  # no predecessor (scipy's -9999, now shifted): NO_HOP
+        return GoalTree(goal, dist_rows, hop, np.full(chosen.size, limit, dtype=np.float64))
+
+
+def _csr32(data: FloatArray, rows: npt.ArrayLike, cols: npt.ArrayLike, size: int) -> sp.csr_array:
+    """A (size, size) CSR graph with int32 indices (what csgraph runs on: no conversion per search)."""
+    graph = sp.csr_array((data, (rows, cols)), shape=(size, size))
+    graph.sort_indices()
+    return sp.csr_array(
+        (graph.data, graph.indices.astype(np.int32), graph.indptr.astype(np.int32)), shape=(size, size)
+    )

@@ -406,7 +406,8 @@ class Planner:
             )
         joins = more_joins_of(self._connector)
         if joins is not None and model.query.connected:
-            return JoinGrowth(self.prior, model.query, joins, self._models.sample_index(), self.growth)
+            index = self._models.sample_index()
+            return JoinGrowth(self.prior, model.query, joins, index, self.growth, self._models.columns)
         return None
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:

@@ -123,7 +123,7 @@ def connected_query(
     worlds: QueryWorlds | None = None
     imputed: BoolArray | None = None
     if prior.worlds is not None and columns is not None:
-        imputed = imputed_columns(index, prior.worlds, [m.states for m in motions])
+        imputed = imputed_columns(index, columns, [m.states for m in motions])
         worlds = QueryWorlds(prior.worlds, columns, imputed)
     cost = float(np.median(prior.edge_costs))
     costs = np.concatenate([prior.edge_costs, np.full(len(motions), cost)])

@@ -28,7 +28,7 @@ from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.goal_trees import GoalJoins, SearchWorlds
+from drd_planner.planner.goal_trees import GoalTree, JoinMotions, SearchWorlds
 from drd_planner.planner.query_graph import Joins
 
 
@@ -86,43 +86,56 @@ def library_paths(
         raise ProblemError(f"max_paths must be at least 1, got {max_paths}")
     if isinstance(start, int) and isinstance(goal, int) and start == goal:
         raise ProblemError(f"start and goal are the same vertex ({start}); no path has an edge to check")
-    worlds = search.worlds
-    if isinstance(goal, Joins):
-        assert goal.free is not None  # a library needs training worlds
-        k = min(goal.vertices.size, search.slots)  # the first (best) joins; any others stay in the graph
-        free = goal.free[worlds][:, :k]
-        tree = search.joined_tree(GoalJoins(goal.vertices[:k], goal.lengths[:k], free))
-        into_goal = dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
+    origin = _motions(search, start)
+    tree, into_goal = _goal_tree(search, origin, goal)
+    if isinstance(origin, JoinMotions):
+        choice, reachable = tree.best_joins(origin)
+        table, counts = tree.walk_table(np.where(reachable, origin.vertices[choice], tree.goal))
+        counts = np.where(reachable, counts, 0)
     else:
-        tree = search.tree(goal)
-        into_goal = {}
-    rows = np.arange(worlds.size)
-    if isinstance(start, Joins):
-        assert start.free is not None
-        behind = np.where(start.free[worlds], start.lengths[None, :] + tree.dist[:, start.vertices], np.inf)
-        choice = np.argmin(behind, axis=1)  # the first of equally short ones
-        reachable = np.isfinite(behind[rows, choice])
-        starts = np.where(reachable, start.vertices[choice], tree.goal)
-    else:
-        choice = np.zeros(worlds.size, dtype=np.int64)
-        reachable = np.ones(worlds.size, dtype=bool)
-        starts = np.full(worlds.size, int(start))
+        choice = np.zeros(search.num_worlds, dtype=np.int64)
+        table, counts = tree.walk_table(np.full(search.num_worlds, origin))
+    # The distinct (join, walk) rows in the worlds' order: the first max_paths of them make the library.
+    kept = counts > 0
+    keyed = np.concatenate([choice[:, None].astype(np.int32), table], axis=1)[kept]
+    if keyed.shape[0] == 0:
+        return []
+    lengths, chosen = counts[kept], choice[kept]
+    _, first = np.unique(keyed, axis=0, return_index=True)
     found: dict[tuple[int, ...], IntArray] = {}
-    for c, walk in enumerate(tree.walks(starts)):
-        if len(found) >= max_paths:
-            break
-        if walk is None or not reachable[c]:
-            continue
+    for row in np.sort(first)[:max_paths]:
+        walk = keyed[row, 1 : 1 + int(lengths[row])].astype(np.int64)
         hops = walk if not into_goal else walk[:-1]  # the last hop of a joined goal is its motion
         edges = [search.arcs.edge_of(hops[:-1], hops[1:])] if hops.size > 1 else []
         if into_goal:
             edges.append(np.array([into_goal[int(hops[-1])]], dtype=np.int64))
         if isinstance(start, Joins):
-            edges.insert(0, np.array([int(start.edges[choice[c]])], dtype=np.int64))
+            edges.insert(0, np.array([int(start.edges[chosen[row]])], dtype=np.int64))
         path = np.concatenate(edges) if edges else np.zeros(0, dtype=np.int64)
         if path.size:
             found.setdefault(tuple(path.tolist()), path)
     return [found[k] for k in sorted(found)]
+
+
+def _motions(search: SearchWorlds, start: int | Joins) -> int | JoinMotions:
+    """A start vertex as it is, or an off-graph start's joins with their outcomes in the search worlds."""
+    if not isinstance(start, Joins):
+        return int(start)
+    assert start.free is not None  # a library needs training worlds
+    return JoinMotions(start.vertices, start.lengths, start.free[search.worlds])
+
+
+def _goal_tree(
+    search: SearchWorlds, origin: int | JoinMotions, goal: int | Joins
+) -> tuple[GoalTree, dict[int, int]]:
+    """The goal's reverse trees (covering ``origin``) and, for a joined goal, its join edge per graph vertex."""
+    if not isinstance(goal, Joins):
+        return search.tree(goal, origin), {}
+    assert goal.free is not None
+    k = min(goal.vertices.size, search.slots)  # the first (best) joins; any others stay in the graph
+    free = goal.free[search.worlds][:, :k]
+    tree = search.joined_tree(JoinMotions(goal.vertices[:k], goal.lengths[:k], free))
+    return tree, dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
 
 
 def vertex_sequence(edges: npt.NDArray[np.int64], start: int, path: IntArray) -> IntArray:
