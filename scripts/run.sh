@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Set up a virtual environment with both packages and run one job.
 #   scripts/run.sh demo    the main job: the planner node on the bundled real-scale helicopter bag heli_lines (planner_demo)
-#   scripts/run.sh test    the whole suite: ruff, mypy, pytest
+#   scripts/run.sh test    the whole suite: ruff, mypy, the docs build (warnings as errors), pytest
 # Works on a fresh Debian/Ubuntu machine with Python 3.10+ (installs python3-venv, and cmake, g++ and the
 # Python headers for the nav2_msgs and moveit_msgs builds, with apt when missing).
 set -euo pipefail
@@ -53,6 +53,7 @@ case "$job" in
     "$venv/bin/ruff" check .
     "$venv/bin/ruff" format --check .
     "$venv/bin/mypy"
+    "$venv/bin/sphinx-build" -W --keep-going -q -b html docs build/docs
     "$py" -m pytest -q
     ;;
 esac

@@ -1,6 +1,6 @@
 """The package's structure rules (issue 17), checked so that they stay true.
 
-- every module has a test file that mirrors it, or a row of the README's table names the test file that
+- every module has a test file that mirrors it, or a row of the docs' table (docs/tests.md) names the test file that
   exercises it and says why it has none of its own;
 - no module is over 500 lines;
 - ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
@@ -54,10 +54,14 @@ def _mirrored_test(dotted: str) -> list[Path]:
     )
 
 
-def _readme_table() -> dict[str, str]:
-    """Module -> test file from the README's table of modules tested through other test files."""
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    section = text.split("### Which test exercises which module", 1)[1].split("\n#", 1)[0]
+#: The docs page whose table names the test file of each module without a mirrored one.
+TESTS_PAGE = REPO / "docs" / "tests.md"
+
+
+def _docs_table() -> dict[str, str]:
+    """Module -> test file from the docs' table of modules tested through other test files."""
+    text = TESTS_PAGE.read_text(encoding="utf-8")
+    section = text.split("## Which test exercises which module", 1)[1].split("\n#", 1)[0]
     rows = re.findall(r"^\| `([\w.]+)` \| `(tests/[\w/]+\.py)` \| \S", section, flags=re.MULTILINE)
     return dict(rows)
 
@@ -77,18 +81,22 @@ def _imports(path: Path) -> set[str]:
 def test_every_module_has_a_test_that_exercises_it(dotted: str, path: Path) -> None:
     if _mirrored_test(dotted):
         return
-    table = _readme_table()
-    assert dotted in table, f"{dotted} has no tests/.../test_{path.stem}.py and no row in the README's table"
+    table = _docs_table()
+    assert dotted in table, (
+        f"{dotted} has no tests/.../test_{path.stem}.py and no row in docs/tests.md's table"
+    )
     assert (REPO / table[dotted]).is_file(), (
-        f"README names {table[dotted]} for {dotted}, which does not exist"
+        f"docs/tests.md names {table[dotted]} for {dotted}, which does not exist"
     )
 
 
-def test_the_readme_table_names_only_modules_without_a_mirrored_test() -> None:
+def test_the_docs_table_names_only_modules_without_a_mirrored_test() -> None:
     modules = {dotted for dotted, _ in _modules()}
-    for dotted in _readme_table():
-        assert dotted in modules, f"README's test table names {dotted}, which is not a module"
-        assert not _mirrored_test(dotted), f"{dotted} has a mirrored test file; drop its README row"
+    table = _docs_table()
+    assert table, f'{TESTS_PAGE} has no table of modules under "## Which test exercises which module"'
+    for dotted in table:
+        assert dotted in modules, f"docs/tests.md's test table names {dotted}, which is not a module"
+        assert not _mirrored_test(dotted), f"{dotted} has a mirrored test file; drop its row in docs/tests.md"
 
 
 @pytest.mark.parametrize(("dotted", "path"), _modules(), ids=[d for d, _ in _modules()])
