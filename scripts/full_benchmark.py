@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The whole benchmark over every authors'-format dataset under a folder: Table 1, figures, timings.
 
-Writes ``OUT/benchmark.json`` (one DESIGN.md section 5 document per dataset, with the Table-1
-``relative`` statistics), ``OUT/table1.md`` (the markdown report) and the figures under
+Writes ``OUT/benchmark.json`` (one ``drd bench --json`` document per dataset, docs/getting-started.md,
+with the Table-1 ``relative`` statistics), ``OUT/table1.md`` (the markdown report) and the figures under
 ``OUT/figures/``, and prints the total wall time. Same as
 ``drd bench --all GCCD --json OUT/benchmark.json --markdown OUT/table1.md --figures OUT/figures``: the
 defaults, i.e. eta, the posterior leaf's kappa and the region rule validated per dataset;

@@ -28,7 +28,8 @@ from drd_planner.planner import load_prior, load_tree_bundle
 
 POLICY_KEYS = {"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}
 DOC_KEYS = {"dataset", "test_ids", "oracle_lower_bound", "policies"}
-#: Keys the runner adds to DESIGN.md section 5 (documented in bench/runner.py and bench/suite.py).
+#: Keys the runner adds to the ``drd bench --json`` document of docs/getting-started.md (documented in
+#: bench/runner.py and bench/suite.py).
 EXTRA_DOC_KEYS = {
     "tree",
     "settings",
@@ -103,7 +104,7 @@ def test_bench_writes_design_json(d2d1: Path, tmp_path: Path, capsys: pytest.Cap
     assert "| dataset_2d_1 |" in captured.out
     assert f"wrote {out}" in captured.out
     doc = json.loads(out.read_text())
-    # DESIGN.md section 5 keys, plus only the runner's documented extra blocks.
+    # The documented keys (docs/getting-started.md, drd bench --json), plus only the runner's extra blocks.
     assert DOC_KEYS <= set(doc)
     assert set(doc) - DOC_KEYS <= EXTRA_DOC_KEYS
     assert doc["dataset"] == "dataset_2d_1"

@@ -1,5 +1,5 @@
-"""Bernoulli baselines (ALGORITHMS.md 4.1/4.2): hand-derived selections, the authors' stored results,
-seeding, and a smoke run on a real dataset."""
+"""Bernoulli baselines (docs/algorithms.md, "The Bernoulli baselines"): hand-derived selections, the
+authors' stored results, seeding, and a smoke run on a real dataset."""
 
 from __future__ import annotations
 

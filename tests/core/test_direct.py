@@ -1,4 +1,4 @@
-"""DiRECt greedy step (ALGORITHMS.md 3.1-3.5) against an independent brute-force reference.
+"""DiRECt greedy step (docs/algorithms.md, "DiRECt") against an independent brute-force reference.
 
 The reference below uses no algebraic shortcut: every ECD problem is written out as an explicit list
 of classes (sets of training worlds), and the EC weight of a version space is the explicit sum, over

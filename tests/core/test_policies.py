@@ -97,5 +97,6 @@ def test_combined_method_beats_bisect_on_baffle() -> None:
                 ).num_checks
             )
         means[name] = np.mean(checks)
-    assert means["bisect"] == pytest.approx(40.20)  # ALGORITHMS.md 2.7, independent re-computation
+    # docs/algorithms.md, "BiSECt against the authors' stored results"
+    assert means["bisect"] == pytest.approx(40.20)
     assert means["direct_bisect"] < 0.85 * means["bisect"]

@@ -15,7 +15,7 @@ from drd_planner.data.gccd import REQUIRED_FILES, RawGraph, load_gccd_folder, me
 from drd_planner.exceptions import DatasetError
 
 # --------------------------------------------------------------------------------------------------
-# The authors' datasets against ALGORITHMS.md section 6.3
+# The authors' datasets against docs/algorithms.md, "The authors' datasets"
 # --------------------------------------------------------------------------------------------------
 
 # folder: (tests, m, fraction of worlds with >= 1 valid path, oracle LB over the test worlds)

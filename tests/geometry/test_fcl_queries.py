@@ -1,5 +1,5 @@
-"""python-fcl traps (DESIGN.md section 8): sticky CollisionResult, the broadphase callback that never stops,
-continuousCollide, and meshes as surfaces."""
+"""python-fcl traps (docs/architecture.md, "Known traps"): sticky CollisionResult, the broadphase
+callback that never stops, continuousCollide, and meshes as surfaces."""
 
 from __future__ import annotations
 

@@ -1,11 +1,11 @@
 # mypy: allow-untyped-calls
 """Seeded generator of malformed planner inputs, made by mutating valid rclpy messages (no tests here).
 
-Every generated :class:`Case` carries the message, the topic it goes to, the mutation that made it,
-whether the interface (DESIGN.md section 6, drd_msgs_py validation) *must* refuse it, and words of
-which at least one has to appear in the refusal (the reason). A few mutations leave the message
-valid on purpose (a repeated LINE_STRIP point, a huge id, some NaN heights, a DELETE with a NaN pose,
-...): those have ``must_fail=False`` and may be accepted.
+Every generated :class:`Case` carries the message, the topic it goes to, the mutation that made it, whether
+the interface (docs/ros-node.md, "Topics, services and actions"; drd_msgs_py validation) *must* refuse it, and
+words of which at least one has to appear in the refusal (the reason). A few mutations leave the message valid
+on purpose (a repeated LINE_STRIP point, a huge id, some NaN heights, a DELETE with a NaN pose, ...): those
+have ``must_fail=False`` and may be accepted.
 
 Valid bases come from the planner's own world models (the helicopter "wires" world of a tree's
 domain via :func:`drd_planner.planning.world_messages.helicopter_world_messages`; the arm "table_clutter" world as

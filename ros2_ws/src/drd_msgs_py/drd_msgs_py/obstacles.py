@@ -1,6 +1,6 @@
 """Obstacles: ``visualization_msgs/MarkerArray`` <-> plain marker shapes with their poses.
 
-Marker semantics (DESIGN.md section 6):
+Marker semantics (docs/ros-node.md, "Topics, services and actions"):
 
 - CUBE: a box of ``scale`` (x, y, z) metres; SPHERE: a sphere of diameter ``scale.x`` (= y = z);
   CYLINDER: a cylinder along the marker's z with diameter ``scale.x`` (= y) and height ``scale.z``;

@@ -15,9 +15,9 @@ below, for groups of one it is the oracle bound, and it grows with the group siz
 all the test worlds (and, over random groups drawn from the world distribution, towards the
 Bayes-optimal policy's expected cost).
 
-``OPT(G)`` is exponential in ``|G|`` (ALGORITHMS.md section 8); :func:`known_worlds_optimum` solves it
-exactly by depth-first branch and bound with the oracle bound as the admissible heuristic, using
-three facts that keep groups of ~20 worlds tractable on the authors' graphs:
+``OPT(G)`` is exponential in ``|G|`` (docs/algorithms.md, "Bounds and exact optima");
+:func:`known_worlds_optimum` solves it exactly by depth-first branch and bound with the oracle bound as the
+admissible heuristic, using three facts that keep groups of ~20 worlds tractable on the authors' graphs:
 
 * *informative checks first*: a check whose outcome is the same in every world still possible can be
   moved to the end of its branch at no cost (its outcome is known), so an optimal policy makes only

@@ -233,7 +233,9 @@ def _space_information(
 
     def state_valid(state: Any) -> bool:
         book.state_checks += 1
-        return True  # vertex validity is folded into the edge outcomes of X (ALGORITHMS.md 6.1)
+        # Vertex validity is folded into the edge outcomes of X (docs/algorithms.md, "Worlds, the path
+        # library and the split").
+        return True
 
     def check_motion(self: Any, s1: Any, s2: Any, *last_valid: Any) -> bool:
         return book.motion(vertex(s1), vertex(s2))

@@ -1,4 +1,4 @@
-"""Exact optima on a finite world database (ALGORITHMS.md section 8, the "physical limit").
+"""Exact optima on a finite world database (docs/algorithms.md, "Bounds and exact optima").
 
 Everything here is exponential on purpose and refuses instances that are too large with a
 :class:`~drd_planner.exceptions.ProblemError`. Benchmarks and tests use it to measure how far the greedy
@@ -116,7 +116,7 @@ def exact_drd_optimum(
     edge_costs: npt.ArrayLike,
     prior: npt.ArrayLike | None = None,
 ) -> float:
-    """Bayes-optimal expected cost of the finite-database DRD problem (ALGORITHMS.md 8.3).
+    """Bayes-optimal expected cost of the finite-database DRD problem (docs/algorithms.md, "Bounds").
 
     Version spaces H' (sets of worlds consistent with the outcomes so far) are bitmasks. With
     P the prior restricted to H',
@@ -245,7 +245,7 @@ def exact_episode_optimum(
     """Bayes-optimal expected cost of a benchmark *episode* on a finite world database.
 
     An episode ends when some library path has every edge checked free, or every library path has
-    a checked blocked edge (ALGORITHMS.md section 1). The state is (checked edges, version space
+    a checked blocked edge (docs/algorithms.md, "The problem"). The state is (checked edges, version space
     H'); all worlds of H' agree on the checked edges. From a state that has not ended, checking
     any unchecked edge e of a still-alive path -- informative on H' or not, since verification
     needs uninformative edges too -- costs c(e) and splits H' by the outcome of e:

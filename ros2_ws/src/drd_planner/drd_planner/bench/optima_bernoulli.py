@@ -1,4 +1,4 @@
-"""Exact optima under the independent-edge model, x_e ~ Bernoulli(theta_e) (ALGORITHMS.md 8.2).
+"""Exact optima under the independent-edge model, x_e ~ Bernoulli(theta_e) (docs/algorithms.md).
 
 * :func:`exact_bernoulli_optimum` -- the episode problem as sequential Boolean function evaluation
   (SBFE) of the monotone DNF OR_i AND_{e in path i} x_e, by DP over partial assignments.

@@ -1,6 +1,6 @@
 """Run policies over a problem's test worlds against a table-lookup oracle and collect statistics.
 
-The JSON written by :func:`benchmark_json` follows DESIGN.md section 5:
+The JSON written by :func:`benchmark_json` is the ``drd bench --json`` document of docs/getting-started.md:
 ``{"dataset", "test_ids", "oracle_lower_bound": {"mean", "per_world"}, "policies": {NAME:
 {"mean_checks", "median_checks", "checks", "failures", "mean_select_ms"}}}`` plus a ``tree`` block, the
 run ``settings``, per policy ``failed_worlds`` (positions in ``test_ids``) and ``relative`` (Table-1
@@ -97,7 +97,7 @@ class PolicyStats:
     failed_worlds: list[int] = field(default_factory=list)
 
     def as_json(self) -> dict[str, Any]:
-        """The DESIGN.md section 5 policy block plus ``failed_worlds``."""
+        """The documented policy block (``drd bench --json``) plus ``failed_worlds``."""
         arr = np.asarray(self.checks, dtype=np.float64)
         return {
             "mean_checks": float(arr.mean()) if arr.size else float("nan"),
@@ -406,7 +406,7 @@ def benchmark_json(
     resamples: int = DEFAULT_RESAMPLES,
     seed: int = 0,
 ) -> dict[str, Any]:
-    """The JSON document of DESIGN.md section 5, extended with the Table-1 ``relative`` statistics.
+    """The ``drd bench --json`` document (docs/getting-started.md) with the Table-1 ``relative`` statistics.
 
     Args:
         result: a benchmark run.

@@ -1,4 +1,4 @@
-"""Table-1 statistics: relative extra cost over a reference policy (ALGORITHMS.md section 5.1).
+"""Table-1 statistics (docs/algorithms.md, "Evaluation protocol"): relative extra cost over a reference.
 
 Per test world j and policy a the *relative extra cost* is ``(c_a(j) - c_ref(j)) / c_ref(j)`` with the
 reference ``direct_bisect`` (the paper's method). Per dataset the paper reports the 40th and 60th

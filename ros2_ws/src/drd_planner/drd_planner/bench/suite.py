@@ -403,7 +403,7 @@ def leaf_lines(runs: Sequence[DatasetRun]) -> list[str]:
 
 
 def dataset_json(run: DatasetRun, options: SuiteOptions) -> dict[str, Any]:
-    """One dataset's DESIGN.md section 5 document with ``wall_seconds``, ``notes`` and ``figures``.
+    """One dataset's ``drd bench --json`` document with ``wall_seconds``, ``notes`` and ``figures``.
 
     A ``training_curve`` block is added when that figure was drawn.
     """

@@ -1,4 +1,4 @@
-"""Bernoulli baselines on the path library (ALGORITHMS.md 4.1, 4.2).
+"""Bernoulli baselines on the path library (docs/algorithms.md, "The Bernoulli baselines").
 
 All of them share BiSECt's state (:class:`BernoulliLibraryState`): the training-set bias theta
 (clamped, never updated) and log p_i per path with observed edges clamped. They stop (``select``

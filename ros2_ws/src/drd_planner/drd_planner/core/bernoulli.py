@@ -1,4 +1,4 @@
-"""The Bernoulli library state shared by BiSECt and the Bernoulli baselines (ALGORITHMS.md 2.1, 2.5).
+"""The Bernoulli library state shared by BiSECt and the Bernoulli baselines (docs/algorithms.md, "BiSECt").
 
 Edges are independent, x_e ~ Bernoulli(theta_e). For each path i the state keeps log p_i, the log
 probability that its untested edges are all free (observed edges are clamped to their outcome), whether

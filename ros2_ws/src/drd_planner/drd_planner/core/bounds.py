@@ -1,4 +1,4 @@
-"""The verification lower bound of ALGORITHMS.md section 8 (the "physical limit"), cheap for any size.
+"""The verification lower bound (docs/algorithms.md, "Bounds and exact optima"), cheap for any size.
 
 :func:`oracle_lower_bound` (8.1) gives per world the cost of its cheapest valid library path: no policy
 that proves a path free can pay less. The exact, exponential optima that measure how far the greedy

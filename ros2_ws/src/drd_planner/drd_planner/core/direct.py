@@ -1,4 +1,4 @@
-"""DiRECt: decision-region edge cutting over a finite world database (ALGORITHMS.md section 3).
+"""DiRECt: decision-region edge cutting over a finite world database (docs/algorithms.md, "DiRECt").
 
 One ECD problem per library path r (its region R_r against the *atoms* outside it: worlds with
 identical path-validity rows), plus a null ECD over all atoms when some training world has no

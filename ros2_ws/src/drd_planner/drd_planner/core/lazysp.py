@@ -1,4 +1,4 @@
-"""LazySP on the full graph with its edge selectors (ALGORITHMS.md 4.2 last row, 4.3).
+"""LazySP on the full graph with its edge selectors (docs/algorithms.md, "LazySP and its selectors").
 
 The loop (Dellin & Srinivasa, ICAPS 2016; the LEMUR code): find the shortest start-goal path in the
 graph with every known-blocked edge deleted (unchecked edges count with their length, their optimistic

@@ -1,9 +1,9 @@
 """Which path (region) BiSECt and the DiRECt tree try to prove next: the region rules.
 
-Both methods restrict their candidate tests to the edges of one library path (ALGORITHMS.md 2.4,
-MaxProbReg). The paper's rule, ``"probability"``, takes the path most likely to be free. That ignores
-what proving it costs: a path of 12 untested edges that is free with probability 0.50 is a worse bet
-than one of 3 untested edges that is free with probability 0.45.
+Both methods restrict their candidate tests to the edges of one library path (MaxProbReg, docs/algorithms.md,
+"The most probable path (MaxProbReg) and ties"). The paper's rule, ``"probability"``, takes the path most
+likely to be free. That ignores what proving it costs: a path of 12 untested edges that is free with
+probability 0.50 is a worse bet than one of 3 untested edges that is free with probability 0.45.
 
 ``"per_check"`` takes the path with the highest probability of being proven free *per expected check
 spent on it*. The derivation, for independent edges (edge e free with probability theta_e, check cost

@@ -1,4 +1,4 @@
-"""The offline DiRECt decision tree (ALGORITHMS.md section 3.6).
+"""The offline DiRECt decision tree (docs/algorithms.md, "The decision tree and the switch to BiSECt").
 
 Built breadth-first from the root (all training worlds active). Each expanded node stores the
 DiRECt edge to check; both children are created, and a child is expanded further only while its

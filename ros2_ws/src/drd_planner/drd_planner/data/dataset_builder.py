@@ -1,6 +1,6 @@
 """Build a dataset file: check every edge on every sampled world in parallel, then library, R and split.
 
-Pipeline (DESIGN.md section 3; ALGORITHMS.md section 6.1):
+Pipeline (docs/architecture.md, "Data flow"; docs/algorithms.md, "Datasets"):
 
 1. The worlds are cut into chunks of ``chunk_size`` consecutive world indices. Each chunk is one task
    (:class:`~drd_planner.data.dataset_chunks.ChunkTask`), evaluated by

@@ -1,4 +1,4 @@
-"""The dataset file: a database of sampled worlds for one domain, and how it was made (DESIGN.md section 4).
+"""The dataset file: a database of sampled worlds for one domain, and how it was made (docs/architecture.md).
 
 Format: a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`; read by :mod:`drd_planner.data.safe_npz`)
 with a JSON header (format name and version, software version, domain name and spec, world model and

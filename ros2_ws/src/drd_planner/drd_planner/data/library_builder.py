@@ -1,12 +1,13 @@
 """Path-library construction and the train/test split, as in the authors' dataset scripts.
 
-Library (ALGORITHMS.md section 6.1, item 3; [CODE] ``create_regions_from_graphs.m`` option 4): for every
-world, keep only its collision-free edges and take Yen's k shortest loopless start-goal paths by edge
-length; the library is the union over all worlds, deduplicated, then subsampled uniformly at random to at
-most ``max_paths`` paths.
+Library (docs/algorithms.md, "Worlds, the path library and the split"; [CODE] ``create_regions_from_graphs.m``
+option 4): for every world, keep only its collision-free edges and take Yen's k shortest loopless start-goal
+paths by edge length; the library is the union over all worlds, deduplicated, then subsampled uniformly at
+random to at most ``max_paths`` paths.
 
-Split (ALGORITHMS.md section 5.1; [CODE] ``create_train_test.m`` type 3): the test worlds are drawn uniformly
-among the worlds in which at least one library path is valid; every other world is a training world.
+Split (docs/algorithms.md, "Evaluation protocol (Table 1)"; [CODE] ``create_train_test.m`` type 3): the test
+worlds are drawn uniformly among the worlds in which at least one library path is valid; every other world is
+a training world.
 """
 
 from __future__ import annotations

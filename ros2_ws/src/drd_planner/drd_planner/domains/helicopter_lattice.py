@@ -1,6 +1,6 @@
 """The helicopter's state lattice in (x, y, z, heading) with Dubins motion primitives.
 
-Like the authors' XYHZ lattice (ALGORITHMS.md section 6.1, ``XYHZAnalyticLattice.m``; their
+Like the authors' XYHZ lattice (docs/algorithms.md, "Graphs"; ``XYHZAnalyticLattice.m``; their
 ``dataset_heli_canyon_1`` uses a 50 m grid, 8 headings and Dubins primitives of turning radius
 100 m over x in [0, 700] m, y in [-250, 250] m, one altitude), vertices are states on a regular grid:
 

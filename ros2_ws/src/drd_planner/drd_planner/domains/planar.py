@@ -3,7 +3,7 @@
 Everything here is self-contained and exact: obstacles are closed axis-aligned boxes and an edge (a
 straight segment between its end vertices) is checked analytically with a vectorised slab test, so no
 FCL and no occupancy grid are needed. Every one of the seven world models (one_wall, two_wall, forest,
-moving_wall, baffle, maze, bugtrap; :mod:`drd_planner.domains.planar_worlds`, ALGORITHMS.md section 6.2)
+moving_wall, baffle, maze, bugtrap; :mod:`drd_planner.domains.planar_worlds`; docs/algorithms.md)
 is a union of axis-aligned rectangles, so boxes represent them without approximation.
 
 :class:`PlanarDomain` is the :class:`drd_planner.domains.base.Domain` of the dataset builder;

@@ -1,6 +1,6 @@
 """Seeded generative world models of the planar and SE(2) domains, as axis-aligned boxes.
 
-Every model of ALGORITHMS.md section 6.2 is built from closed axis-aligned rectangles
+Every model of docs/algorithms.md, "The planar world models", is built from closed axis-aligned rectangles
 ``(xmin, ymin, xmax, ymax)`` in the unit square (lengths are in the same unitless scale), so a world is
 a (k, 4) float64 array and collision checks stay exact (segments, planar domain) or cheap (waypoints,
 SE(2) domain). Parameters follow the spec; where it is vague the choice made here is stated below and

@@ -1,6 +1,6 @@
 """The SE(2) domain: a directed Dubins state lattice in the unit square and the box worlds.
 
-Lattice (ALGORITHMS.md section 6.1, the authors' lattice type 2): states (x, y, heading) with x, y on a
+Lattice (docs/algorithms.md, "Graphs": the authors' lattice type 2): states (x, y, heading) with x, y on a
 grid of ``spacing`` (0.05) over ``bounds`` and 8 headings (multiples of 45 deg). From every state three
 motion primitives leave, each the shortest Dubins path (turning radius ``turning_radius`` = 0.99 * 0.1)
 to a lattice state:

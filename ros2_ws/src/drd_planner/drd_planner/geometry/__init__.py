@@ -24,7 +24,7 @@ Importing this package imports nothing; use the modules:
 - Robot models (URDF parsing, batched forward kinematics, sphere models) live in the ``urdf_model``,
   ``kinematics`` and ``robot`` modules.
 
-The python-fcl traps of DESIGN.md section 8 are handled in one place each: quaternion order in
+The python-fcl traps (docs/architecture.md, "Known traps") are handled in one place each: quaternion order in
 ``Pose.to_fcl``; fresh ``CollisionRequest``/``CollisionResult`` per narrowphase call and the first-hit
 callback in ``fcl_queries``; below-terrain and closed-mesh inside tests in ``Scene``; ``manager.update`` after
 every change; ``continuousCollide`` is never used (trajectories are sampled).

@@ -68,7 +68,7 @@ __all__ = [
     "replay_bag",
 ]
 
-#: What the planner publishes (names relative to its namespace, as in DESIGN.md section 6) -> type.
+#: What the planner publishes (names relative to its namespace, as in docs/ros-node.md) -> type.
 OUTPUT_TOPICS: dict[str, str] = {
     "plan": "nav_msgs/msg/Path",
     "joint_trajectory": "trajectory_msgs/msg/JointTrajectory",
