@@ -1,4 +1,4 @@
-"""BiSECt: Bernoulli subregion edge cutting over a path library (ALGORITHMS.md section 2).
+"""BiSECt: Bernoulli subregion edge cutting over a path library (docs/algorithms.md, "BiSECt").
 
 Edges are independent, x_e ~ Bernoulli(theta_e). The per-path state (log p_i of the untested edges,
 observed edges clamped to their outcome) lives in :class:`BernoulliLibraryState`, shared with the
@@ -84,7 +84,10 @@ class Bisect(BernoulliLibraryState):
         super().__init__(library, theta, observations=observations)
 
     def gains(self, candidates: IntArray) -> FloatArray:
-        """Normalised expected gain g(e) / c(e) for each candidate edge (ALGORITHMS.md 2.3)."""
+        """Normalised expected gain g(e) / c(e) for each candidate edge.
+
+        The closed form: docs/algorithms.md, "The gain in closed form".
+        """
         cand = np.asarray(candidates, dtype=np.int64)
         seg, paths = self.alive_incidence(cand)
         logp = self._logp[paths]

@@ -1,7 +1,7 @@
 """BiSECt's bias re-conditioned on every outcome: the authors' ``update_posterior`` option.
 
-The paper's benchmark keeps BiSECt's bias fixed after the switch from the tree (ALGORITHMS.md 3.6,
-``update_posterior=false``): theta is the free fraction of the training worlds consistent with the
+The paper's benchmark keeps BiSECt's bias fixed after the switch from the tree (docs/algorithms.md,
+"The decision tree and the switch to BiSECt"; ``update_posterior=false``): theta is the free fraction of the training worlds consistent with the
 tree node, and later outcomes only clamp their own edge. With the posterior update every outcome
 also removes the training worlds it contradicts, and theta is recomputed from those that remain.
 
