@@ -16,6 +16,8 @@ most ``FIRST_RADIUS`` times s's distance to the goal over the arcs free in any s
 world's): on short queries a small part of the graph. Within that radius the distances and next hops are
 exactly those of an unbounded search; a world whose start lies beyond it (a long detour) is searched again
 without bound, as is every world a later start of the same goal is not covered in (:meth:`GoalTree.covers`).
+A start in another weakly connected part of a world's free arcs than the goal (computed once per prior) cannot
+reach it there, so that world needs no second search for it (most of them: a start walled in by blocked edges).
 So a replan from along the route walks the kept trees, and any start gets the same paths as unbounded trees.
 
 **A goal off the graph** is the extra vertex ``B - 1`` of each block; the motions joining it (their vertex,
@@ -29,12 +31,12 @@ seeded order, the first W of them.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
@@ -128,29 +130,42 @@ class GoalTree:
         radius: (W,) how far each world was searched (the graph's length unit; inf: the whole graph). Within it
             ``dist`` and ``hop`` are those of an unbounded search. :meth:`SearchWorlds.tree` widens the rows of a
             kept tree in place (to inf) when a later start needs it; rows never change otherwise.
+        parts: (W, B) int32 label of each vertex's weakly connected part of each world's free arcs (vertices
+            of different parts cannot reach each other), or None when unknown.
     """
 
     goal: int
     dist: FloatArray
     hop: npt.NDArray[np.int32]
     radius: FloatArray
+    parts: npt.NDArray[np.int32] | None = None
 
     def covers(self, start: int | JoinMotions) -> BoolArray:
         """(W,) whether each world's shortest free path from ``start`` can be read off this tree.
 
-        A vertex start is covered where it was reached or the world was searched without bound. A joined
-        start (``free`` (W, k)) is covered where no free motion's vertex beyond the radius could beat the best
-        one within it (the best free motion is then exactly chosen, :meth:`best_joins`).
+        A vertex start is covered where it was reached, lies in another part than the goal (it cannot reach
+        it), or the world was searched without bound. A joined start (``free`` (W, k)) is covered where no free
+        motion's vertex beyond the radius (and in the goal's part) could beat the best one within it (the best
+        free motion is then exactly chosen, :meth:`best_joins`).
         """
         whole = np.isinf(self.radius)
         if not isinstance(start, JoinMotions):
-            return np.asarray(whole | np.isfinite(self.dist[:, int(start)]), dtype=bool)
+            vertex = int(start)
+            cut = (
+                np.zeros_like(whole)
+                if self.parts is None
+                else self.parts[:, vertex] != self.parts[:, self.goal]
+            )
+            return np.asarray(whole | cut | np.isfinite(self.dist[:, vertex]), dtype=bool)
         reached = np.isfinite(self.dist[:, start.vertices])  # (W, k)
         best = np.min(
             np.where(start.free & reached, start.lengths[None, :] + self.dist[:, start.vertices], np.inf), 1
         )
+        open_ = start.free & ~reached
+        if self.parts is not None:
+            open_ &= self.parts[:, start.vertices] == self.parts[:, self.goal][:, None]
         # A motion to a vertex beyond the radius is at least its length plus the radius long.
-        floor = np.where(start.free & ~reached, start.lengths[None, :] + self.radius[:, None], np.inf)
+        floor = np.where(open_, start.lengths[None, :] + self.radius[:, None], np.inf)
         return np.asarray(whole | (best <= floor.min(axis=1)), dtype=bool)
 
     def best_joins(self, start: JoinMotions) -> tuple[IntArray, BoolArray]:
@@ -246,6 +261,13 @@ class SearchWorlds:
         cols = np.concatenate([arcs.u[which] + copies * block, spare_cols.ravel()])
         data = np.concatenate([arc_length[which], np.full(num * self.slots, np.inf)])
         self._graph = _csr32(data, rows, cols, num * block)
+        # The weakly connected parts of each world's free arcs (the spare arcs left out): (W, B) labels.
+        arcs_only = sp.coo_array(
+            (np.ones(which.size, dtype=np.int8), (rows[: which.size], cols[: which.size])),
+            shape=(num * block, num * block),
+        )
+        _, labels = connected_components(arcs_only, directed=True, connection="weak")
+        self._parts = np.asarray(labels, dtype=np.int32).reshape(num, block)
         # Where each block's spare arcs sit in the CSR arrays (its goal vertex's row: all of that row).
         goal_rows = np.arange(num) * block + v
         self._slots = self._graph.indptr[goal_rows][:, None] + np.arange(self.slots)[None, :]
@@ -308,7 +330,8 @@ class SearchWorlds:
         indices[slots] = joins.vertices[None, :] + offsets
         data[slots] = np.where(joins.free, joins.lengths[None, :], np.inf)
         graph = sp.csr_array((data, indices, self._graph.indptr), shape=self._graph.shape)
-        return self._search(self.block - 1, graph, limit=np.inf)
+        # Searched whole, so its parts are never asked (and the goal vertex B - 1 has none of its own).
+        return replace(self._search(self.block - 1, graph, limit=np.inf), parts=None)
 
     def _first_radius(self, goal: int, start: int | JoinMotions | None) -> float:
         """How far a new goal's first search goes for ``start``: inf for the whole graph."""
@@ -353,7 +376,8 @@ class SearchWorlds:
             hop = np.asarray(pred[cells], dtype=np.int32)
         hop -= (chosen * block)[:, None].astype(np.int32)  # in place: a block's own vertex numbers
         np.maximum(hop, NO_HOP, out=hop)  # no predecessor (scipy's -9999, now shifted): NO_HOP
-        return GoalTree(goal, dist_rows, hop, np.full(chosen.size, limit, dtype=np.float64))
+        radius = np.full(chosen.size, limit, dtype=np.float64)
+        return GoalTree(goal, dist_rows, hop, radius, None if worlds is not None else self._parts)
 
 
 def _csr32(data: FloatArray, rows: npt.ArrayLike, cols: npt.ArrayLike, size: int) -> sp.csr_array:
