@@ -23,6 +23,8 @@ README_MAX_BYTES = 15_000
 #: Design notes that are not in the repository: the code and docs cite the docs pages instead. (Spelt in two
 #: parts so that this file does not cite them itself.)
 MISSING_DOCUMENTS = ("DESIGN" + ".md", "ALGORITHMS" + ".md")
+#: The same documents cited by their bare names and a section number (the name, a space, a digit).
+MISSING_SECTIONS = re.compile(rb"\b(?:DESIGN|ALGORITHMS)(?:\.md)? (?:section )?\d")
 
 
 def _code(text: str) -> list[str]:
@@ -102,6 +104,8 @@ def test_readme_is_short_and_no_file_cites_documents_the_repository_lacks() -> N
             for document in MISSING_DOCUMENTS:
                 if document.encode() in line:
                     citations.append(f"{name.decode()}:{number}: {document}")
+            if MISSING_SECTIONS.search(line) and not any(d.encode() in line for d in MISSING_DOCUMENTS):
+                citations.append(f"{name.decode()}:{number}: {line.decode(errors='replace').strip()}")
     assert not citations, (
         "these cite documents that are not in the repository (cite the docs page that explains it):\n"
         + "\n".join(citations)

@@ -116,7 +116,9 @@ BUGTRAP_Y_RANGE = (0.2, 0.8)
 
 @dataclass(frozen=True)
 class WorldVariant:
-    """The parameters in which the SE(2) world models differ from the planar ones (ALGORITHMS 6.2).
+    """The parameters in which the SE(2) world models differ from the planar ones.
+
+    See docs/algorithms.md, "The planar world models".
 
     Attributes:
         name: ``"planar"`` or ``"se2"``.
