@@ -15,7 +15,8 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Pose
 from drd_planner.planner import WorldPrior, load_prior
-from drd_planner.planner.no_path import edge_states_of, no_path_reason
+from drd_planner.planner.cause import PlanCause
+from drd_planner.planner.no_path import blocked_end, edge_states_of, no_path_reason
 from drd_planner.planner.query_graph import QueryGraph
 from drd_planner.planning.query_support import rebuild_domain
 
@@ -52,9 +53,11 @@ def test_a_blocked_goal_state_is_named_with_what_blocks_it(shipped: tuple[WorldP
     )  # an off-graph state: no vertex id
     assert "all 4 edges joining the goal" in reason and "were checked blocked" in reason
     assert "the goal state itself is blocked: scene object 'can' (panda_" in reason
+    assert result.cause is PlanCause.GOAL_BLOCKED
     # With growth, growth checks the goal's state first and stops: no path can exist.
     grown = Planner(prior, snap_tolerance=1e-6).plan(0, goal, domain.scene_checker(scene))
     assert grown.status is PlanStatus.NO_PATH and "can exist" in grown.reason
+    assert grown.cause is PlanCause.GOAL_BLOCKED
     assert "goal state itself is blocked (checked): scene object 'can'" in grown.reason
 
 
@@ -64,6 +67,7 @@ def test_a_walled_in_start_names_the_obstacles_of_its_motions(shipped: tuple[Wor
     result = Planner(prior, growth=None).plan(0, 1, checker)
     assert result.status is PlanStatus.NO_PATH
     assert "edges joining the start (vertex 0:" in result.reason
+    assert result.cause is PlanCause.START_BLOCKED
     assert re.search(
         r"the start state itself is free, the (8 shortest )?motions are blocked by scene object",
         result.reason,
@@ -81,6 +85,7 @@ def test_without_an_explainer_the_reason_still_names_the_states() -> None:
         "no free path from the start (vertex 0: [0.0, 0.0]) to the goal (vertex 2: [2.0, 0.0])"
     )
     assert "1 blocked edges disconnect them (1 checks)" in reason
+    assert blocked_end(query, log) is PlanCause.GOAL_BLOCKED  # its only edge is the blocked one
     empty = QueryGraph(
         ExplicitGraph(np.zeros((0, 2), dtype=np.int64), np.zeros(0), 3, vertex_states=states),
         None,
@@ -140,3 +145,17 @@ def test_an_endpoint_joined_by_many_blocked_motions_explains_only_the_shortest()
         and "'wall'" in reason
     )
     assert explainer.explained == 1 + 8  # the state itself, then the 8 shortest motions
+
+
+def test_the_blocked_end_is_the_start_when_both_ends_are_walled_in() -> None:
+    states = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])
+    graph = ExplicitGraph(np.array([[0, 1], [1, 2], [2, 3]]), np.ones(3), 4, vertex_states=states)
+    query = QueryGraph(graph, None, np.ones(3), 0, 3)
+
+    def log(*blocked: int) -> list[CheckRecord]:
+        return [CheckRecord(i, e, False, "graph", 0.0, 0.0) for i, e in enumerate(blocked)]
+
+    assert blocked_end(query, log(2)) is PlanCause.GOAL_BLOCKED
+    assert blocked_end(query, log(0)) is PlanCause.START_BLOCKED
+    assert blocked_end(query, log(2, 0)) is PlanCause.START_BLOCKED  # Nav2 lists the start's code first
+    assert blocked_end(query, log(1)) is None

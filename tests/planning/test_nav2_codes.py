@@ -107,18 +107,20 @@ def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[B
     assert error.name == "GOAL_OCCUPIED", error.text
 
 
-def _failed(message: str, status: str = "no_free_path") -> PlanOutcome:
-    result = QueryPlanResult(ok=False, status=status, message=message, map_version=1, tree="t")
+def _failed(message: str, status: str = "no_free_path", cause: str = "") -> PlanOutcome:
+    result = QueryPlanResult(ok=False, status=status, message=message, map_version=1, tree="t", cause=cause)
     return PlanOutcome(result=result)
 
 
-def test_the_start_wins_over_the_goal_and_other_texts_are_no_valid_path() -> None:
-    both = "no free path ...; the goal state itself is blocked (checked); the start state itself is blocked"
-    assert nav2_error(_failed(both)).name == "START_OCCUPIED"
+def test_the_codes_come_from_the_cause_not_from_the_text() -> None:
     walled = (
         "no free path; all 12 edges joining the start [1.0, 2.0] to the graph (3-5 long) were checked blocked"
     )
-    assert nav2_error(_failed(walled)).name == "START_OCCUPIED"
+    assert nav2_error(_failed(walled, cause="start_blocked")).name == "START_OCCUPIED"
+    assert nav2_error(_failed(walled)).name == "NO_VALID_PATH"  # words alone name no cause
+    assert nav2_error(_failed("x", cause="goal_blocked")).name == "GOAL_OCCUPIED"
+    assert nav2_error(_failed("x", status="refused", cause="start_outside")).name == "START_OUTSIDE_MAP"
+    assert nav2_error(_failed("x", status="refused", cause="goal_outside")).name == "GOAL_OUTSIDE_MAP"
     cut = "no free path from the start to the goal in the graph: 9 blocked edges disconnect them (40 checks)"
     assert nav2_error(_failed(cut)).name == "NO_VALID_PATH"
     assert nav2_error(_failed("time budget", status="time_budget")).name == "TIMEOUT"

@@ -35,6 +35,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.domains.dubins import DubinsPath, dubins_lengths, dubins_path, path_to_point, point_lengths
 from drd_planner.domains.dubins_batch import dubins_sketches
 from drd_planner.exceptions import ProblemError
+from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.connect import Motion, vertex_states_of
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
@@ -207,7 +208,7 @@ class DubinsConnector:
         label = "start" if outgoing else "goal"
         reason = None if self._extent is None else self._extent.refusal(state, label)
         if reason is not None:
-            raise QueryError(reason)
+            raise QueryError(reason, cause=PlanCause.outside(label))
         free_heading = not math.isfinite(float(state[3]))
         if free_heading and outgoing:
             raise QueryError("a start state needs a heading (the vehicle's yaw), got NaN")

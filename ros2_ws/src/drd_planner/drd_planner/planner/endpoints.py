@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import PlanningError
+from drd_planner.planner.cause import PlanCause
 
 #: Default snap tolerance as a fraction of the median edge length.
 SNAP_FRACTION_OF_EDGE = 0.25
@@ -29,7 +30,16 @@ Endpoint = int | npt.ArrayLike
 
 
 class QueryError(PlanningError):
-    """A start or goal that cannot be served (malformed, outside the graph, or out of reach)."""
+    """A start or goal that cannot be served (malformed, outside the graph, or out of reach).
+
+    Args:
+        message: why, in words.
+        cause: the cause as a value, where it is one of :class:`PlanCause` (an end outside the graph).
+    """
+
+    def __init__(self, message: str, *, cause: PlanCause | None = None) -> None:
+        super().__init__(message)
+        self.cause = cause
 
 
 class EndpointResolver:

@@ -24,15 +24,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from drd_planner.arrays import FloatArray
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord, EdgeOracle
+from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.connect import MotionExplainer, MotionOracle
 from drd_planner.planner.growth_samples import known_reachable
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.query_graph import QueryGraph
 from drd_planner.planner.result import GrowthReport
 
-__all__ = ["EdgeStates", "edge_states_of", "no_path_reason"]
+__all__ = ["EdgeStates", "blocked_end", "edge_states_of", "no_path_reason"]
 
 #: (K, D) states along an edge of the query's graph, or None when unknown.
 EdgeStates = Callable[[int], FloatArray | None]
@@ -81,6 +82,31 @@ def _causes(explainer: MotionExplainer, motions: list[FloatArray]) -> str:
     return ", ".join(f"{cause} x {count}" if count > 1 else cause for cause, count in tally.most_common(4))
 
 
+def _end_edges(query: QueryGraph, vertex: int) -> tuple[IntArray, IntArray]:
+    """The vertex edges of an end (its state itself, checked by growth) and the edges joining it to the graph."""
+    edges = query.graph.edges
+    touching = (edges == vertex).any(axis=1)
+    loops = touching & (edges[:, 0] == edges[:, 1])
+    return np.flatnonzero(loops), np.flatnonzero(touching & ~loops)
+
+
+def _end_blocked(query: QueryGraph, vertex: int, outcome: dict[int, bool]) -> bool:
+    """The endpoint rule: the end's state itself, or every edge joining it to the graph, was checked blocked."""
+    loops, incident = _end_edges(query, vertex)
+    if any(outcome.get(int(e)) is False for e in loops.tolist()):
+        return True
+    return incident.size > 0 and all(outcome.get(int(e)) is False for e in incident.tolist())
+
+
+def blocked_end(query: QueryGraph, checks: list[CheckRecord]) -> PlanCause | None:
+    """The cause of a NO_PATH result by the endpoint rule: the start's when both ends are walled in, else None."""
+    outcome = {c.edge: c.free for c in checks}
+    for vertex, label in ((query.start, "start"), (query.goal, "goal")):
+        if _end_blocked(query, vertex, outcome):
+            return PlanCause.blocked(label)
+    return None
+
+
 def _endpoint_text(
     query: QueryGraph,
     vertex: int,
@@ -90,13 +116,10 @@ def _endpoint_text(
     along: EdgeStates,
 ) -> str:
     """The endpoint rule for one end (see the module docstring); "" when some edge at it was free or unchecked."""
-    edges = query.graph.edges
-    touching = (edges == vertex).any(axis=1)
-    loops = touching & (edges[:, 0] == edges[:, 1])  # vertex edges: the state itself, checked by growth
-    incident = np.flatnonzero(touching & ~loops)
+    loops, incident = _end_edges(query, vertex)
     states = query.graph.vertex_states
     explainer = oracle if isinstance(oracle, MotionExplainer) else None
-    if any(outcome.get(int(e)) is False for e in np.flatnonzero(loops).tolist()):
+    if any(outcome.get(int(e)) is False for e in loops.tolist()):
         why = (
             ""
             if explainer is None or states is None

@@ -47,7 +47,7 @@ from drd_planner.planner.connect import MotionOracle, QueryConnector, connector_
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.growth_samples import SegmentMaker
 from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
-from drd_planner.planner.no_path import edge_states_of, no_path_reason
+from drd_planner.planner.no_path import blocked_end, edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_model import QueryModel
@@ -278,7 +278,9 @@ class Planner:
         try:
             resolved = self._resolve(start, goal, oracle)
         except QueryError as exc:
-            return PlanResult(PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin))
+            return PlanResult(
+                PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin), cause=exc.cause
+            )
         if isinstance(resolved, int):
             return trivial_result(resolved, t_begin)
         model = resolved
@@ -389,7 +391,8 @@ class Planner:
         query = model.query if report is None else report.query
         along = edge_states_of(self.prior, query, getattr(self._connector, "segment", None))
         reason = no_path_reason(query, checks, raw, along, report)
-        return unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
+        result = unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
+        return dataclasses.replace(result, cause=blocked_end(query, checks))
 
     def _growth(self, model: QueryModel) -> GraphGrowth | None:
         """How the query's graph grows when it has no free path (None: it does not, or growth is off).

@@ -10,6 +10,7 @@ import numpy as np
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.world_columns import WorldColumns
+from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.connect import EdgeSampleIndex, Motion, MotionOracle, QueryConnector, imputed_columns
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
@@ -103,7 +104,8 @@ def connected_query(
         if not found:
             raise QueryError(
                 f"{label} state {np.round(value, 4).tolist()} has no graph vertex within the connection reach "
-                f"{connector.reach:.4g} that a motion can join: outside the graph's reach"
+                f"{connector.reach:.4g} that a motion can join: outside the graph's reach",
+                cause=PlanCause.outside(label),
             )
         vertex = next_vertex
         next_vertex += 1

@@ -13,6 +13,7 @@ import numpy as np
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.exceptions import PlanningError
+from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.query_library import vertex_sequence
 
 if TYPE_CHECKING:
@@ -156,6 +157,7 @@ class PlanResult:
             ``plan_checks``, ``plan_time``); empty without an ``improve_budget``.
         growth: what roadmap growth did when the plan grew the graph (None when it did not); then
             ``vertices``, ``edges``, ``checks`` and ``motions`` use the ids of ``growth.query``.
+        cause: why it failed, as a value, where the planner can tell (None otherwise, and when FOUND).
     """
 
     status: PlanStatus
@@ -176,6 +178,7 @@ class PlanResult:
     improvements: tuple[Improvement, ...] = ()
     improve_stop: str = ""
     growth: GrowthReport | None = None
+    cause: PlanCause | None = None
 
     @property
     def found(self) -> bool:

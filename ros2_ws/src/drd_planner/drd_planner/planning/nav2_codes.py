@@ -23,15 +23,16 @@ no free path otherwise                              ``NO_VALID_PATH``
 no maps yet, a malformed request, anything else     ``UNKNOWN``
 ==================================================  ======================
 
-When both ends are walled in, the start's code wins (Nav2's result lists its codes in priority order,
+The codes come from the plan's cause (:class:`~drd_planner.planner.cause.PlanCause`), never from its reason
+text. When both ends are walled in, the start's code wins (Nav2's result lists its codes in priority order,
 start before goal). A cancelled plan has no code: the goal ends CANCELED, as in Nav2.
 """
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
+from drd_planner.planner.cause import PlanCause
 from drd_planner.planning.plan_outcome import PlanOutcome
 
 __all__ = ["NAV2_CODES", "Nav2Error", "nav2_error"]
@@ -50,16 +51,6 @@ NAV2_CODES = {
     "NO_VALID_PATH": 208,
 }
 
-#: A refusal of the planner (its ``message``) that puts the start or the goal outside the graph's extent
-#: (the lattice connector: "goal position (...) m is outside the lattice's horizontal extent ...",
-#: "start altitude ... is outside the lattice's altitude band ...").
-_OUTSIDE = re.compile(r"\b(start|goal) (?:position|altitude|state)\b[^;]*\bis outside\b")
-#: A no-path reason's endpoint rule (:mod:`drd_planner.planner.no_path`): "the goal state itself is
-#: blocked", "all 12 edges joining the start [...] to the graph (...) were checked blocked".
-_BLOCKED = (
-    re.compile(r"\bthe (start|goal) state itself is blocked\b"),
-    re.compile(r"\ball \d+ edges joining the (start|goal)\b[^;]*\bwere checked blocked\b"),
-)
 _REFUSED_PART = {
     "prior": "INVALID_PLANNER",
     "start": "TF_ERROR",
@@ -81,12 +72,13 @@ class Nav2Error:
         return NAV2_CODES[self.name]
 
 
-def _endpoint_code(pattern_hits: set[str], suffix: str) -> str | None:
-    """``START_<suffix>`` when the start is named, else ``GOAL_<suffix>``; None when neither."""
-    for end in ("start", "goal"):
-        if end in pattern_hits:
-            return f"{end.upper()}_{suffix}"
-    return None
+#: The code of each failure cause the planner names (the values of :class:`PlanCause`).
+_CAUSE_CODE = {
+    PlanCause.START_OUTSIDE.value: "START_OUTSIDE_MAP",
+    PlanCause.GOAL_OUTSIDE.value: "GOAL_OUTSIDE_MAP",
+    PlanCause.START_BLOCKED.value: "START_OCCUPIED",
+    PlanCause.GOAL_BLOCKED.value: "GOAL_OCCUPIED",
+}
 
 
 def nav2_error(outcome: PlanOutcome) -> Nav2Error:
@@ -97,10 +89,7 @@ def nav2_error(outcome: PlanOutcome) -> Nav2Error:
     if result.ok:
         return Nav2Error("NONE", "")
     message = result.message
-    if result.status == "refused":
-        name = _endpoint_code({m.group(1) for m in _OUTSIDE.finditer(message)}, "OUTSIDE_MAP")
-        return Nav2Error(name or "UNKNOWN", message)
     if result.status in ("max_checks", "time_budget"):
         return Nav2Error("TIMEOUT", f"{result.status.replace('_', ' ')} ran out: {message}")
-    hits = {m.group(1) for pattern in _BLOCKED for m in pattern.finditer(message)}
-    return Nav2Error(_endpoint_code(hits, "OCCUPIED") or "NO_VALID_PATH", message)
+    fallback = "UNKNOWN" if result.status == "refused" else "NO_VALID_PATH"
+    return Nav2Error(_CAUSE_CODE.get(result.cause, fallback), message)

@@ -52,7 +52,7 @@ from drd_planner.planning.query_support import (
     join_pieces,
     rebuild_domain,
 )
-from drd_planner.planning.session import PlanResult, SessionCheck
+from drd_planner.planning.session import PLANNER_STATUS, PlanResult, SessionCheck
 
 #: How far (state units) a start or goal state may lie from a vertex and still be that vertex.
 DEFAULT_SNAP_TOLERANCE = 1e-6
@@ -98,13 +98,6 @@ class QueryPlanResult(PlanResult):
     first_cost: float = 0.0
     improvements: int = 0
     improve_stop: str = ""
-
-
-_STATUS = {
-    PlanStatus.FOUND: "path_found",
-    PlanStatus.NO_PATH: "no_free_path",
-    PlanStatus.REFUSED: "refused",
-}
 
 
 class QuerySession(DomainSession):
@@ -366,10 +359,11 @@ class QuerySession(DomainSession):
             "query": result.query,
             "query_cached": result.query_cached,
             "library_size": result.library_size,
+            "cause": "" if result.cause is None else result.cause.value,
         }
         blocked = sum(not c.free for c in checks)
         if not result.found:
-            status = _STATUS.get(result.status) or self._budget_status(result)
+            status = PLANNER_STATUS.get(result.status) or self._budget_status(result)
             seconds["total"] = time.perf_counter() - t0
             message = result.reason if status == "refused" else f"{result.reason} ({blocked} blocked)"
             return QueryPlanResult(ok=False, status=status, message=message, seconds=seconds, **common)

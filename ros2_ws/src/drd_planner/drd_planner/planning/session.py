@@ -24,6 +24,7 @@ from drd_planner.core.policies import POLICIES, PolicyContext
 from drd_planner.data.tree_file import TreeBundle
 from drd_planner.domains.base import EdgeChecker
 from drd_planner.exceptions import PlanningError, TreeFileError, UnverifiedPathError
+from drd_planner.planner.result import PlanStatus as PlannerStatus
 from drd_planner.planning.domain_view import (
     DomainSession,
     domain_from_stored_spec,
@@ -80,6 +81,8 @@ class PlanResult:
             :meth:`PlanningSession.prepare` had not built them already), ``checks`` (in FCL),
             ``selection`` (the policy choosing edges), ``policy`` (the policy's whole work in the
             episode: choosing, and updating its beliefs after each outcome), ``total``.
+        cause: why it failed, as a value (:class:`~drd_planner.planner.cause.PlanCause`'s: ``start_outside``,
+            ``goal_outside``, ``start_blocked``, ``goal_blocked``), where the planner can tell; "" otherwise.
     """
 
     ok: bool
@@ -92,11 +95,20 @@ class PlanResult:
     states: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     checks: tuple[SessionCheck, ...] = ()
     seconds: dict[str, float] = field(default_factory=dict)
+    cause: str = ""
 
     @property
     def num_blocked(self) -> int:
         """Checks that found the edge in collision."""
         return sum(not c.free for c in self.checks)
+
+
+#: The :attr:`PlanResult.status` of each planner status (a budget's status depends on the budget).
+PLANNER_STATUS = {
+    PlannerStatus.FOUND: "path_found",
+    PlannerStatus.NO_PATH: "no_free_path",
+    PlannerStatus.REFUSED: "refused",
+}
 
 
 class _CachingOracle:
