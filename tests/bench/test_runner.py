@@ -229,7 +229,7 @@ def test_run_benchmark_trains_the_imitation_selector_once(
     problem: Problem, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from drd_planner.bench import runner
-    from drd_planner.core.lazysp_imitation import DaggerSettings, ImitationModel, train_for_problem
+    from drd_planner.bench.lazysp_imitation import DaggerSettings, ImitationModel, train_for_problem
 
     calls: list[int] = []
 

@@ -14,7 +14,7 @@ from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPoli
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import DEFAULT_MAX_CHECKS, GraphArcs, LazySP, LazySPSettings, bisection_position
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.policies import GRAPH_POLICIES, POLICIES, PolicyContext
+from drd_planner.core.policies import POLICIES, PolicyContext, graph_policies
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -201,7 +201,7 @@ def test_weightsamp_is_seeded_and_picks_the_most_sampled_edge() -> None:
 
 def test_registry_and_missing_graph() -> None:
     assert {"lazysp", "lazysp_reverse", "lazysp_alternate", "lazysp_bisection", "lazysp_weightsamp"} <= set(
-        GRAPH_POLICIES
+        graph_policies()
     )
     lib = PathLibrary.from_sequences([PATH_A], len(GRID_EDGES))
     theta = np.full(len(GRID_EDGES), 0.5)

@@ -6,13 +6,15 @@ import numpy as np
 import pytest
 from conftest import gccd_folder, gccd_graph_datasets
 
+from drd_planner.bench.lazysp_imitation import DaggerSettings, train_for_problem
+from drd_planner.core import policies
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode
-from drd_planner.core.lazysp_imitation import DaggerSettings, train_for_problem
-from drd_planner.core.policies import POLICIES, PolicyContext
+from drd_planner.core.policies import CORE_POLICIES, POLICIES, PolicyContext, graph_policies, register_policy
 from drd_planner.core.tree import build_tree
 from drd_planner.data.gccd import load_gccd_folder
+from drd_planner.exceptions import PolicyError
 
 DATASETS = gccd_graph_datasets() or ["dataset_2d_1"]
 
@@ -100,3 +102,27 @@ def test_combined_method_beats_bisect_on_baffle() -> None:
     # docs/algorithms.md, "BiSECt against the authors' stored results"
     assert means["bisect"] == pytest.approx(40.20)
     assert means["direct_bisect"] < 0.85 * means["bisect"]
+
+
+def test_register_policy_adds_a_name_once() -> None:
+    name = "test_only_policy"
+    factory = POLICIES["bisect"]
+    assert name not in POLICIES
+    try:
+        register_policy(name, factory, needs_graph=True)
+        assert POLICIES[name] is factory
+        assert graph_policies()[-1] == name
+        assert name not in CORE_POLICIES
+        with pytest.raises(PolicyError, match=r"already registered; registered: .*bisect"):
+            register_policy(name, factory)
+    finally:
+        policies._REGISTRY.pop(name, None)
+        policies._GRAPH_POLICIES.remove(name)
+    assert name not in POLICIES and name not in graph_policies()
+
+
+def test_core_policies_are_the_planners_own() -> None:
+    assert {"direct_bisect", "bisect", "direct_only", "lazysp", "lazysp_set", "max_tally"} <= set(
+        CORE_POLICIES
+    )
+    assert not {"lazysp_posterior", "lazysp_posterior_delta", "lazysp_imitation"} & set(CORE_POLICIES)

@@ -30,7 +30,7 @@ from drd_planner.bench.runner import (
     train_bias,
 )
 from drd_planner.core.lazysp import GraphArcs
-from drd_planner.core.policies import GRAPH_POLICIES
+from drd_planner.core.policies import graph_policies
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import DrdError
 from drd_planner.planner import Planner
@@ -88,7 +88,7 @@ def _graph_policy_points(
     truth = ShortestPaths(GraphArcs(graph), graph.lengths)
     theta = train_bias(problem)
     points: dict[str, tuple[float, float]] = {}
-    for name in (n for n in result.policies if n in GRAPH_POLICIES and n.startswith("lazysp")):
+    for name in (n for n in result.policies if n in graph_policies() and n.startswith("lazysp")):
         checks, ratios = [], []
         for k, world in enumerate(result.test_ids):
             best = truth.path(problem.start, problem.goal, worlds.X[world])

@@ -22,17 +22,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from drd_planner.bench.lazysp_imitation import IMITATION_POLICY, ImitationModel, train_for_problem
+from drd_planner.bench.learned_policies import TRAIN_WORLD_POLICIES
 from drd_planner.bench.stats import DEFAULT_RESAMPLES, REFERENCE, TIE_SUBSET, Table1, table1_stats
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
 from drd_planner.core.episode import EpisodeResult, TableOracle, run_episode
-from drd_planner.core.lazysp_imitation import IMITATION_POLICY, ImitationModel, train_for_problem
 from drd_planner.core.policies import (
     DEFAULT_ALPHA,
     DEFAULT_ETA,
     PAPER_RULE_POLICIES,
     POLICIES,
-    TRAIN_WORLD_POLICIES,
     TREE_POLICIES,
     PolicyContext,
 )
@@ -175,7 +175,7 @@ def policy_context(
 
     The graph, start and goal are what the full-graph policies (``lazysp``, ``lazysp_set``) need; the
     (n_train, E) training worlds and their prior weights what the learned ``lazysp_posterior*`` need
-    (:data:`~drd_planner.core.policies.TRAIN_WORLD_POLICIES`). Given the ``policy`` the context is for,
+    (:data:`~drd_planner.bench.learned_policies.TRAIN_WORLD_POLICIES`). Given the ``policy`` the context is for,
     the training worlds are copied only when it needs them (every episode builds a context).
     """
     worlds = problem.worlds

@@ -341,7 +341,7 @@ class LazySP:
     def _position(self, path: IntArray, checked: BoolArray) -> int:
         """Position in ``path`` of the edge to check (``checked`` has an unchecked entry).
 
-        The selector hook: subclasses (:mod:`drd_planner.core.lazysp_learned`) override it.
+        The selector hook: subclasses (:mod:`drd_planner.bench.lazysp_learned`) override it.
         """
         open_pos = np.flatnonzero(~checked)
         if self._selector == "forward":

@@ -3,12 +3,17 @@
 BiSECt alone, the DiRECt tree then BiSECt, the tree alone, and the baselines
 (:mod:`drd_planner.core.baselines`, :mod:`drd_planner.core.lazysp`). Every policy is pure and
 seeded: the same inputs and seed give the same checks.
+
+The planner's own policies are the ones this module defines (:data:`CORE_POLICIES`). Other packages
+add theirs with :func:`register_policy` when they are imported: the benchmark package registers the
+learned LazySP selectors (:mod:`drd_planner.bench.learned_policies`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 import numpy.typing as npt
@@ -19,13 +24,6 @@ from drd_planner.core.bisect import Bisect
 from drd_planner.core.episode import Policy
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, LazySP, LazySPSettings, lazysp_name
-from drd_planner.core.lazysp_imitation import IMITATION_POLICY, ImitationLazySP, ImitationModel
-from drd_planner.core.lazysp_learned import (
-    LEARNED_LAZYSP_POLICIES,
-    PosteriorLazySP,
-    PosteriorSettings,
-    all_edge_outcomes,
-)
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.posterior import ConsistentWorldsBias
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
@@ -307,11 +305,12 @@ class PolicyContext:
 
     ``eta`` and ``pseudo_count`` configure ``direct_bisect``'s switch and leaf (see
     :class:`DirectBisectPolicy`). ``graph``, ``start`` and ``goal`` are needed by the policies in
-    :data:`GRAPH_POLICIES`. ``train_worlds`` ((n_train, E) bool, True = free, over every graph edge)
+    :func:`graph_policies`. ``train_worlds`` ((n_train, E) bool, True = free, over every graph edge)
     and their ``train_weights`` ((n_train,) prior weights, None: uniform) are needed by the learned
-    LazySP selectors (:mod:`drd_planner.core.lazysp_learned`). ``imitation_model`` is the selector of
-    ``lazysp_imitation`` (:mod:`drd_planner.core.lazysp_imitation`), trained once per dataset by the
-    caller (``drd_planner.bench.runner.run_benchmark``), never per episode.
+    LazySP selectors (:mod:`drd_planner.bench.lazysp_learned`). ``imitation_model`` is the selector of
+    ``lazysp_imitation`` (:class:`drd_planner.bench.lazysp_imitation.ImitationModel`, opaque to the core:
+    its factory checks the type), trained once per dataset by the caller
+    (``drd_planner.bench.runner.run_benchmark``), never per episode.
     """
 
     library: PathLibrary
@@ -327,7 +326,7 @@ class PolicyContext:
     goal: int | None = None
     train_worlds: BoolArray | None = None
     train_weights: FloatArray | None = None
-    imitation_model: ImitationModel | None = None
+    imitation_model: object | None = None
 
 
 PolicyFactory = Callable[[PolicyContext], Policy]
@@ -345,7 +344,12 @@ def _need_offline_tree(ctx: PolicyContext) -> DecisionTree:
     return ctx.tree
 
 
-def _need_graph(ctx: PolicyContext) -> ExplicitGraph:
+def need_graph(ctx: PolicyContext) -> ExplicitGraph:
+    """The context's graph, checked against the library (for factories of graph policies).
+
+    Raises:
+        ProblemError: no graph, or one whose edge count differs from the library's.
+    """
     if ctx.graph is None:
         raise ProblemError("this policy needs the graph (PolicyContext.graph)")
     if ctx.graph.num_edges != ctx.library.num_edges:
@@ -357,7 +361,7 @@ def _need_graph(ctx: PolicyContext) -> ExplicitGraph:
 
 def _lazysp(selector: str) -> PolicyFactory:
     def make(ctx: PolicyContext) -> Policy:
-        graph = _need_graph(ctx)
+        graph = need_graph(ctx)
         if ctx.start is None or ctx.goal is None:
             raise ProblemError("lazysp needs the start and goal vertices (PolicyContext.start/goal)")
         return LazySP(graph, ctx.start, ctx.goal, LazySPSettings(selector=selector, seed=ctx.seed))
@@ -365,46 +369,15 @@ def _lazysp(selector: str) -> PolicyFactory:
     return make
 
 
-def _lazysp_learned(name: str) -> PolicyFactory:
-    def make(ctx: PolicyContext) -> Policy:
-        graph = _need_graph(ctx)
-        if name == IMITATION_POLICY and ctx.imitation_model is None:
-            raise ProblemError(
-                f"{name} needs a trained selector (PolicyContext.imitation_model, from "
-                "PolicySettings.imitation_model in drd_planner.bench.runner; train it once per dataset with "
-                "drd_planner.core.lazysp_imitation.train_for_problem, as run_benchmark does)"
-            )
-        if ctx.start is None or ctx.goal is None:
-            raise ProblemError(f"{name} needs the start and goal vertices (PolicyContext.start/goal)")
-        if ctx.train_worlds is None:
-            raise ProblemError(
-                f"{name} needs the training worlds over every graph edge (PolicyContext.train_worlds, "
-                "(n_train, E) bool; drd bench fills it from the dataset)"
-            )
-        if ctx.train_worlds.ndim != 2 or ctx.train_worlds.shape[1] != graph.num_edges:
-            raise ProblemError(
-                f"{name}: train_worlds has shape {ctx.train_worlds.shape}, the graph {graph.num_edges} edges"
-            )
-        # A fixed kappa: ctx.pseudo_count is tuned for direct_bisect's leaf, not for LazySP.
-        outcomes = all_edge_outcomes(ctx.train_worlds, ctx.train_weights)
-        if ctx.imitation_model is not None and name == IMITATION_POLICY:
-            return ImitationLazySP(graph, ctx.start, ctx.goal, outcomes, ctx.imitation_model)
-        delta = name == LEARNED_LAZYSP_POLICIES[1]
-        settings = PosteriorSettings(pseudo_count=DEFAULT_PSEUDO_COUNT, delta=delta)
-        return PosteriorLazySP(graph, ctx.start, ctx.goal, outcomes, settings)
-
-    return make
-
-
 def _lazysp_set(weighted: bool) -> PolicyFactory:
     def make(ctx: PolicyContext) -> Policy:
-        lengths = ctx.library.path_costs(_need_graph(ctx).lengths)  # geometric length of each path
+        lengths = ctx.library.path_costs(need_graph(ctx).lengths)  # geometric length of each path
         return LazySPSet(ctx.library, ctx.train_theta, lengths, weighted=weighted, seed=ctx.seed)
 
     return make
 
 
-POLICIES: Mapping[str, PolicyFactory] = {
+_REGISTRY: dict[str, PolicyFactory] = {
     "direct_bisect": lambda c: DirectBisectPolicy(
         _need_tree(c), c.library, c.edge_costs, eta=c.eta, alpha=c.alpha, pseudo_count=c.pseudo_count
     ),
@@ -442,8 +415,12 @@ POLICIES: Mapping[str, PolicyFactory] = {
     "lazysp_set": _lazysp_set(weighted=True),
     "lazysp_set_random": _lazysp_set(weighted=False),
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
-    **{name: _lazysp_learned(name) for name in (*LEARNED_LAZYSP_POLICIES, IMITATION_POLICY)},
 }
+#: The planner's own policies (those this module defines), in registry order.
+CORE_POLICIES: tuple[str, ...] = tuple(_REGISTRY)
+#: Every registered policy by name: :data:`CORE_POLICIES` and those added by :func:`register_policy`
+#: (a read-only view that follows the registrations).
+POLICIES: Mapping[str, PolicyFactory] = MappingProxyType(_REGISTRY)
 
 #: Policies that need a decision tree. ``direct_bisect_fixed`` is the combined method exactly as in
 #: the paper's benchmark (threshold ``DEFAULT_ETA``, fixed leaf bias) whatever the context says, so
@@ -456,17 +433,35 @@ TREE_POLICIES = frozenset({"direct_bisect", "direct_bisect_fixed", "direct_only"
 #: paper's region rule even when the run's tree uses another (``drd_planner.bench.runner.paper_rule_tree``).
 PAPER_RULE_POLICIES = frozenset({"direct_bisect_fixed"})
 
-#: Policies that need ``PolicyContext.train_worlds`` (the learned LazySP selectors; ``lazysp_imitation``
-#: also ``imitation_model``).
-TRAIN_WORLD_POLICIES = frozenset({*LEARNED_LAZYSP_POLICIES, IMITATION_POLICY})
-
-#: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``; the
-#: learned ``lazysp_posterior*`` also ``train_worlds``; their kappa is ``DEFAULT_PSEUDO_COUNT`` whatever
-#: ``pseudo_count`` says, which is tuned for ``direct_bisect``'s leaf).
-GRAPH_POLICIES: tuple[str, ...] = (
+#: Policies that need ``PolicyContext.graph`` (the ``lazysp`` family also ``start`` and ``goal``),
+#: followed by the graph policies added with ``register_policy(..., needs_graph=True)``.
+_GRAPH_POLICIES: list[str] = [
     *(lazysp_name(s) for s in SELECTORS),
-    *LEARNED_LAZYSP_POLICIES,
-    IMITATION_POLICY,
     "lazysp_set",
     "lazysp_set_random",
-)
+]
+
+
+def graph_policies() -> tuple[str, ...]:
+    """The registered policies that need ``PolicyContext.graph`` (the core's first, then the added ones)."""
+    return tuple(_GRAPH_POLICIES)
+
+
+def register_policy(name: str, factory: PolicyFactory, *, needs_graph: bool = False) -> None:
+    """Add a policy to :data:`POLICIES` under ``name`` (how the benchmark package adds its research policies).
+
+    Args:
+        name: the registry name (``drd bench --policies``, ``run_world``); must not be registered yet.
+        factory: builds the policy from a :class:`PolicyContext`.
+        needs_graph: the policy needs ``PolicyContext.graph`` (listed by :func:`graph_policies`).
+
+    Raises:
+        PolicyError: ``name`` is already registered.
+    """
+    if name in _REGISTRY:
+        raise PolicyError(
+            f"policy {name!r} is already registered; registered: {', '.join(sorted(_REGISTRY))}"
+        )
+    _REGISTRY[name] = factory
+    if needs_graph:
+        _GRAPH_POLICIES.append(name)

@@ -38,7 +38,7 @@ from drd_planner.arrays import FloatArray
 from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeStatus, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.online_tree import LazyDirectTree
-from drd_planner.core.policies import POLICIES, TRAIN_WORLD_POLICIES, TREE_POLICIES, PolicyContext
+from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
@@ -74,9 +74,7 @@ from drd_planner.planner.state_sampler import sampler_of
 
 #: Library-stage policies :meth:`Planner.plan` accepts: every registered library policy but
 #: ``direct_only`` (it needs an offline tree) and the full-graph LazySP family (not library policies).
-PLAN_POLICIES = tuple(
-    sorted(set(POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS), *TRAIN_WORLD_POLICIES})
-)
+PLAN_POLICIES = tuple(sorted(set(CORE_POLICIES) - {"direct_only", *(lazysp_name(s) for s in SELECTORS)}))
 
 
 class Planner:

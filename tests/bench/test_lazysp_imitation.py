@@ -7,10 +7,7 @@ import numpy as np
 import pytest
 from conftest import gccd_folder
 
-from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
-from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.lazysp import LazySP
-from drd_planner.core.lazysp_imitation import (
+from drd_planner.bench.lazysp_imitation import (
     DELTA_CAP,
     FEATURE_NAMES,
     IMITATION_POLICY,
@@ -24,9 +21,13 @@ from drd_planner.core.lazysp_imitation import (
     train_for_problem,
     train_imitation_selector,
 )
-from drd_planner.core.lazysp_learned import all_edge_outcomes
+from drd_planner.bench.lazysp_learned import all_edge_outcomes
+from drd_planner.bench.learned_policies import TRAIN_WORLD_POLICIES
+from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.lazysp import LazySP
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.policies import GRAPH_POLICIES, POLICIES, TRAIN_WORLD_POLICIES, PolicyContext
+from drd_planner.core.policies import POLICIES, PolicyContext, graph_policies
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -148,7 +149,7 @@ def test_training_is_deterministic_and_episodes_end_on_a_checked_free_path() -> 
 
 def test_registry_needs_a_model_trained_once() -> None:
     assert IMITATION_POLICY in POLICIES
-    assert IMITATION_POLICY in GRAPH_POLICIES and IMITATION_POLICY in TRAIN_WORLD_POLICIES
+    assert IMITATION_POLICY in graph_policies() and IMITATION_POLICY in TRAIN_WORLD_POLICIES
     x = toy_worlds(10, seed=0)
     lib = PathLibrary.from_sequences([[0, 1, 2]], 8)
     args = (lib, np.ones(8), np.full(8, 0.5), None, 0)

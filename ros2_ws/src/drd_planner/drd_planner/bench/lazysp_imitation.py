@@ -26,7 +26,7 @@ learner that cannot see P(K) is not, so the regret target adds ``free_penalty`` 
 to free candidates: fail fast among the oracle's equally good checks (measured: it helps on 2D sets).
 
 Features (:func:`candidate_features`) per unchecked path edge, from the training-world posterior of
-:class:`~drd_planner.core.lazysp_learned.PosteriorLazySP` (kappa = ``DEFAULT_PSEUDO_COUNT`` = 20):
+:class:`~drd_planner.bench.lazysp_learned.PosteriorLazySP` (kappa = ``DEFAULT_PSEUDO_COUNT`` = 20):
 P(blocked | outcomes), the marginal P(blocked), Delta-len / path length (capped at :data:`DELTA_CAP`;
 bridges at the cap, plus a bridge indicator), their product, the position along the path, edge length /
 path length, a first-unchecked indicator and a bias. In training the posterior leaves out the episode's world.
@@ -56,9 +56,9 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.bench.lazysp_learned import PosteriorLazySP, PosteriorSettings, all_edge_outcomes
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
-from drd_planner.core.lazysp_learned import PosteriorLazySP, PosteriorSettings, all_edge_outcomes
 from drd_planner.core.posterior import TrainingOutcomes
 from drd_planner.core.problem import Problem
 from drd_planner.exceptions import ProblemError
@@ -131,7 +131,7 @@ class ImitationLazySP(PosteriorLazySP):
         graph: the explicit graph.
         start: start vertex.
         goal: goal vertex.
-        outcomes: the training worlds over all E edges (:func:`~drd_planner.core.lazysp_learned.all_edge_outcomes`).
+        outcomes: the training worlds over all E edges (:func:`~drd_planner.bench.lazysp_learned.all_edge_outcomes`).
         model: the trained selector (None: features only, for training; ``select`` then raises).
         name: registry name.
     """

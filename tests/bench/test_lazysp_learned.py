@@ -9,18 +9,18 @@ import scipy.sparse as sp
 from conftest import gccd_folder
 from scipy.sparse.csgraph import dijkstra
 
-from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
-from drd_planner.core.graph import ExplicitGraph
-from drd_planner.core.lazysp import GraphArcs
-from drd_planner.core.lazysp_learned import (
+from drd_planner.bench.lazysp_learned import (
     LEARNED_LAZYSP_POLICIES,
     PosteriorLazySP,
     PosteriorSettings,
     all_edge_outcomes,
     delta_choice,
 )
+from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
+from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.policies import DEFAULT_PSEUDO_COUNT, GRAPH_POLICIES, POLICIES, PolicyContext
+from drd_planner.core.policies import DEFAULT_PSEUDO_COUNT, POLICIES, PolicyContext, graph_policies
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -241,7 +241,7 @@ def test_episode_outcomes_and_determinism(delta: bool) -> None:
 
 def test_registry_needs_the_training_worlds() -> None:
     assert set(LEARNED_LAZYSP_POLICIES) == {"lazysp_posterior", "lazysp_posterior_delta"}
-    assert set(LEARNED_LAZYSP_POLICIES) <= set(GRAPH_POLICIES) & set(POLICIES)
+    assert set(LEARNED_LAZYSP_POLICIES) <= set(graph_policies()) & set(POLICIES)
     lib = PathLibrary.from_sequences([[0, 1, 2]], 9)
     args = (lib, np.ones(9), np.full(9, 0.5), None, 0)
     bare = PolicyContext(*args, graph=DETOURS, start=0, goal=3)
