@@ -4,7 +4,8 @@
   exercises it and says why it has none of its own;
 - no module is over 500 lines;
 - ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
-- no code in ``planning/``, ``ros/``, ``planner/`` or ``cli.py`` asks which concrete domain it holds.
+- no code in ``planning/``, ``ros/``, ``planner/``, ``pictures/`` or ``cli.py`` asks which concrete domain it holds;
+- the product (``core/``, ``planner/``, ``planning/``, ``pictures/``, ``ros/``) imports nothing from ``bench/``.
 """
 
 from __future__ import annotations
@@ -123,6 +124,7 @@ def test_the_online_side_never_asks_for_a_concrete_domain() -> None:
         *(root / "planning").rglob("*.py"),
         *(root / "ros").rglob("*.py"),
         *(root / "planner").rglob("*.py"),
+        *(root / "pictures").rglob("*.py"),
     ]
     for path in [*files, root / "cli.py"]:
         tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -131,3 +133,12 @@ def test_the_online_side_never_asks_for_a_concrete_domain() -> None:
                 pytest.fail(
                     f"{path.relative_to(REPO)}:{node.lineno} names {node.id}; ask the OnlineDomain instead"
                 )
+
+
+@pytest.mark.parametrize("subpackage", ["core", "planner", "planning", "pictures", "ros"])
+def test_the_product_imports_nothing_from_the_benchmark_package(subpackage: str) -> None:
+    for path in (PACKAGES["drd_planner"] / subpackage).rglob("*.py"):
+        bad = sorted(
+            n for n in _imports(path) if n == "drd_planner.bench" or n.startswith("drd_planner.bench.")
+        )
+        assert not bad, f"{path.relative_to(REPO)} imports {bad}"

@@ -169,7 +169,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for k, served in enumerate(history):
             print_record(k, served)
         if not args.no_pictures:
-            from drd_planner.planning.picture import plan_picture
+            from drd_planner.pictures.plan import plan_picture
 
             for k, served in enumerate(history):
                 if served.snapshot is None:  # an old record: its maps are no longer kept

@@ -6,7 +6,7 @@ ended, what served it (:func:`served_by`: the precomputed tree, a library and tr
 "served from cache" when every check came from the map's check cache or the query's library and tree
 were reused), and how many checks were free and blocked. Two panels:
 
-- **helicopter** (x, y, z metres first in the states; :mod:`~drd_planner.planning.picture_helicopter`):
+- **helicopter** (x, y, z metres first in the states; :mod:`~drd_planner.pictures.helicopter`):
   a *top view* with the terrain heights (shaded, with contour lines and a colour bar; unknown cells
   blank), wires (obstacles made only of capsules) as dark lines, every other solid (no-fly zones,
   towers: boxes, cylinders, spheres, meshes) as a translucent footprint, the edges coloured by their
@@ -16,7 +16,7 @@ were reused), and how many checks were free and blocked. Two panels:
   with the vehicle radius around it, the terrain profile under it and the heights of the wires where the
   plan passes over or under them. Without a plan the side view runs along the straight start-goal line
   and shows the checked edges projected onto it. The figure's height follows the top view's aspect.
-- **arm** (``session.domain.name == "arm"``; :mod:`~drd_planner.planning.picture_arm`): the
+- **arm** (``session.domain.name == "arm"``; :mod:`~drd_planner.pictures.arm`): the
   end-effector paths (:meth:`PlanningSession.positions` of each edge's joint samples, the positions the
   node publishes) in a top view (x, y) and a side view (the vertical plane through the start-goal
   direction of the end effector), with the obstacles' outlines projected onto each plane and the arm (its
@@ -24,10 +24,10 @@ were reused), and how many checks were free and blocked. Two panels:
 
 Check numbers never hide an obstacle: once the layout is fixed, each is put on its edge or, where that
 would cover a wire, tower or footprint, beside it with a leader line
-(:mod:`~drd_planner.planning.picture_labels`); obstacle lines are drawn above the numbers, and the
+(:mod:`~drd_planner.pictures.labels`); obstacle lines are drawn above the numbers, and the
 legend sits outside the views. What is drawn is computed in world coordinates (numpy only) by
-:mod:`~drd_planner.planning.picture_geometry`; the drawing pieces every view shares are in
-:mod:`~drd_planner.planning.picture_view`.
+:mod:`~drd_planner.pictures.geometry`; the drawing pieces every view shares are in
+:mod:`~drd_planner.pictures.view`.
 
 matplotlib is the optional ``plots`` extra: it is imported when a picture is drawn, through its Agg
 canvas only (no pyplot, nothing global), and a missing install raises :class:`PictureError`. The
@@ -40,10 +40,9 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
-from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture_arm import arm_views
-from drd_planner.planning.picture_geometry import TOP, AnySession, PictureError, PlanGeometry
-from drd_planner.planning.picture_helicopter import (
+from drd_planner.pictures.arm import arm_views
+from drd_planner.pictures.geometry import TOP, AnySession, PictureError, PlanGeometry
+from drd_planner.pictures.helicopter import (
     HELI_ROWS,
     HELI_TITLE,
     HELI_TOP_MARGIN,
@@ -51,7 +50,9 @@ from drd_planner.planning.picture_helicopter import (
     helicopter_side,
     helicopter_top,
 )
-from drd_planner.planning.picture_view import DPI, PanelView, PlanDrawing, legend_entries, require_matplotlib
+from drd_planner.pictures.style import DPI
+from drd_planner.pictures.view import PanelView, PlanDrawing, legend_entries, require_matplotlib
+from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QueryPlanResult
 from drd_planner.planning.session import PlanResult
 

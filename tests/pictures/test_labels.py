@@ -14,8 +14,8 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 from matplotlib.text import Text
 
-from drd_planner.planning.picture_geometry import PictureError
-from drd_planner.planning.picture_labels import (
+from drd_planner.pictures.geometry import PictureError
+from drd_planner.pictures.labels import (
     LabelPlacer,
     PendingLabel,
     boxes_hit_segments,

@@ -4,7 +4,7 @@ Outlines of posed shapes projected on a picture plane (:func:`shape_outline`, th
 :class:`scipy.spatial.ConvexHull`), the polylines of library and checked edges (:func:`edge_points`,
 :class:`PlanGeometry`), where wires cross a plan seen from above (:func:`profile_crossings`), and the two
 things a picture reads of a domain beyond the session's interface (:func:`domain_robot`,
-:func:`vehicle_radius`). The drawing is in :mod:`drd_planner.planning.picture`.
+:func:`vehicle_radius`). The drawing is in :mod:`drd_planner.pictures.plan`.
 """
 
 from __future__ import annotations

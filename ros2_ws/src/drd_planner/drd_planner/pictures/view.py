@@ -4,8 +4,8 @@
 edge layers (plain, or coloured by altitude with each checked edge in a casing of its outcome's colour),
 wires and solid outlines, start and goal, and the view limits; it keeps what it drew as obstacles and
 the check numbers to write, which :meth:`PanelView.place_labels` puts where they hide no obstacle
-(:mod:`~drd_planner.planning.picture_labels`) once the figure's layout is fixed. The views of each
-domain (:mod:`~drd_planner.planning.picture_helicopter`, :mod:`~drd_planner.planning.picture_arm`) are
+(:mod:`~drd_planner.pictures.labels`) once the figure's layout is fixed. The views of each
+domain (:mod:`~drd_planner.pictures.helicopter`, :mod:`~drd_planner.pictures.arm`) are
 made of them. matplotlib is imported only inside the drawing methods (the ``plots`` extra).
 """
 
@@ -17,16 +17,20 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.bench.extras import install_hint
-from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture_geometry import (
+from drd_planner.pictures.geometry import (
     PictureError,
     PlanGeometry,
     shape_outline,
     shape_points,
     split_obstacles,
 )
-from drd_planner.planning.picture_labels import LabelPlacer, PendingLabel
+from drd_planner.pictures.labels import LabelPlacer, PendingLabel
+from drd_planner.pictures.style import (
+    COLOURS,
+    EXTRA_COLOURS,
+    PLOTS_INSTALL_HINT,
+)
+from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.session import PlanResult
 
 if TYPE_CHECKING:
@@ -39,31 +43,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CASING_WIDTH",
-    "DPI",
     "EDGE_STYLES",
-    "EXTRA_COLOURS",
     "OBSTACLE_ZORDER",
-    "TERRAIN_CMAP",
-    "TERRAIN_CMAP_TOP",
     "PanelView",
     "PlanDrawing",
     "legend_entries",
     "require_matplotlib",
 ]
 
-#: Resolution of the figure and of the written PNGs (dots per inch): labels are placed in its pixels.
-DPI = 150
-#: Colours beyond those of :data:`drd_planner.bench.plots.COLOURS` (matplotlib colour specs).
-EXTRA_COLOURS = {
-    "wire": "#1a1a1a",
-    "solid": "#7b3294",
-    "terrain_line": "#6b4f2a",
-    "terrain_fill": "#c9ad85",
-    "arm": "#555555",
-}
-#: Terrain colour map, of which the light part up to :data:`TERRAIN_CMAP_TOP` is used.
-TERRAIN_CMAP = "YlOrBr"
-TERRAIN_CMAP_TOP = 0.55
 #: Line styles of the edge layers (matplotlib LineCollection keywords), in drawing order.
 EDGE_STYLES: dict[str, dict[str, Any]] = {
     "unchecked": {"linewidths": 0.6, "alpha": 0.55, "zorder": 3, "label": "library edge, not checked"},
@@ -120,7 +107,7 @@ def require_matplotlib() -> None:
         import matplotlib  # noqa: F401
     except ImportError as exc:
         raise PictureError(
-            f"plan pictures need the 'plots' extra (matplotlib): {install_hint('plots')}"
+            f"plan pictures need the 'plots' extra (matplotlib): {PLOTS_INSTALL_HINT}"
         ) from exc
 
 
@@ -187,11 +174,9 @@ class PanelView:
             geometry: the edges' polylines.
             result: the checks, in order.
             heights: colour map and norm (metres) of edge altitudes; None draws each layer in its colour
-                (:data:`drd_planner.bench.plots.COLOURS`). With it, library edges take the colour of their
+                (:data:`drd_planner.pictures.style.COLOURS`). With it, library edges take the colour of their
                 mean altitude and each checked edge is that line inside a casing of its outcome's colour.
         """
-        from drd_planner.bench.plots import COLOURS
-
         for key, style in EDGE_STYLES.items():
             ids = geometry.layers[key]
             if key == "path":
@@ -215,8 +200,6 @@ class PanelView:
         """Add one edge layer; the collection whose segments are the edges (a casing, when cased)."""
         from matplotlib.collections import LineCollection
         from matplotlib.lines import Line2D
-
-        from drd_planner.bench.plots import COLOURS
 
         projected = [self.lifted(line) for line in lines]
         if heights is None or key == "path":

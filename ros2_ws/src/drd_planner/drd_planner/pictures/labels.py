@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray
-from drd_planner.planning.picture_geometry import PictureError
+from drd_planner.pictures.geometry import PictureError
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist

@@ -23,12 +23,12 @@ from drd_planner.bench.plots import COLOURS
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.geometry.shapes import Capsule
+from drd_planner.pictures.geometry import profile_crossings, split_obstacles
+from drd_planner.pictures.labels import BACKGROUND_SHARE, boxes_hit_segments
+from drd_planner.pictures.plan import PictureError, PlanDrawing, draw_plan_picture, plan_picture, served_by
 from drd_planner.planner import load_tree_bundle
 from drd_planner.planning.map_intake import obstacle_map, obstacles_data, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture import PictureError, PlanDrawing, draw_plan_picture, plan_picture, served_by
-from drd_planner.planning.picture_geometry import profile_crossings, split_obstacles
-from drd_planner.planning.picture_labels import BACKGROUND_SHARE, boxes_hit_segments
 from drd_planner.planning.query_session import QueryPlanResult
 from drd_planner.planning.session import PlanningSession, PlanResult, SessionCheck
 from drd_planner.planning.world_messages import helicopter_world_messages

@@ -17,8 +17,7 @@ import numpy as np
 
 from drd_planner.arrays import FloatArray
 from drd_planner.geometry.terrain import Heightfield
-from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture_geometry import (
+from drd_planner.pictures.geometry import (
     AnySession,
     PlanGeometry,
     along,
@@ -26,7 +25,9 @@ from drd_planner.planning.picture_geometry import (
     profile_crossings,
     vehicle_radius,
 )
-from drd_planner.planning.picture_view import DPI, EXTRA_COLOURS, TERRAIN_CMAP, TERRAIN_CMAP_TOP, PanelView
+from drd_planner.pictures.style import COLOURS, DPI, EXTRA_COLOURS, TERRAIN_CMAP, TERRAIN_CMAP_TOP
+from drd_planner.pictures.view import PanelView
+from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.session import PlanResult
 
 if TYPE_CHECKING:
@@ -166,8 +167,6 @@ def helicopter_side(
     wires: FloatArray,
 ) -> int:
     """The side view: altitude along the plan (or along the start-goal line without one); returns the crossings."""
-    from drd_planner.bench.plots import COLOURS
-
     start, goal = (state[:3] for state in end_states(session, result))
     planned = geometry.plan.shape[0] >= 2
     if planned:

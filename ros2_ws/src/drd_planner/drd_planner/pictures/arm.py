@@ -13,8 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.picture_geometry import (
+from drd_planner.pictures.geometry import (
     TOP,
     AnySession,
     PictureError,
@@ -24,7 +23,9 @@ from drd_planner.planning.picture_geometry import (
     shape_points,
     split_obstacles,
 )
-from drd_planner.planning.picture_view import EXTRA_COLOURS, PanelView, PlanDrawing
+from drd_planner.pictures.style import EXTRA_COLOURS
+from drd_planner.pictures.view import PanelView, PlanDrawing
+from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.session import PlanResult
 
 if TYPE_CHECKING:

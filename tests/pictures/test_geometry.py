@@ -9,7 +9,7 @@ import pytest
 
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
-from drd_planner.planning.picture_geometry import (
+from drd_planner.pictures.geometry import (
     TOP,
     capsule_segment,
     convex_hull,
