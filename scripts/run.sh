@@ -39,10 +39,10 @@ extras="plots,test"
   -e ros2_ws/src/drd_msgs_py -e "ros2_ws/src/drd_planner[$extras]" -r requirements-dev.txt
 # Nav2's planner interface (compute_path_to_pose, is_path_valid) needs nav2_msgs: a ROS install's, or the
 # two interfaces built into the venv once (about 1-2 minutes; cached, skipped on later runs).
-bash scripts/build_nav2_msgs.sh "$venv"
+bash scripts/tools/build_nav2_msgs.sh "$venv"
 # MoveIt's scene topic and plan_kinematic_path (arm) need moveit_msgs: a ROS install's, or its PlanningScene and
 # GetMotionPlan subset built into the venv once (3 small packages, about 2-3.5 minutes on 2 cores; cached).
-bash scripts/build_moveit_msgs.sh "$venv"
+bash scripts/tools/build_moveit_msgs.sh "$venv"
 
 case "$job" in
   demo)

@@ -218,7 +218,7 @@ def test_replay_runs_the_console_script_on_a_mounted_bag_and_records_to_a_writab
     bag = PurePosixPath(command[1])
     host_dir, _ = mounts[bag.parent]
     assert host_dir == REPO / "bags"
-    assert (host_dir / bag.name).is_file(), f"{bag.name} not in bags/ (python scripts/make_bags.py)"
+    assert (host_dir / bag.name).is_file(), f"{bag.name} not in bags/ (python scripts/tools/make_bags.py)"
     record = PurePosixPath(command[command.index("--record") + 1])
     out_dir, writable = mounts[record.parent]
     assert writable and out_dir.parent == REPO

@@ -5,7 +5,9 @@
 - no module is over 500 lines;
 - ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
 - no code in ``planning/``, ``ros/``, ``planner/``, ``pictures/`` or ``cli.py`` asks which concrete domain it holds;
-- the product (``core/``, ``planner/``, ``planning/``, ``pictures/``, ``ros/``) imports nothing from ``bench/``.
+- the product (``core/``, ``planner/``, ``planning/``, ``pictures/``, ``ros/``) imports nothing from ``bench/``;
+- ``scripts/`` holds ``run.sh`` and two folders, ``experiments/`` and ``tools/``; no script imports another
+  script or edits ``sys.path`` (shared code lives in the ``drd_planner.bench`` package).
 """
 
 from __future__ import annotations
@@ -142,3 +144,24 @@ def test_the_product_imports_nothing_from_the_benchmark_package(subpackage: str)
             n for n in _imports(path) if n == "drd_planner.bench" or n.startswith("drd_planner.bench.")
         )
         assert not bad, f"{path.relative_to(REPO)} imports {bad}"
+
+
+SCRIPTS = REPO / "scripts"
+
+
+def test_scripts_are_experiments_or_tools() -> None:
+    assert sorted(p.name for p in SCRIPTS.iterdir()) == ["experiments", "run.sh", "tools"]
+    assert (SCRIPTS / "tools" / "make_bags.py").is_file()
+    assert sorted((SCRIPTS / "experiments").glob("bench_*.py"))
+
+
+def test_no_script_imports_another_or_edits_sys_path() -> None:
+    scripts = sorted(SCRIPTS.rglob("*.py"))
+    names = {path.stem for path in scripts}
+    for path in scripts:
+        text = path.read_text(encoding="utf-8")
+        others = sorted(n.split(".")[0] for n in _imports(path) if n.split(".")[0] in names)
+        assert not others, (
+            f"{path.relative_to(REPO)} imports the scripts {others}; move the code to drd_planner"
+        )
+        assert "sys.path" not in text, f"{path.relative_to(REPO)} edits sys.path"

@@ -89,7 +89,7 @@ def test_bad_factors_and_problems_without_test_worlds_are_refused(problem: Probl
 
 def _script() -> object:
     spec = importlib.util.spec_from_file_location(
-        "bench_anytime_script", REPO_ROOT / "scripts" / "bench_anytime.py"
+        "bench_anytime_script", REPO_ROOT / "scripts" / "experiments" / "bench_anytime.py"
     )
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

@@ -23,7 +23,7 @@ CHECK = re.compile(r"^  check +(\d+): edge +(\d+) \((\d+)->(\d+)\) +(free|BLOCKE
 @pytest.fixture(scope="module")
 def bag() -> Path:
     if not BAG.is_file():
-        pytest.skip(f"{BAG} not generated (python scripts/make_bags.py)")
+        pytest.skip(f"{BAG} not generated (python scripts/tools/make_bags.py)")
     return BAG
 
 

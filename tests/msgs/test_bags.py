@@ -152,7 +152,7 @@ def test_missing_corrupt_and_foreign_bags_give_one_clear_error(rb: RosbagsMessag
 def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Path) -> None:
     bundled = REPO_ROOT / "bags" / f"{name}.mcap"
     if not bundled.is_file():
-        pytest.skip(f"{bundled} not generated (python scripts/make_bags.py)")
+        pytest.skip(f"{bundled} not generated (python scripts/tools/make_bags.py)")
     if name.startswith("arm") and not (SHARED_DATA / "panda" / "panda.urdf").is_file():
         pytest.skip("the shared Panda files are needed to plan on the arm bag")
     if name == "heli_lines" and not (SHARED_DATA / "terrain" / "srtm_front_range_144.asc").is_file():
@@ -167,7 +167,7 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
     run = subprocess.run(
         [
             sys.executable,
-            str(REPO_ROOT / "scripts" / "make_bags.py"),
+            str(REPO_ROOT / "scripts" / "tools" / "make_bags.py"),
             "--only",
             only,
             "--out-dir",
@@ -184,7 +184,7 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
     # Byte-equal on the machine that wrote it; elsewhere a float may differ in its last bits (another BLAS
     # kernel on another CPU: seen as 1 ULP in an arm obstacle pose), so floats are compared to 1e-12.
     assert _same_messages(regenerated.decoded(), contents.decoded()), (
-        "the bundled bag is stale: run python scripts/make_bags.py"
+        "the bundled bag is stale: run python scripts/tools/make_bags.py"
     )
 
 

@@ -158,7 +158,7 @@ def test_the_ranking_follows_the_lazy_weight_of_each_sketched_join(prior: WorldP
     assert surprise[:16].mean() <= surprise[-16:].mean()  # likely-free joins first
 
 
-# Two states of ``scripts/bench_heli_states.py --priors heli_lines --states 12 --free-states --seed 1`` that
+# Two states of ``scripts/experiments/bench_heli_states.py --priors heli_lines --states 12 --free-states --seed 1`` that
 # ran out of the 10 s growth budget when joins were offered by length (1071 and 2100 checks): a start low in a
 # valley (10 m off a vertex; every one of its 600 shortest joins is blocked) and a goal 2 m off a vertex whose
 # short joins lead into a part of the lattice the start cannot reach. The corridors world of each is the seed.

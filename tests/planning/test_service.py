@@ -77,7 +77,7 @@ class Recorder:
 @pytest.fixture(scope="module")
 def messages() -> list[BagMessage]:
     if not BAG.is_file():
-        pytest.skip(f"{BAG} not generated (python scripts/make_bags.py)")
+        pytest.skip(f"{BAG} not generated (python scripts/tools/make_bags.py)")
     return read_bag(BAG)
 
 

@@ -1,7 +1,7 @@
 """A MoveIt-style client of the planner, run as its own process: it imports only rclpy and standard packages.
 
 It publishes planning scenes on ``monitored_planning_scene`` and calls ``plan_kinematic_path`` as a MoveIt
-stack would, with ``moveit_msgs`` (a ROS install's, or the subset ``scripts/build_moveit_msgs.sh`` built
+stack would, with ``moveit_msgs`` (a ROS install's, or the subset ``scripts/tools/build_moveit_msgs.sh`` built
 into the venv), and prints one JSON line per step for tests/ros/test_moveit_host.py. After each scene it
 waits for a line on stdin (the test says when the node has applied it). Usage:
 ``python moveit_client.py '{"frame": ..., "joints": [...], "start": [...], "goal": [...], "box": {...}}'``.

@@ -1,7 +1,7 @@
 """A Nav2-style client of the planner, run as its own process: it imports only rclpy and standard packages.
 
 It talks to ``compute_path_to_pose`` and ``is_path_valid`` as a Nav2 stack would, with ``nav2_msgs``
-(a ROS install's, or the one ``scripts/build_nav2_msgs.sh`` built into the venv) and prints one JSON line
+(a ROS install's, or the one ``scripts/tools/build_nav2_msgs.sh`` built into the venv) and prints one JSON line
 per step for tests/ros/test_nav2_interface.py. Between steps it waits for a line on stdin where the test
 changes the maps. Usage: ``python nav2_client.py '{"goal": [x, y, z], "far": [x, y, z]}'``.
 """

@@ -29,7 +29,9 @@ import numpy as np
 import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
-pytest.importorskip("moveit_msgs.srv", reason="moveit_msgs not importable (scripts/build_moveit_msgs.sh)")
+pytest.importorskip(
+    "moveit_msgs.srv", reason="moveit_msgs not importable (scripts/tools/build_moveit_msgs.sh)"
+)
 
 from harness import Peer, active_planner, private_context, spin_until  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402

@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
-pytest.importorskip("nav2_msgs.action", reason="nav2_msgs not importable (scripts/build_nav2_msgs.sh)")
+pytest.importorskip("nav2_msgs.action", reason="nav2_msgs not importable (scripts/tools/build_nav2_msgs.sh)")
 
 from harness import Peer, active_planner, private_context, spin_until  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402

@@ -1,7 +1,8 @@
 # mypy: allow-untyped-calls
 """A burst of 200 requests against the real node: each answered or coalesced, with flat memory.
 
-The harness is the one of ``scripts/bench_node_burst.py`` (the node spun as ``planner_node`` spins it,
+The harness is :mod:`drd_planner.bench.node_harness`, the one of ``scripts/experiments/bench_node_burst.py``
+(the node spun as ``planner_node`` spins it,
 with its own planning thread, a peer on its own executor, all in threads of this process), so the test
 checks what the benchmark prints. Memory is measured after a warm-up (one request, the node's plan
 history filled by service calls, a 50-request burst) from request 50 to 200 during the burst and from
@@ -39,6 +40,7 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not 
 
 from rclpy.qos import ReliabilityPolicy  # noqa: E402
 
+from drd_planner.bench.node_harness import Harness, default_maps, wait_for  # noqa: E402
 from drd_planner.ros.node import REQUESTS  # noqa: E402
 
 pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
@@ -54,7 +56,7 @@ RSS_BOUND = 8 * 2**20
 
 
 def _script(name: str) -> ModuleType:
-    path = ROOT / "scripts" / f"{name}.py"
+    path = ROOT / "scripts" / "experiments" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
@@ -68,9 +70,9 @@ bench = _script("bench_node_burst")
 
 @pytest.fixture(scope="module")
 def harness() -> Iterator[Any]:
-    h = bench.Harness(tree=TREE, domain_id=DOMAIN_ID)
+    h = Harness(tree=TREE, domain_id=DOMAIN_ID)
     try:
-        markers, cloud = bench.default_maps(h, world_seed=1, bag=None)
+        markers, cloud = default_maps(h, world_seed=1, bag=None)
         h.publish_maps(markers, cloud)
         bench.warm_up(h)
         yield h
@@ -117,7 +119,7 @@ def test_topic_burst_is_answered_or_coalesced_with_flat_memory(harness: Any) -> 
     finally:
         tracemalloc.stop()
     answered = sum(r.answered for r in reports)
-    assert bench.wait_for(lambda: harness.plans - plans == answered, 5.0), (
+    assert wait_for(lambda: harness.plans - plans == answered, 5.0), (
         f"{harness.plans - plans} Path messages for {answered} answered requests"
     )
     growths = _growths(reports[-1])
@@ -134,7 +136,7 @@ def test_service_burst_answers_every_call_with_flat_memory(harness: Any) -> None
     bench.print_report(report)
     assert report.answered == BURST, f"{BURST - report.answered} calls got no response"
     assert len(set(report.results)) == 1 and int(report.results[0]) > 2, "responses differ or are empty"
-    assert bench.wait_for(lambda: harness.plans - plans == BURST, 5.0), "one plan per call on plan"
+    assert wait_for(lambda: harness.plans - plans == BURST, 5.0), "one plan per call on plan"
     growths = _growths(report)
     for growth in growths:
         assert growth["rss"] < RSS_BOUND, growth
@@ -154,7 +156,7 @@ def test_burst_script_prints_the_table(tmp_path: Path) -> None:
     out = tmp_path / "burst.json"
     args = ["--requests", "10", "--every", "5", "--repeat", "1", "--trace", "none", "--warm-up-calls", "1"]
     args += ["--json", str(out)]
-    text = _run_script(["scripts/bench_node_burst.py", *args], 210 + os.getpid() % 20)
+    text = _run_script(["scripts/experiments/bench_node_burst.py", *args], 210 + os.getpid() % 20)
     assert "topic burst: 10 requests" in text and "service burst: 10 requests" in text
     assert "RSS MiB" in text and "latency of answered requests" in text
     reports = json.loads(out.read_text())
@@ -168,7 +170,8 @@ def test_burst_script_prints_the_table(tmp_path: Path) -> None:
 def test_latency_script_reports_the_split(tmp_path: Path) -> None:
     out = tmp_path / "latency.json"
     text = _run_script(
-        ["scripts/bench_node_latency.py", "--requests", "3", "--json", str(out)], 210 + (os.getpid() + 7) % 20
+        ["scripts/experiments/bench_node_latency.py", "--requests", "3", "--json", str(out)],
+        210 + (os.getpid() + 7) % 20,
     )
     assert "cold: a new map snapshot before each request: 3 requests" in text
     assert "warm: the same snapshot" in text and "selection + messaging:" in text

@@ -55,7 +55,7 @@ def context() -> Iterator[Any]:
 
 def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[ReplaySummary, PlannerNode]:
     if not bag.is_file():
-        pytest.skip(f"{bag} not generated (python scripts/make_bags.py)")
+        pytest.skip(f"{bag} not generated (python scripts/tools/make_bags.py)")
     params = [
         Parameter("tree_paths", value=[str(TREES / tree)]),
         Parameter("frame_id", value=frame),

@@ -444,7 +444,7 @@ def _add_bench_parser(sub: Any) -> None:
         metavar="C[,C...]",
         help="with --queries: also time every policy to a verified plan with C ms of CPU added to each check "
         "(per kind: the stored query and new ones; off-graph queries need live worlds: "
-        "scripts/bench_check_cost.py; median and mean CPU and wall ms per C in the JSON's policies.NAME.time_ms.C)",
+        "scripts/experiments/bench_check_cost.py; median and mean CPU and wall ms per C in the JSON's policies.NAME.time_ms.C)",
     )
     _tree_options(p)
     p.set_defaults(func=cmd_bench)

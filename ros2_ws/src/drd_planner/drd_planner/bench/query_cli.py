@@ -108,7 +108,7 @@ def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dic
 #: Why a dataset's test worlds (rows of X) cannot be asked off-graph queries.
 OFF_GRAPH_NOTE = (
     "off-graph queries do not apply here: the test worlds are rows of X, which answer graph edges only "
-    "(no domain model checks a motion off the graph); scripts/bench_check_cost.py runs them on live worlds"
+    "(no domain model checks a motion off the graph); scripts/experiments/bench_check_cost.py runs them on live worlds"
 )
 
 

@@ -24,7 +24,7 @@ c_e):
   E_a E_b (p_b / E_b - p_a / E_a) up to a common positive factor).
 
 Library paths do share edges, so the rule is a heuristic there, as MaxProbReg is; whether it needs
-fewer checks is measured (``scripts/bench_region_rule.py``). Ties go to the lower path index, as with
+fewer checks is measured (``scripts/experiments/bench_region_rule.py``). Ties go to the lower path index, as with
 MaxProbReg. With unit costs and all theta equal the two rules differ only through r_i.
 """
 

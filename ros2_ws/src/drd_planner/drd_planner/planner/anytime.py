@@ -26,7 +26,7 @@ always ends: every draw that proposes something checks a new edge or records a s
 Every recorded path has each edge checked free in this plan (re-verified before it is kept); the
 sampler's random stream is derived from the plan's seed only (same seed, same checks).
 
-Measured on the dataset's own query of the authors' SE(2) and helicopter sets (``scripts/bench_anytime.py``,
+Measured on the dataset's own query of the authors' SE(2) and helicopter sets (``scripts/experiments/bench_anytime.py``,
 100 test worlds each, extra budget = the first path's checks): the mean gap of the path cost ratio to 1
 falls by 72 % (xyh_1), 97 % (xyh_3), 91 % (xyh_4), 63 % (xyh_5) and 84 % (heli_canyon_1). Most draws that
 propose nothing need more checks than are left (on xyh_5 about 11 unchecked edges with 6 left), so a

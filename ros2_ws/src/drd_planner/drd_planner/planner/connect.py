@@ -16,7 +16,7 @@ at least half of its samples are free there (a sample-weighted majority vote, :f
 The new edge then is an ordinary column of the query's world matrix: the library, DiRECt and BiSECt use it
 like any edge, and it is checked like any edge (the oracle's ``check_motion``).
 
-Measured by ``scripts/measure_connection_prior.py`` (planar Forest / OneWall / Baffle worlds, 240 motions
+Measured by ``scripts/experiments/measure_connection_prior.py`` (planar Forest / OneWall / Baffle worlds, 240 motions
 each, against the exact box test in the 270 training worlds): mean absolute error of the imputed free
 fraction 0.13 / 0.17 / 0.09 (correlation 0.92 / 0.73 / 0.88); the training marginal of all edges is off by
 0.18 / 0.39 / 0.17; requiring *every* matched edge free was off by 0.40 / 0.44 / 0.32 (graph edges are longer
