@@ -13,7 +13,7 @@ before they decode or copy its payload, with an error that names the limit, its 
 Every field name is also the name of the node parameter that sets it, so the node builds its limits with
 ``MapLimits.from_parameters({name: value, ...})``. The defaults keep the node's peak RSS under 1 GiB with the
 largest map accepted (two terrains of :attr:`MapLimits.max_terrain_cells` alive while one replaces the other);
-``scripts/bench_map_updates.py`` measures the costs.
+``scripts/experiments/bench_map_updates.py`` measures the costs.
 """
 
 from __future__ import annotations

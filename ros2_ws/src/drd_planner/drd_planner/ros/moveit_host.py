@@ -11,7 +11,7 @@
   free, as a ``moveit_msgs/RobotTrajectory`` with ``time_from_start``, and MoveIt's error code.
 
 The interfaces come from ``moveit_msgs``: a ROS install's where it is importable, else the subset
-``scripts/build_moveit_msgs.sh`` builds into the venv (``scripts/run.sh`` runs it). Without either, or without
+``scripts/tools/build_moveit_msgs.sh`` builds into the venv (``scripts/run.sh`` runs it). Without either, or without
 an arm prior, the node runs without MoveIt's interface and says why.
 """
 
@@ -90,7 +90,7 @@ class MoveItHost:
         except ImportError as exc:
             planner.get_logger().warning(
                 f"MoveIt interface off ({SCENE_TOPIC}, {SERVICE_NAME}): moveit_msgs is not importable ({exc}); "
-                "scripts/build_moveit_msgs.sh builds it into the venv"
+                "scripts/tools/build_moveit_msgs.sh builds it into the venv"
             )
             return None
         if service.arm is None:

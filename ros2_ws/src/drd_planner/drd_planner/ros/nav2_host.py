@@ -10,7 +10,7 @@ daemon thread: a goal plans in its callback while another thread hears its cance
 blocked by a Nav2 client. Plans stay one at a time (the service's planning lock).
 
 The interfaces come from ``nav2_msgs``: a ROS install's where it is importable, else the two interfaces
-``scripts/build_nav2_msgs.sh`` builds into the venv (``scripts/run.sh`` runs it). Without either, the node
+``scripts/tools/build_nav2_msgs.sh`` builds into the venv (``scripts/run.sh`` runs it). Without either, the node
 runs without the Nav2 interface and says why.
 """
 
@@ -73,7 +73,7 @@ class Nav2Host:
         except ImportError as exc:
             planner.get_logger().warning(
                 f"Nav2 interface off (compute_path_to_pose, is_path_valid): nav2_msgs is not importable ({exc}); "
-                "scripts/build_nav2_msgs.sh builds it into the venv"
+                "scripts/tools/build_nav2_msgs.sh builds it into the venv"
             )
             return None
         node = rclpy.create_node(
