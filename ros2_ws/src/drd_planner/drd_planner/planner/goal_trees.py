@@ -21,8 +21,8 @@ reach it there, so that world needs no second search for it (most of them: a sta
 So a replan from along the route walks the kept trees, and any start gets the same paths as unbounded trees.
 
 **A goal off the graph** is the extra vertex ``B - 1`` of each block; the motions joining it (their vertex,
-length and imputed outcome per world) are written into the block graph's spare arcs for that search only (it
-is searched without bound).
+length and imputed outcome per world) are written into the block graph's spare arcs for that search only (as
+far as the start needs, like a graph goal; its trees are not kept).
 
 The search worlds: the distinct training worlds (rows compared through a 64-bit hash, then exactly) in a
 seeded order, the first W of them.
@@ -271,9 +271,14 @@ class SearchWorlds:
         # Where each block's spare arcs sit in the CSR arrays (its goal vertex's row: all of that row).
         goal_rows = np.arange(num) * block + v
         self._slots = self._graph.indptr[goal_rows][:, None] + np.arange(self.slots)[None, :]
-        # The arcs free in any search world, reversed: distances on it bound every world's from below.
+        # The arcs free in any search world, reversed, in one block with its spare arcs: distances on it bound
+        # every world's from below.
         anywhere = free.any(axis=0)
-        self._union = _csr32(arc_length[anywhere], arcs.v[anywhere], arcs.u[anywhere], v)
+        union_rows = np.concatenate([arcs.v[anywhere], np.full(self.slots, v)])
+        union_cols = np.concatenate([arcs.u[anywhere], np.arange(self.slots)])
+        union_data = np.concatenate([arc_length[anywhere], np.full(self.slots, np.inf)])
+        self._union = _csr32(union_data, union_rows, union_cols, block)
+        self._union_slots = self._union.indptr[v] + np.arange(self.slots)
         self._trees: OrderedDict[int, GoalTree] = OrderedDict()
 
     @property
@@ -316,8 +321,12 @@ class SearchWorlds:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()
 
-    def joined_tree(self, joins: JoinMotions) -> GoalTree:
-        """The reverse trees of an off-graph goal joined by ``joins`` (the whole graph; not kept)."""
+    def joined_tree(self, joins: JoinMotions, start: int | JoinMotions | None = None) -> GoalTree:
+        """The reverse trees of an off-graph goal joined by ``joins``, covering ``start`` (not kept).
+
+        Searched as far as ``start`` needs (:data:`FIRST_RADIUS`), then again without bound in the worlds
+        it does not cover; None: the whole graph.
+        """
         k = int(joins.vertices.size)
         if k > self.slots:
             raise ProblemError(f"at most {self.slots} motions into a goal can be searched, got {k}")
@@ -330,26 +339,39 @@ class SearchWorlds:
         indices[slots] = joins.vertices[None, :] + offsets
         data[slots] = np.where(joins.free, joins.lengths[None, :], np.inf)
         graph = sp.csr_array((data, indices, self._graph.indptr), shape=self._graph.shape)
-        # Searched whole, so its parts are never asked (and the goal vertex B - 1 has none of its own).
-        return replace(self._search(self.block - 1, graph, limit=np.inf), parts=None)
+        goal = self.block - 1
+        # No parts: the goal's own vertex is joined only in this search (a start is never known to be cut off).
+        tree = replace(self._search(goal, graph, limit=self._first_radius(goal, start, joins)), parts=None)
+        if start is not None:
+            self._widen(tree, ~tree.covers(start), graph)
+        return tree
 
-    def _first_radius(self, goal: int, start: int | JoinMotions | None) -> float:
+    def _first_radius(
+        self, goal: int, start: int | JoinMotions | None, joins: JoinMotions | None = None
+    ) -> float:
         """How far a new goal's first search goes for ``start``: inf for the whole graph."""
         if start is None:
             return np.inf
-        bound = dijkstra(self._union, directed=True, indices=goal)
+        union = self._union
+        if joins is not None:  # the goal's motions free in any search world, in the union's spare arcs
+            data, indices = union.data.copy(), union.indices.copy()
+            slots = self._union_slots[: joins.vertices.size]
+            indices[slots] = joins.vertices
+            data[slots] = np.where(joins.free.any(axis=0), joins.lengths, np.inf)
+            union = sp.csr_array((data, indices, union.indptr), shape=union.shape)
+        bound = dijkstra(union, directed=True, indices=goal)
         if isinstance(start, JoinMotions):
             near = float(np.min(start.lengths + bound[start.vertices], initial=np.inf))
         else:
             near = float(bound[int(start)])
         return FIRST_RADIUS * near  # inf where no world can reach the goal at all: search everything once
 
-    def _widen(self, tree: GoalTree, worlds: BoolArray) -> None:
-        """Search ``worlds`` (W,) of a kept tree again without bound, in place."""
+    def _widen(self, tree: GoalTree, worlds: BoolArray, graph: sp.csr_array | None = None) -> None:
+        """Search ``worlds`` (W,) of a tree again without bound, in place (on ``graph``: a joined goal's)."""
         again = np.flatnonzero(worlds)
         if again.size == 0:
             return
-        full = self._search(tree.goal, self._graph, limit=np.inf, worlds=again)
+        full = self._search(tree.goal, self._graph if graph is None else graph, limit=np.inf, worlds=again)
         tree.dist[again] = full.dist
         tree.hop[again] = full.hop
         tree.radius[again] = np.inf

@@ -134,7 +134,7 @@ def _goal_tree(
     assert goal.free is not None
     k = min(goal.vertices.size, search.slots)  # the first (best) joins; any others stay in the graph
     free = goal.free[search.worlds][:, :k]
-    tree = search.joined_tree(JoinMotions(goal.vertices[:k], goal.lengths[:k], free))
+    tree = search.joined_tree(JoinMotions(goal.vertices[:k], goal.lengths[:k], free), origin)
     return tree, dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
 
 
