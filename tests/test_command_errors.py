@@ -7,7 +7,7 @@ import argparse
 import pytest
 
 from drd_planner.command_errors import ERROR_EXIT, INTERRUPT_EXIT, run_command
-from drd_planner.exceptions import DatasetError
+from drd_planner.exceptions import DatasetError, DrdError, InvariantError, UnverifiedPathError
 
 
 def _args(func: object) -> argparse.Namespace:
@@ -44,3 +44,15 @@ def test_other_exceptions_are_bugs_and_propagate() -> None:
 
     with pytest.raises(ValueError, match="a bug"):
         run_command(_args(bug))
+
+
+def test_a_broken_invariant_is_a_bug_not_a_refusal(capsys: pytest.CaptureFixture[str]) -> None:
+    # An unverified path about to go out is a broken safety invariant: it keeps its traceback (no exit 2).
+    def unverified(args: argparse.Namespace) -> int:
+        raise UnverifiedPathError("edge 3 of the returned path was not checked free")
+
+    assert not issubclass(UnverifiedPathError, DrdError)
+    assert issubclass(UnverifiedPathError, InvariantError) and issubclass(InvariantError, RuntimeError)
+    with pytest.raises(UnverifiedPathError, match="edge 3"):
+        run_command(_args(unverified))
+    assert "drd: error" not in capsys.readouterr().err

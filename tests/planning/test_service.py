@@ -20,7 +20,7 @@ from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.terrain import cloud_from_heightfield
-from drd_planner.exceptions import DrdError
+from drd_planner.exceptions import DrdError, UnverifiedPathError
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request
@@ -43,11 +43,15 @@ class Recorder:
     records: list[PlanRecord] = field(default_factory=list)
     plans: list[PlanResult] = field(default_factory=list)
     kept_versions: list[int] = field(default_factory=list)
+    bugs: list[tuple[str, BaseException]] = field(default_factory=list)
     withdrawn: int = 0
     active: bool = True
 
     def error(self, text: str, topic: str = "plan") -> None:
         self.errors.append(text)
+
+    def bug(self, text: str, exc: BaseException) -> None:
+        self.bugs.append((text, exc))
 
     def info(self, text: str) -> None:
         pass
@@ -218,3 +222,29 @@ def test_a_terrain_above_every_vertex_is_refused_and_the_next_plan_says_so(
     record = out.records[-1]
     assert record.result.ok and record.snapshot.version == used
     assert record.request["newer_map_refused"].startswith("terrain refused: not the prior's terrain")
+
+
+def test_an_unverified_path_is_a_bug_reported_as_one_and_nothing_is_published(
+    messages: list[BagMessage], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = Recorder()
+    service = _service(out)
+    first_request = bag_requests(messages)[0].position
+    for m in messages[:first_request]:
+        _feed(service, m)
+    session = service.sessions[0]
+
+    def broken(*args: Any, **kwargs: Any) -> Any:
+        raise UnverifiedPathError("edge 3 of the returned path was not checked free")
+
+    monkeypatch.setattr(session, "plan", broken)
+    goal = read_goal("goal_pose", messages[first_request].message, service.sessions, "map")
+    assert service.enqueue(goal, "goal_pose", "1.0")
+    service.serve()  # the planning thread: the bug is reported, the thread goes on
+    assert not out.plans and not out.records and service.published is None
+    assert not any("refused" in e for e in out.errors)  # a bug, never a refused request
+    assert len(out.bugs) == 1 and isinstance(out.bugs[0][1], UnverifiedPathError)
+    assert out.bugs[0][0].startswith("goal_pose: internal error") and "edge 3" in out.bugs[0][0]
+    outcome = service.serve_request(goal, None, "get_plan")  # a service call: answered empty, not refused
+    assert outcome.sent is None and outcome.refusal == "" and "edge 3" in outcome.internal_error
+    assert len(out.bugs) == 2 and not out.plans

@@ -30,6 +30,7 @@ from sensor_msgs.msg import PointCloud2  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
+from drd_planner.exceptions import UnverifiedPathError  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
 from drd_planner.planner import load_tree_bundle  # noqa: E402
@@ -336,6 +337,47 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
         peer.node.destroy_node()
     assert "loaded 1 tree(s): heli_wires" in output
     assert "Traceback" not in output
+
+
+def test_an_unverified_path_is_logged_with_its_traceback_and_nothing_is_published(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    node = _node(context, [str(TREE)])
+    peer = Peer(context)
+    logged: list[str] = []
+    real_logger = node.get_logger()
+
+    class _Logger:
+        def error(self, text: str) -> None:
+            logged.append(text)
+            real_logger.error(text)
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(real_logger, name)
+
+    monkeypatch.setattr(node, "get_logger", lambda: _Logger())
+    with active_planner(context, node, peer) as executor:
+        session = node.sessions[0]
+        _publish_world(executor, node, peer)
+        real_plan = session.plan
+        calls: list[int] = []
+
+        def unverified_once(*args: Any, **kwargs: Any) -> Any:
+            calls.append(1)
+            if len(calls) == 1:
+                raise UnverifiedPathError("edge 3 of the returned path was not checked free")
+            return real_plan(*args, **kwargs)
+
+        monkeypatch.setattr(session, "plan", unverified_once)
+        peer.goals.publish(_goal(session))
+        assert spin_until(executor, lambda: any("UnverifiedPathError" in e for e in node.errors))
+        assert "goal_pose: internal error, nothing published" in node.errors[-1]
+        assert not any("refused" in e for e in node.errors)  # a bug, never a refused request
+        assert not peer.plans
+        bug_lines = [line for line in logged if "UnverifiedPathError" in line]
+        assert bug_lines and "Traceback (most recent call last)" in bug_lines[-1]
+        peer.goals.publish(_goal(session))  # the node is still up and plans
+        assert spin_until(executor, lambda: bool(peer.plans))
 
 
 def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(context: Any) -> None:

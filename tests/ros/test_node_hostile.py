@@ -35,7 +35,7 @@ from drd_planner.planning import map_store as map_store_module  # noqa: E402
 from drd_planner.planning import service as service_module  # noqa: E402
 from drd_planner.planning.session import PlanningSession  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
-from drd_planner.ros.guard import MAX_ERROR_CHARS  # noqa: E402
+from drd_planner.ros.guard import MAX_ERROR_CHARS, traceback_of  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
@@ -438,3 +438,23 @@ def test_a_start_that_fails_after_a_signal_ends_with_130(monkeypatch: pytest.Mon
     finally:
         for s, handler in before.items():
             signal.signal(s, handler)
+
+
+def test_a_bugs_traceback_is_logged_whole_or_by_its_last_characters() -> None:
+    def raise_deep(depth: int) -> None:
+        if depth == 0:
+            raise ZeroDivisionError("deep down")
+        raise_deep(depth - 1)
+
+    try:
+        raise_deep(3)
+    except ZeroDivisionError as exc:
+        caught = exc
+    text = traceback_of(caught)
+    assert text.startswith("Traceback (most recent call last)") and text.endswith(
+        "ZeroDivisionError: deep down"
+    )
+    assert text.count(", in raise_deep") == 4  # the four frames, every one named
+    cut = traceback_of(caught, limit=60)
+    assert cut.endswith("ZeroDivisionError: deep down") and cut.startswith("[")
+    assert cut == f"[{len(text) - 60} characters before]..." + text[-60:]

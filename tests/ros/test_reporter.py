@@ -70,7 +70,9 @@ def _result(ok: bool) -> Any:
 
 def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
     outputs, logger, errors = _Outputs(active=True), _Logger(), []
-    reporter = NodeReporter(logger, outputs, lambda text, topic: errors.append((text, topic)))  # type: ignore[arg-type]
+    reporter = NodeReporter(
+        logger, outputs, lambda text, topic: errors.append((text, topic)), lambda text, exc: None
+    )  # type: ignore[arg-type]
     session = SimpleNamespace(name="t")
     record = PlanRecord(session, _result(True), MapSnapshot(1), {"request": "goal_pose"})  # type: ignore[arg-type]
 
@@ -96,7 +98,21 @@ def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
 
 def test_no_plan_is_logged_as_a_warning() -> None:
     outputs, logger = _Outputs(active=False), _Logger()
-    reporter = NodeReporter(logger, outputs, lambda text, topic: None)  # type: ignore[arg-type]
+    reporter = NodeReporter(logger, outputs, lambda text, topic: None, lambda text, exc: None)  # type: ignore[arg-type]
     record = PlanRecord(SimpleNamespace(name="t"), _result(False), MapSnapshot(1), {})  # type: ignore[arg-type]
     assert reporter.result(record, wait_s=0.0, publish=lambda stamp: None) is None
     assert logger.lines == ["warning t: m; nothing published on plan"]
+
+
+def test_a_bug_goes_to_the_nodes_bug_report_with_its_exception() -> None:
+    bugs: list[tuple[str, BaseException]] = []
+    errors: list[tuple[str, str]] = []
+    reporter = NodeReporter(
+        _Logger(),
+        _Outputs(active=True),  # type: ignore[arg-type]
+        lambda text, topic: errors.append((text, topic)),
+        lambda text, exc: bugs.append((text, exc)),
+    )
+    exc = RuntimeError("broken")
+    reporter.bug("goal_pose: internal error", exc)
+    assert bugs == [("goal_pose: internal error", exc)] and not errors

@@ -3,7 +3,8 @@
 Both ``drd`` (:mod:`drd_planner.cli`) and the stand-alone dataset tool (:mod:`drd_planner.data.dataset_cli`)
 run their chosen subcommand through :func:`run_command`, so a :class:`~drd_planner.exceptions.DrdError`
 prints ``drd: error: <message>`` and returns 2, and Ctrl-C prints the caller's interrupt line and returns
-130 (128 + SIGINT, as a shell reports it). Any other exception is a bug and keeps its traceback.
+130 (128 + SIGINT, as a shell reports it). Any other exception is a bug and keeps its traceback, a broken
+safety invariant (:class:`~drd_planner.exceptions.InvariantError`, not a ``DrdError``) included.
 """
 
 from __future__ import annotations

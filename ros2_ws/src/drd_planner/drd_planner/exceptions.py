@@ -1,7 +1,12 @@
 """All exceptions raised by drd_planner.
 
 Every error a user can trigger with bad input derives from :class:`DrdError`, so callers (the CLI,
-the ROS node) can catch one type and print one clear line.
+the ROS node) can catch one type and print one clear line: a refusal.
+
+A broken safety invariant of the planner itself (a path about to go out with an edge not checked free)
+is a bug, not a refusal: it derives from :class:`InvariantError`, deliberately not a ``DrdError``, so no
+refusal handler catches it. The CLI lets it raise with its traceback; the node logs it at ERROR with its
+traceback, publishes nothing for that request and goes on.
 """
 
 from __future__ import annotations
@@ -27,7 +32,11 @@ class PolicyError(DrdError):
     """A policy broke the episode contract (for example it chose an edge twice)."""
 
 
-class UnverifiedPathError(DrdError):
+class InvariantError(RuntimeError):
+    """A safety invariant of the planner broke: a bug in drd_planner, never the user's input."""
+
+
+class UnverifiedPathError(InvariantError):
     """A path was about to be returned although one of its edges was not checked free."""
 
 

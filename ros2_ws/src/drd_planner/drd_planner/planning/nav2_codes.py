@@ -20,7 +20,7 @@ no free path, every motion at the start blocked     ``START_OCCUPIED``
 no free path, every motion at the goal blocked      ``GOAL_OCCUPIED``
 ``max_checks`` or ``time_budget_s`` ran out         ``TIMEOUT``
 no free path otherwise                              ``NO_VALID_PATH``
-no maps yet, a malformed request, anything else     ``UNKNOWN``
+no maps yet, a malformed request, a bug, the rest   ``UNKNOWN``
 ==================================================  ======================
 
 The codes come from the plan's cause (:class:`~drd_planner.planner.cause.PlanCause`), never from its reason
@@ -84,6 +84,8 @@ _CAUSE_CODE = {
 def nav2_error(outcome: PlanOutcome) -> Nav2Error:
     """The Nav2 error of a served request (``NONE`` with a verified path); see the module docstring."""
     result = outcome.result
+    if outcome.internal_error:
+        return Nav2Error("UNKNOWN", outcome.internal_error)
     if result is None:
         return Nav2Error(_REFUSED_PART.get(outcome.refused, "UNKNOWN"), outcome.refusal)
     if result.ok:

@@ -32,6 +32,9 @@ class PlanOutcome:
         result: the plan's result (None: refused before planning); ``result.ok`` with a verified path.
         refusal: why the request was refused before the planner ran ("" otherwise).
         refused: what that refusal is about (:data:`RefusedPart`).
+        internal_error: why the request ended without a plan because of a bug ("" otherwise): a broken
+            safety invariant (:class:`~drd_planner.exceptions.InvariantError`), reported with its
+            traceback; never a refusal.
         session: the prior that planned it (None: refused before planning).
         snapshot: the maps it was planned on (None: refused before planning).
     """
@@ -40,6 +43,7 @@ class PlanOutcome:
     result: QueryPlanResult | None = None
     refusal: str = ""
     refused: RefusedPart = ""
+    internal_error: str = ""
     session: QuerySession | None = None
     snapshot: MapSnapshot | None = None
 

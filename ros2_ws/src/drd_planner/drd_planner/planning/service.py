@@ -15,7 +15,9 @@ older one that has not started (the summary's ``coalesced`` value counts them). 
 before a plan is published, or after, is compared with the map that plan was verified on; only the plan's
 edges the update can affect are re-checked (:mod:`drd_planner.planning.replan`): the plan is kept if they
 stay free, replanned from the robot's state now if one is blocked, and withdrawn if no free path is found.
-No plan is published unless every one of its edges was checked free on the snapshot it was planned on.
+No plan is published unless every one of its edges was checked free on the snapshot it was planned on;
+a plan that breaks that invariant (:class:`~drd_planner.exceptions.InvariantError`) is a bug: reported
+with its traceback (:meth:`ServiceOutputs.bug`), never as a refused request, and nothing is published.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
 from drd_planner.domains.pose_states import state_from_pose
-from drd_planner.exceptions import DrdError, PlanningError
+from drd_planner.exceptions import DrdError, InvariantError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.map_limits import MapLimits
@@ -379,6 +381,10 @@ class PlannerService:
             result = session.plan(snapshot, begin, end, seed=self._live().seed, cancel=cancel)
         except DrdError as exc:
             return self._refuse(f"{values.get('request', 'request')} refused: {exc}", part)
+        except InvariantError as exc:  # a bug, not a refusal: reported with its traceback, nothing published
+            text = f"{values.get('request', 'request')}: internal error, nothing published: {type(exc).__name__}: {exc}"
+            self._out.bug(text, exc)
+            return PlanOutcome(internal_error=text, session=session, snapshot=snapshot)
         # A start or goal the prior cannot serve is a refused request, not a plan.
         if result.status == "refused":
             self._out.error(f"{values.get('request', 'request')} refused: {result.message}")

@@ -54,6 +54,9 @@ class ServiceOutputs(Protocol):
     def error(self, text: str, topic: str = "plan") -> None:
         """Report a refused input or a failure (``topic``: ``plan``, ``maps`` or ``node``)."""
 
+    def bug(self, text: str, exc: BaseException) -> None:
+        """Report a bug (a broken safety invariant) with ``exc``'s traceback; never a refused input."""
+
     def info(self, text: str) -> None:
         """Log a line."""
 

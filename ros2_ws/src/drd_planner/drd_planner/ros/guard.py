@@ -15,14 +15,25 @@ available in the current state (ros2/rclpy#1209, fixed upstream by #1319):
 from __future__ import annotations
 
 import sys
+import traceback
 from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["MAX_ERROR_CHARS", "guard_callback", "guard_change_state", "guard_service", "shorten"]
+__all__ = [
+    "MAX_ERROR_CHARS",
+    "MAX_TRACEBACK_CHARS",
+    "guard_callback",
+    "guard_change_state",
+    "guard_service",
+    "shorten",
+    "traceback_of",
+]
 
 #: Longest error text the node logs, publishes on ``/diagnostics`` or keeps in its history (characters).
 MAX_ERROR_CHARS = 400
+#: Longest traceback the node logs after a bug's error line (characters; its last ones are kept).
+MAX_TRACEBACK_CHARS = 8000
 
 Report = Callable[[str], None]
 
@@ -33,6 +44,14 @@ def shorten(text: str, limit: int = MAX_ERROR_CHARS) -> str:
         return text
     tail = f"... [{len(text)} characters]"
     return text[: max(0, limit - len(tail))] + tail
+
+
+def traceback_of(exc: BaseException, limit: int = MAX_TRACEBACK_CHARS) -> str:
+    """``exc``'s traceback as Python prints it, its last ``limit`` characters (the frames nearest the raise)."""
+    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)).rstrip("\n")
+    if len(text) <= limit:
+        return text
+    return f"[{len(text) - limit} characters before]..." + text[len(text) - limit :]
 
 
 def _describe(exc: BaseException) -> str:

@@ -64,7 +64,7 @@ from drd_planner.planning.requests import ambiguity, goal_from_pose, read_goal
 from drd_planner.planning.service import LiveSettings, PlannerService, PlanRecord
 from drd_planner.planning.session import PlanResult
 from drd_planner.planning.shipped import resolve_tree_path
-from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten
+from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten, traceback_of
 from drd_planner.ros.moveit_host import MoveItHost
 from drd_planner.ros.nav2_host import Nav2Host
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs
@@ -114,7 +114,7 @@ class PlannerNode(LifecycleNode):
         self._worker = PlanWorker(self._serve, on_error=self._on_worker_error)
         self._taken: Counter[str] = Counter()  # messages taken per subscribed topic
         self._out = PlannerOutputs(self)  # lifecycle publishers; /diagnostics in every state
-        self._reporter = NodeReporter(self.get_logger(), self._out, self._report_error)
+        self._reporter = NodeReporter(self.get_logger(), self._out, self._report_error, self._report_bug)
         self._errors: list[str] = []
         self.add_on_set_parameters_callback(self._on_set_parameters)
         guard_change_state(self, report=self._report_to("node"))
@@ -431,7 +431,13 @@ class PlannerNode(LifecycleNode):
     # Reports
 
     def _on_worker_error(self, exc: Exception) -> None:
-        self._report_error(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}")
+        self._report_bug(
+            f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}", exc
+        )
+
+    def _report_bug(self, text: str, exc: BaseException) -> None:
+        """:meth:`_report_error` of a bug: the log line (ERROR) is followed by ``exc``'s traceback."""
+        self._report_error(text, "plan", trace=traceback_of(exc))
 
     def _report_to(self, topic: str) -> Callable[[str], None]:
         """:meth:`_report_error` under the status ``topic``."""
@@ -463,10 +469,10 @@ class PlannerNode(LifecycleNode):
             return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
-    def _report_error(self, text: str, topic: str = "plan") -> None:
-        """Log ``text`` (shortened), keep it, put it on ``/diagnostics`` under ``topic`` (plan, maps or node)."""
+    def _report_error(self, text: str, topic: str = "plan", *, trace: str = "") -> None:
+        """Log ``text`` (shortened; then ``trace``, a traceback), keep it, put it on ``/diagnostics`` under ``topic``."""
         text = shorten(text)
-        self.get_logger().error(text)
+        self.get_logger().error(f"{text}\n{trace}" if trace else text)
         with self._lock:
             self._errors = [*self._errors[-99:], text]
         self._out.status(topic, ok=False, message=text, values={})

@@ -3,7 +3,7 @@
 :class:`NodeReporter` is the node's :class:`~drd_planner.planning.service.ServiceOutputs`: a served request
 goes out as ``plan`` (and ``joint_trajectory``) first, then the check log, the markers and last the summary
 on ``/diagnostics``; a plan kept after a map update gets a ``map update`` status; errors go to the node's
-error report (log, ``/diagnostics``, :attr:`PlannerNode.errors`).
+error report (log, ``/diagnostics``, :attr:`PlannerNode.errors`), a bug's with its traceback in the log.
 """
 
 from __future__ import annotations
@@ -33,19 +33,29 @@ class NodeReporter:
             after each plan must not cost milliseconds).
         outputs: the node's publishers.
         report_error: the node's error report, ``(text, topic)``.
+        report_bug: the node's report of a bug, ``(text, exception)``: logged at ERROR with its traceback.
     """
 
     def __init__(
-        self, logger: Any, outputs: PlannerOutputs, report_error: Callable[[str, str], None]
+        self,
+        logger: Any,
+        outputs: PlannerOutputs,
+        report_error: Callable[[str, str], None],
+        report_bug: Callable[[str, BaseException], None],
     ) -> None:
         self._logger = NodeLog(logger)
         self._out = outputs
         self._report_error = report_error
+        self._report_bug = report_bug
         self.last_plan: LastPlan | None = None
 
     def error(self, text: str, topic: str = "plan") -> None:
         """Report an error under the status ``topic``."""
         self._report_error(text, topic)
+
+    def bug(self, text: str, exc: BaseException) -> None:
+        """Report a bug (a broken safety invariant) with ``exc``'s traceback, under the status ``plan``."""
+        self._report_bug(text, exc)
 
     def info(self, text: str) -> None:
         """Log a line."""
