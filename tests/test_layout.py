@@ -4,7 +4,8 @@
   exercises it and says why it has none of its own;
 - no module is over 500 lines;
 - ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
-- no code in ``planning/``, ``ros/``, ``planner/``, ``pictures/`` or ``cli.py`` asks which concrete domain it holds;
+- no code in ``planning/``, ``ros/``, ``planner/``, ``pictures/`` or ``cli.py`` asks which concrete domain it holds, and
+  ``planning/`` and ``ros/`` ask the domain's capabilities, never an ``is_arm`` flag;
 - the product (``core/``, ``planner/``, ``planning/``, ``pictures/``, ``ros/``) imports nothing from ``bench/``;
 - ``scripts/`` holds ``run.sh`` and two folders, ``experiments/`` and ``tools/``; no script imports another
   script or edits ``sys.path`` (shared code lives in the ``drd_planner.bench`` package).
@@ -165,3 +166,13 @@ def test_no_script_imports_another_or_edits_sys_path() -> None:
             f"{path.relative_to(REPO)} imports the scripts {others}; move the code to drd_planner"
         )
         assert "sys.path" not in text, f"{path.relative_to(REPO)} edits sys.path"
+
+
+def test_planning_and_ros_ask_capabilities_not_is_arm() -> None:
+    root = PACKAGES["drd_planner"]
+    for path in [*(root / "planning").rglob("*.py"), *(root / "ros").rglob("*.py")]:
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+            assert not re.search(r"\bis_arm\b", line), (
+                f"{path.relative_to(REPO)}:{number} uses is_arm; ask a capability of the domain "
+                "(plans_joint_goals, robot_state_topic, publishes_joint_trajectory, needs_robot_description)"
+            )

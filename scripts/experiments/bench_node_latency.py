@@ -213,7 +213,7 @@ def new_goals(harness: Harness, *, seed: int = 0) -> Iterator[Any]:
             continue
         state = session.vertex_state(int(vertex))
         x, y, z = (float(v) for v in session.positions(state[None])[-1])
-        yaw = 0.0 if session.is_arm or state.size < 4 else float(state[3])
+        yaw = 0.0 if session.domain.plans_joint_goals or state.size < 4 else float(state[3])
         goal = PoseStamped()
         goal.header.frame_id = harness.frame_id
         goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = x, y, z

@@ -172,7 +172,7 @@ def _pose(msgs: RosbagsMessages, state: Any) -> Any:
 
 def _request(msgs: RosbagsMessages, session: QuerySession, goal: Any, frame: str, time_ns: int) -> BagMessage:
     """A request for the state ``goal``: ``/goal_joints`` (arm) or ``/goal_pose`` (helicopter)."""
-    if session.is_arm:
+    if session.domain.plans_joint_goals:
         msg = _joints(msgs, session, goal, frame, time_ns)
         return BagMessage("/goal_joints", "sensor_msgs/msg/JointState", time_ns, msg)
     pose = _pose(msgs, goal)
@@ -184,7 +184,7 @@ def _robot_state(
     msgs: RosbagsMessages, session: QuerySession, state: Any, frame: str, time_ns: int
 ) -> BagMessage:
     """The robot at ``state``: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
-    if session.is_arm:
+    if session.domain.plans_joint_goals:
         msg = _joints(msgs, session, state, frame, time_ns)
         return BagMessage("/joint_states", "sensor_msgs/msg/JointState", time_ns, msg)
     pose = _pose(msgs, state)

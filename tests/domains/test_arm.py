@@ -382,3 +382,11 @@ def test_box_panda_states_need_the_scene_floor_default() -> None:
         assert built.graph.vertex_states is not None
         np.testing.assert_array_equal(built.graph.vertex_states[: len(states)], states)
         assert list(built.extra_vertices) == list(range(2, len(states)))
+
+
+def test_the_arms_capabilities_say_the_node_plans_joint_goals_and_sends_a_trajectory(
+    domain: ArmDomain,
+) -> None:
+    assert domain.plans_joint_goals and domain.robot_state_topic == "joint_states"
+    assert domain.publishes_joint_trajectory and domain.needs_robot_description
+    assert domain.state_columns == "joint angles, rad"

@@ -67,3 +67,21 @@ def test_the_helicopter_states_are_poses_with_a_periodic_heading() -> None:
     ((centres, reach),) = domain.sweep_spheres(Source(), [0], None)
     np.testing.assert_array_equal(centres, domain.lattice.trajectory(0)[:, :3])
     assert np.all(reach >= domain.vehicle_radius + 0.5 * domain.lattice.params.sample_spacing)
+
+
+@pytest.mark.parametrize(
+    ("name", "spec", "columns"),
+    [
+        ("planar", {}, "x, y (unit square)"),
+        ("se2", {}, "x, y (unit square); heading rad"),
+        ("helicopter", HELI, "x, y, z m; heading rad"),
+    ],
+)
+def test_pose_domains_capabilities_say_the_node_plans_poses_from_odometry(
+    name: str, spec: dict[str, object], columns: str
+) -> None:
+    domain = domain_from_spec(name, spec)
+    assert isinstance(domain, OnlineDomain)
+    assert not domain.plans_joint_goals and domain.robot_state_topic == "odom"
+    assert not domain.publishes_joint_trajectory and not domain.needs_robot_description
+    assert domain.state_columns == columns

@@ -144,11 +144,11 @@ def test_one_parser_reads_goals_and_robot_states_of_any_namespace(session: Query
     pose.pose.position.x, pose.pose.orientation.w = 5.0, 1.0
     goal = read_goal("/robot1/goal_pose", pose, [session], "map")
     assert goal.joints is None and goal.position is not None and goal.position[0] == 5.0
-    with pytest.raises(PlanningError, match="no arm prior is loaded"):
+    with pytest.raises(PlanningError, match="no prior that plans joint-space goals"):
         read_goal("goal_joints", JointState(), [session], "map")
     odom = Odometry()
     odom.header.frame_id = "map"
     odom.pose.pose.orientation.w = 1.0
     read = read_robot_state("odom", odom, [session], "map")
-    assert read is not None and read[0] is False and read[1].shape == (4,)
+    assert read is not None and read[0] == "odom" and read[1].shape == (4,)
     assert read_robot_state("/robot1/joint_states", JointState(), [session], "map") is None  # not ours

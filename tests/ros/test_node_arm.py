@@ -73,7 +73,7 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         domain = session.domain
-        assert isinstance(domain, ArmDomain) and session.is_arm
+        assert isinstance(domain, ArmDomain) and session.domain.plans_joint_goals
         markers = _world_markers(domain, 5)
         peer.obstacles.publish(markers)
         assert spin_until(executor, lambda: node.snapshot.version >= 1)

@@ -88,7 +88,7 @@ def test_odometry_drifting_off_the_lattice_replans_every_request(context: Any) -
             odom.publish(_pose(Odometry(), state))
 
             def arrived() -> bool:
-                known = None if node.service is None else node.service.robot_states.get(False)
+                known = None if node.service is None else node.service.robot_states.get("odom")
                 return known is not None and bool(np.allclose(known, state))
 
             assert spin_until(executor, arrived)

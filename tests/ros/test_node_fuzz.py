@@ -259,7 +259,7 @@ def _verify_plans(peer: _Peer, session: PlanningSession) -> int:
     Helicopter: the Path's positions; arm: the JointTrajectory's configurations. An empty plan is a
     withdrawal (the node's way of taking a plan back) and is not a plan. Returns the plans verified.
     """
-    if session.is_arm:
+    if session.domain.publishes_joint_trajectory:
         plans = [(_stamp(t), np.array([list(p.positions) for p in t.points])) for t in peer.trajectories]
     else:
         plans = [

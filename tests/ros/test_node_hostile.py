@@ -349,7 +349,7 @@ def test_a_robot_state_stream_in_the_wrong_frame_is_reported_once_per_period(con
         spin_for(executor, 0.3)
         refused = [e for e in node.errors if e.startswith("odometry refused")]
         assert len(refused) == 1 and "frame 'odom'" in refused[0]
-        assert node.service is not None and node.service.robot_states.get(False) is None
+        assert node.service is not None and node.service.robot_states.get("odom") is None
 
 
 def test_a_signal_whose_interrupt_an_import_swallowed_still_ends_the_start(

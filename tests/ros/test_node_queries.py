@@ -112,7 +112,7 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         start = session.vertex_state(0) + np.array([-30.0, 0.0, 0.0, 0.0])  # off the graph
         odom.publish(_pose(Odometry(), start))
         assert spin_until(
-            executor, lambda: node.service is not None and node.service.robot_states.get(False) is not None
+            executor, lambda: node.service is not None and node.service.robot_states.get("odom") is not None
         )
         for seed in range(100, 130):  # the first world with a free path from there
             if seed > 100:
@@ -147,7 +147,7 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         odom.publish(_pose(Odometry(), moved))
         assert spin_until(
             executor,
-            lambda: node.service is not None and np.allclose(node.service.robot_states[False], moved),
+            lambda: node.service is not None and np.allclose(node.service.robot_states["odom"], moved),
         )
         future = replan.call_async(Trigger.Request())
         assert spin_until(executor, future.done) and future.result().success, future.result().message

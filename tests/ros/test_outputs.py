@@ -63,7 +63,7 @@ def test_a_helicopter_plan_goes_out_as_bytes_of_the_path_its_message_gives() -> 
     node = _Node()
     outputs = PlannerOutputs(node, frame="map")
     states = np.array([[0.0, 0.0, 50.0, 0.0], [10.0, 5.0, 55.0, 0.5], [20.0, 10.0, 60.0, 1.0]])
-    session = SimpleNamespace(is_arm=False)
+    session = SimpleNamespace(domain=SimpleNamespace(publishes_joint_trajectory=False))
     sent = outputs.plan(session, SimpleNamespace(states=states), MapSnapshot(1), (4, 5))  # type: ignore[arg-type]
     [(topic, data)] = node.sent
     assert topic == "plan" and isinstance(data, bytes)
@@ -80,9 +80,8 @@ def test_an_arm_plan_sends_its_trajectory_then_its_tool_path() -> None:
     q = np.linspace(0.0, 1.0, 14).reshape(7, 2)
     tool = np.column_stack([q, np.ones(7)])
     session = SimpleNamespace(
-        is_arm=True,
         joint_names=("j1", "j2"),
-        domain=SimpleNamespace(resolution=0.05),
+        domain=SimpleNamespace(resolution=0.05, publishes_joint_trajectory=True),
         positions=lambda states, snapshot: tool,
     )
     sent = outputs.plan(session, SimpleNamespace(states=q), MapSnapshot(1), (4, 5))  # type: ignore[arg-type]

@@ -47,7 +47,13 @@ from drd_planner.domains.arm_worlds import (
     sample_arm_world,
     world_from_planning_scene,
 )
-from drd_planner.domains.online import EdgeSource, OnlineDefaults, PositionGoals, SweepSpheres
+from drd_planner.domains.online import (
+    EdgeSource,
+    OnlineDefaults,
+    PositionGoals,
+    RobotStateTopic,
+    SweepSpheres,
+)
 from drd_planner.exceptions import GeometryError, PlanningError, ProblemError
 from drd_planner.geometry.mesh_collider import MeshCollider
 from drd_planner.geometry.robot import RobotModel
@@ -295,6 +301,31 @@ class ArmDomain(OnlineDefaults):
     def position_goals(self) -> PositionGoals:
         """``"vertex"``: a goal position is the roadmap vertex whose tool point is nearest."""
         return "vertex"
+
+    @property
+    def plans_joint_goals(self) -> bool:
+        """True: goals and starts are joint vectors (a start pose is refused)."""
+        return True
+
+    @property
+    def robot_state_topic(self) -> RobotStateTopic:
+        """``"joint_states"``: the arm's state is its joint angles."""
+        return "joint_states"
+
+    @property
+    def publishes_joint_trajectory(self) -> bool:
+        """True: a plan goes out as a JointTrajectory, and its Path is the tool point's."""
+        return True
+
+    @property
+    def needs_robot_description(self) -> bool:
+        """True: tool points and checks use the ``robot_description`` model when one was received."""
+        return True
+
+    @property
+    def state_columns(self) -> str:
+        """Joint angles."""
+        return "joint angles, rad"
 
     @property
     def has_sweep_model(self) -> bool:

@@ -247,6 +247,11 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
         return "pose"
 
     @property
+    def state_columns(self) -> str:
+        """Position and heading."""
+        return "x, y, z m; heading rad"
+
+    @property
     def has_sweep_model(self) -> bool:
         """True."""
         return True

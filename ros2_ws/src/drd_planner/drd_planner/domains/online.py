@@ -7,6 +7,13 @@ arm model from ``robot_description``), position goals, and the *sweep model* tha
 check can touch (for re-checking only the plan edges a map update can reach,
 :mod:`drd_planner.planning.replan`).
 
+Its *capabilities* say what the node does with the domain's plans and inputs, so that ``planning/`` and
+``ros/`` never ask which domain they hold: :attr:`~OnlineDomain.plans_joint_goals` (goals and starts are
+joint vectors), :attr:`~OnlineDomain.robot_state_topic` (where the robot's state comes from),
+:attr:`~OnlineDomain.publishes_joint_trajectory` (a plan goes out as a JointTrajectory, its Path the tool
+point's), :attr:`~OnlineDomain.needs_robot_description` (positions and checks use the ``robot_description``
+model) and :attr:`~OnlineDomain.state_columns` (what a state's numbers are, for people).
+
 :class:`OnlineDefaults` implements the members for a domain whose states start with positions and that has
 no sweep model and no arm (the planar and SE(2) domains); the helicopter and the arm override what they add.
 No code outside ``domains/`` asks which concrete domain it holds: it asks this interface.
@@ -34,6 +41,7 @@ __all__ = [
     "OnlineDefaults",
     "OnlineDomain",
     "PositionGoals",
+    "RobotStateTopic",
     "SweepSpheres",
 ]
 
@@ -55,6 +63,10 @@ SweepSpheres = list[tuple[FloatArray, FloatArray]]
 #: How a goal given as a position becomes a state: ``"pose"`` (the state is the position and a heading),
 #: ``"vertex"`` (the vertex whose position is nearest), ``"none"`` (the domain has no position goals).
 PositionGoals = Literal["pose", "vertex", "none"]
+
+#: Where the robot's current state (a plan's start when the request gives none) comes from: ``"odom"``
+#: (``nav_msgs/Odometry``: a pose) or ``"joint_states"`` (``sensor_msgs/JointState``: joint angles).
+RobotStateTopic = Literal["odom", "joint_states"]
 
 
 class EdgeSource(Protocol):
@@ -116,6 +128,31 @@ class OnlineDomain(Domain[W], Protocol[W]):
     @property
     def has_sweep_model(self) -> bool:
         """Whether :meth:`sweep_spheres` bounds what an edge's check touches (else every edge is affected)."""
+        ...
+
+    @property
+    def plans_joint_goals(self) -> bool:
+        """Whether goals and starts are joint vectors (``goal_joints``, a MoveIt request); a start pose is refused."""
+        ...
+
+    @property
+    def robot_state_topic(self) -> RobotStateTopic:
+        """Where the robot's current state comes from (see :data:`RobotStateTopic`)."""
+        ...
+
+    @property
+    def publishes_joint_trajectory(self) -> bool:
+        """Whether a plan also goes out as a JointTrajectory; its Path is then the positions of its states."""
+        ...
+
+    @property
+    def needs_robot_description(self) -> bool:
+        """Whether positions and checks use the robot model of a ``robot_description`` (the snapshot's robot)."""
+        ...
+
+    @property
+    def state_columns(self) -> str:
+        """What the numbers of a state are, with their units (for people: tables, logs)."""
         ...
 
     def positions(self, states: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
@@ -207,6 +244,31 @@ class OnlineDefaults(ABC):
     def has_sweep_model(self) -> bool:
         """False."""
         return False
+
+    @property
+    def plans_joint_goals(self) -> bool:
+        """False: goals are positions (poses), not joint vectors."""
+        return False
+
+    @property
+    def robot_state_topic(self) -> RobotStateTopic:
+        """``"odom"``: the robot's state is a pose."""
+        return "odom"
+
+    @property
+    def publishes_joint_trajectory(self) -> bool:
+        """False: a plan goes out as a Path of its states."""
+        return False
+
+    @property
+    def needs_robot_description(self) -> bool:
+        """False: no robot model from ``robot_description``."""
+        return False
+
+    @property
+    def state_columns(self) -> str:
+        """The generic text (a domain says better)."""
+        return "the domain's state coordinates"
 
     def positions(self, states: npt.ArrayLike, robot: RobotModel | None = None) -> FloatArray:
         """The first three columns of (K, D) states (fewer when D < 3)."""

@@ -346,6 +346,11 @@ class PlanarDomain(SpecParams, OnlineDefaults):
         return "planar"
 
     @property
+    def state_columns(self) -> str:
+        """A point of the unit square."""
+        return "x, y (unit square)"
+
+    @property
     def graph(self) -> ExplicitGraph:
         """The undirected random geometric graph; ``vertex_states`` (V, 2) are (x, y)."""
         return self._built[0]

@@ -390,6 +390,11 @@ class Se2Domain(SpecParams, LatticeMembers[Se2Lattice], OnlineDefaults):
         return "se2"
 
     @property
+    def state_columns(self) -> str:
+        """A point of the unit square and a heading."""
+        return "x, y (unit square); heading rad"
+
+    @property
     def world_models(self) -> tuple[str, ...]:
         """All seven world models, with their SE(2) parameters."""
         return WORLD_MODELS

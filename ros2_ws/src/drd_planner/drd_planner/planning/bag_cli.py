@@ -82,7 +82,7 @@ def cmd_plan_bag(args: argparse.Namespace) -> int:
         f"[query {result.query}, stage {result.stage}]"
     )
     print(f"  path edges: {list(result.path_edges)}")
-    columns = "joint angles, rad" if session.is_arm else "x, y, z m; heading rad"
+    columns = session.domain.state_columns
     print(
         f"  path vertices ({columns}; 'state' is a state off the graph: the request's own start or goal, or a "
         "vertex roadmap growth added):"

@@ -176,7 +176,7 @@ def robot_state_at(
 
     The helicopter's comes from ``odom`` (x, y, z m; yaw rad), the arm's from ``joint_states`` (rad).
     """
-    topic = "joint_states" if session.is_arm else "odom"
+    topic = session.domain.robot_state_topic
     state: FloatArray | None = None
     notes: list[str] = []
     for m in messages:
@@ -229,7 +229,7 @@ def plan_bag_request(
     elif prior_start:
         start = int(session.domain.start)
     else:
-        topic = "joint_states" if session.is_arm else "odom"
+        topic = session.domain.robot_state_topic
         raise PlanningError(
             f"request {index}: the bag has no accepted {topic} message before it (no robot state to plan "
             "from; plan from the prior's start with --prior-start)"

@@ -134,11 +134,6 @@ class DomainSession:
         return float(self._domain.margin)
 
     @property
-    def is_arm(self) -> bool:
-        """Whether the session plans in an arm's joint space (states are joint angles)."""
-        return bool(self._domain.joint_names)
-
-    @property
     def joint_names(self) -> tuple[str, ...]:
         """The arm's chain joint names, root to tip (empty for other domains)."""
         return self._domain.joint_names

@@ -205,12 +205,12 @@ class MapStore:
 
 
 def robot_loader_of(sessions: Sequence[Any], limits: MapLimits) -> RobotLoader | None:
-    """The arm prior's ``robot_description`` reader with ``limits`` (None: no arm prior is loaded).
+    """The ``robot_description`` reader with ``limits`` of the prior that needs one (None: no prior does).
 
     ``sessions``: the loaded priors (:class:`~drd_planner.planning.query_session.QuerySession`).
     """
-    arm = next((s for s in sessions if s.is_arm), None)
-    loader: Any = None if arm is None else arm.robot_loader
+    needs = next((s for s in sessions if s.domain.needs_robot_description), None)
+    loader: Any = None if needs is None else needs.robot_loader
     if loader is None:
         return None
     return lambda text: loader(text, limits=limits)  # type: ignore[no-any-return]

@@ -298,7 +298,7 @@ class QuerySession(DomainSession):
         self, xyz: npt.ArrayLike, snapshot: MapSnapshot | None = None
     ) -> tuple[int, float]:
         """(vertex, distance in m) of the vertex whose position (:meth:`positions`) is nearest to ``xyz``."""
-        robot = snapshot.robot if snapshot is not None and self.is_arm else None
+        robot = snapshot.robot if snapshot is not None and self._domain.needs_robot_description else None
         cached = self._tool_positions
         if cached is None or cached[0] is not robot:
             states = self._prior.graph.vertex_states

@@ -35,6 +35,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.obstacles import pose_from_msg
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
+from drd_planner.domains.online import RobotStateTopic
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
@@ -147,8 +148,9 @@ def joint_vector(msg: Any, joint_names: Sequence[str], what: str = "joint state"
     return q
 
 
-def _arm(sessions: Sequence[QuerySession]) -> QuerySession | None:
-    return next((s for s in sessions if s.is_arm), None)
+def _joint_session(sessions: Sequence[QuerySession]) -> QuerySession | None:
+    """The prior that plans joint-space goals (an arm's), or None."""
+    return next((s for s in sessions if s.domain.plans_joint_goals), None)
 
 
 def read_goal(topic: str, msg: Any, sessions: Sequence[QuerySession], frame: str) -> Goal:
@@ -158,30 +160,33 @@ def read_goal(topic: str, msg: Any, sessions: Sequence[QuerySession], frame: str
 
     Raises:
         MessageError: a pose in another frame or not finite, joints the arm prior does not plan for.
-        PlanningError: ``goal_joints`` without an arm prior.
+        PlanningError: ``goal_joints`` without a prior that plans joint-space goals (an arm's).
     """
     if topic_base(topic) == "goal_joints":
-        arm = _arm(sessions)
-        if arm is None:
-            raise PlanningError("no arm prior is loaded")
-        return Goal(joints=joint_vector(msg, arm.joint_names, "goal_joints"))
+        joint = _joint_session(sessions)
+        if joint is None:
+            raise PlanningError("no prior that plans joint-space goals (an arm's) is loaded")
+        return Goal(joints=joint_vector(msg, joint.joint_names, "goal_joints"))
     return goal_from_pose(msg, frame, "goal_pose")
 
 
 def read_robot_state(
     topic: str, msg: Any, sessions: Sequence[QuerySession], frame: str
-) -> tuple[bool, FloatArray] | None:
-    """(is_arm, state) of an ``odom`` (helicopter: x, y, z m, yaw rad) or ``joint_states`` (arm, rad) message.
+) -> tuple[RobotStateTopic, FloatArray] | None:
+    """(topic, state) of an ``odom`` (a pose: x, y, z m, yaw rad) or ``joint_states`` (joint angles, rad) message.
 
-    None: a ``joint_states`` message while no arm prior is loaded (a helicopter stack's joints are not ours).
+    None: a ``joint_states`` message while no loaded prior takes its state from ``joint_states`` (a
+    helicopter stack's joints are not ours).
 
     Raises:
         MessageError: a pose in another frame or not finite; joints missing, repeated or not finite.
     """
     if topic_base(topic) == "joint_states":
-        arm = _arm(sessions)
-        return None if arm is None else (True, joint_vector(msg, arm.joint_names, "joint_states"))
-    return False, start_from_odometry(msg, frame)
+        joint = next((s for s in sessions if s.domain.robot_state_topic == "joint_states"), None)
+        return (
+            None if joint is None else ("joint_states", joint_vector(msg, joint.joint_names, "joint_states"))
+        )
+    return "odom", start_from_odometry(msg, frame)
 
 
 def ambiguity(sessions: Sequence[QuerySession]) -> str | None:
@@ -199,10 +204,15 @@ def ambiguity(sessions: Sequence[QuerySession]) -> str | None:
 
 
 def pick_session(sessions: Sequence[QuerySession], goal: Goal) -> QuerySession | None:
-    """The prior that serves ``goal``: joints go to the arm's, a pose to the helicopter's, else the arm's."""
+    """The prior that serves ``goal``: joints go to the one that plans joint-space goals (the arm's).
+
+    A pose goes to a prior whose goals are poses (the helicopter's), else to the joint-space one (the arm's
+    end effector).
+    """
+    joint = _joint_session(sessions)
     if goal.joints is not None:
-        return next((s for s in sessions if s.is_arm), None)
-    return next((s for s in sessions if not s.is_arm), next((s for s in sessions if s.is_arm), None))
+        return joint
+    return next((s for s in sessions if not s.domain.plans_joint_goals), joint)
 
 
 def goal_endpoint(
@@ -216,7 +226,7 @@ def goal_endpoint(
             session, goal.joints, stored, tolerances.joint_rad, lambda s: np.abs(s - goal.joints)
         )
     assert goal.position is not None
-    if session.is_arm:
+    if domain.position_goals == "vertex":  # the vertex whose position (an arm's end effector) is nearest
         state = session.goal_state_from_position(
             goal.position, snapshot=snapshot, tolerance=tolerances.position_m
         )

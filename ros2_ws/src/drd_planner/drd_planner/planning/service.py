@@ -33,6 +33,7 @@ from typing import Any
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
+from drd_planner.domains.online import RobotStateTopic
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import DrdError, InvariantError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
@@ -144,7 +145,7 @@ class PlannerService:
             terrain_fit=terrain_fit_of([s.domain for s in self._sessions]),
         )
         self._snapshot = self.maps.snapshot
-        self._robot_states: dict[bool, FloatArray] = {}  # is_arm -> the latest robot state
+        self._robot_states: dict[RobotStateTopic, FloatArray] = {}  # its topic -> the latest robot state
         self._lock = threading.Lock()  # the pending requests
         self._planning = threading.Lock()  # one plan at a time: the sessions' caches, the published plan
         self._pending: dict[str, _Request] = {}
@@ -186,14 +187,14 @@ class PlannerService:
         return tuple(self._history)
 
     @property
-    def robot_states(self) -> dict[bool, FloatArray]:
-        """is_arm -> the robot's latest accepted state."""
+    def robot_states(self) -> dict[RobotStateTopic, FloatArray]:
+        """The robot's latest accepted state per robot-state topic (``odom``, ``joint_states``)."""
         return dict(self._robot_states)
 
     @property
-    def arm(self) -> QuerySession | None:
-        """The arm prior, if one is loaded."""
-        return next((s for s in self._sessions if s.is_arm), None)
+    def joint_goal_session(self) -> QuerySession | None:
+        """The prior that plans joint-space goals (an arm's: MoveIt's requests go to it), if one is loaded."""
+        return next((s for s in self._sessions if s.domain.plans_joint_goals), None)
 
     # ------------------------------------------------------------------------------------------------
     # Maps and robot state
@@ -309,12 +310,14 @@ class PlannerService:
         if session is None:
             return self._refuse(f"{source} refused: no loaded prior plans for {goal.describe()}", "prior")
         start_state = None
-        if start is not None and session.is_arm and start.joints is not None:
+        joints = session.domain.plans_joint_goals
+        if start is not None and joints and start.joints is not None:
             start_state = start.joints  # joint angles given with the request (MoveIt's start state)
         elif start is not None:
-            if session.is_arm or start.yaw is None:
-                arm = "an arm's start comes from joint_states, not a pose"
-                why = arm if session.is_arm else "a start pose needs its orientation (the vehicle's yaw)"
+            if joints or start.yaw is None:
+                topic = session.domain.robot_state_topic
+                joint_start = f"a start of {session.name} (joint angles) comes from {topic}, not a pose"
+                why = joint_start if joints else "a start pose needs its orientation (the vehicle's yaw)"
                 return self._refuse(f"{source} refused: {why}", "start")
             assert start.position is not None
             start_state = state_from_pose(start.position, start.yaw)
@@ -348,13 +351,14 @@ class PlannerService:
 
     def _start_for(self, session: QuerySession) -> Endpoint:
         """Where a plan of ``session`` starts when the request gives no start: the robot's state."""
-        state = self._robot_states.get(session.is_arm)
+        kind = session.domain.robot_state_topic
+        state = self._robot_states.get(kind)
         if state is not None:
             return state
         live = self._live()
         if live.prior_start:
             return int(session.domain.start)
-        topic = live.state_topics[1] if session.is_arm else live.state_topics[0]
+        topic = live.state_topics[1] if kind == "joint_states" else live.state_topics[0]
         raise PlanningError(
             f"no robot state known yet: nothing received on {topic!r} (give get_plan a start, or set "
             "start_without_robot_state to prior_start to plan from the prior's stored start)"

@@ -74,7 +74,7 @@ def print_record(number: int, record: PlanRecord) -> None:
         return
     positions = session.positions(result.states, record.snapshot)
     length = float(np.sum(np.linalg.norm(np.diff(positions, axis=0), axis=1)))
-    what = "end-effector path" if session.is_arm else "path"
+    what = "end-effector path" if session.domain.publishes_joint_trajectory else "path"
     print(f"  {what}: edges {list(result.path_edges)}, {len(positions)} poses, {length:.2f} m long")
     for label, row in (("start", positions[0]), ("goal ", positions[-1])):
         print(f"    {label} ({row[0]:9.3f}, {row[1]:9.3f}, {row[2]:8.3f}) m")

@@ -93,7 +93,7 @@ class MoveItHost:
                 "scripts/tools/build_moveit_msgs.sh builds it into the venv"
             )
             return None
-        if service.arm is None:
+        if service.joint_goal_session is None:
             planner.get_logger().info(
                 f"MoveIt interface off ({SCENE_TOPIC}, {SERVICE_NAME}): no arm prior loaded"
             )
@@ -139,7 +139,7 @@ class MoveItHost:
         return response
 
     def _plan(self, request: Any, out: Any) -> MoveItError:
-        arm = self._service.arm
+        arm = self._service.joint_goal_session
         assert arm is not None  # checked at start
         names = list(arm.joint_names)
         parsed = read_motion_request(request, names)

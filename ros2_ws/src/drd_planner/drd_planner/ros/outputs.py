@@ -82,8 +82,6 @@ class Session(Protocol):
     @property
     def domain(self) -> Any: ...
     @property
-    def is_arm(self) -> bool: ...
-    @property
     def joint_names(self) -> tuple[str, ...]: ...
     def positions(self, states: Any, snapshot: MapSnapshot | None = None) -> Any: ...
     def edge_states(self, edge: int) -> Any: ...
@@ -197,7 +195,7 @@ class PlannerOutputs:
         The arm's JointTrajectory goes first, then its end-effector Path (positions of the plan's
         configurations on ``snapshot``'s robot model).
         """
-        if session.is_arm:
+        if session.domain.publishes_joint_trajectory:
             seconds = float(session.domain.resolution) / TRAJECTORY_JOINT_SPEED
             self._trajectory.publish(
                 joint_trajectory_cdr(
@@ -218,7 +216,7 @@ class PlannerOutputs:
         """Publish an empty ``plan`` (and ``joint_trajectory``): the plan out there is taken back."""
         stamp = self.stamp()
         self._plan.publish(path_cdr(np.zeros((0, 3)), frame_id=self.frame, stamp=stamp))
-        if session.is_arm:
+        if session.domain.publishes_joint_trajectory:
             names = session.joint_names
             self._trajectory.publish(
                 joint_trajectory_cdr(names, np.zeros((0, len(names))), frame_id=self.frame)
@@ -258,7 +256,7 @@ class PlannerOutputs:
 
     def _library_marker(self, session: Session, snapshot: MapSnapshot) -> Any:
         """Every library edge as a grey LINE_LIST, each drawn with at most :data:`LIBRARY_EDGE_SEGMENTS` segments."""
-        key = (session.name, snapshot.robot if session.is_arm else None)
+        key = (session.name, snapshot.robot if session.domain.needs_robot_description else None)
         marker = self._library_markers.get(key)
         if marker is None:
             segments = []
