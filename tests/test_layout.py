@@ -4,6 +4,8 @@
   exercises it and says why it has none of its own;
 - no module is over 500 lines;
 - ``drd_msgs_py`` imports nothing from ``drd_planner`` (no package cycle), ``domains/`` nothing from ``data/``;
+- no module imports from a higher floor (:data:`FLOORS`, docs/architecture.md "Floors"), at module level or
+  inside a function;
 - no code in ``planning/``, ``ros/``, ``planner/``, ``pictures/`` or ``cli.py`` asks which concrete domain it holds, and
   ``planning/`` and ``ros/`` ask the domain's capabilities, never an ``is_arm`` flag;
 - the product (``core/``, ``planner/``, ``planning/``, ``pictures/``, ``ros/``) imports nothing from ``bench/``;
@@ -176,3 +178,89 @@ def test_planning_and_ros_ask_capabilities_not_is_arm() -> None:
                 f"{path.relative_to(REPO)}:{number} uses is_arm; ask a capability of the domain "
                 "(plans_joint_goals, robot_state_topic, publishes_joint_trajectory, needs_robot_description)"
             )
+
+
+#: The package's floors, lowest first: a module may import from its own floor and the ones below, never above.
+#: A name is a top-level module or sub-package of ``drd_planner``; ``drd_planner/__init__.py`` (the public
+#: facade) stands above them all.
+FLOORS: tuple[frozenset[str], ...] = (
+    frozenset({"arrays", "exceptions", "settings", "progress", "argtypes", "command_errors"}),
+    frozenset({"core"}),
+    frozenset({"geometry"}),
+    frozenset({"domains"}),
+    frozenset({"data"}),
+    frozenset({"planner"}),
+    frozenset({"planning"}),
+    frozenset({"pictures"}),
+    frozenset({"ros"}),
+    frozenset({"bench"}),
+    frozenset({"cli"}),
+)
+
+#: Upward imports known and not fixed yet: (importer, imported module) -> why. An entry whose importer no
+#: longer exists is ignored (the module moved); one whose import is gone must be dropped.
+KNOWN_UPWARD: dict[tuple[str, str], str] = {
+    ("drd_planner.planner.commands", "drd_planner.planning.bag_cli"): "drd plan --bag dispatch (issue 32)",
+    (
+        "drd_planner.planner.commands",
+        "drd_planner.planning.scene_plan",
+    ): "drd plan --scene dispatch (issue 32)",
+}
+
+
+def _floor(dotted: str) -> int:
+    """The floor of module ``dotted`` of drd_planner (its sub-package or top-level module)."""
+    part = dotted.split(".")[1]
+    for index, names in enumerate(FLOORS):
+        if part in names:
+            return index
+    raise AssertionError(f"{dotted}: {part} is on no floor; add it to FLOORS and docs/architecture.md")
+
+
+def _upward_imports() -> list[tuple[str, str, int]]:
+    """(importer, imported, line) of every import of a higher floor in drd_planner."""
+    found = []
+    root = PACKAGES["drd_planner"]
+    inits = [
+        (".".join(("drd_planner", *p.parent.relative_to(root).parts)), p)
+        for p in sorted(root.glob("*/__init__.py"))
+    ]
+    for dotted, path in [*_modules(), *inits]:
+        if not dotted.startswith("drd_planner."):
+            continue
+        own = _floor(dotted)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                if name.startswith("drd_planner.") and _floor(name) > own:
+                    found.append((dotted, name, node.lineno))
+    return found
+
+
+def test_every_subpackage_and_module_of_the_package_is_on_a_floor() -> None:
+    root = PACKAGES["drd_planner"]
+    parts = {p.stem for p in root.glob("*.py") if p.stem != "__init__"} | {
+        p.name for p in root.iterdir() if (p / "__init__.py").is_file()
+    }
+    placed = set().union(*FLOORS)
+    assert parts <= placed, f"not on a floor: {sorted(parts - placed)}; add them to FLOORS and the docs"
+    assert not placed - parts, f"FLOORS names what does not exist: {sorted(placed - parts)}"
+
+
+def test_no_module_imports_from_a_higher_floor() -> None:
+    upward = _upward_imports()
+    new = [
+        f"{importer} (line {line}) imports {name}: floor {_floor(importer)} -> {_floor(name)}"
+        for importer, name, line in upward
+        if (importer, name) not in KNOWN_UPWARD
+    ]
+    assert not new, "upward imports (move the helper down, or take it as a parameter):\n" + "\n".join(new)
+    modules = {dotted for dotted, _ in _modules()}
+    seen = {(importer, name) for importer, name, _ in upward}
+    stale = [key for key in KNOWN_UPWARD if key[0] in modules and key not in seen]
+    assert not stale, f"KNOWN_UPWARD entries no longer imported; drop them: {stale}"

@@ -15,7 +15,7 @@ checker's terrain prefilter). Cases:
 - ``mesh T``: one TRIANGLE_LIST marker of T triangles;
 - ``urdf L``: the shared Panda ``robot_description`` with L extra links (skipped without the shared data).
 
-Messages are converted with the :class:`~drd_planner.planning.map_limits.MapLimits` defaults, or with the
+Messages are converted with the :class:`~drd_planner.geometry.map_limits.MapLimits` defaults, or with the
 values given as ``--limit name=value``; a refused message (over a limit) prints the refusal instead of timings.
 Peak RSS is the child's maximum so far (its rows run in order).
 
@@ -48,7 +48,7 @@ def _rss_mib() -> float:
 
 
 def _limits() -> Any:
-    from drd_planner.planning.map_limits import MapLimits
+    from drd_planner.geometry.map_limits import MapLimits
 
     return MapLimits.from_parameters(LIMITS)
 

@@ -9,7 +9,7 @@ from conftest import SHARED_DATA
 
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.exceptions import ProblemError
-from drd_planner.planning.map_limits import MapLimits
+from drd_planner.geometry.map_limits import MapLimits
 
 PANDA = SHARED_DATA / "panda"
 

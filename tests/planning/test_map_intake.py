@@ -12,6 +12,7 @@ from drd_msgs_py.obstacles import Obstacle
 from drd_msgs_py.shapes import HeightGrid, LineStripData, MeshData, PoseData
 from drd_msgs_py.terrain import cloud_from_heightfield
 from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.scene import Scene
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Sphere, TriangleMesh
@@ -26,7 +27,6 @@ from drd_planner.planning.map_intake import (
     pose_of,
     terrain_from_cloud,
 )
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.world_messages import obstacle_markers
 
 FRAME = "map"

@@ -19,12 +19,12 @@ from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.terrain import cloud_from_heightfield
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import DrdError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Sphere
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.bag_plan import maps_at_request, maps_until
 from drd_planner.planning.map_intake import obstacle_parts
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_store import MapStore, terrain_fit_of
 from drd_planner.planning.world_messages import obstacle_markers
 

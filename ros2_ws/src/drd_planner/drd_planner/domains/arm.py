@@ -55,10 +55,10 @@ from drd_planner.domains.online import (
     SweepSpheres,
 )
 from drd_planner.exceptions import GeometryError, PlanningError, ProblemError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.mesh_collider import MeshCollider
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.scene import Scene
-from drd_planner.planning.map_limits import MapLimits
 
 #: Clearance (m) added to the robot's spheres at start and goal when placing random obstacles.
 KEEP_CLEAR_CLEARANCE = 0.02

@@ -2,7 +2,7 @@
 
 A description is parsed into a self-collision table that grows with links^2 and spheres^2, so
 :func:`check_description_size` bounds its bytes, links, collision spheres and origin numbers (a
-:class:`~drd_planner.planning.map_limits.MapLimits`) with the standard XML parser before the model is
+:class:`~drd_planner.geometry.map_limits.MapLimits`) with the standard XML parser before the model is
 built. :func:`check_robot_coordinates` refuses a parsed model whose joint and link frames or collision spheres are
 not finite or lie beyond ``max_coordinate`` (a URDF origin of 1e308 composes to infinity), which would make
 every later check fail. Refusals are :class:`~drd_planner.exceptions.ProblemError` naming the limit's parameter.
@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from drd_planner.exceptions import GeometryError, ProblemError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.urdf_model import description_summary
-from drd_planner.planning.map_limits import MapLimits
 
 __all__ = ["check_description_size", "check_robot_coordinates"]
 

@@ -33,11 +33,11 @@ from drd_msgs_py.shapes import (
 from drd_msgs_py.terrain import heightfield_from_cloud
 from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Cylinder, Shape, Sphere, TriangleMesh
 from drd_planner.geometry.terrain import Heightfield, Unknown
 from drd_planner.geometry.wires import capsule_between
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import Parts
 
 __all__ = [

@@ -35,10 +35,10 @@ from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.topics import topic_base
 from drd_planner.domains.online import OnlineDomain
 from drd_planner.exceptions import DrdError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot, Parts
 from drd_planner.planning.moveit_world import MoveItWorld
 

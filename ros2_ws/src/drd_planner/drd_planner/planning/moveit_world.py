@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from drd_planner.exceptions import GeometryError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Cylinder, Shape, Sphere, TriangleMesh
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import Parts
 
 __all__ = ["ADD", "APPEND", "MOVE", "REMOVE", "MoveItObject", "MoveItWorld", "object_key", "pose_of_msg"]

@@ -36,9 +36,9 @@ from drd_planner.arrays import FloatArray
 from drd_planner.domains.online import RobotStateTopic
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import DrdError, InvariantError, PlanningError
+from drd_planner.geometry.map_limits import MapLimits
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.cancel import Cancel
-from drd_planner.planning.map_limits import MapLimits
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MapStore, robot_loader_of, terrain_fit_of
 from drd_planner.planning.plan_outcome import PlanOutcome, RefusedPart

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
-from drd_planner.planning.map_limits import MapLimits
+from drd_planner.geometry.map_limits import MapLimits
 
 if TYPE_CHECKING:
     from drd_planner.planning.query_session import SessionBudgets
@@ -237,7 +237,7 @@ def _limit_check(name: str) -> Callable[[Any], str | None]:
     return lambda value: MapLimits.check_value(name, value)
 
 
-#: The map limits (:class:`~drd_planner.planning.map_limits.MapLimits`), one parameter each: checked
+#: The map limits (:class:`~drd_planner.geometry.map_limits.MapLimits`), one parameter each: checked
 #: before a map message is decoded; a map beyond one is refused naming it. Read at configure.
 MAP_LIMIT_PARAMETERS: tuple[ParameterSpec, ...] = tuple(
     ParameterSpec(

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from drd_planner.exceptions import DrdError, ParameterError
-from drd_planner.planning.map_limits import UNKNOWN_TERRAIN_CHOICES, MapLimits
+from drd_planner.geometry.map_limits import UNKNOWN_TERRAIN_CHOICES, MapLimits
 
 
 def test_defaults() -> None:
