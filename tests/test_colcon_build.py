@@ -99,7 +99,8 @@ def test_console_scripts_are_installed_where_ros2_run_finds_them_and_run(install
     bin_dir = install / "drd_planner" / "lib" / "drd_planner"
     for script in ("drd", "planner_node"):
         path = bin_dir / script
-        assert path.is_file() and os.access(path, os.X_OK), f"{path} missing or not executable"
+        assert path.is_file(), f"{path} missing or not executable"
+        assert os.access(path, os.X_OK), f"{path} missing or not executable"
         # Entry points run with the interpreter that ran colcon (the venv in the Docker image).
         assert path.read_text().splitlines()[0].startswith("#!")
     # The installed `drd` runs, and imports the installed copies of both packages.
@@ -109,7 +110,8 @@ def test_console_scripts_are_installed_where_ros2_run_finds_them_and_run(install
     done = subprocess.run(
         [shebang, str(bin_dir / "drd"), "--help"], capture_output=True, text=True, env=env, check=False
     )
-    assert done.returncode == 0 and "usage" in done.stdout.lower(), done.stderr
+    assert done.returncode == 0, done.stderr
+    assert "usage" in done.stdout.lower(), done.stderr
     where = subprocess.run(
         [shebang, "-c", "import drd_planner, drd_msgs_py; print(drd_planner.__file__, drd_msgs_py.__file__)"],
         capture_output=True,

@@ -52,7 +52,8 @@ def test_a_broken_invariant_is_a_bug_not_a_refusal(capsys: pytest.CaptureFixture
         raise UnverifiedPathError("edge 3 of the returned path was not checked free")
 
     assert not issubclass(UnverifiedPathError, DrdError)
-    assert issubclass(UnverifiedPathError, InvariantError) and issubclass(InvariantError, RuntimeError)
+    assert issubclass(UnverifiedPathError, InvariantError)
+    assert issubclass(InvariantError, RuntimeError)
     with pytest.raises(UnverifiedPathError, match="edge 3"):
         run_command(_args(unverified))
     assert "drd: error" not in capsys.readouterr().err

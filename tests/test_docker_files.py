@@ -141,7 +141,8 @@ def test_python_dependencies_cover_both_packages_install_requires(dockerfile: li
             assert required.specifier.contains(pinned[0]), f"{name}=={pinned[0]} violates {required}"
             assert required.extras <= pip[name].extras, f"{name}: extras {required.extras} missing"
     # Ubuntu's numpy 1.x stays: ROS's generated message modules are compiled against it.
-    assert "numpy" in pip and not pip["numpy"].specifier.contains("2.0")
+    assert "numpy" in pip
+    assert not pip["numpy"].specifier.contains("2.0")
 
 
 def test_rosdep_skips_exactly_the_pip_only_keys(dockerfile: list[tuple[str, str]]) -> None:
@@ -188,7 +189,8 @@ def test_compose_has_a_planner_and_a_replay_service_on_one_image_and_domain(comp
     assert planner["image"] == replay["image"]
     build = planner["build"]
     context = (DOCKER / build["context"]).resolve()
-    assert context == REPO and (context / build["dockerfile"]).resolve() == DOCKER / "Dockerfile"
+    assert context == REPO
+    assert (context / build["dockerfile"]).resolve() == DOCKER / "Dockerfile"
     domain = {s["environment"]["ROS_DOMAIN_ID"] for s in services.values()}
     assert len(domain) == 1
     # Host networking needs the host's IPC namespace too (Fast DDS shared memory); both or neither.
@@ -221,7 +223,8 @@ def test_replay_runs_the_console_script_on_a_mounted_bag_and_records_to_a_writab
     assert (host_dir / bag.name).is_file(), f"{bag.name} not in bags/ (python scripts/tools/make_bags.py)"
     record = PurePosixPath(command[command.index("--record") + 1])
     out_dir, writable = mounts[record.parent]
-    assert writable and out_dir.parent == REPO
+    assert writable
+    assert out_dir.parent == REPO
     ignored = (REPO / ".gitignore").read_text().split()
     assert f"/{out_dir.name}/" in ignored, "the output folder should be git-ignored"
 
@@ -231,4 +234,5 @@ def test_planner_health_check_asks_for_the_launched_node_being_active(compose: d
     launch = (SRC / "drd_planner" / "launch" / "planner.launch.py").read_text()
     node_name = re.search(r'^NODE_NAME = "([^"]+)"', launch, re.MULTILINE)
     assert node_name is not None
-    assert f"ros2 lifecycle get /{node_name.group(1)}" in test and "active" in test
+    assert f"ros2 lifecycle get /{node_name.group(1)}" in test
+    assert "active" in test

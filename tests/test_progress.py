@@ -46,7 +46,8 @@ def test_disabled_is_silent_and_a_terminal_gets_a_bar(monkeypatch: pytest.Monkey
     tty = FakeTerminal()
     with Progress(3, "bar", unit="world", stream=tty) as bar:
         bar.update(3)
-    assert "bar: 100%" in tty.getvalue() and "3/3" in tty.getvalue()
+    assert "bar: 100%" in tty.getvalue()
+    assert "3/3" in tty.getvalue()
 
 
 def test_progress_iter_yields_every_item_and_reports(

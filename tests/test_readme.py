@@ -86,7 +86,8 @@ def test_own_environment_install_upgrades_pip_before_installing_with_extras() ->
 def test_run_sh_demo_says_how_to_reach_the_commands() -> None:
     script = (REPO / "scripts" / "run.sh").read_text()
     demo = script[script.index("  demo)\n") : script.index(";;", script.index("  demo)\n"))]
-    assert ". $venv/bin/activate" in demo and ">&2" in demo
+    assert ". $venv/bin/activate" in demo
+    assert ">&2" in demo
 
 
 def test_readme_is_short_and_no_file_cites_documents_the_repository_lacks() -> None:

@@ -38,9 +38,9 @@ def test_the_ratios_the_gap_and_the_budget_per_world(problem: Problem, doc: dict
     for factor, s in doc["factors"].items():
         first, after = np.array(s["first_ratios"]), np.array(s["after_ratios"])
         assert s["episodes"] == first.size > 0
-        assert np.all(first >= 1.0 - 1e-9) and np.all(
-            after >= 1.0 - 1e-9
-        )  # no path beats the world's shortest
+        # no path beats the world's shortest
+        assert np.all(first >= 1.0 - 1e-9)
+        assert np.all(after >= 1.0 - 1e-9)
         assert np.all(after <= first + 1e-12)  # improving never lengthens the path
         assert s["first_cost_ratio"] == pytest.approx(first.mean())
         before, now = first.mean(), after.mean()
@@ -70,7 +70,8 @@ def test_the_markdown_has_one_row_per_dataset_and_factor(doc: dict) -> None:  # 
     text = anytime_markdown([doc, doc])
     rows = [line for line in text.splitlines() if line.startswith(f"| {doc['dataset']} |")]
     assert len(rows) == 4
-    assert "| 1x |" in rows[0] and "| 3x |" in rows[1]
+    assert "| 1x |" in rows[0]
+    assert "| 3x |" in rows[1]
 
 
 def test_bad_factors_and_problems_without_test_worlds_are_refused(problem: Problem) -> None:
@@ -91,7 +92,8 @@ def _script() -> object:
     spec = importlib.util.spec_from_file_location(
         "bench_anytime_script", REPO_ROOT / "scripts" / "experiments" / "bench_anytime.py"
     )
-    assert spec is not None and spec.loader is not None
+    assert spec is not None
+    assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -105,4 +107,5 @@ def test_the_script_reports_a_helicopter_set(tmp_path: Path, capsys: pytest.Capt
     assert "| dataset_heli_canyon_1 | 1x |" in printed
     (saved,) = json.loads(out.read_text())
     s = saved["factors"]["1"]
-    assert s["episodes"] > 50 and s["after_cost_ratio"] <= s["first_cost_ratio"]
+    assert s["episodes"] > 50
+    assert s["after_cost_ratio"] <= s["first_cost_ratio"]

@@ -20,11 +20,16 @@ def test_more_checks_never_give_a_longer_path_and_lazysp_finds_the_shortest(tmp_
     assert 1 <= data["worlds"] <= 6
     xs = [x for x, _ in data["anytime"]]
     ratios = [y for _, y in data["anytime"]]
-    assert xs == sorted(xs) and len(xs) == 5  # the first path, then four budgets
+    # the first path, then four budgets
+    assert xs == sorted(xs)
+    assert len(xs) == 5
     assert all(r >= 1.0 - 1e-9 for r in ratios)
     assert ratios[-1] <= ratios[0] + 1e-9  # the anytime step only keeps shorter verified paths
     assert set(data["policies"]) == {"lazysp", "lazysp_posterior"}
     for checks, ratio in data["policies"].values():
-        assert ratio == pytest.approx(1.0) and checks > 0  # LazySP verifies the shortest free path
+        # LazySP verifies the shortest free path
+        assert ratio == pytest.approx(1.0)
+        assert checks > 0
     files = plot_checks_vs_cost(data, problem.name, tmp_path / "c")
-    assert [f.suffix for f in files] == [".png", ".svg"] and all(f.stat().st_size > 1000 for f in files)
+    assert [f.suffix for f in files] == [".png", ".svg"]
+    assert all(f.stat().st_size > 1000 for f in files)

@@ -36,10 +36,14 @@ def test_outcomes_are_the_checkers_own(small_arm: ArmDomain, meshes: ArmDomain) 
     world = recipe.make(small_arm)
     np.testing.assert_array_equal(result.free_spheres, small_arm.checker(world).check_many(edges))
     np.testing.assert_array_equal(result.free_meshes, meshes.checker(world).check_many(edges))
-    assert result.ms_spheres.shape == result.ms_meshes.shape == (30,) and np.all(result.ms_meshes > 0)
+    assert result.ms_spheres.shape == result.ms_meshes.shape == (30,)
+    assert np.all(result.ms_meshes > 0)
     assert len(result.misses) == result.meshes_only_blocked
     for miss in result.misses:
-        assert miss.link.startswith("panda_") and miss.depth_m >= 0 and miss.sample >= 0 and miss.obstacle
+        assert miss.link.startswith("panda_")
+        assert miss.depth_m >= 0
+        assert miss.sample >= 0
+        assert miss.obstacle
     block = summarize([result])["all"]
     assert block["agree"] + block["spheres_only_blocked"] + block["meshes_only_blocked"] == 30
     assert block["time_ratio"] == pytest.approx(block["ms_meshes_mean"] / block["ms_spheres_mean"])
@@ -51,11 +55,13 @@ def test_a_box_the_spheres_miss_is_reported_with_where(
     (tmp_path / "scene0001.yaml").write_text(REAR)
     recipe = WorldRecipe("rear", "rear", scene=str(tmp_path / "scene0001.yaml"))
     result = compare_world(small_arm, meshes, recipe, np.arange(5))
-    assert result.free_spheres.all() and not result.free_meshes.any()
+    assert result.free_spheres.all()
+    assert not result.free_meshes.any()
     assert len(result.misses) == 5
     for miss in result.misses:
         assert (miss.sample, miss.link, miss.obstacle, miss.reason) == (-1, "panda_link0", "rear", "contact")
-        assert 0.0 < miss.depth_m < 0.03 and miss.sphere_clearance_m > 0.04
+        assert 0.0 < miss.depth_m < 0.03
+        assert miss.sphere_clearance_m > 0.04
     summary = summarize([result])
     assert summary["families"]["rear"]["meshes_only_blocked"] == 5
     assert summary["misses_by_link"]["panda_link0"]["edges"] == 5

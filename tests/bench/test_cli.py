@@ -63,11 +63,15 @@ def test_build_tree_validates_eta_and_kappa_on_random_queries(
     out = tmp_path / "v.npz"
     assert main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--kappa", "none"]) == 0
     printed = capsys.readouterr().out
-    assert "random queries" in printed and "region rule" in printed  # --region-rule auto validates both
+    # --region-rule auto validates both
+    assert "random queries" in printed
+    assert "region rule" in printed
     prior = load_tree_bundle(out)
-    assert "random queries" in prior.provenance["eta"] and prior.pseudo_count is None
+    assert "random queries" in prior.provenance["eta"]
+    assert prior.pseudo_count is None
     whole = load_prior(out)
-    assert whole.region_rule in REGION_RULES and f"region rule {whole.region_rule}" in prior.provenance["eta"]
+    assert whole.region_rule in REGION_RULES
+    assert f"region rule {whole.region_rule}" in prior.provenance["eta"]
     assert whole.trees[0].tree.region_rule in REGION_RULES
     # A given rule is stored as given, for the prior's new queries and the dataset's own tree.
     fixed = tmp_path / "f.npz"
@@ -75,7 +79,8 @@ def test_build_tree_validates_eta_and_kappa_on_random_queries(
     assert main([*argv, "--region-rule", "per_check"]) == 0
     capsys.readouterr()
     given = load_prior(fixed)
-    assert given.region_rule == "per_check" and given.trees[0].tree.region_rule == "per_check"
+    assert given.region_rule == "per_check"
+    assert given.trees[0].tree.region_rule == "per_check"
 
 
 def test_build_tree_says_when_eta_1_leaves_the_tree_unused(
@@ -85,7 +90,8 @@ def test_build_tree_says_when_eta_1_leaves_the_tree_unused(
     argv = ["build-tree", "--gccd", str(d2d1), "--kappa", "none"]
     assert main([*argv, "--out", str(tmp_path / "one.npz"), "--eta", "1"]) == 0
     printed = capsys.readouterr().out
-    assert "this query's DiRECt tree is never used" in printed and "more worlds (now " in printed
+    assert "this query's DiRECt tree is never used" in printed
+    assert "more worlds (now " in printed
     assert main([*argv, "--out", str(tmp_path / "used.npz"), "--eta", "0.2"]) == 0
     assert "never used" not in capsys.readouterr().out
 

@@ -34,7 +34,8 @@ def _log(out: str) -> list[tuple[int, bool, str]]:
 
 def _error(capsys: pytest.CaptureFixture[str]) -> str:
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("drd: error:"), err
+    assert len(err) == 1, err
+    assert err[0].startswith("drd: error:"), err
     return err[0]
 
 
@@ -134,7 +135,11 @@ def test_a_corrupt_map_message_stops_the_plan_unless_asked_to_plan_as_the_node(
     broken = write_bag(tmp_path / "corrupt.mcap", corrupt)
     assert main(["plan", "--bag", str(broken), "--tree", str(TREE)]) == 2
     err = _error(capsys)
-    assert "terrain at" in err and "refused" in err and "--skip-refused-maps" in err
+    assert "terrain at" in err
+    assert "refused" in err
+    assert "--skip-refused-maps" in err
     assert main(["plan", "--bag", str(broken), "--tree", str(TREE), "--skip-refused-maps"]) in (0, 1)
     out = capsys.readouterr().out
-    assert "terrain none" in out and "  refused: terrain at" in out  # which maps it planned on, and why
+    # which maps it planned on, and why
+    assert "terrain none" in out
+    assert "  refused: terrain at" in out

@@ -49,7 +49,9 @@ def test_build_tree_reports_progress_and_a_short_summary(
     assert sum(line.startswith("  eta ") for line in lines) >= len(DEFAULT_ETA_CANDIDATES)  # a row per eta
     assert any(line.startswith("tree dataset_2d_1 ") and "built in" in line for line in lines)
     done = re.fullmatch(r"done in ([\d.]+) s .*", lines[-1])
-    assert done and float(done.group(1)) >= float(validated.group(1)) - 0.05  # validation included
+    # validation included
+    assert done
+    assert float(done.group(1)) >= float(validated.group(1)) - 0.05
     err = captured.err.splitlines()
     total = len(DEFAULT_ETA_CANDIDATES) * 2 * 64  # eta candidates x 2 rules x 64 episodes
     assert err[0] == f"validating eta x kappa x region rule: {total} episodes"
@@ -71,12 +73,14 @@ def test_bench_max_worlds_also_limits_the_validation(
     assert selection["num_validation_worlds"] == 3
     lines = captured.out.splitlines()
     summary = next(line for line in lines if line.startswith("dataset_2d_1: eta "))
-    assert "validated in" in summary and "on 3 held-out training worlds" in summary
+    assert "validated in" in summary
+    assert "on 3 held-out training worlds" in summary
     assert len(summary) <= MAX_LINE
     total = re.fullmatch(
         r"total wall time ([\d.]+) s \(eta and kappa validation ([\d.]+) s of it\)", lines[-1]
     )
-    assert total and float(total.group(1)) >= float(total.group(2))
+    assert total
+    assert float(total.group(1)) >= float(total.group(2))
     assert float(total.group(2)) == pytest.approx(selection["seconds"], abs=0.06)
     err = captured.err
     etas = len(DEFAULT_ETA_CANDIDATES)
@@ -105,7 +109,8 @@ def test_a_dataset_without_test_worlds_is_refused_by_bench(
         assert main(["bench", "--dataset", str(data), "--policies", "direct_bisect,bisect", *extra]) == 2
         captured = capsys.readouterr()
         assert "no test worlds" in _one_error_line(captured.err), extra
-        assert "nan" not in captured.out and "validat" not in captured.err
+        assert "nan" not in captured.out
+        assert "validat" not in captured.err
     # Training needs no test worlds: the prior is still written.
     assert main(["build-tree", "--dataset", str(data), "--out", str(tmp_path / "p.npz"), "--eta", "0.2"]) == 0
 

@@ -27,7 +27,8 @@ def test_time_keys_and_the_cost_paid(tmp_path: Path, capsys: pytest.CaptureFixtu
     out = tmp_path / "q.json"
     assert main(_argv(folder, out, "0,2")) == 0
     report = capsys.readouterr().out
-    assert "time to a verified plan" in report and "off-graph queries do not apply" in report
+    assert "time to a verified plan" in report
+    assert "off-graph queries do not apply" in report
     doc = json.loads(out.read_text())
     assert doc["check_cost"]["costs_ms"] == ["0", "2"]
     for name in ("direct_bisect", "lazysp", "check_all"):
@@ -35,7 +36,9 @@ def test_time_keys_and_the_cost_paid(tmp_path: Path, capsys: pytest.CaptureFixtu
         for key in ("0", "2"):
             t = entry["time_ms"][key]
             assert {"median", "mean", "wall_median", "wall_mean", "n", "kinds"} <= set(t)
-            assert t["n"] >= 1 and 0 < t["median"] and t["mean"] > 0
+            assert t["n"] >= 1
+            assert 0 < t["median"]
+            assert t["mean"] > 0
             assert set(t["kinds"]) == {"stored", "new"}
         # CPU at 2 ms per check is at least checks x 2 ms (the median query's checks bound it below)
         checks = min(entry["time_checks"].values())
@@ -51,7 +54,8 @@ def test_malformed_costs_and_missing_queries_are_one_clear_error(
     folder = gccd_folder("dataset_2d_1")
     assert main(_argv(folder, tmp_path / "q.json", "0,x")) == 2
     err = capsys.readouterr().err
-    assert err.count("error") == 1 and "comma-separated non-negative numbers of milliseconds" in err
+    assert err.count("error") == 1
+    assert "comma-separated non-negative numbers of milliseconds" in err
     assert main(["bench", "--gccd", str(folder), "--check-cost-ms", "1"]) == 2
     assert "--queries" in capsys.readouterr().err
     argv = _argv(folder, tmp_path / "q.json", "1")
@@ -66,7 +70,9 @@ def test_medians_compare_the_queries_every_policy_verified() -> None:
 
     episodes = [ep("a", 0, True, 1.0), ep("a", 1, True, 100.0), ep("b", 0, True, 2.0), ep("b", 1, False, 5.0)]
     summary = summarize_costs(episodes, (0.0,))
-    assert summary["a"]["time_ms"]["0"]["median"] == 1.0 and summary["a"]["time_ms"]["0"]["n"] == 1
+    assert summary["a"]["time_ms"]["0"]["median"] == 1.0
+    assert summary["a"]["time_ms"]["0"]["n"] == 1
     assert summary["b"]["time_ms"]["0"]["kinds"]["new"]["wall_median"] == 4.0
-    assert summary["b"]["verified"] == {"new": 1} and summary["a"]["queries"] == {"new": 2}
+    assert summary["b"]["verified"] == {"new": 1}
+    assert summary["a"]["queries"] == {"new": 2}
     assert "| new | 0 | 1 | 1.00 | 2.00 |" in cost_markdown(summary, (0.0,), title="t")

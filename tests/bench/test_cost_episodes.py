@@ -48,22 +48,24 @@ def test_each_policy_pays_the_cost_per_check_and_verifies(setup: tuple[WorldPrio
         assert first.checks == costly.checks  # same seed, same checks
         assert costly.time.cpu_ms >= 2.0 * costly.checks
     lazy = lazysp_episode(planner, stored, 0, domain.checker(world), 2.0)
-    assert lazy.time.cpu_ms >= 2.0 * lazy.checks and lazy.checks > 0
+    assert lazy.time.cpu_ms >= 2.0 * lazy.checks
+    assert lazy.checks > 0
 
 
 def test_off_graph_paths_start_at_the_state(setup: tuple[WorldPrior, Planner, object]) -> None:
     prior, planner, (domain, world) = setup  # type: ignore[misc]
     query = _off_graph(prior)
     graph = planner.query_graph(query.start, query.goal)
-    assert graph.start >= prior.graph.num_vertices and graph.goal >= prior.graph.num_vertices
+    assert graph.start >= prior.graph.num_vertices
+    assert graph.goal >= prior.graph.num_vertices
     assert np.allclose(graph.new_states[graph.start], query.start)
     result = planner.plan(query.start, query.goal, domain.checker(world))
     if result.found:
-        assert result.vertices[0] == result.start and np.allclose(
-            result.new_states[result.start], query.start
-        )
+        assert result.vertices[0] == result.start
+        assert np.allclose(result.new_states[result.start], query.start)
     episode = plan_episode(planner, query, 1, domain.checker(world), 1.0, "direct_bisect", 0)
-    assert episode.verified == result.found and episode.time.cpu_ms >= 1.0 * episode.checks
+    assert episode.verified == result.found
+    assert episode.time.cpu_ms >= 1.0 * episode.checks
     row = full_row(domain.checker(world), prior.graph.num_edges)
     every = check_all_episode(planner, query, 1, domain.checker(world), 1.0, row)
     assert every.checks == graph.graph.num_edges

@@ -31,7 +31,8 @@ def test_held_out_worlds_free_the_stored_query(worlds: tuple[Any, ...]) -> None:
     prior, _, found, rows, recipes = worlds
     assert len(found) == len(recipes) == len(rows) == 2
     seeds = [r.seed for r in recipes]
-    assert seeds == sorted(set(seeds)) and seeds[0] >= 500
+    assert seeds == sorted(set(seeds))
+    assert seeds[0] >= 500
     assert all(r.model == "wires" for r in recipes)
     paths = ShortestPaths(GraphArcs(prior.graph), prior.graph.lengths)
     stored = prior.trees[0]
@@ -46,7 +47,9 @@ def test_new_queries_are_free_vertex_pairs(worlds: tuple[Any, ...]) -> None:
     assert len(queries) == 3
     paths = ShortestPaths(GraphArcs(prior.graph), prior.graph.lengths)
     for k, q in enumerate(queries):
-        assert q.kind == "new" and q.world == k % len(rows) and q.start != q.goal
+        assert q.kind == "new"
+        assert q.world == k % len(rows)
+        assert q.start != q.goal
         assert paths.path(q.start, q.goal, rows[q.world].outcomes) is not None
     again = new_queries(prior, rows, 3, np.random.default_rng(0))
     assert [(q.start, q.goal) for q in again] == [(q.start, q.goal) for q in queries]
@@ -57,8 +60,10 @@ def test_off_graph_queries_are_states_inside_the_graphs_box(worlds: tuple[Any, .
     planner = Planner(prior, snap_tolerance=1e-6)
     (query,) = off_graph_queries(planner, domain, found, rows, 1, np.random.default_rng(1))
     states = prior.graph.vertex_states
-    assert query.kind == "off_graph" and query.world == 0
+    assert query.kind == "off_graph"
+    assert query.world == 0
     for end in (query.start, query.goal):
         end = np.asarray(end)
         assert end.shape == (states.shape[1],)
-        assert np.all(end >= states.min(axis=0)) and np.all(end <= states.max(axis=0))
+        assert np.all(end >= states.min(axis=0))
+        assert np.all(end <= states.max(axis=0))

@@ -88,12 +88,14 @@ def test_the_bound_partitions_the_worlds_and_groups_of_one_give_the_oracle_bound
     assert singles.oracle_mean == pytest.approx(oracle)
     grouped = known_worlds_bound(x, paths, costs, ids, group_size=6, seed=3)
     assert sorted(w for g in grouped.groups for w in g) == ids.tolist()
-    assert grouped.sizes.max() <= 6 and grouped.sizes.max() - grouped.sizes.min() <= 1
+    assert grouped.sizes.max() <= 6
+    assert grouped.sizes.max() - grouped.sizes.min() <= 1
     assert grouped.oracle_mean == pytest.approx(oracle)
     assert grouped.mean >= oracle - TOL
     assert np.all(grouped.optima >= grouped.oracle - TOL)
     again = known_worlds_bound(x, paths, costs, ids, group_size=6, seed=3)
-    assert again.groups == grouped.groups and np.array_equal(again.optima, grouped.optima)
+    assert again.groups == grouped.groups
+    assert np.array_equal(again.optima, grouped.optima)
 
 
 def test_bad_input_is_refused_with_a_problem_error() -> None:

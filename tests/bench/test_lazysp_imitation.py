@@ -89,7 +89,8 @@ def test_oracle_takes_the_better_continuation_for_a_blocked_edge() -> None:
     cut = WORLD.copy()
     cut[7] = False
     picks, final = ClairvoyantOracle(GRAPH, 0, 3, cut).blocked_phase(frozenset())
-    assert final is None and picks == (1, 6, 7)
+    assert final is None
+    assert picks == (1, 6, 7)
 
 
 def test_features_are_documented_and_capped() -> None:
@@ -101,7 +102,8 @@ def test_features_are_documented_and_capped() -> None:
         np.array([0, 2]),
         np.array([1.0, 1.0, 3.0]),
     )
-    assert feats.shape == (2, len(FEATURE_NAMES)) and feats.dtype == np.float64
+    assert feats.shape == (2, len(FEATURE_NAMES))
+    assert feats.dtype == np.float64
     row = dict(zip(FEATURE_NAMES, feats[0], strict=True))
     assert row == {
         "bias": 1.0,
@@ -133,7 +135,8 @@ def test_training_is_deterministic_and_episodes_end_on_a_checked_free_path() -> 
     again = train_imitation_selector(GRAPH, 0, 3, x, seed=3, settings=settings)
     np.testing.assert_array_equal(first.weights, again.weights)
     assert first.feature_names == FEATURE_NAMES
-    assert first.stats["episodes"] == 18 and first.stats["states"] > 0
+    assert first.stats["episodes"] == 18
+    assert first.stats["states"] > 0
     outcomes = all_edge_outcomes(x)
     for world in toy_worlds(20, seed=2):
         result = run(ImitationLazySP(GRAPH, 0, 3, outcomes, first), world)
@@ -149,7 +152,8 @@ def test_training_is_deterministic_and_episodes_end_on_a_checked_free_path() -> 
 
 def test_registry_needs_a_model_trained_once() -> None:
     assert IMITATION_POLICY in POLICIES
-    assert IMITATION_POLICY in graph_policies() and IMITATION_POLICY in TRAIN_WORLD_POLICIES
+    assert IMITATION_POLICY in graph_policies()
+    assert IMITATION_POLICY in TRAIN_WORLD_POLICIES
     x = toy_worlds(10, seed=0)
     lib = PathLibrary.from_sequences([[0, 1, 2]], 8)
     args = (lib, np.ones(8), np.full(8, 0.5), None, 0)
@@ -161,7 +165,8 @@ def test_registry_needs_a_model_trained_once() -> None:
     with pytest.raises(ProblemError, match="training worlds"):
         POLICIES[IMITATION_POLICY](PolicyContext(*args, graph=GRAPH, start=0, goal=3, imitation_model=model))
     pol = POLICIES[IMITATION_POLICY](ctx)
-    assert isinstance(pol, ImitationLazySP) and isinstance(pol, GraphPathPolicy)
+    assert isinstance(pol, ImitationLazySP)
+    assert isinstance(pol, GraphPathPolicy)
     assert pol.name == IMITATION_POLICY
     # All weights zero: every score ties, so the higher posterior (then the earlier edge) wins.
     path = pol.proposed_path()
@@ -198,7 +203,9 @@ def test_beats_forward_lazysp_on_one_wall() -> None:
     # first 40 test worlds 71.4-71.9 for seeds 0-4 against 85.1 for forward LazySP.
     problem = load_gccd_folder(gccd_folder("dataset_2d_1"))
     worlds = problem.require_worlds()
-    assert problem.graph is not None and problem.start is not None and problem.goal is not None
+    assert problem.graph is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     settings = DaggerSettings(work_budget=5e6, rollouts=False)
     model = train_for_problem(problem, seed=0, settings=settings)
     outcomes = all_edge_outcomes(worlds.X[worlds.train_ids])

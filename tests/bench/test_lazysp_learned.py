@@ -235,7 +235,8 @@ def test_episode_outcomes_and_determinism(delta: bool) -> None:
     cut = free.copy()
     cut[[2, 7]] = False
     result = episode(policy(DETOURS, DETOUR_WORLDS, delta=delta), cut)
-    assert result.status is EpisodeStatus.NO_FREE_PATH and result.path_edges is None
+    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.path_edges is None
     assert {2, 7} <= {c.edge for c in result.checks if not c.free}
 
 
@@ -255,7 +256,8 @@ def test_registry_needs_the_training_worlds() -> None:
         with pytest.raises(ProblemError, match="graph"):
             POLICIES[name](PolicyContext(*args, train_worlds=DETOUR_WORLDS))
         pol = POLICIES[name](full)
-        assert pol.name == name and isinstance(pol, GraphPathPolicy)
+        assert pol.name == name
+        assert isinstance(pol, GraphPathPolicy)
     # kappa is DEFAULT_PSEUDO_COUNT whatever the context's pseudo-count (direct_bisect's) says.
     for kappa in (None, TINY):
         ctx = PolicyContext(
@@ -288,13 +290,16 @@ def test_observations_at_construction_count() -> None:
         PosteriorSettings(TINY, delta=True),
         observations={7: False},
     )
-    assert pol.num_consistent == 1 and pol.select() == 2
+    assert pol.num_consistent == 1
+    assert pol.select() == 2
 
 
 def test_dataset_episodes_find_the_shortest_feasible_path() -> None:
     problem = load_gccd_folder(gccd_folder("dataset_2d_1"))
     graph, worlds = problem.graph, problem.require_worlds()
-    assert graph is not None and problem.start is not None and problem.goal is not None
+    assert graph is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     outcomes = all_edge_outcomes(worlds.X[worlds.train_ids])
     for delta in (False, True):
         for w in worlds.test_ids[:4]:
@@ -307,7 +312,9 @@ def test_dataset_episodes_find_the_shortest_feasible_path() -> None:
             assert len(set(edges)) == len(edges)
             assert result.status is EpisodeStatus.PATH_FOUND
             path = result.path_edges
-            assert path is not None and set(path.tolist()) <= set(edges) and x[path].all()
+            assert path is not None
+            assert set(path.tolist()) <= set(edges)
+            assert x[path].all()
             assert graph.lengths[path].sum() == pytest.approx(
                 shortest_length(graph, x, problem.start, problem.goal)
             )

@@ -191,7 +191,9 @@ def test_lazyprm_on_dataset_2d_1() -> None:
     problem = load_gccd_folder(gccd_folder("dataset_2d_1"))
     worlds = problem.require_worlds()
     graph = problem.graph
-    assert graph is not None and problem.start is not None and problem.goal is not None
+    assert graph is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     ids = worlds.test_ids[:5]
     result = run_ompl_lazyprm(problem, ids, seed=0, time_limit_s=20.0)
     assert result["embedding"] == "coords"
@@ -259,7 +261,8 @@ def test_live_mode_answers_with_the_domains_own_checker(small_arm: ArmDomain) ->
         here = small_arm.checker(recipe.make(small_arm))
         asked = block["checked_edges"]
         assert block["checked_free"] == [here.check(e) for e in asked]  # the worker's checker is ours
-        assert block["checks"] == len(set(asked)) and block["wall_s"] >= block["check_s"] > 0
+        assert block["checks"] == len(set(asked))
+        assert block["wall_s"] >= block["check_s"] > 0
         if block["success"]:
             assert set(block["path_edges"]) <= {
                 e for e, f in zip(asked, block["checked_free"], strict=True) if f

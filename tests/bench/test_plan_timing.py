@@ -39,9 +39,12 @@ class Table:
 def test_recording_oracle_and_checked_free(small_arm: ArmDomain) -> None:
     oracle = RecordingOracle(small_arm.checker(small_arm.make_world("clutter", 1)))
     answers = [oracle.check(e) for e in (0, 1, 0)]
-    assert oracle.log == {0: answers[0], 1: answers[1]} and oracle.seconds > 0
-    assert checked_free([0, 1], {0: True, 1: True}) and not checked_free([0, 1], {0: True})
-    assert not checked_free([0], {0: False}) and not checked_free([], {})
+    assert oracle.log == {0: answers[0], 1: answers[1]}
+    assert oracle.seconds > 0
+    assert checked_free([0, 1], {0: True, 1: True})
+    assert not checked_free([0, 1], {0: True})
+    assert not checked_free([0], {0: False})
+    assert not checked_free([], {})
 
 
 def test_lazysp_and_direct_bisect_runs_verify_their_paths(small_arm: ArmDomain) -> None:
@@ -59,15 +62,18 @@ def test_lazysp_and_direct_bisect_runs_verify_their_paths(small_arm: ArmDomain) 
         reference = run_episode(
             None, graph.lengths, LazySP(graph, 0, 1, LazySPSettings(max_checks=None)), Table(rows[seed])
         )
-        assert lazy.checks == reference.num_checks and lazy.method == "lazysp"
+        assert lazy.checks == reference.num_checks
+        assert lazy.method == "lazysp"
         plan = time_planner(
             planner, small_arm.checker(world), (0, 1), model="spheres", world=f"clutter:{seed}"
         )
         again = planner.plan(0, 1, Table(rows[seed]), policy="direct_bisect")
         assert plan.found == (again.status is PlanStatus.FOUND) == lazy.found
-        assert plan.checks == again.num_checks and plan.path_edges == again.edges.tolist()
+        assert plan.checks == again.num_checks
+        assert plan.path_edges == again.edges.tolist()
         for run in (lazy, plan):
-            assert run.verified == run.found and run.seconds >= run.check_seconds > 0
+            assert run.verified == run.found
+            assert run.seconds >= run.check_seconds > 0
             assert all(rows[seed][e] for e in run.path_edges)
         found += plan.found
     assert found >= 1
@@ -94,7 +100,8 @@ def test_summary_compares_the_same_worlds() -> None:
     assert list(summary) == ["lazysp"]
     block = summary["lazysp"]
     assert (block["worlds"], block["both_verified"]) == (3, 2)
-    assert block["spheres"]["verified"] == 3 and block["meshes"]["verified"] == 2
+    assert block["spheres"]["verified"] == 3
+    assert block["meshes"]["verified"] == 2
     assert block["spheres"]["ms_mean"] == pytest.approx(11.0)  # a's best 12 ms and c's 10 ms
     assert block["meshes"]["ms_mean"] == pytest.approx(30.0)
     assert block["ratio"] == pytest.approx(30.0 / 11.0)
@@ -109,5 +116,7 @@ def test_ompl_runs_count_only_paths_checked_free(small_arm: ArmDomain) -> None:
     assert [r.world for r in runs] == ["clutter:10", "clutter:11"]
     for run, recipe in zip(runs, recipes, strict=True):
         row = small_arm.checker(recipe.make(small_arm)).check_many(np.arange(small_arm.graph.num_edges))
-        assert run.method == "ompl_lazyprm" and run.verified == run.found
-        assert all(row[e] for e in run.path_edges) and run.seconds >= run.check_seconds > 0
+        assert run.method == "ompl_lazyprm"
+        assert run.verified == run.found
+        assert all(row[e] for e in run.path_edges)
+        assert run.seconds >= run.check_seconds > 0

@@ -62,7 +62,8 @@ def _segment_set(segments: np.ndarray) -> set[tuple[float, ...]]:
 def _assert_written(paths: list[Path]) -> None:
     assert [p.suffix for p in paths] == [".png", ".svg"]
     for p in paths:
-        assert p.is_file() and p.stat().st_size > 1000, p
+        assert p.is_file(), p
+        assert p.stat().st_size > 1000, p
     assert paths[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert b"<svg" in paths[1].read_bytes()[:2000]
 
@@ -121,7 +122,8 @@ def test_checked_edges_need_coordinates(
 ) -> None:
     assert problem.graph is not None
     bare = dataclasses.replace(problem, graph=dataclasses.replace(problem.graph, vertex_states=None))
-    assert has_vertex_xy(problem) and not has_vertex_xy(bare)
+    assert has_vertex_xy(problem)
+    assert not has_vertex_xy(bare)
     with pytest.raises(ProblemError, match="vertex coordinates"):
         plot_checked_edges(bare, episodes, tmp_path / "x")
     no_graph = Problem("synthetic", PathLibrary.from_sequences([[0, 1]], 2), np.ones(2))
@@ -179,7 +181,8 @@ def test_training_size_curve_on_a_dataset(problem: Problem) -> None:
     assert curve.num_test == 3
     assert set(curve.mean_checks) == {"direct_bisect", "direct_only", "bisect"}
     for values in curve.mean_checks.values():
-        assert values.shape == (2,) and np.all(values >= 1)
+        assert values.shape == (2,)
+        assert np.all(values >= 1)
     assert np.all((curve.failure_rate >= 0) & (curve.failure_rate <= 1))
     assert np.all(curve.tree_nodes >= 1)
     assert curve.as_json()["sizes"] == [50, 200]

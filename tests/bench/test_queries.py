@@ -38,10 +38,12 @@ def test_query_benchmark_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ]
     assert main(argv) == 0
     report = capsys.readouterr().out
-    assert "| direct_bisect |" in report and "false no-path" in report
+    assert "| direct_bisect |" in report
+    assert "false no-path" in report
     doc = json.loads(out.read_text())
     problem = load_gccd_folder(folder)
-    assert doc["queries"] == 6 and len(doc["episodes"]) == 6
+    assert doc["queries"] == 6
+    assert len(doc["episodes"]) == 6
     first = doc["episodes"][0]
     assert (first["start"], first["goal"]) == (problem.start, problem.goal)
     test_ids = problem.require_worlds().test_ids.tolist()
@@ -49,7 +51,8 @@ def test_query_benchmark_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     for name, stats in doc["policies"].items():
         assert POLICY_KEYS <= set(stats), name
         assert len(stats["checks"]) == 6
-        assert stats["false_no_path"] == 0 and stats["failures"] == 0
+        assert stats["false_no_path"] == 0
+        assert stats["failures"] == 0
     assert doc["policies"]["check_all"]["checks"] == [problem.num_edges] * 6
     assert all(r >= 1.0 - 1e-9 for r in [doc["policies"]["check_all"]["path_cost_ratio"]])
 

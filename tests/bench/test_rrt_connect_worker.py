@@ -19,7 +19,8 @@ def test_states_and_motions_are_answered_by_the_checker_and_counted(small_arm: A
     )
     checker = small_arm.scene_checker(scene)
     counter = _Counter(checker, small_arm.resolution, 7)
-    assert counter.state_valid(start.tolist()) and not counter.state_valid(goal.tolist())
+    assert counter.state_valid(start.tolist())
+    assert not counter.state_valid(goal.tolist())
     assert not counter.motion_valid(start.tolist(), goal.tolist())
     nearby = start + 0.02
     assert counter.motion_valid(start.tolist(), nearby.tolist())

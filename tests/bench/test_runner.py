@@ -52,16 +52,21 @@ def test_policy_context_passes_the_graph_when_supported(problem: Problem, tree: 
     ctx = policy_context(
         problem, theta=train_bias(problem), tree=tree, seed=5, settings=PolicySettings(eta=0.3)
     )
-    assert ctx.seed == 5 and ctx.eta == 0.3 and ctx.tree is tree
+    assert ctx.seed == 5
+    assert ctx.eta == 0.3
+    assert ctx.tree is tree
     assert isinstance(ctx, PolicyContext)
-    assert ctx.graph is problem.graph and ctx.graph is not None
+    assert ctx.graph is problem.graph
+    assert ctx.graph is not None
     assert (ctx.start, ctx.goal) == (problem.start, problem.goal)
 
 
 def test_policy_context_carries_the_training_worlds(problem: Problem) -> None:
     ctx = policy_context(problem, theta=train_bias(problem), tree=None, seed=0)
     worlds = problem.require_worlds()
-    assert ctx.train_worlds is not None and ctx.train_weights is None  # uniform prior
+    # uniform prior
+    assert ctx.train_worlds is not None
+    assert ctx.train_weights is None
     np.testing.assert_array_equal(ctx.train_worlds, worlds.X[worlds.train_ids])
     # Only a policy that needs them pays for the copy (a context is built for every episode).
     lean = policy_context(problem, theta=train_bias(problem), tree=None, seed=0, policy="bisect")
@@ -254,11 +259,14 @@ def test_run_benchmark_trains_the_imitation_selector_once(
         ).num_checks
         for k, w in enumerate(res.test_ids)
     ]
-    assert again == res.policies["lazysp_imitation"].checks and calls == [3]
+    assert again == res.policies["lazysp_imitation"].checks
+    assert calls == [3]
     # run_world never trains per episode: without the run's model it says what is missing.
     with pytest.raises(ProblemError, match="imitation_model"):
         run_world(problem, "lazysp_imitation", res.test_ids[0], theta=theta, tree=None, seed=3)
     assert calls == [3]
     # Without the policy, nothing is trained and the settings block is unchanged.
     plain = run_benchmark(problem, policies=["lazysp"], seed=3, max_worlds=2, progress=False)
-    assert plain.imitation_model is None and "imitation" not in plain.settings and calls == [3]
+    assert plain.imitation_model is None
+    assert "imitation" not in plain.settings
+    assert calls == [3]

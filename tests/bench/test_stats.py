@@ -127,7 +127,8 @@ def test_bootstrap_is_deterministic_for_a_seed_and_contains_the_mean() -> None:
     mean, low, high = a
     assert mean == pytest.approx(np.mean(x))
     assert low < mean < high
-    assert min(x) <= low and high <= max(x)
+    assert min(x) <= low
+    assert high <= max(x)
 
 
 def test_bootstrap_width_matches_the_normal_theory() -> None:
@@ -142,7 +143,8 @@ def test_bootstrap_level_and_degenerate_samples() -> None:
     x = np.arange(30, dtype=float)
     _, lo90, hi90 = bootstrap_mean_ci(x, level=0.90, seed=0)
     _, lo99, hi99 = bootstrap_mean_ci(x, level=0.99, seed=0)
-    assert lo99 < lo90 and hi90 < hi99
+    assert lo99 < lo90
+    assert hi90 < hi99
     assert bootstrap_mean_ci([2.5, 2.5, 2.5], seed=0) == (2.5, 2.5, 2.5)
     assert all(math.isnan(v) for v in bootstrap_mean_ci([np.nan]))
     assert bootstrap_mean_ci([1.0, np.nan, 3.0], seed=0)[0] == pytest.approx(2.0)
@@ -188,12 +190,14 @@ def test_table1_stats_by_hand() -> None:
     assert ref.unfiltered.p40 == ref.unfiltered.p60 == ref.unfiltered.mean == 0.0
     rnd = table.policies["random"]
     assert rnd.per_world.tolist() == pytest.approx([1.0, 0, 0, 0, -0.5])
-    assert rnd.filtered.n == 3 and rnd.filtered.p60 == 0.0
+    assert rnd.filtered.n == 3
+    assert rnd.filtered.p60 == 0.0
     assert table.oracle is not None
     assert table.oracle.per_world[:4].tolist() == pytest.approx([-0.5, -0.5, 0.0, -0.5])
     assert table.oracle.unfiltered.n == 4  # the NaN bound is ignored
     protocol = table.protocol_json()
-    assert protocol["num_kept"] == 3 and protocol["tie_filter_applied"] is True
+    assert protocol["num_kept"] == 3
+    assert protocol["tie_filter_applied"] is True
     assert protocol["bootstrap"] == {"resamples": 500, "level": 0.95, "seed": 4}
     json.dumps(protocol, allow_nan=False)
 

@@ -24,9 +24,9 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
     resolved, choice, scores = resolve_settings(problem, options, progress=False)
     assert set(scores) == set(REGION_RULES)
     chosen = resolved.tree_options["region_rule"]
-    assert (
-        choice is not None and resolved.eta == choice.eta and resolved.pseudo_counts == (choice.pseudo_count,)
-    )
+    assert choice is not None
+    assert resolved.eta == choice.eta
+    assert resolved.pseudo_counts == (choice.pseudo_count,)
     # The paper's rule stays unless the other is better by more than its validation noise.
     if chosen == "per_check":
         assert scores["per_check"] < scores["probability"] - choice.standard_error(
@@ -48,7 +48,8 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
     plain, _, none = resolve_settings(
         problem, SuiteOptions(policies=("direct_bisect",), region_rules=()), progress=False
     )
-    assert none == {} and "region_rule" not in plain.tree_options
+    assert none == {}
+    assert "region_rule" not in plain.tree_options
 
 
 def test_bench_reports_the_rule_and_fold_validation(
@@ -62,9 +63,8 @@ def test_bench_reports_the_rule_and_fold_validation(
     capsys.readouterr()
     settings = json.loads(out.read_text())["settings"]
     selection = settings["region_rule_selection"]
-    assert selection["chosen"] in REGION_RULES and set(selection["validated_mean_checks"]) == set(
-        REGION_RULES
-    )
+    assert selection["chosen"] in REGION_RULES
+    assert set(selection["validated_mean_checks"]) == set(REGION_RULES)
     assert settings["eta_selection"]["folds"] == 3
     assert json.loads(out.read_text())["tree"]["region_rule"] == selection["chosen"]
 

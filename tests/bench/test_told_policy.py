@@ -46,7 +46,8 @@ def test_told_one_world_proves_one_of_its_valid_paths(problem: Problem) -> None:
     x = problem.require_worlds().X[world]
     checks = told_checks(problem, [world], "probability", settings=(PolicySettings(eta=1e-4),))
     oracle = problem.library.path_costs(problem.edge_costs)[problem.library.valid_paths(x[None, :])[0]].min()
-    assert checks.shape == (1, 1) and checks[0, 0] >= oracle - TOL
+    assert checks.shape == (1, 1)
+    assert checks[0, 0] >= oracle - TOL
 
 
 def test_bad_rule_or_group_is_refused(problem: Problem) -> None:

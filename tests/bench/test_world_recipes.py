@@ -22,9 +22,8 @@ SCENE = """world:
 
 def test_recipes_round_trip_and_remake_the_same_world(small_arm: ArmDomain, tmp_path: Path) -> None:
     seeded = seeded_recipes("clutter", [3, 4])
-    assert [r.label for r in seeded] == ["clutter:3", "clutter:4"] and {r.family for r in seeded} == {
-        "clutter"
-    }
+    assert [r.label for r in seeded] == ["clutter:3", "clutter:4"]
+    assert {r.family for r in seeded} == {"clutter"}
     for recipe in seeded:
         assert WorldRecipe.from_json(recipe.to_json()) == recipe
     assert seeded[0].make(small_arm) == small_arm.make_world("clutter", 3)

@@ -232,7 +232,8 @@ def test_dataset_smoke_every_baseline_finds_a_verified_path() -> None:
             assert len(set(edges)) == len(edges)
             assert all(x[c.edge] == c.free for c in result.checks)
             assert result.status is EpisodeStatus.PATH_FOUND, name  # test worlds are feasible
-            assert result.path_index is not None and result.path_edges is not None
+            assert result.path_index is not None
+            assert result.path_edges is not None
             assert all(x[int(e)] for e in result.path_edges)
             assert set(result.path_edges.tolist()) <= set(edges)
             runs.append(edges)

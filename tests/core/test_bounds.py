@@ -17,7 +17,9 @@ def test_oracle_lower_bound_small_example() -> None:
     R = np.array([[1, 0, 1], [0, 0, 0], [0, 1, 1], [1, 1, 1]], dtype=bool)
     bound = oracle_lower_bound(R, [3.0, 1.0, 2.0])
     assert bound.shape == (4,)
-    assert bound[0] == 2.0 and bound[2] == 1.0 and bound[3] == 1.0
+    assert bound[0] == 2.0
+    assert bound[2] == 1.0
+    assert bound[3] == 1.0
     assert np.isnan(bound[1])
 
 

@@ -352,18 +352,21 @@ def test_hand_computed_uniform_prior() -> None:
     Unit costs pick e2. With c(e2) = 3: scores 0.952, 0.992, 0.996/3 = 0.332, so e1 wins.
     """
     sel = DirectSelector(HAND_X, HAND_R, np.ones(3))
-    assert sel.num_ecds == 3 and sel.has_null_ecd
+    assert sel.num_ecds == 3
+    assert sel.has_null_ecd
     got = sel.select([0, 1, 2, 3])
     assert got is not None
     assert got.edge == 2
     assert got.log_expected_remaining == pytest.approx(math.log(0.004), rel=1e-12)
     assert got.score == pytest.approx(0.996, rel=1e-12)
     costly = DirectSelector(HAND_X, HAND_R, np.array([1.0, 1.0, 3.0])).select([0, 1, 2, 3])
-    assert costly is not None and costly.edge == 1
+    assert costly is not None
+    assert costly.edge == 1
     assert costly.log_expected_remaining == pytest.approx(math.log(0.008), rel=1e-12)
     # restricting the candidates to e0 leaves e0, with E = 0.048
     only0 = DirectSelector(HAND_X, HAND_R, np.ones(3), candidate_edges=[0]).select([0, 1, 2, 3])
-    assert only0 is not None and only0.edge == 0
+    assert only0 is not None
+    assert only0.edge == 0
     assert only0.log_expected_remaining == pytest.approx(math.log(0.048), rel=1e-12)
 
 
@@ -376,16 +379,20 @@ def test_hand_computed_heavy_prior_flips_choice() -> None:
     The heavy world h3 makes isolating it (e0) best, unlike the uniform case.
     """
     got = DirectSelector(HAND_X, HAND_R, np.ones(3), prior=[1.0, 1.0, 1.0, 10.0]).select([0, 1, 2, 3])
-    assert got is not None and got.edge == 0
+    assert got is not None
+    assert got.edge == 0
     assert got.log_expected_remaining == pytest.approx(math.log(3 / 13 * (2 / 32) ** 3), rel=1e-12)
 
 
 def test_hand_case_matches_reference() -> None:
     """The brute-force reference reproduces the hand numbers (so it is not vacuous)."""
     ref = reference_select(HAND_X, HAND_R, [1.0, 1.0, 1.0], [0, 1, 2, 3])
-    assert ref is not None and ref.edge == 2 and ref.log_expected == pytest.approx(math.log(0.004))
+    assert ref is not None
+    assert ref.edge == 2
+    assert ref.log_expected == pytest.approx(math.log(0.004))
     ref = reference_select(HAND_X, HAND_R, [1.0, 1.0, 1.0], [0, 1, 2, 3], prior=[1.0, 1.0, 1.0, 10.0])
-    assert ref is not None and ref.edge == 0
+    assert ref is not None
+    assert ref.edge == 0
 
 
 def test_ec_weight_by_hand() -> None:
@@ -444,7 +451,8 @@ def test_colouring_star_and_extremes() -> None:
     for i in range(leaves):
         R[i, i + 1] = True  # leaf i holds world i only
     colour = greedy_region_colouring(R)
-    assert colour[0] == 0 and set(colour[1:].tolist()) == {1}
+    assert colour[0] == 0
+    assert set(colour[1:].tolist()) == {1}
     disjoint = np.eye(5, dtype=bool)
     assert greedy_region_colouring(disjoint).tolist() == [0] * 5
     clique = np.ones((3, 4), dtype=bool)
@@ -492,7 +500,8 @@ def test_select_none_without_informative_test() -> None:
     assert sel.select([0, 1]) is None
     assert reference_select(X, R, [1.0, 1.0], [0, 1], candidate_edges=[0]) is None
     got = DirectSelector(X, R, np.ones(2)).select([0, 1])
-    assert got is not None and got.edge == 1
+    assert got is not None
+    assert got.edge == 1
 
 
 # --------------------------------------------------------------------------------------------------
@@ -515,9 +524,11 @@ def test_tiny_weight_tie_break_exact_semantics() -> None:
     R = np.array([[1], [0], [1]], dtype=bool)
     prior = [1e-7, 1e-7, 1.0]
     ref = reference_select(X, R, [1.0, 1.0], [0, 1, 2], prior=prior)
-    assert ref is not None and ref.edge == 1
+    assert ref is not None
+    assert ref.edge == 1
     got = DirectSelector(X, R, np.ones(2), prior=prior).select([0, 1, 2])
-    assert got is not None and got.edge == 1
+    assert got is not None
+    assert got.edge == 1
 
 
 def test_tiny_weight_not_reported_solved() -> None:

@@ -165,7 +165,9 @@ def test_graph_policy_disconnected_and_budgets() -> None:
     world = np.ones(5, dtype=bool)
     gone = run_episode(LIB, COSTS, ScriptedGraphPolicy([0], None), TableOracle(world))
     assert gone.status is EpisodeStatus.NO_FREE_PATH
-    assert gone.num_checks == 0 and gone.blocked_evidence is None and gone.path_edges is None
+    assert gone.num_checks == 0
+    assert gone.blocked_evidence is None
+    assert gone.path_edges is None
     capped = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 3], [3], max_checks=2), TableOracle(world))
     assert (capped.status, capped.num_checks) == (EpisodeStatus.MAX_CHECKS, 2)
     tighter = run_episode(
@@ -177,4 +179,5 @@ def test_graph_policy_disconnected_and_budgets() -> None:
     assert last.status is EpisodeStatus.PATH_FOUND
     # A policy that stops asking before its path is checked gives up; nothing unverified is returned.
     quits = run_episode(LIB, COSTS, ScriptedGraphPolicy([2], [2, 3]), TableOracle(world))
-    assert quits.status is EpisodeStatus.POLICY_GAVE_UP and quits.path_edges is None
+    assert quits.status is EpisodeStatus.POLICY_GAVE_UP
+    assert quits.path_edges is None

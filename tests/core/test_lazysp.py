@@ -94,7 +94,8 @@ def test_disconnected_start_ends_with_no_free_path() -> None:
     result = run(LazySP(grid(), 0, 8), world(0, 6))
     assert [c.edge for c in result.checks] == [0, 6]
     assert result.status is EpisodeStatus.NO_FREE_PATH
-    assert result.path_edges is None and result.blocked_evidence is None
+    assert result.path_edges is None
+    assert result.blocked_evidence is None
     assert not result.success
 
 
@@ -110,7 +111,9 @@ def test_does_not_stop_on_a_proven_library_path() -> None:
 def test_check_budget_reports_max_checks() -> None:
     result = run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=3)), world(10))
     assert result.status is EpisodeStatus.MAX_CHECKS
-    assert result.num_checks == 3 and not result.success and result.path_edges is None
+    assert result.num_checks == 3
+    assert not result.success
+    assert result.path_edges is None
     # The budget does not cut an episode whose path is verified by the last allowed check.
     assert run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=4)), world()).status is EpisodeStatus.PATH_FOUND
 
@@ -179,7 +182,8 @@ def test_weightsamp_batched_counts_equal_one_search_per_sample() -> None:
             if path is not None:
                 want[path] += 1
     np.testing.assert_array_equal(counts, want)
-    assert counts[10] == 0 and counts.sum() > 0
+    assert counts[10] == 0
+    assert counts.sum() > 0
 
 
 def test_weightsamp_is_seeded_and_picks_the_most_sampled_edge() -> None:
@@ -234,7 +238,9 @@ def shortest_feasible_length(graph: ExplicitGraph, x: np.ndarray, start: int, go
 
 def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
     problem = load_gccd_folder(gccd_folder("dataset_2d_1"))
-    assert problem.graph is not None and problem.start is not None and problem.goal is not None
+    assert problem.graph is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     worlds = problem.require_worlds()
     theta = bias_from_worlds(worlds.X[worlds.train_ids])
     for name in ("lazysp", "lazysp_reverse", "lazysp_alternate", "lazysp_bisection", "lazysp_weightsamp"):
@@ -256,7 +262,8 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
             assert len(set(edges)) == len(edges)
             assert result.status is EpisodeStatus.PATH_FOUND, name
             path = result.path_edges
-            assert path is not None and all(x[int(e)] for e in path)
+            assert path is not None
+            assert all(x[int(e)] for e in path)
             assert set(path.tolist()) <= set(edges)
             # a connected start-goal walk
             ends = problem.graph.edges[path]

@@ -71,7 +71,8 @@ def test_node_cap_turns_nodes_into_leaves() -> None:
     tree = LazyDirectTree(worlds.X[worlds.train_ids], problem.library, problem.edge_costs, max_nodes=3)
     assert tree.node_edge(0) != NO_EDGE
     assert tree.num_nodes == 3
-    assert tree.node_edge(1) == NO_EDGE and tree.node_edge(2) == NO_EDGE
+    assert tree.node_edge(1) == NO_EDGE
+    assert tree.node_edge(2) == NO_EDGE
 
 
 def test_needs_training_worlds_over_the_library_edges() -> None:

@@ -19,7 +19,8 @@ def test_each_column_holds_its_paths_edges_in_order_then_the_pad() -> None:
     csr = library.incidence
     rows = PathRows(csr.indptr, csr.indices, library.num_edges)
     used = np.unique(np.concatenate(library.path_edges))
-    assert rows.edges.tolist() == used.tolist() and rows.pad == used.size
+    assert rows.edges.tolist() == used.tolist()
+    assert rows.pad == used.size
     assert rows.column[used].tolist() == list(range(used.size))
     assert set(rows.column[np.setdiff1d(np.arange(library.num_edges), used)].tolist()) <= {rows.pad}
     assert rows.table.shape == (max(p.size for p in library.path_edges), library.num_paths)

@@ -118,7 +118,8 @@ def test_register_policy_adds_a_name_once() -> None:
     finally:
         policies._REGISTRY.pop(name, None)
         policies._GRAPH_POLICIES.remove(name)
-    assert name not in POLICIES and name not in graph_policies()
+    assert name not in POLICIES
+    assert name not in graph_policies()
 
 
 def test_core_policies_are_the_planners_own() -> None:

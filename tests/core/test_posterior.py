@@ -99,7 +99,8 @@ def test_posterior_leaf_is_deterministic_and_finds_valid_paths(planar) -> None: 
             policy = DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.3, pseudo_count=10.0)
             result = run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[world]))
             runs.append([(c.edge, c.free) for c in result.checks])
-            assert result.success and worlds.R[world, result.path_index]
+            assert result.success
+            assert worlds.R[world, result.path_index]
         assert runs[0] == runs[1]
 
 
@@ -108,7 +109,8 @@ def test_posterior_leaf_bias_follows_the_consistent_worlds(planar) -> None:  # t
     worlds = problem.require_worlds()
     world = int(worlds.test_ids[0])
     policy = DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=1.0, pseudo_count=4.0)
-    assert policy.stage == "bisect" and policy.pseudo_count == 4.0
+    assert policy.stage == "bisect"
+    assert policy.pseudo_count == 4.0
     edge = policy.select()
     assert edge is not None
     free = bool(worlds.X[world, edge])

@@ -25,7 +25,8 @@ def test_the_root_is_the_lazy_trees_root() -> None:
         root = RootTree(x[:, library.library_edges], library, region_rule="probability")
         assert np.array_equal(root.bias(0, alpha=0.97), lazy.bias(0, alpha=0.97))
         assert root.node_fraction(0) == lazy.node_fraction(0) == 1.0
-        assert root.node_edge(0) == NO_EDGE and root.node_child(0, True) == NO_CHILD
+        assert root.node_edge(0) == NO_EDGE
+        assert root.node_child(0, True) == NO_CHILD
         assert (root.num_edges, root.num_paths, root.num_nodes) == (12, 4, 1)
         ours, theirs = root.training_outcomes, lazy.training_outcomes
         assert np.array_equal(ours.world_free, theirs.world_free)

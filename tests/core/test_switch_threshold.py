@@ -84,7 +84,8 @@ def test_same_seed_same_choice_and_ties_go_to_larger_eta_then_fixed_leaf(problem
     assert a.eta == max(e for e, _ in tied)
     if (a.eta, None) in tied:
         assert a.pseudo_count is None
-    assert "eta" in a.describe() and a.as_json()["pseudo_count"] == a.pseudo_count
+    assert "eta" in a.describe()
+    assert a.as_json()["pseudo_count"] == a.pseudo_count
 
 
 @pytest.mark.parametrize("cands", [(), (0.0,), (1.5,), (-0.1, 0.5)])
@@ -109,7 +110,8 @@ def test_max_worlds_limits_the_validation_worlds(problem) -> None:  # type: igno
     assert len(full.validation_ids) > 3
     assert len(quick.validation_ids) == 3
     assert set(quick.validation_ids) <= set(problem.worlds.train_ids.tolist())
-    assert quick.seconds > 0 and quick.as_json()["num_validation_worlds"] == 3
+    assert quick.seconds > 0
+    assert quick.as_json()["num_validation_worlds"] == 3
     with pytest.raises(ProblemError, match="max_worlds"):
         select_switch_threshold(
             problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(None,)), max_worlds=0
@@ -126,12 +128,14 @@ def test_summary_is_a_few_short_lines() -> None:
     lines = choice.summary_lines()
     assert lines[0] == "eta 0.2, kappa 5: validated in 9.5 s on 90 held-out training worlds"
     assert lines[1].split() == ["mean", "checks", "fixed", "kappa", "5", "kappa", "20", "kappa", "50"]
-    assert len(lines) == 2 + 6 and max(len(line) for line in lines) <= 100
+    assert len(lines) == 2 + 6
+    assert max(len(line) for line in lines) <= 100
     assert lines[4].split() == ["eta", "0.2", "10.20", "15.20*", "30.20", "60.20"]
     # Columns line up: every number ends under the end of its header (a "*" may follow it).
     for head in ("fixed", "kappa 5", "kappa 20", "kappa 50"):
         end = lines[1].index(head) + len(head)
-        assert lines[3][end - 1].isdigit() and lines[3][end : end + 1] in (" ", "*", ""), head
+        assert lines[3][end - 1].isdigit(), head
+        assert lines[3][end : end + 1] in (" ", "*", ""), head
 
 
 def test_k_fold_validation_uses_disjoint_folds_and_the_one_standard_error_rule(problem) -> None:  # type: ignore[no-untyped-def]
@@ -140,8 +144,11 @@ def test_k_fold_validation_uses_disjoint_folds_and_the_one_standard_error_rule(p
     worlds = problem.worlds
     held = np.asarray(choice.validation_ids)
     per_fold = round(0.1 * worlds.train_ids.size)
-    assert held.size == 3 * per_fold and np.unique(held).size == held.size  # three disjoint folds
-    assert np.isin(held, worlds.train_ids).all() and worlds.R[held].any(axis=1).all()
+    # three disjoint folds
+    assert held.size == 3 * per_fold
+    assert np.unique(held).size == held.size
+    assert np.isin(held, worlds.train_ids).all()
+    assert worlds.R[held].any(axis=1).all()
     for candidate, means in choice.fold_means.items():
         assert len(means) == 3
         assert choice.mean_checks[candidate] == pytest.approx(np.mean(means))
@@ -159,14 +166,16 @@ def test_k_fold_validation_uses_disjoint_folds_and_the_one_standard_error_rule(p
         assert (chosen[0], None) not in within
     assert choice.standard_error(chosen) >= 0.0
     summary = choice.as_json()
-    assert summary["folds"] == 3 and set(summary["standard_error"]) == {
+    assert summary["folds"] == 3
+    assert set(summary["standard_error"]) == {
         f"eta {e:g}" + ("" if k is None else f" kappa {k:g}") for e, k in choice.mean_checks
     }
     assert "3 folds x" in choice.describe()
     # Same seed, same folds, same choice; one fold is the single split of before.
     assert select_switch_threshold(problem, grid, seed=2, folds=3) == choice
     single = select_switch_threshold(problem, grid, seed=2)
-    assert single.fold_means == {} and single.standard_error((single.eta, single.pseudo_count)) == 0.0
+    assert single.fold_means == {}
+    assert single.standard_error((single.eta, single.pseudo_count)) == 0.0
 
 
 def test_folds_shrink_to_what_the_worlds_hold_and_bad_folds_are_refused(problem) -> None:  # type: ignore[no-untyped-def]

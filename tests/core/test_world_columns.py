@@ -21,7 +21,8 @@ def test_counts_equal_the_sums_over_the_rows(n: int, e: int, seed: int) -> None:
         rows = rng.random(n) < rng.random()
         assert np.array_equal(columns.free_counts(rows), x[rows].sum(axis=0))
     assert np.array_equal(columns.free_totals, x.sum(axis=0))
-    assert columns.num_worlds == n and columns.num_edges == e
+    assert columns.num_worlds == n
+    assert columns.num_edges == e
     edges = rng.integers(0, e, size=7)  # repeats allowed
     assert np.array_equal(columns.rows_of(edges), x[:, edges].T)
 
@@ -30,8 +31,10 @@ def test_rows_are_packed_little_endian_in_64_bit_words() -> None:
     rows = np.zeros(70, dtype=bool)
     rows[[0, 63, 64, 69]] = True
     words = pack_rows(rows)
-    assert words.dtype == np.uint64 and words.size == 2
-    assert int(words[0]) == (1 << 0) | (1 << 63) and int(words[1]) == (1 << 0) | (1 << 5)
+    assert words.dtype == np.uint64
+    assert words.size == 2
+    assert int(words[0]) == (1 << 0) | (1 << 63)
+    assert int(words[1]) == (1 << 0) | (1 << 5)
 
 
 def test_a_mask_of_another_size_is_refused() -> None:

@@ -65,7 +65,8 @@ def test_start_and_goal_must_be_distinct_vertices_of_the_graph() -> None:
 
 def test_json_depth_ignores_brackets_in_strings() -> None:
     assert json_depth('{"a": [1, {"b": "[[[[{{"}], "c": "\\"]]"}') == 3
-    assert json_depth("[]") == 1 and json_depth("1") == 0
+    assert json_depth("[]") == 1
+    assert json_depth("1") == 0
 
 
 def test_header_json_limits() -> None:

@@ -214,7 +214,8 @@ def test_files_that_are_not_npz_say_what_they_are(tmp_path: Path, kind: str, loa
     path.write_bytes(data)
     load, error = LOADERS[loader]
     message = refusal(load, path, error)
-    assert "is not a readable" in message and ".npz (zip) archive" in message, message
+    assert "is not a readable" in message, message
+    assert ".npz (zip) archive" in message, message
     assert found in message, message
 
 
@@ -237,7 +238,9 @@ def test_drd_prints_one_line_for_a_crafted_tree(
     path = TREE_CASES["deep_json"].write(base_tree, tmp_path / "deep.npz")
     assert main(["plan", "--bag", "heli_wires", "--tree", str(path)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("drd: error: ") and err.count("\n") == 1 and "deep.npz" in err, err
+    assert err.startswith("drd: error: "), err
+    assert err.count("\n") == 1, err
+    assert "deep.npz" in err, err
 
 
 @pytest.mark.parametrize(

@@ -41,7 +41,8 @@ def base_prior(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any]
     from drd_planner.planner import QueryTree, prior_from_problem, save_prior
 
     problem = make_planar_problem(model="forest", num_worlds=60, seed=2)
-    assert problem.start is not None and problem.goal is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     own = QueryTree("own", problem.start, problem.goal, problem.library, build_tree(problem, progress=False))
     prior = prior_from_problem(problem, domain="planar", trees=(own,), eta=0.4)
     return read_trusted(save_prior(tmp_path_factory.mktemp("prior") / "prior.npz", prior))

@@ -189,7 +189,9 @@ def test_grid_domain_satisfies_the_protocol() -> None:
 def reference(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("ref") / "grid.npz"
     report = build_grid(out, workers=1)
-    assert report.complete and report.evaluated_chunks == 7 and report.resumed_chunks == 0
+    assert report.complete
+    assert report.evaluated_chunks == 7
+    assert report.resumed_chunks == 0
     assert not parts_dir(out).exists()  # chunk files are removed after a complete build
     return out
 
@@ -208,19 +210,26 @@ def test_build_contents_follow_the_recipe(reference: Path) -> None:
     assert ds.library.num_paths == 30 < ds.provenance["union_size"]
     for got, want in zip(ds.library.path_edges, expected.path_edges, strict=True):
         assert np.array_equal(got, want)
-    assert expected.vertex_paths is not None and ds.library.vertex_paths is not None
+    assert expected.vertex_paths is not None
+    assert ds.library.vertex_paths is not None
     for got, want in zip(ds.library.vertex_paths, expected.vertex_paths, strict=True):
         assert np.array_equal(got, want)
     assert np.array_equal(ds.R, expected.valid_paths(ds.X))
     train, test = split_worlds(ds.R, test_fraction=0.1, seed=split_seed)
-    assert np.array_equal(ds.train_ids, train) and np.array_equal(ds.test_ids, test)
-    assert test.size == 4 and ds.R[test].any(axis=1).all()
-    assert ds.domain == "grid_test" and ds.world_model == "uniform" and ds.seed == 7
+    assert np.array_equal(ds.train_ids, train)
+    assert np.array_equal(ds.test_ids, test)
+    assert test.size == 4
+    assert ds.R[test].any(axis=1).all()
+    assert ds.domain == "grid_test"
+    assert ds.world_model == "uniform"
+    assert ds.seed == 7
     assert ds.domain_spec == domain.spec()
     assert ds.check_metadata == domain.check_metadata()
     assert ds.world_model_params == {"block_probability": 0.25}
-    assert ds.edge_trajectories is not None and len(ds.edge_trajectories) == 42
-    assert ds.provenance["library_seed"] == library_seed and ds.provenance["split_seed"] == split_seed
+    assert ds.edge_trajectories is not None
+    assert len(ds.edge_trajectories) == 42
+    assert ds.provenance["library_seed"] == library_seed
+    assert ds.provenance["split_seed"] == split_seed
     assert ds.provenance["domain_factory"] == GRID_FACTORY
     assert np.array_equal(ds.edge_costs, np.ones(42))
 
@@ -231,7 +240,8 @@ def test_two_local_workers_give_identical_bytes(reference: Path, tmp_path: Path,
         pytest.skip(f"no {method!r} start method on this platform")
     out = tmp_path / "grid.npz"
     report = build_grid(out, workers=2, start_method=method)
-    assert report.complete and report.evaluated_chunks == 7
+    assert report.complete
+    assert report.evaluated_chunks == 7
     assert out.read_bytes() == reference.read_bytes()
 
 
@@ -248,7 +258,8 @@ def test_dask_local_cluster_gives_identical_bytes(reference: Path, tmp_path: Pat
     ) as cluster:
         out = tmp_path / "grid.npz"
         report = build_grid(out, scheduler=cluster.scheduler_address)
-        assert report.complete and report.evaluated_chunks == 7
+        assert report.complete
+        assert report.evaluated_chunks == 7
     assert load_dataset(out).X.tobytes() == load_dataset(reference).X.tobytes()
     assert out.read_bytes() == reference.read_bytes()
 
@@ -280,12 +291,18 @@ def test_domain_instance_without_factory(reference: Path, tmp_path: Path) -> Non
 def test_resume_after_a_stop_gives_the_identical_file(reference: Path, tmp_path: Path) -> None:
     out = tmp_path / "grid.npz"
     first = build_grid(out, workers=1, max_chunks=3)
-    assert not first.complete and first.dataset is None and not out.exists()
+    assert not first.complete
+    assert first.dataset is None
+    assert not out.exists()
     assert sorted(p.name for p in parts_dir(out).iterdir()) == [f"chunk_00000{i}.npz" for i in range(3)]
     second = build_grid(out, workers=2, max_chunks=2)
-    assert not second.complete and second.resumed_chunks == 3 and second.evaluated_chunks == 2
+    assert not second.complete
+    assert second.resumed_chunks == 3
+    assert second.evaluated_chunks == 2
     last = build_grid(out, workers=2)
-    assert last.complete and last.resumed_chunks == 5 and last.evaluated_chunks == 2
+    assert last.complete
+    assert last.resumed_chunks == 5
+    assert last.evaluated_chunks == 2
     assert out.read_bytes() == reference.read_bytes()
 
 
@@ -297,7 +314,8 @@ def test_resume_reevaluates_a_damaged_chunk(reference: Path, tmp_path: Path) -> 
     chunk.write_bytes(chunk.read_bytes()[:100])  # as if the machine died while writing it
     (parts_dir(out) / "chunk_000004.npz").unlink()
     report = build_grid(out, workers=1)
-    assert report.resumed_chunks == 5 and report.evaluated_chunks == 2
+    assert report.resumed_chunks == 5
+    assert report.evaluated_chunks == 2
     assert out.read_bytes() == reference.read_bytes()
 
 
@@ -340,10 +358,13 @@ def test_resume_after_killing_the_build_process(reference: Path, tmp_path: Path)
     done = len(list(parts.glob("chunk_*.npz")))
     assert 2 <= done < 7
     report = build_grid(out, workers=2, domain_spec=slow)
-    assert report.complete and report.resumed_chunks == done and report.evaluated_chunks == 7 - done
+    assert report.complete
+    assert report.resumed_chunks == done
+    assert report.evaluated_chunks == 7 - done
     ds, ref = load_dataset(out), load_dataset(reference)
     assert ds.X.tobytes() == ref.X.tobytes()
-    assert np.array_equal(ds.R, ref.R) and np.array_equal(ds.test_ids, ref.test_ids)
+    assert np.array_equal(ds.R, ref.R)
+    assert np.array_equal(ds.test_ids, ref.test_ids)
     assert ds.domain_spec == slow  # the only difference from the reference
 
 
@@ -407,7 +428,8 @@ def test_seeded_chunk_tasks_carry_no_source() -> None:
 
     recipe = DatasetRecipe("grid_test", "uniform", 10, 7, domain_factory=GRID_FACTORY)
     plan = _plan(recipe, BuildOptions(chunk_size=4))
-    assert [t.source_json for t in plan.tasks] == [None, None, None] and plan.source is None
+    assert [t.source_json for t in plan.tasks] == [None, None, None]
+    assert plan.source is None
     assert plan.tasks[0].seeds == tuple(int(s) for s in world_seeds(7, 10)[:4])
 
 
@@ -417,4 +439,6 @@ def test_progress_is_announced_at_once_and_counted_in_worlds(
     """Issue 33 item 14: an arm build said nothing for 206 s, until its first chunk of worlds was checked."""
     build_grid(tmp_path / "d.npz", progress=True)
     lines = capsys.readouterr().err.splitlines()
-    assert lines and lines[0] == "edge checks: 40 worlds"  # before any chunk is checked
+    # before any chunk is checked
+    assert lines
+    assert lines[0] == "edge checks: 40 worlds"

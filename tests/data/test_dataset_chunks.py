@@ -39,7 +39,8 @@ def _result(index: int = 1) -> ChunkResult:
 def test_paths_round_trip_through_the_packed_arrays() -> None:
     result = _result()
     assert result.paths() == PATHS
-    assert result.path_offsets.tolist() == [0, 3, 4] and result.vertex_offsets.tolist() == [0, 4, 6]
+    assert result.path_offsets.tolist() == [0, 3, 4]
+    assert result.vertex_offsets.tolist() == [0, 4, 6]
     empty = pack_paths([])
     assert [a.tolist() for a in empty] == [[], [0], [], [0]]
 
@@ -52,9 +53,11 @@ def test_parts_dir_and_chunk_path() -> None:
 def test_a_saved_chunk_loads_back(tmp_path: Path) -> None:
     save_chunk(tmp_path, _result(), build_key="k1", num_worlds=2)
     loaded = load_chunk(chunk_path(tmp_path, 1), index=1, build_key="k1", num_worlds=2, num_edges=3)
-    assert loaded is not None and loaded.paths() == PATHS
+    assert loaded is not None
+    assert loaded.paths() == PATHS
     assert loaded.x_packed.tobytes() == _result().x_packed.tobytes()
-    assert loaded.graph_sha256 == "abc" and loaded.seconds == 0.5
+    assert loaded.graph_sha256 == "abc"
+    assert loaded.seconds == 0.5
 
 
 def test_damaged_or_unexpected_chunks_are_ignored_and_foreign_ones_refused(tmp_path: Path) -> None:

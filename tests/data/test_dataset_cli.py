@@ -44,8 +44,11 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_build_dataset_writes_a_loadable_file(built: Path, capsys: pytest.CaptureFixture[str]) -> None:
     ds = load_dataset(built)
-    assert ds.num_worlds == 20 and ds.seed == 3 and ds.domain == "grid_test"
-    assert ds.library.num_paths <= 20 and ds.test_ids.size == 2
+    assert ds.num_worlds == 20
+    assert ds.seed == 3
+    assert ds.domain == "grid_test"
+    assert ds.library.num_paths <= 20
+    assert ds.test_ids.size == 2
 
 
 def test_recorded_command_recreates_the_same_bytes(
@@ -53,12 +56,15 @@ def test_recorded_command_recreates_the_same_bytes(
 ) -> None:
     command = load_dataset(built).provenance["command"]
     argv = shlex.split(command)
-    assert argv[:2] == ["drd", "build-dataset"] and "--out" not in argv and "--workers" not in argv
+    assert argv[:2] == ["drd", "build-dataset"]
+    assert "--out" not in argv
+    assert "--workers" not in argv
     out = tmp_path / "again.npz"
     assert main([*argv[1:], "--out", str(out), "--workers", "2", "--chunk-size", "3"]) == 0
     line = capsys.readouterr().out.strip()
     assert line.startswith(f"wrote {out}: 20 worlds x 42 edges (")
-    assert "7 chunks (0 resumed)" in line and "on 2 local worker(s)" in line
+    assert "7 chunks (0 resumed)" in line
+    assert "on 2 local worker(s)" in line
     assert out.read_bytes() == built.read_bytes()
 
 
@@ -76,7 +82,8 @@ def test_parser_glue_and_spec_file(tmp_path: Path, capsys: pytest.CaptureFixture
     assert cmd_build_dataset(args) == 0
     ds = load_dataset(out)
     assert ds.domain_spec == {"size": 3, "block_probability": 0.1, "delay_s": 0.0}
-    assert ds.graph.num_vertices == 9 and ds.edge_trajectories is None
+    assert ds.graph.num_vertices == 9
+    assert ds.edge_trajectories is None
     # The recorded command recreates the same bytes, trajectories left out included.
     again = tmp_path / "again.npz"
     argv = shlex.split(ds.provenance["command"])[1:]
@@ -168,8 +175,10 @@ def test_dataset_source_gives_the_problem(built: Path) -> None:
     problem = load_problem_from_args(_source_parser().parse_args(["--dataset", str(built)]))
     ds = load_dataset(built)
     worlds = problem.require_worlds()
-    assert problem.name == "grid" and problem_domain(problem) == "grid_test"
-    assert np.array_equal(worlds.X, ds.X) and np.array_equal(worlds.test_ids, ds.test_ids)
+    assert problem.name == "grid"
+    assert problem_domain(problem) == "grid_test"
+    assert np.array_equal(worlds.X, ds.X)
+    assert np.array_equal(worlds.test_ids, ds.test_ids)
 
 
 def test_gccd_source_still_works() -> None:
@@ -177,7 +186,8 @@ def test_gccd_source_still_works() -> None:
 
     folder = gccd_folder("dataset_2d_1")
     problem = load_problem_from_args(_source_parser().parse_args(["--gccd", str(folder)]))
-    assert problem.name == "dataset_2d_1" and problem_domain(problem) == "gccd"
+    assert problem.name == "dataset_2d_1"
+    assert problem_domain(problem) == "gccd"
 
 
 def test_source_needs_exactly_one_of_gccd_and_dataset(
@@ -206,7 +216,8 @@ def test_build_dataset_on_planar(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert main([*argv, "--workers", "1", "--chunk-size", "4", "--out", str(out)]) == 0
     ds = load_dataset(out)
     assert ds.X.shape == (12, planar.graph.num_edges)
-    assert ds.domain == "planar" and ds.world_model == model
+    assert ds.domain == "planar"
+    assert ds.world_model == model
     assert ds.check_metadata == json.loads(json.dumps(planar.check_metadata()))
 
 
@@ -219,7 +230,8 @@ def test_print_spec_needs_only_the_domain(capsys: pytest.CaptureFixture[str]) ->
 
     assert main(["build-dataset", "--domain", "planar", "--print-spec"]) == 0
     printed = capsys.readouterr().out
-    assert printed == spec_help("planar") + "\n" and "planar" in printed
+    assert printed == spec_help("planar") + "\n"
+    assert "planar" in printed
     assert main(["build-dataset", "--domain", "atlantis", "--print-spec"]) == 2
     assert "unknown domain 'atlantis'" in _one_error_line(capsys.readouterr().err)
 
@@ -229,10 +241,8 @@ def test_a_build_still_needs_its_arguments(capsys: pytest.CaptureFixture[str]) -
         main(["build-dataset", "--domain", "planar", "--world-model", "forest", "--worlds", "3"])
     assert info.value.code == 2
     err = capsys.readouterr().err
-    assert (
-        err.startswith("usage: drd build-dataset")
-        and "the following arguments are required: --seed, --out" in err
-    )
+    assert err.startswith("usage: drd build-dataset")
+    assert "the following arguments are required: --seed, --out" in err
     with pytest.raises(SystemExit):
         main(["build-dataset", "--print-spec"])
     assert "the following arguments are required: --domain" in capsys.readouterr().err

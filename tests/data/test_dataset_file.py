@@ -77,11 +77,13 @@ def assert_same(a: Dataset, b: Dataset) -> None:
             assert np.array_equal(p, q)
     for f in ("X", "R", "train_ids", "test_ids", "edge_costs", "world_seeds"):
         x, y = getattr(a, f), getattr(b, f)
-        assert x.dtype == y.dtype and np.array_equal(x, y), f
+        assert x.dtype == y.dtype, f
+        assert np.array_equal(x, y), f
     assert (a.edge_trajectories is None) == (b.edge_trajectories is None)
     if a.edge_trajectories is not None and b.edge_trajectories is not None:
         for p, q in zip(a.edge_trajectories, b.edge_trajectories, strict=True):
-            assert p.shape == q.shape and np.array_equal(p, q)
+            assert p.shape == q.shape
+            assert np.array_equal(p, q)
     for f in ("start", "goal", "domain", "domain_spec", "world_model", "seed", "world_model_params"):
         assert getattr(a, f) == getattr(b, f), f
     for f in ("check_metadata", "provenance", "software_version"):
@@ -94,8 +96,10 @@ def assert_same(a: Dataset, b: Dataset) -> None:
 
 def test_round_trip_of_a_built_dataset(grid_file: Path, tmp_path: Path) -> None:
     ds = load_dataset(grid_file)
-    assert ds.graph.vertex_states is not None and ds.library.vertex_paths is not None
-    assert ds.edge_trajectories is not None and ds.edge_trajectories[0].shape == (3, 2)
+    assert ds.graph.vertex_states is not None
+    assert ds.library.vertex_paths is not None
+    assert ds.edge_trajectories is not None
+    assert ds.edge_trajectories[0].shape == (3, 2)
     assert ds.provenance["command"] == "drd build-dataset --domain grid_test ..."
     again = tmp_path / "again.npz"
     save_dataset(again, ds)
@@ -108,8 +112,10 @@ def test_round_trip_without_optional_arrays(tmp_path: Path) -> None:
     out = save_dataset(tmp_path / "tiny.npz", ds)
     back = load_dataset(out)
     assert_same(back, ds)
-    assert back.graph.directed and back.graph.vertex_states is None
-    assert back.library.vertex_paths is None and back.edge_trajectories is None
+    assert back.graph.directed
+    assert back.graph.vertex_states is None
+    assert back.library.vertex_paths is None
+    assert back.edge_trajectories is None
     with np.load(out, allow_pickle=False) as archive:
         assert not {"vertex_states", "vertex_paths", "traj_states"} & set(archive.files)
 
@@ -125,9 +131,12 @@ def test_file_is_a_plain_reproducible_npz(grid_file: Path) -> None:
         header = json.loads(archive["header"].tobytes())
         x_packed = archive["X_packed"]
     ds = load_dataset(grid_file)
-    assert header["format"] == FORMAT_NAME and header["format_version"] == FORMAT_VERSION
-    assert header["num_worlds"] == 40 and header["num_edges"] == 42
-    assert x_packed.dtype == np.uint8 and x_packed.shape == (40, 6)
+    assert header["format"] == FORMAT_NAME
+    assert header["format_version"] == FORMAT_VERSION
+    assert header["num_worlds"] == 40
+    assert header["num_edges"] == 42
+    assert x_packed.dtype == np.uint8
+    assert x_packed.shape == (40, 6)
     assert np.array_equal(np.packbits(ds.X, axis=1), x_packed)
 
 
@@ -136,15 +145,20 @@ def test_problem_view_matches_the_dataset(grid_file: Path) -> None:
     problem = load_dataset_problem(grid_file)
     worlds = problem.require_worlds()
     assert problem.name == "grid"
-    assert problem.start == ds.start and problem.goal == ds.goal
-    assert problem.graph is not None and np.array_equal(problem.graph.edges, ds.graph.edges)
-    assert np.array_equal(worlds.X, ds.X) and np.array_equal(worlds.R, ds.R)
-    assert np.array_equal(worlds.train_ids, ds.train_ids) and np.array_equal(worlds.test_ids, ds.test_ids)
+    assert problem.start == ds.start
+    assert problem.goal == ds.goal
+    assert problem.graph is not None
+    assert np.array_equal(problem.graph.edges, ds.graph.edges)
+    assert np.array_equal(worlds.X, ds.X)
+    assert np.array_equal(worlds.R, ds.R)
+    assert np.array_equal(worlds.train_ids, ds.train_ids)
+    assert np.array_equal(worlds.test_ids, ds.test_ids)
     assert problem.library.num_paths == ds.library.num_paths
     assert all(
         np.array_equal(p, q) for p, q in zip(problem.library.path_edges, ds.library.path_edges, strict=True)
     )
-    assert problem.metadata["domain"] == "grid_test" and problem.metadata["file"] == "grid.npz"
+    assert problem.metadata["domain"] == "grid_test"
+    assert problem.metadata["file"] == "grid.npz"
     assert len(problem.metadata["sha256"]) == 64
     # It runs in the benchmark like an authors' folder: every test world is solvable, so no failures.
     result = run_benchmark(problem, policies=["bisect"], progress=False)

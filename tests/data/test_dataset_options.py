@@ -13,8 +13,10 @@ from drd_planner.exceptions import DatasetError
 
 def test_recipe_normalises_its_numbers() -> None:
     recipe = DatasetRecipe("planar", "forest", np.int64(10), np.int64(3), test_fraction=1)
-    assert type(recipe.num_worlds) is int and type(recipe.seed) is int
-    assert type(recipe.test_fraction) is float and recipe.test_fraction == 1.0
+    assert type(recipe.num_worlds) is int
+    assert type(recipe.seed) is int
+    assert type(recipe.test_fraction) is float
+    assert recipe.test_fraction == 1.0
 
 
 def test_recipe_command_lists_only_content_settings() -> None:
@@ -23,7 +25,8 @@ def test_recipe_command_lists_only_content_settings() -> None:
     )
     argv = shlex.split(recipe.command())
     assert argv[:6] == ["drd", "build-dataset", "--domain", "helicopter", "--world-model", "terrain"]
-    assert argv[argv.index("--k") + 1] == "3" and argv[argv.index("--max-paths") + 1] == "40"
+    assert argv[argv.index("--k") + 1] == "3"
+    assert argv[argv.index("--max-paths") + 1] == "40"
     assert argv[argv.index("--domain-spec") + 1] == '{"models": {"terrain": {"mirror": 0}}}'
     assert "--k" not in DatasetRecipe("planar", "forest", 5, 0).command()
     # Leaving the edge trajectories out changes the file, so the command says so.
@@ -51,7 +54,8 @@ def test_bad_recipes_are_refused(kwargs: dict[str, object], message: str) -> Non
 
 def test_options() -> None:
     assert not BuildOptions().parallel
-    assert BuildOptions(workers=2).parallel and BuildOptions(scheduler="tcp://h:1").parallel
+    assert BuildOptions(workers=2).parallel
+    assert BuildOptions(scheduler="tcp://h:1").parallel
     with pytest.raises(DatasetError, match="chunk_size must be a positive integer"):
         BuildOptions(chunk_size=0)
     with pytest.raises(DatasetError, match="max_chunks must be a positive integer"):

@@ -31,7 +31,8 @@ def test_evaluate_chunk_matches_direct_checks() -> None:
     x = np.unpackbits(result.x_packed, axis=1, count=domain.graph.num_edges).astype(bool)
     assert np.array_equal(x, grid_x(domain, "uniform", seeds))
     for edges, verts in result.paths():
-        assert verts[0] == domain.start and verts[-1] == domain.goal
+        assert verts[0] == domain.start
+        assert verts[-1] == domain.goal
         assert list(domain.graph.vertex_path_to_edges(verts)) == list(edges)
 
 

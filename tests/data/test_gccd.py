@@ -87,7 +87,8 @@ def test_dataset_graph_is_consistent(name: str) -> None:
     problem = _load(name)
     graph = problem.graph
     assert graph is not None
-    assert problem.start is not None and problem.goal is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     assert problem.library.vertex_paths is not None
     for vertices, edges in zip(problem.library.vertex_paths, problem.library.path_edges, strict=True):
         assert vertices[0] == problem.start

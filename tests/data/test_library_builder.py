@@ -135,7 +135,8 @@ def test_planar_library_paths_are_valid_start_goal_paths(
     assert lib.vertex_paths is not None
     assert lib.num_paths == 40
     for ep, vp in zip(lib.path_edges, lib.vertex_paths, strict=True):
-        assert vp[0] == s and vp[-1] == t
+        assert vp[0] == s
+        assert vp[-1] == t
         assert np.unique(vp).size == vp.size  # loopless
         assert np.array_equal(g.vertex_path_to_edges(vp), ep)  # every step is a graph edge
     r = lib.valid_paths(x)
@@ -184,10 +185,13 @@ def test_split_worlds_properties() -> None:
     assert set(test.tolist()) <= eligible
     assert np.intersect1d(train, test).size == 0
     assert np.array_equal(np.union1d(train, test), np.arange(200))
-    assert np.array_equal(train, np.sort(train)) and np.array_equal(test, np.sort(test))
-    assert train.dtype == np.int64 and test.dtype == np.int64
+    assert np.array_equal(train, np.sort(train))
+    assert np.array_equal(test, np.sort(test))
+    assert train.dtype == np.int64
+    assert test.dtype == np.int64
     train2, test2 = split_worlds(r, test_fraction=0.1, seed=3)
-    assert np.array_equal(test, test2) and np.array_equal(train, train2)
+    assert np.array_equal(test, test2)
+    assert np.array_equal(train, train2)
     tests = {tuple(split_worlds(r, test_fraction=0.1, seed=s)[1].tolist()) for s in range(5)}
     assert len(tests) > 1
 
@@ -199,6 +203,7 @@ def test_split_worlds_with_few_solvable_worlds() -> None:
     assert test.tolist() == [3, 17, 40]  # fewer than round(0.2 * 50) = 10 eligible: all of them
     assert train.size == 47
     train, test = split_worlds(np.zeros((5, 2), dtype=bool), seed=0)
-    assert test.size == 0 and train.tolist() == [0, 1, 2, 3, 4]
+    assert test.size == 0
+    assert train.tolist() == [0, 1, 2, 3, 4]
     with pytest.raises(ProblemError):
         split_worlds(r, test_fraction=1.5, seed=0)

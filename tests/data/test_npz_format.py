@@ -20,8 +20,11 @@ def test_write_read_round_trip_and_reproducible_bytes(tmp_path: Path) -> None:
     two = FORMAT.write(tmp_path / "sub" / "two.npz", {"note": "hi"}, arrays)
     assert one.read_bytes() == two.read_bytes()
     header, back = FORMAT.read(one)
-    assert header["note"] == "hi" and header["format"] == "drd_planner.test" and header["format_version"] == 2
-    assert set(back) == {"a", "b"} and np.array_equal(back["a"], np.eye(2))
+    assert header["note"] == "hi"
+    assert header["format"] == "drd_planner.test"
+    assert header["format_version"] == 2
+    assert set(back) == {"a", "b"}
+    assert np.array_equal(back["a"], np.eye(2))
 
 
 def test_other_formats_and_versions_are_refused(tmp_path: Path) -> None:

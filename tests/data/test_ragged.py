@@ -12,7 +12,9 @@ from drd_planner.exceptions import DatasetError
 def test_pack_and_unpack_round_trip() -> None:
     parts = [np.array([1, 2, 3]), np.array([], dtype=np.int64), np.array([7])]
     flat, offsets = pack_ragged(parts, np.int64)
-    assert flat.dtype == np.int64 and flat.tolist() == [1, 2, 3, 7] and offsets.tolist() == [0, 3, 3, 4]
+    assert flat.dtype == np.int64
+    assert flat.tolist() == [1, 2, 3, 7]
+    assert offsets.tolist() == [0, 3, 3, 4]
     back = unpack_ragged(flat, offsets, 3, "path", DatasetError)
     assert [b.tolist() for b in back] == [[1, 2, 3], [], [7]]
     assert [b.tolist() for b in unpack_ragged(flat, offsets, None, "path", DatasetError)] == [
@@ -24,11 +26,15 @@ def test_pack_and_unpack_round_trip() -> None:
 
 def test_tuples_rows_and_no_parts() -> None:
     flat, offsets = pack_ragged([(4, 5), (6,)], np.int64)
-    assert flat.tolist() == [4, 5, 6] and offsets.tolist() == [0, 2, 3]
+    assert flat.tolist() == [4, 5, 6]
+    assert offsets.tolist() == [0, 2, 3]
     rows, row_offsets = pack_ragged([np.zeros((2, 3)), np.ones((1, 3))], np.float64)
-    assert rows.shape == (3, 3) and row_offsets.tolist() == [0, 2, 3]
+    assert rows.shape == (3, 3)
+    assert row_offsets.tolist() == [0, 2, 3]
     empty, empty_offsets = pack_ragged([], np.int64)
-    assert empty.shape == (0,) and empty.dtype == np.int64 and empty_offsets.tolist() == [0]
+    assert empty.shape == (0,)
+    assert empty.dtype == np.int64
+    assert empty_offsets.tolist() == [0]
 
 
 @pytest.mark.parametrize(

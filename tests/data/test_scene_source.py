@@ -82,13 +82,15 @@ def test_each_scene_is_checked_as_the_domain_checks_its_own_worlds(scenes: Path,
     edges = np.arange(domain.graph.num_edges)
     expected = [domain.checker(world_from_planning_scene(p)).check_many(edges) for p in scene_files(scenes)]
     assert np.array_equal(ds.X, np.array(expected))
-    assert ds.world_model == "moveit_scenes" and np.array_equal(ds.world_seeds, [0, 1, 2])
+    assert ds.world_model == "moveit_scenes"
+    assert np.array_equal(ds.world_seeds, [0, 1, 2])
     source = ds.provenance["world_source"]
     assert ds.provenance["world_seed_rule"] == FILE_WORLD_RULE
     assert [r["sha256"] for r in source["scenes"]] == [
         FileRecord.of(scenes / f"scene000{i}.yaml").sha256 for i in (1, 2, 3)
     ]
-    assert len(source["requests"]) == 3 and source["start_from"] == "request0001.yaml"
+    assert len(source["requests"]) == 3
+    assert source["start_from"] == "request0001.yaml"
     assert ds.domain_spec["floor_z"] is None  # the arm's scene-set default, under the user's spec
 
 
@@ -101,8 +103,11 @@ def test_request_states_become_the_first_vertices(scenes: Path, built: Path) -> 
     start = joint_vector(requests[0].start, joints, where="start", allow_extra=True)
     goals = [joint_vector(r.goals[0], joints, where="goal") for r in requests]
     states = ds.graph.vertex_states
-    assert states is not None and ds.start == 0 and ds.goal == 1
-    assert np.array_equal(states[0], start) and np.array_equal(states[1], goals[0])
+    assert states is not None
+    assert ds.start == 0
+    assert ds.goal == 1
+    assert np.array_equal(states[0], start)
+    assert np.array_equal(states[1], goals[0])
     # The other requests start where the first does, so only their goals are new: vertices 2 and 3.
     assert np.array_equal(states[2:4], goals[1:])
     assert ds.domain_spec["extra_states"] == [g.tolist() for g in goals[1:]]
@@ -118,8 +123,10 @@ def test_the_recorded_command_and_two_workers_give_the_same_bytes(
     out = tmp_path / "again.npz"
     assert main([*argv[1:], "--out", str(out), "--workers", "2", "--chunk-size", "2"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].startswith(f"wrote {out}: 3 worlds x ") and "on 2 local worker(s)" in lines[0]
-    assert lines[1].startswith("worlds: 3 scene file(s) of ") and "2 added as vertices" in lines[1]
+    assert lines[0].startswith(f"wrote {out}: 3 worlds x ")
+    assert "on 2 local worker(s)" in lines[0]
+    assert lines[1].startswith("worlds: 3 scene file(s) of ")
+    assert "2 added as vertices" in lines[1]
     assert out.read_bytes() == built.read_bytes()
 
 
@@ -141,7 +148,8 @@ def test_worlds_takes_the_first_scenes_and_their_requests(scenes: Path, tmp_path
         "request0002.yaml",
     ]
     ds = load_dataset(_build(scenes, tmp_path / "two.npz", num_worlds=2))
-    assert ds.num_worlds == 2 and len(ds.domain_spec["extra_states"]) == 1
+    assert ds.num_worlds == 2
+    assert len(ds.domain_spec["extra_states"]) == 1
     assert "--worlds 2" in ds.provenance["command"]
 
 
@@ -158,13 +166,16 @@ def test_no_requests_and_a_start_of_ones_own(scenes: Path, tmp_path: Path) -> No
     start, goal = _request_state(scenes, "0001", "start"), _request_state(scenes, "0001", "goal")
     spec = {"start": start, "goal": goal}
     plain = load_dataset(_build(scenes, tmp_path / "plain.npz", requests=False, spec=spec))
-    assert plain.domain_spec["extra_states"] == [] and plain.provenance["world_source"]["requests"] == []
+    assert plain.domain_spec["extra_states"] == []
+    assert plain.provenance["world_source"]["requests"] == []
     assert "--no-requests" in plain.provenance["command"]
     own = _request_state(scenes, "0003", "goal")
     ds = load_dataset(_build(scenes, tmp_path / "own.npz", spec={"start": own}))
-    assert ds.domain_spec["start"] == own and ds.domain_spec["goal"] == goal
+    assert ds.domain_spec["start"] == own
+    assert ds.domain_spec["goal"] == goal
     source = ds.provenance["world_source"]
-    assert source["start_from"] == "--domain-spec" and source["goal_from"] == "request0001.yaml"
+    assert source["start_from"] == "--domain-spec"
+    assert source["goal_from"] == "request0001.yaml"
     # The requests' start is now an extra state; the goal of request0003 is the start, so not repeated.
     assert ds.domain_spec["extra_states"] == [start, _request_state(scenes, "0002", "goal")]
 
@@ -183,7 +194,8 @@ def test_a_scene_that_changed_is_refused_in_the_worker(scenes: Path, tmp_path: P
 def _refusal(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
     assert main(["build-dataset", "--domain", "arm", "--domain-spec", SPEC, "--seed", "0", *argv]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("drd: error: "), err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("drd: error: "), err
     return err
 
 
@@ -206,7 +218,8 @@ def test_refusals_name_the_file_the_check_and_the_parameter(
     assert f"--worlds 3: {folder} has only 2 scene file(s)" in err
     (folder / "scene0003.yaml").write_text(MESH_SCENE)
     err = _refusal(["--scenes", str(folder), *out], capsys)
-    assert "scene0003.yaml: collision object 'Bowl' has meshes" in err and "--worlds N" in err
+    assert "scene0003.yaml: collision object 'Bowl' has meshes" in err
+    assert "--worlds N" in err
     (folder / "scene0003.yaml").unlink()
     request = folder / "request0002.yaml"
     request.write_text(request.read_text().replace("panda_joint7", "wrist_roll"))
@@ -286,4 +299,5 @@ def test_hostile_scene_files_end_the_build_at_once_with_one_line(
     t0 = time.perf_counter()
     err = _refusal(["--scenes", str(folder), "--out", str(tmp_path / "d.npz")], capsys)
     assert time.perf_counter() - t0 < 30.0
-    assert fragment in err and len(err) < 600, err
+    assert fragment in err, err
+    assert len(err) < 600, err

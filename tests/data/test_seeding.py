@@ -21,8 +21,10 @@ def test_world_seeds_are_deterministic_prefix_stable_and_distinct() -> None:
 
 
 def test_library_and_split_streams() -> None:
-    assert library_seed(7) == derived_seed(7, 1) and split_seed(7) == derived_seed(7, 2)
-    assert 0 <= library_seed(0) < 2**63 and library_seed(0) != split_seed(0)
+    assert library_seed(7) == derived_seed(7, 1)
+    assert split_seed(7) == derived_seed(7, 2)
+    assert 0 <= library_seed(0) < 2**63
+    assert library_seed(0) != split_seed(0)
 
 
 def test_negative_seed_is_refused() -> None:

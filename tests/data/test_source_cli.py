@@ -39,14 +39,18 @@ def test_each_source_flag_gives_its_request(tmp_path: Path) -> None:
     assert source_from_args(args, _error) == SceneFolder(str(tmp_path), requests=False)
     args, _ = _parse(["--bags", "a.mcap", "b.mcap", "--frame", "odom"])
     bags = source_from_args(args, _error)
-    assert isinstance(bags, MapBags) and [Path(f).name for f in bags.files] == ["a.mcap", "b.mcap"]
+    assert isinstance(bags, MapBags)
+    assert [Path(f).name for f in bags.files] == ["a.mcap", "b.mcap"]
     assert bags.frame == "odom"
     args, _ = _parse(
         ["--terrain", "t.asc", "--site", "5e5,4.4e6", "--site-jitter", "40", "--crop-scale", "25"]
     )
     terrain = source_from_args(args, _error)
-    assert isinstance(terrain, TerrainFile) and terrain.site == (5e5, 4.4e6) and terrain.site_jitter == 40.0
-    assert terrain.crop == "random" and terrain.crop_scale == (25.0, 25.0)
+    assert isinstance(terrain, TerrainFile)
+    assert terrain.site == (5e5, 4.4e6)
+    assert terrain.site_jitter == 40.0
+    assert terrain.crop == "random"
+    assert terrain.crop_scale == (25.0, 25.0)
     west = TerrainFile("t.asc", site=(-105.5, 40.15))
     again, _ = _parse(west.argv())  # a negative X survives the round trip through the flags
     assert source_from_args(again, _error) == west

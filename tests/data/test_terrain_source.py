@@ -63,7 +63,8 @@ def test_the_site_becomes_grid_fractions(grid: Path) -> None:
     last = (X0 + CELL / 2 + (COLS - 1) * CELL, Y0 + CELL / 2 + (ROWS - 1) * CELL)
     assert site_fractions(field, last, "g") == [1.0, 1.0]
     row, col = site_fractions(field, (first[0] + 20 * CELL, first[1] + 10 * CELL), "g")
-    assert row == pytest.approx(10 / (ROWS - 1)) and col == pytest.approx(20 / (COLS - 1))
+    assert row == pytest.approx(10 / (ROWS - 1))
+    assert col == pytest.approx(20 / (COLS - 1))
     with pytest.raises(DatasetError, match=r"--site 0,0 lies outside the grid g: x in \[450015, 452385\]"):
         site_fractions(field, (0.0, 0.0), "g")
 
@@ -72,26 +73,29 @@ def test_flags_map_onto_terrain_spec_keys(grid: Path, tmp_path: Path) -> None:
     field = read_esri_ascii(grid)
     centre = (X0 + 40 * CELL, Y0 + 30 * CELL)
     keys = terrain_keys(TerrainFile(str(grid), site=centre, site_jitter=25.0, crop="as-is"), field)
-    assert keys["path"] == str(grid) and keys["site_jitter"] == 25.0
-    assert (
-        keys["rotation_deg"] == [0.0, 0.0]
-        and keys["mirror"] == 0.0
-        and keys["metres_per_cell"] == [CELL, CELL]
-        and keys["relief"] is None
-    )
+    assert keys["path"] == str(grid)
+    assert keys["site_jitter"] == 25.0
+    assert keys["rotation_deg"] == [0.0, 0.0]
+    assert keys["mirror"] == 0.0
+    assert keys["metres_per_cell"] == [CELL, CELL]
+    assert keys["relief"] is None
     scaled = terrain_keys(TerrainFile(str(grid), crop="as-is", crop_scale=(12.0, 15.0)), field)
-    assert scaled["metres_per_cell"] == [12.0, 15.0] and "site" not in scaled
+    assert scaled["metres_per_cell"] == [12.0, 15.0]
+    assert "site" not in scaled
     # Issue 33 item 11: a geographic grid's cells are not square. At 40 degrees north a cell of 0.00083
     # degrees spans about 71 m east-west and 92 m north-south: the crop takes both (no more 27 % error).
     geo = write_grid(tmp_path / "geo.asc", cell=0.00083, origin=(-105.5, 40.0))
     degrees = read_esri_ascii(geo)
     at_40 = terrain_keys(TerrainFile(str(geo), site=(-105.45, 40.01), crop="as-is"), degrees)
     east, north = at_40["metres_per_cell"][0], at_40["metres_per_cell"][0] * at_40["cell_aspect"]
-    assert east == pytest.approx(70.9, abs=0.1) and north == pytest.approx(92.1, abs=0.1)
-    assert at_40["metres_per_cell"][1] == east and at_40["relief"] is None
+    assert east == pytest.approx(70.9, abs=0.1)
+    assert north == pytest.approx(92.1, abs=0.1)
+    assert at_40["metres_per_cell"][1] == east
+    assert at_40["relief"] is None
     # --crop-scale sets the east-west metres; the aspect still comes from the latitude.
     scaled_geo = terrain_keys(TerrainFile(str(geo), crop="as-is", crop_scale=(90.0, 90.0)), degrees)
-    assert scaled_geo["metres_per_cell"] == [90.0, 90.0] and scaled_geo["cell_aspect"] > 1.29
+    assert scaled_geo["metres_per_cell"] == [90.0, 90.0]
+    assert scaled_geo["cell_aspect"] > 1.29
     assert "cell_aspect" not in keys  # a projected grid's cells are square
     nowhere = read_esri_ascii(
         write_grid(tmp_path / "nowhere.asc", cell=0.00083)
@@ -127,16 +131,20 @@ def test_a_terrain_build_draws_seeded_crops_of_the_users_grid(
     assert "worlds: terrain model on " in capsys.readouterr().out
     ds = load_dataset(out)
     terrain = ds.domain_spec["models"]["terrain"]
-    assert terrain["path"] == str(grid) and terrain["site"] == pytest.approx([29.5 / 59, 39.5 / 79])
-    assert terrain["mirror"] == 0.0 and ds.world_model == "terrain"
+    assert terrain["path"] == str(grid)
+    assert terrain["site"] == pytest.approx([29.5 / 59, 39.5 / 79])
+    assert terrain["mirror"] == 0.0
+    assert ds.world_model == "terrain"
     source = ds.provenance["world_source"]
-    assert source["file"]["sha256"] == FileRecord.of(grid).sha256 and source["grid"]["rows"] == ROWS
+    assert source["file"]["sha256"] == FileRecord.of(grid).sha256
+    assert source["grid"]["rows"] == ROWS
     domain = domain_from_spec("helicopter", ds.domain_spec)
     edges = np.arange(domain.graph.num_edges)
     expected = [
         domain.checker(domain.make_world("terrain", int(s))).check_many(edges) for s in ds.world_seeds
     ]
-    assert np.array_equal(ds.X, np.array(expected)) and ds.world_model_params["path"] == str(grid)
+    assert np.array_equal(ds.X, np.array(expected))
+    assert ds.world_model_params["path"] == str(grid)
     # The recorded command (with --terrain and its flags) recreates the same bytes.
     again = tmp_path / "again.npz"
     assert main([*shlex.split(ds.provenance["command"])[1:], "--workers", "2", "--out", str(again)]) == 0

@@ -52,4 +52,5 @@ def test_shipped_tree_rebuilds_its_graph_from_the_stored_spec(path: Path) -> Non
     assert np.allclose(domain.graph.lengths, bundle.problem.graph.lengths)
     assert (domain.start, domain.goal) == (bundle.problem.start, bundle.problem.goal)
     assert meta["check_metadata"] == domain.check_metadata()
-    assert 0.0 < bundle.eta <= 1.0 and bundle.tree.num_nodes >= 1
+    assert 0.0 < bundle.eta <= 1.0
+    assert bundle.tree.num_nodes >= 1

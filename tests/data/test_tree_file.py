@@ -121,7 +121,8 @@ def test_round_trip_is_exact(saved: Path, bundle: TreeBundle) -> None:
     assert (problem.start, problem.goal) == (source.start, source.goal)
     assert problem.metadata == source.metadata
     np.testing.assert_array_equal(problem.edge_costs, source.edge_costs)
-    assert problem.graph is not None and source.graph is not None
+    assert problem.graph is not None
+    assert source.graph is not None
     assert problem.graph.num_vertices == source.graph.num_vertices
     assert problem.graph.directed == source.graph.directed
     np.testing.assert_array_equal(problem.graph.edges, source.graph.edges)
@@ -132,7 +133,8 @@ def test_round_trip_is_exact(saved: Path, bundle: TreeBundle) -> None:
     assert problem.library.num_paths == source.library.num_paths
     for a, b in zip(problem.library.path_edges, source.library.path_edges, strict=True):
         np.testing.assert_array_equal(a, b)
-    assert problem.library.vertex_paths is not None and source.library.vertex_paths is not None
+    assert problem.library.vertex_paths is not None
+    assert source.library.vertex_paths is not None
     for a, b in zip(problem.library.vertex_paths, source.library.vertex_paths, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -405,7 +407,8 @@ def test_training_worlds_and_pseudo_count_round_trip(
     posterior = dataclasses.replace(bundle, pseudo_count=12.5)
     loaded = load_tree(save_tree(tmp_path / "p.npz", posterior))
     assert loaded.pseudo_count == 12.5
-    assert loaded.tree.world_free is not None and loaded.tree.world_free.dtype == np.bool_
+    assert loaded.tree.world_free is not None
+    assert loaded.tree.world_free.dtype == np.bool_
     np.testing.assert_array_equal(loaded.tree.world_free, tree.world_free)
     assert loaded.tree.world_weights is None
     for world in worlds.test_ids[:10]:
@@ -434,7 +437,8 @@ def test_version_1_file_loads_with_a_fixed_leaf(saved: Path, planar: tuple[Probl
     problem, _ = planar
     _as_version_1(saved)
     loaded = load_tree(saved)
-    assert loaded.tree.world_free is None and loaded.pseudo_count is None
+    assert loaded.tree.world_free is None
+    assert loaded.pseudo_count is None
     DirectBisectPolicy(loaded.tree, problem.library, problem.edge_costs, eta=1.0)  # the paper's leaf works
     with pytest.raises(ProblemError, match="format version 1"):
         DirectBisectPolicy(loaded.tree, problem.library, problem.edge_costs, eta=1.0, pseudo_count=5.0)

@@ -30,7 +30,8 @@ def test_a_file_record_hashes_the_bytes_and_refuses_a_changed_file(tmp_path: Pat
     path = tmp_path / "scene0001.yaml"
     path.write_bytes(b"world: {collision_objects: []}\n")
     record = FileRecord.of(path)
-    assert record.path == str(path) and record.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert record.path == str(path)
+    assert record.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
     assert record.read() == path.read_bytes()
     assert FileRecord.from_json(json.loads(json.dumps(record.to_json()))) == record
     path.write_bytes(b"world: {collision_objects: [changed]}\n")
@@ -95,13 +96,16 @@ def test_source_requests_give_their_flags_back() -> None:
 
 def test_recipes_with_a_source_name_their_world_model_and_command() -> None:
     recipe = DatasetRecipe("arm", "", ALL_WORLDS, 0, source=SceneFolder("/s"), domain_spec={"k": 4})
-    assert recipe.world_model == "moveit_scenes" and recipe.num_worlds == ALL_WORLDS
+    assert recipe.world_model == "moveit_scenes"
+    assert recipe.num_worlds == ALL_WORLDS
     argv = shlex.split(recipe.command())
     assert argv[:6] == ["drd", "build-dataset", "--domain", "arm", "--scenes", "/s"]
-    assert "--worlds" not in argv and "--world-model" not in argv
+    assert "--worlds" not in argv
+    assert "--world-model" not in argv
     assert argv[argv.index("--domain-spec") + 1] == '{"k": 4}'
     first = DatasetRecipe("helicopter", "", 7, 1, source=TerrainFile("/t.asc"))
-    assert first.world_model == "terrain" and shlex.split(first.command())[4:8] == [
+    assert first.world_model == "terrain"
+    assert shlex.split(first.command())[4:8] == [
         "--terrain",
         "/t.asc",
         "--worlds",

@@ -247,7 +247,8 @@ def test_spec_round_trip(domain: ArmDomain) -> None:
     again = domain_from_spec("arm", spec)
     assert again.spec() == spec
     assert np.array_equal(again.graph.edges, domain.graph.edges)
-    assert again.graph.vertex_states is not None and domain.graph.vertex_states is not None
+    assert again.graph.vertex_states is not None
+    assert domain.graph.vertex_states is not None
     assert np.array_equal(again.graph.vertex_states, domain.graph.vertex_states)
 
 
@@ -261,11 +262,14 @@ def test_metadata_and_trajectories(domain: ArmDomain) -> None:
 
 
 def test_online_members_kept_from_the_defaults_and_its_own(domain: ArmDomain) -> None:
-    assert domain.vehicle_radius == 0.0 and domain.periodic_dims == ()
+    assert domain.vehicle_radius == 0.0
+    assert domain.periodic_dims == ()
     assert domain.world_model_params("clutter") == {}
-    assert domain.position_goals == "vertex" and domain.has_sweep_model
+    assert domain.position_goals == "vertex"
+    assert domain.has_sweep_model
     assert domain.joint_names == tuple(domain.robot.chain.joint_names)
-    assert domain.sweep_robot(None) is None and domain.sweep_robot(domain.robot) is None
+    assert domain.sweep_robot(None) is None
+    assert domain.sweep_robot(domain.robot) is None
     with pytest.raises(PlanningError, match="the arm domain matches goal positions to roadmap vertices"):
         domain.state_from_position([0.0, 0.0, 0.0], 0.0)
 
@@ -326,11 +330,13 @@ def test_extra_states_spec_round_trip(domain: ArmDomain) -> None:
     extras = (states[[20, 60]] - 0.01).tolist()
     built = domain_from_spec("arm", {**SMALL, "extra_states": extras})
     assert isinstance(built, ArmDomain)
-    assert list(built.extra_vertices) == [2, 3] and list(domain.extra_vertices) == []
+    assert list(built.extra_vertices) == [2, 3]
+    assert list(domain.extra_vertices) == []
     assert built.graph.vertex_states is not None
     np.testing.assert_array_equal(built.graph.vertex_states[2:4], extras)
     spec = built.spec()
-    assert spec["extra_states"] == extras and domain.spec()["extra_states"] == []
+    assert spec["extra_states"] == extras
+    assert domain.spec()["extra_states"] == []
     again = domain_from_spec("arm", json.loads(json.dumps(spec)))
     assert again.spec() == spec
     assert np.array_equal(again.graph.edges, built.graph.edges)
@@ -387,6 +393,8 @@ def test_box_panda_states_need_the_scene_floor_default() -> None:
 def test_the_arms_capabilities_say_the_node_plans_joint_goals_and_sends_a_trajectory(
     domain: ArmDomain,
 ) -> None:
-    assert domain.plans_joint_goals and domain.robot_state_topic == "joint_states"
-    assert domain.publishes_joint_trajectory and domain.needs_robot_description
+    assert domain.plans_joint_goals
+    assert domain.robot_state_topic == "joint_states"
+    assert domain.publishes_joint_trajectory
+    assert domain.needs_robot_description
     assert domain.state_columns == "joint angles, rad"

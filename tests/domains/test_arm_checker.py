@@ -20,14 +20,17 @@ def domain(small_arm: ArmDomain) -> ArmDomain:
 def test_empty_scene_frees_everything_and_a_big_box_blocks_everything(domain: ArmDomain) -> None:
     edges = np.arange(domain.graph.num_edges)
     free = domain.scene_checker(Scene(margin=0.0))
-    assert isinstance(free, ArmEdgeChecker) and free.check_many(edges).all()
+    assert isinstance(free, ArmEdgeChecker)
+    assert free.check_many(edges).all()
     walled = Scene(margin=0.0)
     walled.add(Box([4.0, 4.0, 4.0]), Pose([0.0, 0.0, 0.5]), name="all")
     blocked = domain.scene_checker(walled)
-    assert not blocked.check_many(edges).any() and not blocked.check(0)
+    assert not blocked.check_many(edges).any()
+    assert not blocked.check(0)
     states = domain.graph.vertex_states
     assert states is not None
-    assert free.check_motion(states[:2]) and not blocked.check_motion(states[:2])
+    assert free.check_motion(states[:2])
+    assert not blocked.check_motion(states[:2])
     with pytest.raises(ProblemError, match="motion"):
         free.check_motion(np.zeros((2, 3)))
 
@@ -77,7 +80,8 @@ def test_motions_off_the_roadmap_obey_the_static_rules(domain: ArmDomain) -> Non
     moving = robot.spheres.frame_index > 0
     bottoms = (robot.sphere_centres(q)[:, moving, 2] - robot.spheres.radii[moving]).min(axis=1)
     under = q[ok & (bottoms < -0.05)][0]  # valid but for the floor
-    assert not free.check_motion(under[None]) and "below the floor" in free.explain_motion(under[None])
+    assert not free.check_motion(under[None])
+    assert "below the floor" in free.explain_motion(under[None])
 
 
 def test_explain_motion_names_what_blocks_the_first_blocked_sample(domain: ArmDomain) -> None:
@@ -92,6 +96,8 @@ def test_explain_motion_names_what_blocks_the_first_blocked_sample(domain: ArmDo
     motion = np.linspace(np.asarray(domain.params.start, dtype=np.float64), goal, 21)
     assert not checker.check_motion(motion)
     why = checker.explain_motion(motion)
-    assert why.startswith("scene object 'can' (panda_") and why.endswith("at sample 21 of 21")  # the goal end
+    # the goal end
+    assert why.startswith("scene object 'can' (panda_")
+    assert why.endswith("at sample 21 of 21")
     assert checker.explain_motion(goal[None]).startswith("scene object 'can'")
     assert domain.scene_checker(Scene(margin=0.0)).explain_motion(motion) == ""

@@ -62,8 +62,10 @@ def test_the_spec_chooses_the_collision_model(small_arm: ArmDomain, meshes: ArmD
     assert isinstance(meshes.scene_checker(Scene()).model, MeshCollider)
     assert small_arm.check_metadata()["collision_model"] == "spheres"
     meta = meshes.check_metadata()
-    assert meta["collision_model"] == "meshes" and meta["mesh_elements"] == 11
-    assert meta["mesh_triangles"] > 3000 and "panda_hand" in meta["mesh_links"]
+    assert meta["collision_model"] == "meshes"
+    assert meta["mesh_elements"] == 11
+    assert meta["mesh_triangles"] > 3000
+    assert "panda_hand" in meta["mesh_links"]
     assert meshes.spec()["collision_model"] == "meshes"
     assert np.array_equal(meshes.graph.edges, small_arm.graph.edges)  # the same roadmap
     # Every checker shares one set of BVH models.
@@ -130,9 +132,11 @@ def test_end_vertices_first_then_bisection_order_with_early_exit(meshes: ArmDoma
     assert checker.check(e) is False
     (ends, ends_owner, ends_count), (inner, inner_owner, inner_count) = recording.calls
     np.testing.assert_array_equal(ends, q[:2])  # both end vertices first, each its own group
-    assert ends_owner.tolist() == [0, 1] and ends_count == 2
+    assert ends_owner.tolist() == [0, 1]
+    assert ends_count == 2
     np.testing.assert_array_equal(inner, q[2:])  # then the interior, as one group, in bisection order
-    assert inner_count == 1 and not inner_owner.any()
+    assert inner_count == 1
+    assert not inner_owner.any()
     stopped = recording.inner.queries
     everything = mesh_model(meshes.checker(scene))
     everything.groups_blocked(q, np.arange(len(q)), len(q))
@@ -156,7 +160,9 @@ def test_margin_blocks_edges_that_pass_closer_than_it(meshes: ArmDomain) -> None
     world = meshes.make_world("table_clutter", 2)
     exact = meshes.checker(world.to_scene(margin=0.0)).check_many(np.arange(meshes.graph.num_edges))
     wide = meshes.checker(world.to_scene(margin=0.03)).check_many(np.arange(meshes.graph.num_edges))
-    assert not np.any(wide & ~exact) and np.sum(exact & ~wide) > 0  # a margin only blocks more
+    # a margin only blocks more
+    assert not np.any(wide & ~exact)
+    assert np.sum(exact & ~wide) > 0
     assert mesh_model(meshes.checker(world.to_scene(margin=0.03))).obstacles.margin == 0.03
     e = int(np.flatnonzero(exact)[0])
     tool = meshes.end_effector_positions(edge_configurations(meshes, e)[2:3])[0]
@@ -193,7 +199,8 @@ def test_another_robot_model_places_the_same_meshes(meshes: ArmDomain) -> None:
     assert other is not meshes.robot
     world = meshes.make_world("table_clutter", 5)
     theirs = meshes.checker(world, robot=other)
-    assert theirs.self_collision and mesh_model(theirs).placement.robot is other
+    assert theirs.self_collision
+    assert mesh_model(theirs).placement.robot is other
     edges = np.arange(meshes.graph.num_edges)
     np.testing.assert_array_equal(theirs.check_many(edges), meshes.checker(world).check_many(edges))
 
@@ -218,7 +225,9 @@ def test_sweep_growth_is_computed_once_and_contains_the_meshes(meshes: ArmDomain
     model = mesh_model(meshes.checker(Scene()))
     growth = mesh_sweep_growth(meshes.robot, model.placement.meshes)
     assert mesh_sweep_growth(meshes.robot, model.placement.meshes) is growth
-    assert growth.shape == (meshes.robot.spheres.count,) and growth.max() > 0.05  # the base sticks out most
+    # the base sticks out most
+    assert growth.shape == (meshes.robot.spheres.count,)
+    assert growth.max() > 0.05
     centres = meshes.robot.sphere_centres(edge_configurations(meshes, 0))  # (n, S, 3)
     placement = model.placement
     poses = placement.poses(edge_configurations(meshes, 0))

@@ -10,11 +10,14 @@ from drd_planner.exceptions import ProblemError
 
 def test_defaults_and_normalised_values() -> None:
     params = ArmParams.from_spec({"num_samples": 60.0, "urdf_path": None, "start": DEFAULT_START})
-    assert params.num_samples == 60 and isinstance(params.num_samples, int)
+    assert params.num_samples == 60
+    assert isinstance(params.num_samples, int)
     assert params.start == list(DEFAULT_START)
     spec = params.to_spec()
     assert tuple(spec) == SPEC_KEYS
-    assert spec["floor_z"] == 0.0 and spec["resolution"] == 0.05 and spec["margin"] == 0.0
+    assert spec["floor_z"] == 0.0
+    assert spec["resolution"] == 0.05
+    assert spec["margin"] == 0.0
     assert ArmParams.from_spec(spec) == params
 
 
@@ -42,4 +45,5 @@ def test_extra_states_are_stored_as_lists_of_floats() -> None:
     assert params.extra_states == [[1.0, 2.5], [0.0, -1.0]]
     assert all(isinstance(x, float) for row in params.extra_states for x in row)
     assert params.to_spec()["extra_states"] == [[1.0, 2.5], [0.0, -1.0]]
-    assert ArmParams().extra_states == [] and ArmParams().to_spec()["extra_states"] == []
+    assert ArmParams().extra_states == []
+    assert ArmParams().to_spec()["extra_states"] == []

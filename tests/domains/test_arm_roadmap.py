@@ -38,7 +38,8 @@ def test_edge_samples_are_interior_and_in_bisection_order() -> None:
     assert samples.fractions[0] == pytest.approx(0.5)  # the middle first
     assert sorted(samples.fractions.tolist()) == pytest.approx([0.25, 0.5, 0.75])
     q = samples.configurations(graph, 0)
-    assert q.shape == (3, 2) and np.all((q[:, 0] > 0) & (q[:, 0] < 0.4))
+    assert q.shape == (3, 2)
+    assert np.all((q[:, 0] > 0) & (q[:, 0] < 0.4))
     with pytest.raises(ProblemError, match="resolution"):
         EdgeSamples.of_graph(graph, 0.0)
     with pytest.raises(ProblemError, match="vertex states"):

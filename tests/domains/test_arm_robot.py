@@ -19,9 +19,12 @@ def test_the_loader_keeps_one_model_per_description() -> None:
     texts = robot_texts()
     loader = RobotLoader(capacity=1)
     first = loader.model(*texts)
-    assert loader.model(*texts) is first and len(loader) == 1
+    assert loader.model(*texts) is first
+    assert len(loader) == 1
     other = loader.model(texts[1] or texts[0], None, texts[2])  # the spherized file on its own
-    assert other is not first and len(loader) == 1  # the older model was dropped
+    # the older model was dropped
+    assert other is not first
+    assert len(loader) == 1
     assert loader.model(*texts) is not first
     assert load_robot(loader=loader).chain.joint_names == first.chain.joint_names
 

@@ -17,7 +17,8 @@ def domain(small_arm: ArmDomain) -> ArmDomain:
 
 def test_rates_bound_how_fast_each_sphere_moves(domain: ArmDomain) -> None:
     rates = sphere_rates(domain.robot)
-    assert rates.shape == (domain.robot.dof, domain.robot.spheres.count) and np.all(rates >= 0)
+    assert rates.shape == (domain.robot.dof, domain.robot.spheres.count)
+    assert np.all(rates >= 0)
     base = domain.robot.spheres.frame_index == 0
     assert np.all(rates[:, base] == 0)  # the fixed base spheres never move
     q = np.array(domain.graph.vertex_states[:2])  # type: ignore[index]
@@ -28,7 +29,9 @@ def test_rates_bound_how_fast_each_sphere_moves(domain: ArmDomain) -> None:
 
 
 def test_edge_spheres_hold_every_checked_configuration(domain: ArmDomain) -> None:
-    assert isinstance(domain, OnlineDomain) and domain.has_sweep_model and domain.position_goals == "vertex"
+    assert isinstance(domain, OnlineDomain)
+    assert domain.has_sweep_model
+    assert domain.position_goals == "vertex"
     assert domain.joint_names == domain.robot.chain.joint_names
     assert domain.sweep_robot(domain.robot) is None
 
@@ -45,9 +48,8 @@ def test_edge_spheres_hold_every_checked_configuration(domain: ArmDomain) -> Non
     spheres = domain.sweep_spheres(Source(), [0, domain.graph.num_edges], None)
     count = domain.robot.spheres.count
     interior = domain.samples.configurations(domain.graph, 0).shape[0]
-    assert spheres[0][0].shape == ((interior + 2) * count, 3) and spheres[0][1].shape == (
-        (interior + 2) * count,
-    )
+    assert spheres[0][0].shape == ((interior + 2) * count, 3)
+    assert spheres[0][1].shape == ((interior + 2) * count,)
     assert spheres[1][0].shape == (3 * count, 3)
     np.testing.assert_allclose(spheres[1][0][:count], domain.robot.sphere_centres(motion[:1])[0])
     assert np.all(spheres[1][1] >= np.tile(domain.robot.spheres.radii, 3))
@@ -68,4 +70,5 @@ def test_under_the_mesh_model_the_sweep_spheres_grow_to_hold_the_meshes(
     ((centres, reach),) = domain.sweep_spheres(Source(), [0], None)
     ((mesh_centres, mesh_reach),) = meshes.sweep_spheres(Source(), [0], None)
     np.testing.assert_array_equal(mesh_centres, centres)
-    assert np.all(mesh_reach >= reach) and float(np.max(mesh_reach - reach)) > 0.01
+    assert np.all(mesh_reach >= reach)
+    assert float(np.max(mesh_reach - reach)) > 0.01

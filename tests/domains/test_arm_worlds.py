@@ -57,7 +57,8 @@ def test_table_clutter_objects_stand_on_the_table() -> None:
         top_z = top.pose.position[2] + TABLE_THICKNESS / 2
         assert TABLE_TOP_HEIGHT[0] <= top_z <= TABLE_TOP_HEIGHT[1]
         yaw = Rotation.from_quat(top.pose.quaternion_xyzw).as_euler("xyz")
-        assert yaw[0] == pytest.approx(0.0, abs=1e-12) and yaw[1] == pytest.approx(0.0, abs=1e-12)
+        assert yaw[0] == pytest.approx(0.0, abs=1e-12)
+        assert yaw[1] == pytest.approx(0.0, abs=1e-12)
         objects = [o for o in world.obstacles if not o.name.startswith("table")]
         assert TABLE_OBJECTS[0] <= len(objects) <= TABLE_OBJECTS[1]
         to_table = top.pose.inverse()

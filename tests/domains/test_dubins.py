@@ -115,14 +115,16 @@ UNSIGNED = [
 @pytest.mark.parametrize(("start", "end", "word", "segments", "middle"), SIGNED)
 def test_signed_golden_cases(start: Pose, end: Pose, word: str, segments: tuple, middle: list) -> None:
     path = dubins_path(start, end, radius=R)
-    assert path.word == word and path.segments == pytest.approx(segments, rel=1e-12, abs=1e-12)
+    assert path.word == word
+    assert path.segments == pytest.approx(segments, rel=1e-12, abs=1e-12)
     assert path.sample(np.linspace(0.0, path.length, 5))[2] == pytest.approx(middle, rel=1e-12, abs=1e-12)
 
 
 @pytest.mark.parametrize(("start", "end", "word", "segments", "middle"), UNSIGNED)
 def test_unsigned_golden_cases(start: Pose, end: Pose, word: str, segments: tuple, middle: list) -> None:
     path = dubins_path(start, end, radius=0.3, headings="unsigned")
-    assert path.word == word and path.segments == pytest.approx(segments, rel=1e-12, abs=1e-12)
+    assert path.word == word
+    assert path.segments == pytest.approx(segments, rel=1e-12, abs=1e-12)
     assert path.sample(np.linspace(0.0, path.length, 5))[2] == pytest.approx(middle, rel=1e-12, abs=1e-12)
 
 
@@ -232,7 +234,8 @@ def test_unsigned_samples_lie_on_the_turning_circle(goal: Pose, length: float, c
     pts = path.sample_evenly(0.005)
     assert np.all((pts[:, 2] >= 0.0) & (pts[:, 2] < TWO_PI))
     if centre is None:
-        assert np.allclose(pts[:, 1], 0.0) and np.allclose(pts[:, 2], 0.0)
+        assert np.allclose(pts[:, 1], 0.0)
+        assert np.allclose(pts[:, 2], 0.0)
     else:
         assert np.allclose(np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1]), 0.1, atol=1e-12)
 
@@ -284,7 +287,8 @@ def test_even_samples_respect_the_spacing() -> None:
         path = dubins_path(a, b, radius=radius, headings="unsigned")
         pts = path.sample_evenly(0.01)
         assert pts.shape[0] == max(2, math.ceil(path.length / 0.01 - 1e-9) + 1)
-        assert pts[0] == pytest.approx(a, abs=1e-12) and pts[-1, :2] == pytest.approx(b[:2], abs=1e-9)
+        assert pts[0] == pytest.approx(a, abs=1e-12)
+        assert pts[-1, :2] == pytest.approx(b[:2], abs=1e-9)
         step = np.linalg.norm(np.diff(pts[:, :2], axis=0), axis=1)
         assert step.max() <= 0.01 + 1e-12
 

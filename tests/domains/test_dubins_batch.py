@@ -19,19 +19,22 @@ def test_sketches_match_the_verified_paths_word_for_word() -> None:
     ends[20:30, :2] = starts[20:30, :2] + 50.0  # inside the turning circle
     fractions = np.linspace(0.0, 1.0, 8)
     lengths, poses = dubins_sketches(starts, ends, radius=300.0, fractions=fractions)
-    assert lengths.shape == (n,) and poses.shape == (n, 8, 3)
+    assert lengths.shape == (n,)
+    assert poses.shape == (n, 8, 3)
     for i in range(n):
         path = dubins_path(tuple(starts[i]), tuple(ends[i]), radius=300.0)
         assert lengths[i] == pytest.approx(path.length, abs=1e-6)
         expected = path.sample(fractions * path.length)
         assert np.allclose(poses[i, :, :2], expected[:, :2], atol=1e-6)
         assert np.allclose(np.cos(poses[i, :, 2] - expected[:, 2]), 1.0)
-    assert np.allclose(poses[:, 0, :2], starts[:, :2]) and np.allclose(poses[:, -1, :2], ends[:, :2])
+    assert np.allclose(poses[:, 0, :2], starts[:, :2])
+    assert np.allclose(poses[:, -1, :2], ends[:, :2])
 
 
 def test_one_start_broadcasts_and_a_bad_radius_is_refused() -> None:
     ends = np.array([[500.0, 0.0, 0.0], [0.0, 500.0, np.pi / 2]])
     lengths, poses = dubins_sketches(np.zeros(3), ends, radius=100.0, fractions=[0.0, 1.0])
-    assert lengths[0] == pytest.approx(500.0) and poses.shape == (2, 2, 3)
+    assert lengths[0] == pytest.approx(500.0)
+    assert poses.shape == (2, 2, 3)
     with pytest.raises(ProblemError, match="turning radius"):
         dubins_sketches(np.zeros(3), ends, radius=0.0, fractions=[0.5])

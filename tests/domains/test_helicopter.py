@@ -53,12 +53,14 @@ def test_custom_spec_round_trips_and_is_used() -> None:
     assert isinstance(domain, HelicopterDomain)
     spec = domain.spec()
     assert domain_from_spec("helicopter", json.loads(json.dumps(spec))).spec() == spec
-    assert spec["vehicle_radius"] == 4.0 and spec["wire_segments"] is None
+    assert spec["vehicle_radius"] == 4.0
+    assert spec["wire_segments"] is None
     states = domain.graph.vertex_states
     assert states is not None
     assert states[domain.goal].tolist() == [400.0, 0.0, 80.0, 0.0]  # middle of two levels = the upper one
     world = domain.make_world("wires", 0)
-    assert len(world.nofly) == 1 and world.nofly[0].center == (200.0, 100.0)
+    assert len(world.nofly) == 1
+    assert world.nofly[0].center == (200.0, 100.0)
     # same spec, same worlds, same answers
     other = domain_from_spec("helicopter", spec)
     edges = np.arange(domain.graph.num_edges)
@@ -73,7 +75,8 @@ def test_edge_trajectories_and_check_metadata(domain: HelicopterDomain) -> None:
     assert all(t.ndim == 2 and t.shape[1] == 4 and t.shape[0] >= 2 for t in trajectories)
     meta = domain.check_metadata()
     json.dumps(meta)
-    assert meta["vehicle_radius_m"] == 5.0 and meta["margin_m"] == 2.0
+    assert meta["vehicle_radius_m"] == 5.0
+    assert meta["margin_m"] == 2.0
     assert meta["effective_radius_m"] == 7.0
     assert meta["max_sample_step_m"] <= meta["sample_spacing_m"] + 1e-9
     assert meta["sample_spacing_m"] <= meta["vehicle_radius_m"]
@@ -113,10 +116,14 @@ def test_a_terrain_elsewhere_or_in_another_datum_is_not_the_lattices(domain: Hel
     assert domain.terrain_mismatch(terrain) is None
     far = Heightfield(terrain.origin + 20_000.0, terrain.cell_size, terrain.heights)
     reason = domain.terrain_mismatch(far)
-    assert reason is not None and "do not overlap" in reason and "the prior's lattice x [0, 700] m" in reason
+    assert reason is not None
+    assert "do not overlap" in reason
+    assert "the prior's lattice x [0, 700] m" in reason
     above_sea = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1600.0)  # heights above MSL
     reason = domain.terrain_mismatch(above_sea)
-    assert reason is not None and "below it" in reason and "not above sea level" in reason
+    assert reason is not None
+    assert "below it" in reason
+    assert "not above sea level" in reason
     # Partly over the lattice, partly beyond it: the part over it decides, and it fits.
     shifted = Heightfield(terrain.origin + np.array([600.0, 0.0]), terrain.cell_size, terrain.heights)
     assert domain.terrain_mismatch(shifted) is None

@@ -19,4 +19,5 @@ def test_valley_floor_holds_start_and_goal_and_wires_span_the_rims() -> None:
     at_ends = draw.terrain.height_at(np.array([[0.0, 0.0], [700.0, 0.0]]))
     assert at_ends == pytest.approx([floor, floor])
     assert draw.terrain.heights.max() == pytest.approx(wall, abs=1e-6)
-    assert len(draw.wires) == 2 and draw.solids == ()
+    assert len(draw.wires) == 2
+    assert draw.solids == ()

@@ -94,7 +94,8 @@ def test_wire_across_the_corridor_blocks_the_edges_it_crosses(domain: Helicopter
     flat = states[u, 2] == states[v, 2]
     crosses = (states[u, 0] < 325.0) & (states[v, 0] > 325.0)
     at_65 = flat & crosses & (states[u, 2] == 65.0)
-    assert at_65.any() and not free[at_65].any()
+    assert at_65.any()
+    assert not free[at_65].any()
     assert free[flat & (states[u, 2] != 65.0)].all()
 
 
@@ -109,7 +110,8 @@ def test_sagging_wire_is_checked_conservatively(domain: HelicopterDomain) -> Non
     dmin = _edge_min(domain, distance)
     assert not free[dmin < REACH - 0.1].any()  # 0.1 m covers the sampling of the curve
     assert free[dmin > REACH + chord_gap + 0.1].all()
-    assert (~free).any() and free.any()
+    assert (~free).any()
+    assert free.any()
 
 
 def test_nofly_cylinder_around_a_vertex_blocks_its_edges(domain: HelicopterDomain) -> None:
@@ -119,7 +121,8 @@ def test_nofly_cylinder_around_a_vertex_blocks_its_edges(domain: HelicopterDomai
     zone = NoFlyZone("cylinder", (350.0, 0.0), radius=10.0)
     free = _all_free(domain, _world(domain, zones=(zone,)))
     incident = (domain.graph.edges[:, 0] == vertex) | (domain.graph.edges[:, 1] == vertex)
-    assert incident.sum() >= 4 and not free[incident].any()
+    assert incident.sum() >= 4
+    assert not free[incident].any()
     pts = domain.lattice.points
     distance = np.hypot(pts[:, 0] - 350.0, pts[:, 1])
     _assert_matches(free, _edge_min(domain, distance), 10.0 + REACH)

@@ -74,10 +74,13 @@ def test_registration_error_shifts_and_lifts_the_dem(plane: Path) -> None:
         far &= np.hypot(gx - 300.0, gy) > 2.0
         moved = SLOPE[0] * (gx + reg["dx"]) + SLOPE[1] * (gy + reg["dy"]) + reg["bias"]
         assert np.allclose(draw.terrain.heights[far], moved[far], atol=1e-6)
-        assert abs(reg["dx"]) <= 60.0 and abs(reg["dy"]) <= 60.0 and abs(reg["bias"]) <= 18.0
+        assert abs(reg["dx"]) <= 60.0
+        assert abs(reg["dy"]) <= 60.0
+        assert abs(reg["bias"]) <= 18.0
         seen.append((reg["dx"], reg["bias"]))
     spread = np.std(np.asarray(seen), axis=0)
-    assert 10.0 < spread[0] < 30.0 and 3.0 < spread[1] < 9.0
+    assert 10.0 < spread[0] < 30.0
+    assert 3.0 < spread[1] < 9.0
 
 
 def test_a_present_line_stands_on_the_true_ground_along_its_route(plane: Path) -> None:
@@ -89,7 +92,8 @@ def test_a_present_line_stands_on_the_true_ground_along_its_route(plane: Path) -
     draw = CorridorsModel().draw(np.random.default_rng(1), params, FRAME)
     towers = [(name, pose) for name, _shape, pose in draw.solids if name.startswith("tower_l_")]
     assert len(towers) == 4  # 300 m of route, towers at most 100 m apart
-    assert len(draw.wires) == 3 * 2 and {w.sag for w in draw.wires} == {5.0}
+    assert len(draw.wires) == 3 * 2
+    assert {w.sag for w in draw.wires} == {5.0}
     tops = sorted(max(w.start[2], w.end[2]) for w in draw.wires)
     ground_top = SLOPE[0] * 150.0 + SLOPE[1] * 150.0 + 30.0  # the northern tower
     assert tops[-1] == pytest.approx(ground_top)
@@ -113,10 +117,12 @@ def test_presence_and_activity_follow_their_probabilities_independently(plane: P
         present.append([line["present"] for line in draw.info["lines"]])
         active.append([zone["active"] for zone in draw.info["zones"]])
         assert not any(name.startswith("tower_never") for name, _s, _p in draw.solids)
-        assert draw.nofly[0].center == (150.0, 100.0) and type(draw.nofly[0]).__name__ == "NoFlyZone"
+        assert draw.nofly[0].center == (150.0, 100.0)
+        assert type(draw.nofly[0]).__name__ == "NoFlyZone"
         assert len(draw.nofly) == 1 + int(active[-1][1])
     rate = np.mean(np.asarray(present, dtype=float), axis=0)
-    assert 0.38 < rate[0] < 0.62 and rate[1] == 0.0
+    assert 0.38 < rate[0] < 0.62
+    assert rate[1] == 0.0
     assert 0.38 < np.mean([a[1] for a in active]) < 0.62
     # the second line's draws do not depend on whether the first one is present
     flipped = _params(
@@ -147,14 +153,16 @@ def test_taps_need_their_line_and_grouped_zones_switch_together(plane: Path) -> 
         a, b = (zone["active"] for zone in info["zones"])
         assert a == b
         states.append(a)
-    assert 0.3 < np.mean(taps) < 0.6 and 0.38 < np.mean(states) < 0.62
+    assert 0.3 < np.mean(taps) < 0.6
+    assert 0.38 < np.mean(states) < 0.62
 
 
 def test_same_seed_same_draw(plane: Path) -> None:
     params = _params(plane, lines=(KnownLine(name="l", route=((150.0, -150.0), (160.0, 150.0))),))
     one = CorridorsModel().draw(np.random.default_rng(4), params, FRAME)
     two = CorridorsModel().draw(np.random.default_rng(4), params, FRAME)
-    assert np.array_equal(one.terrain.heights, two.terrain.heights) and one.info == two.info
+    assert np.array_equal(one.terrain.heights, two.terrain.heights)
+    assert one.info == two.info
     assert one.wires == two.wires
 
 
@@ -179,7 +187,8 @@ def test_refusals_name_what_to_change(plane: Path, values: dict[str, Any], match
 
 def test_metres_per_degree() -> None:
     east, north = metres_per_degree(40.0)
-    assert east == pytest.approx(85_394.0, rel=1e-3) and north == pytest.approx(111_035.0, rel=1e-3)
+    assert east == pytest.approx(85_394.0, rel=1e-3)
+    assert north == pytest.approx(111_035.0, rel=1e-3)
     assert metres_per_degree(0.0)[0] == pytest.approx(111_320.0, rel=1e-3)
     assert math.isclose(metres_per_degree(90.0)[0], 0.0, abs_tol=1.0)
 
@@ -196,8 +205,10 @@ def test_the_real_scale_preset_is_big_and_keeps_its_start_and_goal_clear() -> No
     domain = HelicopterDomain.from_spec(spec)
     lattice, default = domain.params.lattice, LatticeParams()
     assert domain.graph.num_edges >= 10_000
-    assert np.ptp(lattice.x_range) >= 2000.0 and np.ptp(lattice.y_range) >= 2000.0
-    assert len(lattice.z_levels) > len(default.z_levels) and lattice.max_heading_deg > default.max_heading_deg
+    assert np.ptp(lattice.x_range) >= 2000.0
+    assert np.ptp(lattice.y_range) >= 2000.0
+    assert len(lattice.z_levels) > len(default.z_levels)
+    assert lattice.max_heading_deg > default.max_heading_deg
     states = domain.graph.vertex_states
     assert states is not None
     assert np.unique(np.round(states[:, 3], 6)).size == 8  # every heading
@@ -219,16 +230,17 @@ def test_the_shipped_lines_prior_walks_its_tree_on_a_corridors_world() -> None:
     path = REPO_ROOT / "trees" / "heli_lines.npz"
     prior = load_prior(path)
     spec = json.loads((REPO_ROOT / "trees" / "heli_lines_spec.json").read_text(encoding="utf-8"))
-    assert (
-        prior.domain == "helicopter"
-        and prior.domain_spec["lattice"]["z_levels"] == spec["lattice"]["z_levels"]
-    )
+    assert prior.domain == "helicopter"
+    assert prior.domain_spec["lattice"]["z_levels"] == spec["lattice"]["z_levels"]
     domain = domain_from_spec(prior.domain, prior.domain_spec)
     assert np.array_equal(domain.graph.edges, prior.graph.edges)
     own = prior.trees[0]
     assert (own.start, own.goal) == (domain.start, domain.goal)
-    assert own.leaf is not None and own.leaf.eta < 1.0  # the tree does not hand over at its root
+    # the tree does not hand over at its root
+    assert own.leaf is not None
+    assert own.leaf.eta < 1.0
     result = Planner(prior).plan(domain.start, domain.goal, domain.checker(domain.make_world("corridors", 6)))
     assert result.found
     stages = [check.stage for check in result.checks]
-    assert stages[0] == "tree" and "bisect" in stages
+    assert stages[0] == "tree"
+    assert "bisect" in stages

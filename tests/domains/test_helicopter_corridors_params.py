@@ -15,7 +15,8 @@ from drd_planner.exceptions import ProblemError
 
 def test_defaults_round_trip_through_json() -> None:
     params = CorridorsParams()
-    assert params.lines and params.zones
+    assert params.lines
+    assert params.zones
     text = json.dumps(params_to_dict(params))
     again = model_params_from_dict("corridors", json.loads(text))
     assert again == params
@@ -32,7 +33,8 @@ def test_partial_dicts_fill_in_defaults() -> None:
     assert isinstance(params, CorridorsParams)
     assert params.lines == (KnownLine(name="a", route=((0.0, 1.0), (2.0, 3.0))),)
     assert params.lines[0].probability == KnownLine().probability
-    assert params.zones == () and params.shift_sigma == 0.0
+    assert params.zones == ()
+    assert params.shift_sigma == 0.0
 
 
 def test_known_zone_is_a_no_fly_zone_with_a_probability() -> None:
@@ -47,7 +49,8 @@ def test_known_zone_is_a_no_fly_zone_with_a_probability() -> None:
         (10.0, 20.0),
         30.0,
     )
-    assert zone.probability == 1.0 and zone.footprint_radius == column.footprint_radius
+    assert zone.probability == 1.0
+    assert zone.footprint_radius == column.footprint_radius
 
 
 @pytest.mark.parametrize(

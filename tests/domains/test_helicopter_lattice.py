@@ -29,7 +29,8 @@ def test_default_size_and_endpoints(lattice: HelicopterLattice) -> None:
     g = lattice.graph
     assert g.directed
     assert 1000 <= g.num_edges <= 3100
-    assert g.vertex_states is not None and g.vertex_states.shape == (g.num_vertices, 4)
+    assert g.vertex_states is not None
+    assert g.vertex_states.shape == (g.num_vertices, 4)
     assert g.vertex_states[lattice.start].tolist() == [0.0, 0.0, 65.0, 0.0]
     assert g.vertex_states[lattice.goal].tolist() == [700.0, 0.0, 65.0, 0.0]
 

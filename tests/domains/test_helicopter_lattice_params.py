@@ -10,8 +10,10 @@ from drd_planner.exceptions import ProblemError
 
 def test_defaults_and_normalisation() -> None:
     p = LatticeParams(x_range=[0, 700], z_levels=[40, 65, 90], start_level=0, axis_primitives=[[1, 0, 0]])
-    assert p.x_range == (0.0, 700.0) and p.z_levels == (40.0, 65.0, 90.0)
-    assert p.axis_primitives == ((1, 0, 0),) and p.level_index(p.start_level) == 0
+    assert p.x_range == (0.0, 700.0)
+    assert p.z_levels == (40.0, 65.0, 90.0)
+    assert p.axis_primitives == ((1, 0, 0),)
+    assert p.level_index(p.start_level) == 0
     assert p.level_index(p.goal_level) == 1
     assert LatticeParams.from_dict(p.to_dict()) == p
 

@@ -28,11 +28,13 @@ def test_grids_are_read_once_per_file_version(tmp_path: Path) -> None:
     grids = TerrainGrids(size=1)
     a = _grid(tmp_path / "a.asc", 100.0)
     first = grids.load(a)
-    assert grids.load(a) is first and len(grids) == 1
+    assert grids.load(a) is first
+    assert len(grids) == 1
     _grid(a, 200.0)
     os.utime(a, ns=(first_ns := a.stat().st_mtime_ns + 10**9, first_ns))
     second = grids.load(a)
-    assert second is not first and second.heights.mean() > first.heights.mean()
+    assert second is not first
+    assert second.heights.mean() > first.heights.mean()
     grids.load(_grid(tmp_path / "b.asc", 0.0))
     assert len(grids) == 1  # the least recently used grid went
     with pytest.raises(ProblemError, match="not found"):
@@ -51,8 +53,11 @@ def test_model_draws_through_its_cache(tmp_path: Path) -> None:
     params = TerrainParams(path=str(path), metres_per_cell=(5.0, 8.0), nofly=0)
     one = model.draw(np.random.default_rng(3), params, frame)
     two = model.draw(np.random.default_rng(3), params, frame)
-    assert np.array_equal(one.terrain.heights, two.terrain.heights) and one.info == two.info
-    assert len(model.grids) == 1 and one.wires == () and one.solids == ()
+    assert np.array_equal(one.terrain.heights, two.terrain.heights)
+    assert one.info == two.info
+    assert len(model.grids) == 1
+    assert one.wires == ()
+    assert one.solids == ()
 
 
 def test_relief_null_keeps_the_grids_own_heights(tmp_path: Path) -> None:

@@ -20,4 +20,5 @@ def test_lines_have_towers_and_conductors_between_them() -> None:
     per_line = [sum(name.startswith(f"tower_{i}_") for name in towers) for i in range(2)]
     assert len(draw.wires) == sum(2 * (k - 1) for k in per_line)
     again = draw_wires(np.random.default_rng(1), params, FRAME)
-    assert again.wires == draw.wires and np.array_equal(again.terrain.heights, draw.terrain.heights)
+    assert again.wires == draw.wires
+    assert np.array_equal(again.terrain.heights, draw.terrain.heights)

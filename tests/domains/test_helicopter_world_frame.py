@@ -12,11 +12,13 @@ FRAME = WorldFrame((0.0, 100.0), (-50.0, 50.0), 20.0, 10.0, ((0.0, 0.0, 60.0),),
 
 def test_grid_and_heightfield_cover_the_corridor_plus_margin() -> None:
     xs, ys = FRAME.grid()
-    assert (
-        xs[0] == -20.0 and xs[-1] == pytest.approx(120.0) and ys[0] == -70.0 and ys[-1] == pytest.approx(70.0)
-    )
+    assert xs[0] == -20.0
+    assert xs[-1] == pytest.approx(120.0)
+    assert ys[0] == -70.0
+    assert ys[-1] == pytest.approx(70.0)
     field = FRAME.heightfield(np.zeros((ys.size, xs.size)))
-    assert tuple(field.origin) == (-20.0, -70.0) and field.cell_size == 10.0
+    assert tuple(field.origin) == (-20.0, -70.0)
+    assert field.cell_size == 10.0
 
 
 def test_draw_helpers() -> None:

@@ -21,7 +21,8 @@ from drd_planner.geometry.shapes import Box, Cylinder
 def test_no_fly_zones_as_solids_and_footprints() -> None:
     cyl = NoFlyZone("cylinder", (10.0, 0.0), radius=5.0)
     shape, pose = cyl.solid()
-    assert isinstance(shape, Cylinder) and pose.position[2] == pytest.approx(sum(NOFLY_Z_RANGE) / 2)
+    assert isinstance(shape, Cylinder)
+    assert pose.position[2] == pytest.approx(sum(NOFLY_Z_RANGE) / 2)
     assert cyl.contains_xy([[12.0, 0.0], [16.0, 0.0]]).tolist() == [True, False]
     prism = NoFlyZone("prism", (0.0, 0.0), size=(10.0, 2.0), yaw_deg=90.0)
     assert isinstance(prism.solid()[0], Box)

@@ -56,7 +56,8 @@ def test_same_seed_same_world_different_seed_different_world(domain: HelicopterD
     free_a = domain.checker(a).check_many(edges)
     assert np.array_equal(free_a, domain.checker(b).check_many(edges))
     assert not np.array_equal(free_a, domain.checker(c).check_many(edges))
-    assert a.model == model and a.seed == 5
+    assert a.model == model
+    assert a.seed == 5
 
 
 @pytest.mark.parametrize("model", WORLD_MODELS)
@@ -84,7 +85,8 @@ def test_start_and_goal_are_clear_and_worlds_are_mixed(domain: HelicopterDomain,
 def test_wires_hang_from_tower_tops(domain: HelicopterDomain) -> None:
     world = domain.make_world("wires", 2)
     towers = [(shape, pose) for name, shape, pose in world.solids if name.startswith("tower_")]
-    assert towers and world.wires
+    assert towers
+    assert world.wires
     tops = np.array(
         [
             pose.position + np.array([0.0, 0.0, shape.length / 2])
@@ -101,7 +103,8 @@ def test_wires_hang_from_tower_tops(domain: HelicopterDomain) -> None:
             k = int(np.argmin(d))
             assert d[k] < 1e-9
             drop = tops[k, 2] - end[2]
-            assert drop == pytest.approx(round(drop / gap) * gap, abs=1e-9) and drop >= -1e-9
+            assert drop == pytest.approx(round(drop / gap) * gap, abs=1e-9)
+            assert drop >= -1e-9
     # every tower stands on the terrain (its base is below the ground)
     for shape, pose in towers:
         assert isinstance(shape, Cylinder)
@@ -185,7 +188,8 @@ def test_terrain_model_reads_any_esri_grid(tmp_path: Path) -> None:
     assert world.info["path"] == str(path)
     assert np.array_equal(world.terrain.heights, domain.make_world("terrain", 0).terrain.heights)
     free = domain.checker(world).check_many(np.arange(domain.graph.num_edges))
-    assert free.any() and (~free).any()
+    assert free.any()
+    assert (~free).any()
 
 
 def test_terrain_model_errors(tmp_path: Path) -> None:

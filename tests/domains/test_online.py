@@ -25,9 +25,15 @@ def test_the_registry_maps_names_to_domain_classes() -> None:
 def test_point_domains_use_the_defaults(name: str) -> None:
     domain = domain_from_spec(name)
     assert isinstance(domain, OnlineDomain)
-    assert domain.margin == 0.0 and domain.resolution == 0.0 and domain.robot is None
-    assert domain.joint_names == () and domain.periodic_dims == () and domain.position_goals == "none"
-    assert not domain.has_sweep_model and domain.robot_loader() is None and domain.sweep_robot(None) is None
+    assert domain.margin == 0.0
+    assert domain.resolution == 0.0
+    assert domain.robot is None
+    assert domain.joint_names == ()
+    assert domain.periodic_dims == ()
+    assert domain.position_goals == "none"
+    assert not domain.has_sweep_model
+    assert domain.robot_loader() is None
+    assert domain.sweep_robot(None) is None
     assert domain.world_model_params(domain.world_models[0]) == {}
     states = np.array([[0.1, 0.2, 0.3], [0.4, 0.5, 0.6]])
     np.testing.assert_array_equal(domain.positions(states), states[:, :3])
@@ -50,8 +56,12 @@ def test_lattice_domains_read_their_graph_from_the_lattice(name: str, spec: dict
 def test_the_helicopter_states_are_poses_with_a_periodic_heading() -> None:
     domain = domain_from_spec("helicopter", HELI)
     assert isinstance(domain, OnlineDomain)
-    assert domain.periodic_dims == (3,) and domain.position_goals == "pose" and domain.has_sweep_model
-    assert domain.margin == 2.0 and domain.joint_names == () and domain.robot_loader() is None
+    assert domain.periodic_dims == (3,)
+    assert domain.position_goals == "pose"
+    assert domain.has_sweep_model
+    assert domain.margin == 2.0
+    assert domain.joint_names == ()
+    assert domain.robot_loader() is None
     np.testing.assert_allclose(
         domain.state_from_position([1.0, 2.0, 3.0], 4.0), [1.0, 2.0, 3.0, 4.0 - 2 * np.pi]
     )
@@ -82,6 +92,8 @@ def test_pose_domains_capabilities_say_the_node_plans_poses_from_odometry(
 ) -> None:
     domain = domain_from_spec(name, spec)
     assert isinstance(domain, OnlineDomain)
-    assert not domain.plans_joint_goals and domain.robot_state_topic == "odom"
-    assert not domain.publishes_joint_trajectory and not domain.needs_robot_description
+    assert not domain.plans_joint_goals
+    assert domain.robot_state_topic == "odom"
+    assert not domain.publishes_joint_trajectory
+    assert not domain.needs_robot_description
     assert domain.state_columns == columns

@@ -76,7 +76,8 @@ def test_segment_box_shapes_and_multiple_boxes() -> None:
     p0 = np.array([[0.0, 0.375], [0.6, 0.05], [0.0, 0.9]])
     p1 = np.array([[1.0, 0.375], [0.9, 0.05], [1.0, 0.9]])
     out = segments_hit_boxes(p0, p1, boxes)
-    assert out.shape == (3, 2) and out.dtype == bool
+    assert out.shape == (3, 2)
+    assert out.dtype == bool
     assert out.tolist() == [[True, False], [False, True], [False, False]]
     assert segments_hit_boxes(p0, p1, np.zeros((0, 4))).shape == (3, 0)
     with pytest.raises(ProblemError):
@@ -126,7 +127,8 @@ def test_rgg_edges_are_exactly_the_close_pairs() -> None:
     n = 120
     g, start, goal = random_geometric_graph(n, seed=7)
     pts = g.vertex_states
-    assert pts is not None and pts.shape == (n, 2)
+    assert pts is not None
+    assert pts.shape == (n, 2)
     assert ((pts >= 0) & (pts <= 1)).all()
     r = rgg_radius(n)
     dist = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
@@ -144,15 +146,19 @@ def test_rgg_edges_are_exactly_the_close_pairs() -> None:
         assert g.edge_id(u, v) == g.edge_id(v, u) == eid  # symmetric lookup
     assert start == int(np.argmin(np.linalg.norm(pts, axis=1)))
     assert goal == int(np.argmin(np.linalg.norm(pts - 1, axis=1)))
-    assert np.linalg.norm(pts[start]) < 0.3 and np.linalg.norm(pts[goal] - 1) < 0.3
+    assert np.linalg.norm(pts[start]) < 0.3
+    assert np.linalg.norm(pts[goal] - 1) < 0.3
 
 
 def test_rgg_determinism_and_disconnection() -> None:
     a, sa, ga = random_geometric_graph(80, seed=1)
     b, sb, gb = random_geometric_graph(80, seed=1)
     c, _, _ = random_geometric_graph(80, seed=2)
-    assert a.vertex_states is not None and b.vertex_states is not None and c.vertex_states is not None
-    assert np.array_equal(a.edges, b.edges) and np.array_equal(a.vertex_states, b.vertex_states)
+    assert a.vertex_states is not None
+    assert b.vertex_states is not None
+    assert c.vertex_states is not None
+    assert np.array_equal(a.edges, b.edges)
+    assert np.array_equal(a.vertex_states, b.vertex_states)
     assert (sa, ga) == (sb, gb)
     assert not np.array_equal(a.vertex_states, c.vertex_states)
     with pytest.raises(ProblemError, match="raise num_vertices or eta"):
@@ -177,7 +183,8 @@ def test_edge_free_matrix_hand_graph() -> None:
         np.array([[0.45, 0.0, 0.55, 0.1]]),  # touches the bottom edge (y = 0.1) from below
     ]
     x = edge_free_matrix(g, worlds)
-    assert x.shape == (4, 6) and x.dtype == bool
+    assert x.shape == (4, 6)
+    assert x.dtype == bool
     assert x.tolist() == [
         [True, True, True, True, True, True],
         [True, True, True, True, False, False],
@@ -211,8 +218,11 @@ def test_world_models_are_seeded_boxes(model: str) -> None:
     c = sample_worlds(model, 30, seed=5)
     assert len(a) == 30
     for w in a:
-        assert w.ndim == 2 and w.shape[1] == 4 and w.dtype == np.float64
-        assert (w[:, 2] > w[:, 0]).all() and (w[:, 3] > w[:, 1]).all()
+        assert w.ndim == 2
+        assert w.shape[1] == 4
+        assert w.dtype == np.float64
+        assert (w[:, 2] > w[:, 0]).all()
+        assert (w[:, 3] > w[:, 1]).all()
     assert all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
     assert not all(u.shape == v.shape and np.array_equal(u, v) for u, v in zip(a, c, strict=True))
 
@@ -225,7 +235,8 @@ def _squares_of(w: np.ndarray) -> np.ndarray:
 
 def test_one_wall_structure() -> None:
     patterns = one_wall_patterns(17)
-    assert 1 <= patterns.shape[0] <= 15 and patterns.shape[1] == 5
+    assert 1 <= patterns.shape[0] <= 15
+    assert patterns.shape[1] == 5
     assert (patterns.sum(axis=1) >= 2).all()
     worlds = sample_worlds("one_wall", 300, seed=8)
     ys = np.linspace(0.0005, 0.9995, 1000)
@@ -261,7 +272,8 @@ def test_forest_and_moving_wall_structure() -> None:
         assert np.allclose(w[:, 2] - w[:, 0], 0.15)
         xc = (w[0, 0] + w[0, 2]) / 2
         assert 0.2 <= xc <= 0.8
-        assert w[0, 1] == 0.0 and w[1, 3] == 1.0
+        assert w[0, 1] == 0.0
+        assert w[1, 3] == 1.0
         assert w[1, 1] - w[0, 3] == pytest.approx(0.1)
         assert 0.2 <= (w[1, 1] + w[0, 3]) / 2 <= 0.8
 
@@ -320,8 +332,11 @@ def test_generate_world_is_deterministic_per_seed(model: str) -> None:
     assert all(np.array_equal(u, generate_world(model, seed=s)) for s, u in enumerate(a))
     assert len({u.tobytes() for u in a}) == 8  # different seeds, different worlds
     for w in a:
-        assert w.dtype == np.float64 and w.ndim == 2 and w.shape[1] == 4
-        assert (w[:, 2] > w[:, 0]).all() and (w[:, 3] > w[:, 1]).all()
+        assert w.dtype == np.float64
+        assert w.ndim == 2
+        assert w.shape[1] == 4
+        assert (w[:, 2] > w[:, 0]).all()
+        assert (w[:, 3] > w[:, 1]).all()
     with pytest.raises(ProblemError, match="non-negative integer"):
         dom.make_world(model, -1)
     with pytest.raises(ProblemError, match="unknown planar world model"):
@@ -339,9 +354,8 @@ def test_one_wall_band_blocks_everything_but_open_slots() -> None:
         assert 2 <= len(intervals) <= 5
         for lo, hi in intervals:  # every opening is exactly one slot
             i = int(np.argmin(np.abs(slot_lo - lo)))
-            assert lo == pytest.approx(slot_lo[i], abs=1e-3) and hi == pytest.approx(
-                slot_lo[i] + gap, abs=1e-3
-            )
+            assert lo == pytest.approx(slot_lo[i], abs=1e-3)
+            assert hi == pytest.approx(slot_lo[i] + gap, abs=1e-3)
         for i in range(5):
             mid = slot_lo[i] + gap / 2
             is_open = any(lo < mid < hi for lo, hi in intervals)
@@ -356,8 +370,10 @@ def test_one_and_two_wall_pattern_lists() -> None:
     p1 = one_wall_patterns(3)
     assert np.array_equal(p1, wall_patterns(seed=3, walls=1, max_patterns=15))
     p2 = two_wall_patterns(3)
-    assert 1 <= p2.shape[0] <= 20 and p2.shape[1] == 10
-    assert (p2[:, :5].sum(axis=1) >= 2).all() and (p2[:, 5:].sum(axis=1) >= 2).all()
+    assert 1 <= p2.shape[0] <= 20
+    assert p2.shape[1] == 10
+    assert (p2[:, :5].sum(axis=1) >= 2).all()
+    assert (p2[:, 5:].sum(axis=1) >= 2).all()
     with pytest.raises(ProblemError):
         wall_patterns(seed=0, walls=0, max_patterns=5)
     # each world uses one pattern of the domain's fixed list
@@ -396,14 +412,18 @@ def test_moving_wall_has_exactly_one_gap() -> None:
 def test_baffle_s_passage() -> None:
     for seed in range(50):
         w = generate_world("baffle", seed=seed)
-        assert w.shape == (2, 4) and np.allclose(w[:, 2] - w[:, 0], 0.1)
+        assert w.shape == (2, 4)
+        assert np.allclose(w[:, 2] - w[:, 0], 0.1)
         left, right = w[np.argsort(w[:, 0])]
-        assert left[1] == 0.0 and right[3] == 1.0  # rising from the bottom, hanging from the top
+        # rising from the bottom, hanging from the top
+        assert left[1] == 0.0
+        assert right[3] == 1.0
         cx = (left[2] + right[0]) / 2
         cy = (left[3] + right[1]) / 2
         assert right[0] - left[2] == pytest.approx(0.1)  # passage width
         assert left[3] - right[1] == pytest.approx(0.15)  # vertical overlap
-        assert 0.3 <= cx <= 0.7 and 0.2 <= cy <= 0.8
+        assert 0.3 <= cx <= 0.7
+        assert 0.2 <= cy <= 0.8
         s_path = [(cx - 0.25, cy + 0.1), (cx, cy + 0.1), (cx, cy - 0.1), (cx + 0.25, cy - 0.1)]
         assert all(free(a, b, w) for a, b in itertools.pairwise(s_path))
         assert not free((0.0, cy), (1.0, cy), w)  # no straight way across at the centre height
@@ -416,7 +436,8 @@ def test_maze_has_one_left_right_tunnel() -> None:
         centres = []
         for x in walls_x:
             (lo, hi), *rest = free_intervals_on_vertical(w, x)  # one gap of height 0.1 per wall
-            assert rest == [] and hi - lo == pytest.approx(0.1, abs=1e-3)
+            assert rest == []
+            assert hi - lo == pytest.approx(0.1, abs=1e-3)
             centres.append((lo + hi) / 2)
         # a polyline from the corner (0, 0) to the corner (1, 1) through the gaps and column centres
         path = [(0.1, 0.005), (0.1, centres[0])]
@@ -464,8 +485,10 @@ def test_se2_variants_differ_where_the_spec_says() -> None:
         sq = w[np.isclose(w[:, 2] - w[:, 0], 0.1)]
         centres = (sq[:, :2] + sq[:, 2:]) / 2
         assert ((centres >= [0.2, 0.1]) & (centres <= [0.8, 0.9])).all()
-    assert PLANAR_VARIANT.bugtrap_square_rate == 0.0 and SE2_VARIANT.bugtrap_square_rate == 6.0
-    assert len(SE2_VARIANT.forest_means) == 4 and SE2_VARIANT.forest_variance == 0.005
+    assert PLANAR_VARIANT.bugtrap_square_rate == 0.0
+    assert SE2_VARIANT.bugtrap_square_rate == 6.0
+    assert len(SE2_VARIANT.forest_means) == 4
+    assert SE2_VARIANT.forest_variance == 0.005
 
 
 # --------------------------------------------------------------------------------------------------
@@ -503,13 +526,18 @@ def test_planar_checker_matches_edge_free_matrix() -> None:
 
 def test_planar_domain_protocol_and_spec_round_trip() -> None:
     dom = domain_from_spec("planar", {"num_vertices": 150, "seed": 3, "pattern_seed": 7})
-    assert isinstance(dom, PlanarDomain) and isinstance(dom, Domain)
-    assert dom.name == "planar" and dom.world_models == WORLD_MODELS and len(WORLD_MODELS) == 7
+    assert isinstance(dom, PlanarDomain)
+    assert isinstance(dom, Domain)
+    assert dom.name == "planar"
+    assert dom.world_models == WORLD_MODELS
+    assert len(WORLD_MODELS) == 7
     g, s, t = random_geometric_graph(150, seed=3)
-    assert np.array_equal(dom.graph.edges, g.edges) and (dom.start, dom.goal) == (s, t)
+    assert np.array_equal(dom.graph.edges, g.edges)
+    assert (dom.start, dom.goal) == (s, t)
     spec = json.loads(json.dumps(dom.spec()))
     again = domain_from_spec("planar", spec)
-    assert again == dom and again.spec() == dom.spec()
+    assert again == dom
+    assert again.spec() == dom.spec()
     assert np.array_equal(again.make_world("two_wall", 4), dom.make_world("two_wall", 4))
 
     def walls(d: PlanarDomain) -> set[bytes]:
@@ -529,7 +557,8 @@ def test_planar_domain_protocol_and_spec_round_trip() -> None:
 def test_planar_domain_keep_clear() -> None:
     dom = PlanarDomain(num_vertices=100, seed=0, keep_clear=True)
     pts = dom.keep_clear_points()
-    assert pts is not None and pts.shape == (2, 2)
+    assert pts is not None
+    assert pts.shape == (2, 2)
     for s in range(100):
         assert dom.checker(dom.make_world("one_wall", s)).check_many(np.arange(0)).shape == (0,)
         w = dom.make_world("forest", s)

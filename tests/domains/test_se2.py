@@ -39,11 +39,15 @@ def test_lattice_counts_against_the_authors(dom: Se2Domain) -> None:
     g = dom.graph
     # ours keeps one boundary state and its one arc that the authors' graph drops (module docstring)
     assert (g.num_vertices, g.num_edges) == (AUTHORS_V + 1, AUTHORS_E + 1)
-    assert g.directed and g.vertex_states is not None and g.vertex_states.shape == (g.num_vertices, 3)
-    assert dom.start == 0 and g.vertex_states[dom.start] == pytest.approx([0.05, 0.5, 0.0])
+    assert g.directed
+    assert g.vertex_states is not None
+    assert g.vertex_states.shape == (g.num_vertices, 3)
+    assert dom.start == 0
+    assert g.vertex_states[dom.start] == pytest.approx([0.05, 0.5, 0.0])
     assert g.vertex_states[dom.goal] == pytest.approx([0.95, 0.5, 0.0])
     xy = g.vertex_states[:, :2]
-    assert xy.min() >= 0.0 and xy.max() <= 1.0
+    assert xy.min() >= 0.0
+    assert xy.max() <= 1.0
     assert np.allclose(xy / 0.05, np.round(xy / 0.05))
     assert np.allclose(g.vertex_states[:, 2] / HEADING_STEP, np.round(g.vertex_states[:, 2] / HEADING_STEP))
 
@@ -66,7 +70,9 @@ def test_primitives_end_on_lattice_points_and_turn_by_45_degrees(dom: Se2Domain)
             assert sorted((abs(dx), abs(dy))) == [1, 2]
             assert p.length == pytest.approx(0.1143732, abs=1e-6)
         step = np.linalg.norm(np.diff(wp[:, :2], axis=0), axis=1)
-        assert step.max() <= 0.01 + 1e-12 and step.min() >= 0.0075  # evenly spaced, at most 0.01
+        # evenly spaced, at most 0.01
+        assert step.max() <= 0.01 + 1e-12
+        assert step.min() >= 0.0075
         assert wp.shape[0] == math.ceil(p.length / 0.01 - 1e-9) + 1
         heading_steps = np.abs(np.remainder(np.diff(wp[:, 2]) + math.pi, 2 * math.pi) - math.pi)
         assert heading_steps.sum() == pytest.approx(math.pi / 4 if i % 3 else 0.0, abs=1e-9)
@@ -85,7 +91,8 @@ def test_every_edge_joins_its_vertices(dom: Se2Domain) -> None:
         assert t[0] == pytest.approx(states[u], abs=1e-12)
         assert t[-1] == pytest.approx(states[v], abs=1e-12)
         polyline = np.linalg.norm(np.diff(t[:, :2], axis=0), axis=1).sum()
-        assert polyline <= g.lengths[e] + 1e-12 and polyline == pytest.approx(g.lengths[e], rel=2e-3)
+        assert polyline <= g.lengths[e] + 1e-12
+        assert polyline == pytest.approx(g.lengths[e], rel=2e-3)
 
 
 def test_lattice_equals_the_authors_graph_plus_one_boundary_arc(dom: Se2Domain) -> None:
@@ -110,14 +117,17 @@ def test_lattice_equals_the_authors_graph_plus_one_boundary_arc(dom: Se2Domain) 
         path, ours_at = paths[rel]
         worst = max(worst, float(np.abs(ours_at[:, :2] + traj[0, :2] - traj[:, :2]).max()))
         assert float(item["cost"][0, 0]) == pytest.approx(path.length, abs=1e-4)  # theirs: polyline length
-    assert len(theirs) == AUTHORS_E and len(paths) == 24 and worst < 1e-9
+    assert len(theirs) == AUTHORS_E
+    assert len(paths) == 24
+    assert worst < 1e-9
     states = dom.graph.vertex_states
     assert states is not None
     ours = {(grid_key(states[u]), grid_key(states[v])) for u, v in dom.graph.edges}
     assert set(theirs) <= ours
     assert ours - set(theirs) == {((20, 18, 2), (19, 20, 3))}  # (1.0, 0.9, 90 deg) -> (0.95, 1.0, 135 deg)
     problem = load_gccd_folder(folder)
-    assert problem.graph is not None and problem.graph.num_edges == AUTHORS_E
+    assert problem.graph is not None
+    assert problem.graph.num_edges == AUTHORS_E
 
 
 def test_lattice_errors() -> None:
@@ -132,7 +142,8 @@ def test_lattice_errors() -> None:
     with pytest.raises(ProblemError, match="not reachable"):
         build_lattice(bounds=(0.0, 0.0, 0.2, 0.2), start=(0.0, 0.0, math.pi), goal=(0.2, 0.2, 0.0))
     small = build_lattice(bounds=(0.0, 0.0, 0.5, 0.5), start=(0.1, 0.25, 0.0), goal=(0.4, 0.25, 0.0))
-    assert small.graph.num_vertices < 3050 and small.goal > 0
+    assert small.graph.num_vertices < 3050
+    assert small.goal > 0
 
 
 # --------------------------------------------------------------------------------------------------
@@ -154,14 +165,16 @@ def test_points_in_closed_boxes() -> None:
 def test_checker_hand_placed_boxes(dom: Se2Domain) -> None:
     g = dom.graph
     straight = g.edge_id(dom.start, 1)  # (0.05, 0.5, 0) -> (0.10, 0.5, 0), waypoints every 0.01 in x
-    assert g.vertex_states is not None and g.vertex_states[1] == pytest.approx([0.1, 0.5, 0.0])
+    assert g.vertex_states is not None
+    assert g.vertex_states[1] == pytest.approx([0.1, 0.5, 0.0])
     out_of_start = [g.edge_id(dom.start, v) for v in g.edges[g.edges[:, 0] == dom.start][:, 1]]
     assert len(out_of_start) == 3
     # a box around the waypoint (0.07, 0.5) of the straight edge only
     checker = dom.checker(np.array([[0.069, 0.499, 0.071, 0.501]]))
     assert isinstance(checker, EdgeChecker)
     free = checker.check_many(np.arange(g.num_edges))
-    assert not free[straight] and not checker.check(straight)
+    assert not free[straight]
+    assert not checker.check(straight)
     trajs = dom.edge_trajectories()
     expected = np.array(
         [not ((np.abs(t[:, 0] - 0.07) <= 0.001) & (np.abs(t[:, 1] - 0.5) <= 0.001)).any() for t in trajs]
@@ -206,16 +219,22 @@ def test_checker_matches_brute_force_over_trajectories(dom: Se2Domain, model: st
 
 
 def test_se2_domain_protocol_and_spec_round_trip(dom: Se2Domain) -> None:
-    assert isinstance(dom, Domain) and dom.name == "se2" and dom.world_models == WORLD_MODELS
+    assert isinstance(dom, Domain)
+    assert dom.name == "se2"
+    assert dom.world_models == WORLD_MODELS
     spec = json.loads(json.dumps(dom.spec()))
-    assert spec["start_state"] == [0.05, 0.5, 0.0] and spec["turning_radius"] == 0.099
+    assert spec["start_state"] == [0.05, 0.5, 0.0]
+    assert spec["turning_radius"] == 0.099
     again = domain_from_spec("se2", spec)
-    assert isinstance(again, Se2Domain) and again == dom and again.spec() == dom.spec()
+    assert isinstance(again, Se2Domain)
+    assert again == dom
+    assert again.spec() == dom.spec()
     assert np.array_equal(again.graph.edges, dom.graph.edges)
     assert np.array_equal(again.make_world("bugtrap", 5), dom.make_world("bugtrap", 5))
     assert not np.array_equal(dom.make_world("bugtrap", 5), dom.make_world("bugtrap", 6))
     meta = json.loads(json.dumps(dom.check_metadata()))
-    assert meta["waypoint_spacing"] == 0.01 and meta["vehicle"] == "point"
+    assert meta["waypoint_spacing"] == 0.01
+    assert meta["vehicle"] == "point"
     with pytest.raises(ProblemError, match=r"unknown .* spec keys"):
         domain_from_spec("se2", {"radius": 0.1})
     for bad in ({"start_state": [0.05, 0.5]}, {"spacing": "x"}, {"pattern_seed": -2}, {"keep_clear": "no"}):

@@ -68,22 +68,29 @@ def test_helicopter_nested_keys_are_walked() -> None:
     assert {f"lattice.{f.name}" for f in dataclasses.fields(LatticeParams)} <= keys
     for model in WORLD_MODELS:
         assert f"models.{model}.nofly" in keys
-    assert "models.terrain.site" in keys and "vehicle_radius" in keys
+    assert "models.terrain.site" in keys
+    assert "vehicle_radius" in keys
     entry = next(e for e in spec_entries("helicopter") if e.key == "lattice.xy_spacing")
-    assert entry.unit == "m" and entry.default == 50.0 and "grid spacing" in entry.meaning
+    assert entry.unit == "m"
+    assert entry.default == 50.0
+    assert "grid spacing" in entry.meaning
 
 
 def test_arm_entries_match_the_params_and_help_lists_every_key() -> None:
     entries = {e.key: e for e in spec_entries("arm")}
-    assert entries["floor_z"].unit == "m" and entries["floor_z"].default == 0.0
-    assert entries["extra_states"].default == [] and entries["extra_states"].unit == "rad"
+    assert entries["floor_z"].unit == "m"
+    assert entries["floor_z"].default == 0.0
+    assert entries["extra_states"].default == []
+    assert entries["extra_states"].unit == "rad"
     assert entries["start"].unit == "rad"  # "(D,)" before it is a shape, not a unit
-    assert entries["num_samples"].unit == "count" and "(count)" not in entries["num_samples"].meaning
+    assert entries["num_samples"].unit == "count"
+    assert "(count)" not in entries["num_samples"].meaning
     text = spec_help("arm")
     for key, entry in entries.items():
         line = next(line for line in text.splitlines() if line.strip().startswith(f"{key} "))
         assert f"= {json.dumps(entry.default)}  [{entry.unit}]  {entry.meaning}" in line
-    assert ":data:" not in text and "``" not in text
+    assert ":data:" not in text
+    assert "``" not in text
 
 
 def test_unknown_domain_names_the_registered_ones() -> None:
@@ -129,5 +136,6 @@ def test_attribute_docs_join_lines_follow_the_mro_and_leave_gaps_visible() -> No
     assert docs["width"] == "how wide (m), a second line."
     assert docs["angle"] == "(D,) turn (deg)."
     assert docs["label"].startswith("a label")
-    assert "undocumented" not in docs and "ProblemError" not in docs
+    assert "undocumented" not in docs
+    assert "ProblemError" not in docs
     assert plain_text("see :class:`~a.b.NoFlyZone` and ``x`` or :func:`f`") == "see NoFlyZone and x or f"

@@ -62,8 +62,10 @@ def test_from_parameters_takes_its_fields_and_ignores_other_parameters() -> None
     limits = MapLimits.from_parameters(
         {"max_terrain_cells": 4e6, "max_coordinate": 5000, "unknown_terrain": "highest_neighbour", "seed": 7}
     )
-    assert limits.max_terrain_cells == 4_000_000 and isinstance(limits.max_terrain_cells, int)
-    assert limits.max_coordinate == 5000.0 and isinstance(limits.max_coordinate, float)
+    assert limits.max_terrain_cells == 4_000_000
+    assert isinstance(limits.max_terrain_cells, int)
+    assert limits.max_coordinate == 5000.0
+    assert isinstance(limits.max_coordinate, float)
     assert limits.unknown == "highest_neighbour"
     assert dataclasses.replace(limits, max_markers=3).max_markers == 3
     with pytest.raises(ParameterError, match="'seeds' is not a map limit"):

@@ -69,14 +69,16 @@ def test_a_link_mesh_at_its_fk_pose_meets_a_box_on_it_and_not_one_moved_away(
     hit = collider(robot, hand, on)
     assert hit.groups_blocked(Q, np.array([0]), 1).tolist() == [True]
     contact = hit.first_contact(Q)
-    assert contact is not None and (contact.link, contact.reason, contact.obstacle) == (
+    assert contact is not None
+    assert (contact.link, contact.reason, contact.obstacle) == (
         "panda_hand",
         "contact",
         0,
     )
     assert 0.0 < contact.depth <= 0.02 * np.sqrt(3)
     part = hand.parts[0]  # its collision origin is the identity: the link frame is the mesh's
-    assert np.all(contact.point >= part.bounds[0] - 0.021) and np.all(contact.point <= part.bounds[1] + 0.021)
+    assert np.all(contact.point >= part.bounds[0] - 0.021)
+    assert np.all(contact.point <= part.bounds[1] + 0.021)
     world = MeshPlacement(robot, hand).poses(Q)[0, 0] @ np.append(contact.point, 1.0)
     assert np.linalg.norm(world[:3] - vertex) < 0.02 * np.sqrt(3)  # at the box
     away = Scene()
@@ -114,16 +116,19 @@ def test_what_fcl_cannot_see_inside_meshes_still_blocks(robot: RobotModel, panda
     tiny.add(Box([0.004, 0.004, 0.004]), Pose(pose[:3, :3] @ inner + pose[:3, 3]), name="tiny")
     assert not pair_collides(placed(robot, link7), SceneObstacles.of_scene(tiny).objects[0])  # hollow to FCL
     contact = collider(robot, link7, tiny).first_contact(Q)
-    assert contact is not None and (contact.reason, contact.obstacle) == ("inside", 0)
+    assert contact is not None
+    assert (contact.reason, contact.obstacle) == ("inside", 0)
     shell = trimesh.creation.box(extents=[3.0, 3.0, 3.0])
     boxed = Scene()
     boxed.add(TriangleMesh(shell.vertices, shell.faces), Pose(), name="room")
     inside = collider(robot, link7, boxed).first_contact(Q)
-    assert inside is not None and inside.reason == "inside"
+    assert inside is not None
+    assert inside.reason == "inside"
     buried = Scene()
     buried.add_terrain(Heightfield((-5.0, -5.0), 1.0, np.full((11, 11), 5.0)))
     under = collider(robot, link7, buried).first_contact(Q)
-    assert under is not None and under.reason == "terrain"
+    assert under is not None
+    assert under.reason == "terrain"
     assert collider(robot, link7, Scene()).first_contact(Q) is None
 
 
@@ -142,4 +147,5 @@ def test_groups_stop_at_their_first_blocked_configuration(robot: RobotModel, pan
     assert per_row.tolist() == [False, True, True, True, False, False]
     assert grouped.queries < one_by_one.queries  # rows 2 and 3 were never decided
     again = collider(robot, hand, scene)
-    assert again.groups_blocked(rows, owner, 2).tolist() == [True, False] and again.queries == grouped.queries
+    assert again.groups_blocked(rows, owner, 2).tolist() == [True, False]
+    assert again.queries == grouped.queries

@@ -60,7 +60,8 @@ def test_panda_meshes_are_read_once_per_text_and_folder(panda_text: str) -> None
     # Merged OBJ vertices: most links close up into solids; link6 is 29 separate bodies (a surface).
     assert {p.link for p in meshes.parts if p.solid is None} == {"panda_link6"}
     assert meshes.triangles == sum(p.faces.shape[0] for p in meshes.parts) > 3000
-    assert loader.meshes(panda_text, PANDA) is meshes and len(loader) == 1
+    assert loader.meshes(panda_text, PANDA) is meshes
+    assert len(loader) == 1
     assert loader.meshes(panda_text, PANDA / "meshes" / "..") is meshes  # the same folder spelled differently
     loader.meshes(BOX_ARM, PANDA)  # capacity 1: the Panda set is dropped
     assert loader.meshes(panda_text, PANDA) is not meshes
@@ -89,7 +90,8 @@ def test_missing_or_bad_collisions_are_refused(tmp_path: Path) -> None:
     (tmp_path / "m").mkdir()
     (tmp_path / "m" / "x.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     found = parse_link_meshes(urdf, tmp_path)  # package name dropped: <folder>/m/x.obj
-    assert found.parts[0].faces.shape == (1, 3) and found.parts[0].solid is None
+    assert found.parts[0].faces.shape == (1, 3)
+    assert found.parts[0].solid is None
     with pytest.raises(GeometryError, match="no <collision> elements"):
         parse_link_meshes('<robot name="r"><link name="a"/></robot>', tmp_path)
     with pytest.raises(GeometryError, match="without mesh, box, cylinder or sphere"):
@@ -121,6 +123,7 @@ def test_placement_follows_forward_kinematics() -> None:
     for n in range(2):
         for p in range(4):
             world = placement.world_vertices(poses[n, p], p)
-            assert np.all(world >= lo[n, p] - 1e-12) and np.all(world <= hi[n, p] + 1e-12)
+            assert np.all(world >= lo[n, p] - 1e-12)
+            assert np.all(world <= hi[n, p] + 1e-12)
     with pytest.raises(GeometryError, match="no link 'elbow'"):
         MeshPlacement(robot, parse_link_meshes(BOX_ARM.replace('"arm"', '"elbow"', 1), "."))

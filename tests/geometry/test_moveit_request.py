@@ -41,7 +41,8 @@ def test_start_and_goals_are_read_by_name() -> None:
     states = parse_motion_plan_request(REQUEST, source="r.yaml")
     assert states.source == "r.yaml"
     assert states.start == {"j1": 0.1, "j2": -0.2, "j3": 0.3, "finger": 0.04}
-    assert len(states.goals) == 2 and states.goals[0] == {"j3": 1.5, "j1": -1.0, "j2": 0.25}
+    assert len(states.goals) == 2
+    assert states.goals[0] == {"j3": 1.5, "j1": -1.0, "j2": 0.25}
 
 
 def test_joint_vector_follows_the_robot_order() -> None:
@@ -69,7 +70,8 @@ def test_missing_and_extra_joints_are_named() -> None:
 def test_a_request_without_a_start_state() -> None:
     text = "goal_constraints:\n  - joint_constraints:\n      - {joint_name: j1, position: 0.5}\n"
     states = parse_motion_plan_request(text)
-    assert states.start is None and states.goals == ({"j1": 0.5},)
+    assert states.start is None
+    assert states.goals == ({"j1": 0.5},)
     empty = "start_state:\n  joint_state: {name: [], position: []}\n" + text
     assert parse_motion_plan_request(empty).start is None
 

@@ -216,7 +216,8 @@ def test_names_versions_and_bounds() -> None:
     second = scene.add_wire(Wire((0, 0, 0), (10, 0, 0), sag=1.0, diameter=0.1), segments=4)
     assert first != second
     assert scene.names == (first, second)
-    assert first in scene and len(scene) == 2
+    assert first in scene
+    assert len(scene) == 2
     lo, hi = scene.bounds  # type: ignore[misc]
     capsule_radius = 0.05 + 1.0 / 4**2  # wire radius + sag / segments**2
     np.testing.assert_allclose(lo, [-capsule_radius, -capsule_radius, -1.0 - capsule_radius], atol=1e-9)
@@ -232,7 +233,8 @@ def test_terrain_is_replaced_and_removed() -> None:
     name = scene.add_terrain(Heightfield((0.0, 0.0), 1.0, np.zeros((3, 3))))
     scene.add_terrain(Heightfield((0.0, 0.0), 1.0, np.full((3, 3), 5.0)))
     assert scene.names == (name,)
-    assert scene.terrain is not None and scene.terrain.heights[0, 0] == 5.0
+    assert scene.terrain is not None
+    assert scene.terrain.heights[0, 0] == 5.0
     assert scene.spheres_collide([[1.0, 1.0, 5.0]], 0.1)
     scene.remove(name)
     assert scene.terrain is None
@@ -337,13 +339,16 @@ def test_each_obstacle_alone_says_which_one_blocks() -> None:
     scene.add_terrain(Heightfield((-10.0, -10.0), 10.0, np.zeros((3, 3))), name="ground")
     probe = np.array([[10.0, 0.0, 1.8]])  # 0.3 m above the ball's top: within the margin
     blocked = [name for name in scene.names if scene.alone(name).spheres_collide(probe, 0.5)]
-    assert blocked == ["ball"] and scene.spheres_collide(probe, 0.5)
+    assert blocked == ["ball"]
+    assert scene.spheres_collide(probe, 0.5)
     below = np.array([[5.0, 5.0, -3.0]])
     assert [n for n in scene.names if scene.alone(n).spheres_collide(below, 0.1)] == ["ground"]
-    assert scene.alone("ground").terrain is not None and scene.alone("box").terrain is None
+    assert scene.alone("ground").terrain is not None
+    assert scene.alone("box").terrain is None
     version = scene.version
     alone = scene.alone("box")
     alone.set_pose("box", Pose((50.0, 0.0, 0.0)))  # moving it there never moves it here
-    assert scene.spheres_collide(np.zeros((1, 3)), 0.1) and scene.version == version
+    assert scene.spheres_collide(np.zeros((1, 3)), 0.1)
+    assert scene.version == version
     with pytest.raises(GeometryError, match="no obstacle named 'nothing'"):
         scene.alone("nothing")

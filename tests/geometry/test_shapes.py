@@ -124,6 +124,7 @@ def test_shape_aabb_matches_dense_tessellations(pose: Pose) -> None:
     for shape, mesh, tol in cases:
         lo, hi = shape_aabb(shape, pose)
         ref_lo, ref_hi = sampled_aabb(mesh, pose)
-        assert np.all(lo <= ref_lo + 1e-9) and np.all(hi >= ref_hi - 1e-9), shape
+        assert np.all(lo <= ref_lo + 1e-9), shape
+        assert np.all(hi >= ref_hi - 1e-9), shape
         np.testing.assert_allclose(lo, ref_lo, atol=tol)
         np.testing.assert_allclose(hi, ref_hi, atol=tol)

@@ -39,7 +39,9 @@ def test_reader_with_corner_header_flips_rows_and_reads_nodata(tmp_path: Path) -
     assert field.cell_size == 10.0
     assert field.shape == (2, 3)
     np.testing.assert_array_equal(field.heights[1], [1, 2, 3])  # first file row is the northern one
-    assert field.heights[0, 0] == 4 and math.isnan(field.heights[0, 1]) and field.heights[0, 2] == 6
+    assert field.heights[0, 0] == 4
+    assert math.isnan(field.heights[0, 1])
+    assert field.heights[0, 2] == 6
     assert field.extent == (105.0, 125.0, 205.0, 215.0)
 
 

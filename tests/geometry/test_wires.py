@@ -84,7 +84,8 @@ def test_straight_wire_needs_one_capsule() -> None:
     wire = Wire((0.0, 0.0, 0.0), (10.0, 0.0, 0.0), sag=0.0, diameter=0.1)
     assert wire.default_segments() == 1
     ((capsule, pose),) = wire.capsule_chain()
-    assert capsule.length == pytest.approx(10.0) and capsule.radius == pytest.approx(0.05)
+    assert capsule.length == pytest.approx(10.0)
+    assert capsule.radius == pytest.approx(0.05)
     np.testing.assert_allclose(pose.rotation()[:, 2], [1.0, 0.0, 0.0], atol=1e-12)
 
 

@@ -72,12 +72,14 @@ def test_round_trip_gives_equal_messages_in_time_order(rb: RosbagsMessages, tmp_
     ]
     shuffled = [messages[i] for i in np.random.default_rng(0).permutation(len(messages))]
     path = write_bag(tmp_path / "s.mcap", shuffled)
-    assert path.is_file() and not list(tmp_path.glob(".s-*")), "no temporary folder is left behind"
+    assert path.is_file(), "no temporary folder is left behind"
+    assert not list(tmp_path.glob(".s-*")), "no temporary folder is left behind"
     back = read_bag(path)
     want = sorted(messages, key=lambda m: m.time_ns)
     assert [(m.topic, m.msgtype, m.time_ns) for m in back] == [(m.topic, m.msgtype, m.time_ns) for m in want]
     assert [_cdr(m) for m in back] == [_cdr(m) for m in want]  # field-for-field equal
-    assert back[-1].message.name == JOINTS and back[-1].message.position[3] == pytest.approx(0.3)
+    assert back[-1].message.name == JOINTS
+    assert back[-1].message.position[3] == pytest.approx(0.3)
     raw = open_bag(path)
     assert raw.duration_ns == 3 * SEC
     assert {t.name: t.count for t in raw.topics.values()}["/obstacles"] == 3
@@ -179,7 +181,8 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
         check=False,
     )
     assert run.returncode == 0, run.stderr
-    assert "world seed" in run.stdout and "blocked" in run.stdout
+    assert "world seed" in run.stdout
+    assert "blocked" in run.stdout
     regenerated = open_bag(tmp_path / f"{name}.mcap")
     # Byte-equal on the machine that wrote it; elsewhere a float may differ in its last bits (another BLAS
     # kernel on another CPU: seen as 1 ULP in an arm obstacle pose), so floats are compared to 1e-12.

@@ -81,7 +81,8 @@ def test_a_plan_of_heli_lines_size_is_one_block_of_equal_records(typestore: Any)
     states = np.column_stack([np.linspace(0, 2500, 679), np.zeros(679), np.full(679, 60.0), np.ones(679)])
     data = path_cdr(states, frame_id="map", stamp=(1, 2))
     decoded = typestore.deserialize_cdr(data, PATH)
-    assert len(decoded.poses) == 679 and decoded.poses[-1].header.frame_id == "map"
+    assert len(decoded.poses) == 679
+    assert decoded.poses[-1].header.frame_id == "map"
     assert decoded.poses[-1].pose.position.x == 2500.0
     assert decoded.poses[3].pose.orientation.z == pytest.approx(np.sin(0.5))
 
@@ -137,7 +138,8 @@ def test_check_log_bytes_are_rosbags_bytes_and_decode_to_edge_checks_message(
     decoded = deserialize(data, DiagnosticArray)
     assert decoded == edge_checks_message(_checks(count), stamp=(8, 9), hardware_id="node", msgs=msgs)
     if count > 1:
-        assert decoded.status[1].level == b"\x02" and decoded.status[1].values[2].value == "0.123"
+        assert decoded.status[1].level == b"\x02"
+        assert decoded.status[1].values[2].value == "0.123"
 
 
 def test_summary_bytes_are_rosbags_bytes_and_decode_to_the_summary(typestore: Any) -> None:

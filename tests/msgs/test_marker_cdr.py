@@ -101,13 +101,14 @@ def test_content_is_the_shape_and_pose_only(rb: RosbagsMessages) -> None:
         rb, 3, pose=rb("geometry_msgs/msg/Pose", orientation=rb("geometry_msgs/msg/Quaternion", w=1.0))
     )
     a, b, c = read_marker_array(_serialized(rb, [base, restyled, moved]))
-    assert a.content == b.content and a.content != c.content
+    assert a.content == b.content
+    assert a.content != c.content
     wider = read_marker_array(_serialized(rb, [_marker(rb, 3, scale=rb("geometry_msgs/msg/Vector3", x=9.0))]))
     assert wider[0].content != a.content
     big = read_marker_array(_serialized(rb, [base], little_endian=False))[0]
-    assert (
-        big.values == a.values and big.content[0] != a.content[0]
-    )  # one number, two byte orders: told apart
+    # one number, two byte orders: told apart
+    assert big.values == a.values
+    assert big.content[0] != a.content[0]
 
 
 def test_every_truncation_is_refused_as_a_message_error(rb: RosbagsMessages) -> None:

@@ -70,7 +70,9 @@ def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
     assert [k for op, k in update.operations[1:]] == ["box/1", "ball/2", "nofly/3", "mesh/4", "wire/5"]
     obs = update.apply({})
     box = obs["box/1"]
-    assert box.shape == BoxData((2.0, 3.0, 4.0)) and box.kind == "CUBE" and box.label == "marker 1 (box/1)"
+    assert box.shape == BoxData((2.0, 3.0, 4.0))
+    assert box.kind == "CUBE"
+    assert box.label == "marker 1 (box/1)"
     np.testing.assert_allclose(box.pose.position, (1, 2, 3))
     np.testing.assert_allclose(
         box.pose.quaternion_xyzw, (0, 0, math.sin(math.radians(15)), math.cos(math.radians(15)))
@@ -78,12 +80,16 @@ def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
     assert obs["ball/2"].shape == SphereData(1.5)
     assert obs["nofly/3"].shape == CylinderData(50.0, 200.0)
     mesh = obs["mesh/4"].shape
-    assert isinstance(mesh, MeshData) and mesh.faces.shape == (4, 3) and obs["mesh/4"].points == 12
+    assert isinstance(mesh, MeshData)
+    assert mesh.faces.shape == (4, 3)
+    assert obs["mesh/4"].points == 12
     np.testing.assert_array_equal(mesh.vertices, TET.vertices[TET.faces.reshape(-1)])
     wire = obs["wire/5"].shape
-    assert isinstance(wire, LineStripData) and wire.diameter == pytest.approx(0.05)
+    assert isinstance(wire, LineStripData)
+    assert wire.diameter == pytest.approx(0.05)
     np.testing.assert_allclose(wire.points, WIRE, atol=1e-12)
-    assert obs["wire/5"].pose == PoseData() and obs["wire/5"].points == 5
+    assert obs["wire/5"].pose == PoseData()
+    assert obs["wire/5"].points == 5
 
 
 def test_delete_and_delete_all_apply_in_order(msgs: Any) -> None:
@@ -93,7 +99,9 @@ def test_delete_and_delete_all_apply_in_order(msgs: Any) -> None:
     after = obstacle_update(
         msgs("visualization_msgs/msg/MarkerArray", markers=[delete]), frame_id=FRAME
     ).apply(first)
-    assert "box/1" not in after and "ball/2" in after and "box/1" in first
+    assert "box/1" not in after
+    assert "ball/2" in after
+    assert "box/1" in first
     clear = msgs("visualization_msgs/msg/Marker", header=header, action=3)
     assert (
         obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME).apply(

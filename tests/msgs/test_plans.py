@@ -24,7 +24,8 @@ def test_checked_edge_markers_keep_every_segment_in_its_colour(msgs: object) -> 
     )  # type: ignore[arg-type]
     array = checked_edges_markers(segments, outcome, frame_id="map", msgs=msgs, background=[background])  # type: ignore[arg-type]
     markers = list(array.markers)
-    assert markers[0].action == 3 and markers[1] is background
+    assert markers[0].action == 3
+    assert markers[1] is background
     by_ns = {m.ns: m for m in markers[2:]}
     assert set(by_ns) == {"free", "blocked", "unchecked"}
     for value, name in ((1, "free"), (0, "blocked"), (-1, "unchecked")):

@@ -17,4 +17,5 @@ def test_small_shapes_and_poses_compare_by_value() -> None:
 
 def test_a_height_grid_knows_its_shape() -> None:
     grid = HeightGrid((1.0, 2.0), 0.5, np.zeros((3, 4)))
-    assert grid.shape == (3, 4) and grid.origin == (1.0, 2.0)
+    assert grid.shape == (3, 4)
+    assert grid.origin == (1.0, 2.0)

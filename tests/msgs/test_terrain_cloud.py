@@ -33,7 +33,8 @@ def test_round_trip_keeps_the_grid_and_float32_heights(msgs: Any) -> None:
     cloud = cloud_from_heightfield(terrain, frame_id=FRAME, stamp=(3, 0), msgs=msgs)
     assert (cloud.height, cloud.width, cloud.point_step) == (7, 9, 12)
     back = heightfield_from_cloud(cloud, frame_id=FRAME)
-    assert back.shape == terrain.shape and back.cell_size == pytest.approx(25.0)
+    assert back.shape == terrain.shape
+    assert back.cell_size == pytest.approx(25.0)
     np.testing.assert_allclose(back.origin, terrain.origin)
     np.testing.assert_array_equal(np.isnan(back.heights), np.isnan(terrain.heights))
     known = ~np.isnan(terrain.heights)

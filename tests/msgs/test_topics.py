@@ -7,6 +7,7 @@ from drd_msgs_py.topics import MAP_TOPICS, REQUEST_TOPICS, topic_base
 
 def test_the_base_name_ignores_namespaces_and_trailing_slashes() -> None:
     assert topic_base("/robot1/obstacles") == "obstacles"
-    assert topic_base("terrain/") == "terrain" and topic_base("goal_pose") == "goal_pose"
+    assert topic_base("terrain/") == "terrain"
+    assert topic_base("goal_pose") == "goal_pose"
     assert {"obstacles", "terrain", "robot_description"} == MAP_TOPICS
     assert not MAP_TOPICS & REQUEST_TOPICS

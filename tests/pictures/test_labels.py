@@ -91,13 +91,16 @@ def test_a_label_moves_off_a_wire_along_its_edge_with_a_leader() -> None:
     edge = np.array([[20.0, 50.0], [80.0, 50.0]])  # right under the wire
     (text,), counts = placer.place([PendingLabel("7", "#2ca02c", edge)])
     assert counts == {"moved": 1, "hidden": 0}
-    assert text.get_visible() and text.get_text() == "7"
+    assert text.get_visible()
+    assert text.get_text() == "7"
     box = _box(fig, text)
     pixels = _pixels(ax, np.array([[0.0, 50.0], [100.0, 50.0]]))[None]
     assert not boxes_hit_segments(box[None], pixels, np.array([1.4 * 150 / 72 / 2]))[0]
     (leader,) = ax.get_lines()
     start = leader.get_xydata()[0]
-    assert start[1] == pytest.approx(50.0) and 20.0 <= start[0] <= 80.0  # from the edge to the label
+    # from the edge to the label
+    assert start[1] == pytest.approx(50.0)
+    assert 20.0 <= start[0] <= 80.0
     assert leader.get_color() == "#2ca02c"
 
 
@@ -142,7 +145,8 @@ def test_a_label_with_no_free_spot_is_thinned() -> None:
     ax.add_collection(hatch)
     placer = LabelPlacer(ax, [hatch], [])
     (text,), counts = placer.place([PendingLabel("3", "red", np.array([[40.0, 40.0], [60.0, 60.0]]))])
-    assert counts == {"moved": 0, "hidden": 1} and not text.get_visible()
+    assert counts == {"moved": 0, "hidden": 1}
+    assert not text.get_visible()
 
 
 def test_unknown_obstacle_artists_are_refused() -> None:

@@ -102,7 +102,8 @@ def _arm_world(session: PlanningSession, seed: int) -> Case:
 
 def _png_size(path: Path) -> tuple[int, int]:
     data = path.read_bytes()
-    assert data[:8] == PNG_MAGIC and data[12:16] == b"IHDR"
+    assert data[:8] == PNG_MAGIC
+    assert data[12:16] == b"IHDR"
     width, height = struct.unpack(">II", data[16:24])
     return int(width), int(height)
 
@@ -177,7 +178,8 @@ def test_helicopter_drawing_encodes_the_check_log(heli: Case) -> None:
     # Each checked edge is drawn where its trajectory lies (lifted up the picture by its altitude above
     # the middle of the drawn range, a few pixels), in check order.
     base, per_metre = drawing.lift
-    assert per_metre > 0.0 and 40.0 <= base <= 90.0
+    assert per_metre > 0.0
+    assert 40.0 <= base <= 90.0
 
     def drawn(states: np.ndarray) -> np.ndarray:
         return states[:, :2] + np.outer(per_metre * (states[:, 2] - base), [0.0, 1.0])
@@ -198,12 +200,16 @@ def test_helicopter_drawing_encodes_the_check_log(heli: Case) -> None:
     # Maps: one dark line per wire capsule, one footprint per other part, crossings under the plan.
     capsules = sum(isinstance(s, Capsule) for parts in snapshot.obstacles.values() for s, _ in parts)
     others = sum(not isinstance(s, Capsule) for parts in snapshot.obstacles.values() for s, _ in parts)
-    assert capsules > 0 and others > 0
-    assert drawing.counts["wires"] == capsules and drawing.counts["solids"] == others
+    assert capsules > 0
+    assert others > 0
+    assert drawing.counts["wires"] == capsules
+    assert drawing.counts["solids"] == others
     top_images = drawing.top.get_images()
-    assert len(top_images) == 1 and top_images[0].get_gid() == "terrain"
+    assert len(top_images) == 1
+    assert top_images[0].get_gid() == "terrain"
     assert drawing.counts["crossings"] > 0
-    assert "altitude" in drawing.side.get_ylabel() and "(m)" in drawing.top.get_xlabel()
+    assert "altitude" in drawing.side.get_ylabel()
+    assert "(m)" in drawing.top.get_xlabel()
     # One legend for both views, in its own row: it covers neither view.
     (legend,) = [ax.get_legend() for ax in drawing.figure.axes if ax.get_legend() is not None]
     assert legend.axes not in (drawing.top, drawing.side)
@@ -233,7 +239,8 @@ def test_labels_never_cover_obstacles_in_a_crowded_picture(heli: Case) -> None:
     midpoints = [_covers_a_wire(drawing, session.edge_states(c.edge)) for c in checks]
     assert sum(midpoints) >= 10
     assert _labels_over_obstacles(drawing) == []
-    assert drawing.counts["labels"] == 60 and drawing.counts["labels_hidden"] <= 3
+    assert drawing.counts["labels"] == 60
+    assert drawing.counts["labels_hidden"] <= 3
     assert drawing.counts["labels_moved"] >= 10  # off their edge, with a leader line
     shown = [t for t in drawing.labels if t.get_visible()]
     assert len(shown) == 60 - drawing.counts["labels_hidden"]
@@ -242,9 +249,11 @@ def test_labels_never_cover_obstacles_in_a_crowded_picture(heli: Case) -> None:
         c for c in drawing.top.get_children() if c.get_gid() in ("wires", "obstacle", "obstacle_dot")
     ]
     others = [t for t in drawing.top.texts if t not in drawing.labels]
-    assert others and max(t.get_zorder() for t in others) < min(c.get_zorder() for c in obstacles)
+    assert others
+    assert max(t.get_zorder() for t in others) < min(c.get_zorder() for c in obstacles)
     plain = draw_plan_picture(session, snapshot, heli.result)  # the real check log
-    assert _labels_over_obstacles(plain) == [] and plain.counts["labels_hidden"] == 0
+    assert _labels_over_obstacles(plain) == []
+    assert plain.counts["labels_hidden"] == 0
 
 
 def _covers_a_wire(drawing: PlanDrawing, states: np.ndarray) -> bool:
@@ -277,7 +286,8 @@ def test_edges_at_different_altitudes_differ_in_colour(heli: Case) -> None:
         for g in by_ground.values()
         if len(g) >= 3
     )
-    assert session.edge_states(low)[0, 2] == levels[0] and session.edge_states(high)[0, 2] == levels[-1]
+    assert session.edge_states(low)[0, 2] == levels[0]
+    assert session.edge_states(high)[0, 2] == levels[-1]
     checks = (
         SessionCheck(1, low, (0, 0), True, "bisect", 0.1, 0.0, False),
         SessionCheck(2, high, (0, 0), True, "bisect", 0.1, 0.0, False),
@@ -289,7 +299,8 @@ def test_edges_at_different_altitudes_differ_in_colour(heli: Case) -> None:
     low_line, high_line = (drawing.top.transData.transform(s) for s in _segments(drawing, "free"))
     lift = high_line - low_line
     assert lift[:, 0] == pytest.approx(np.zeros(len(lift)), abs=1e-6)
-    assert 7.0 <= float(lift[0, 1]) <= 16.0 and np.ptp(lift[:, 1]) < 1e-6
+    assert 7.0 <= float(lift[0, 1]) <= 16.0
+    assert np.ptp(lift[:, 1]) < 1e-6
     # One outline colour (free), two core colours, ordered by altitude.
     core = drawing.altitude["free"]
     assert core.get_array().tolist() == [levels[0], levels[-1]]
@@ -297,7 +308,8 @@ def test_edges_at_different_altitudes_differ_in_colour(heli: Case) -> None:
     assert np.abs(low_rgba - high_rgba).max() > 0.3
     assert np.sum(high_rgba[:3]) < np.sum(low_rgba[:3])  # higher is darker
     casings = drawing.layers["free"].get_colors()
-    assert len(casings) == 1 and to_hex(casings[0]) == COLOURS["free"]
+    assert len(casings) == 1
+    assert to_hex(casings[0]) == COLOURS["free"]
     assert drawing.layers["free"].get_linewidths()[0] > core.get_linewidths()[0]
     # The library edges: one colour per altitude, from the mean altitude of each edge.
     library = drawing.altitude["unchecked"]
@@ -315,10 +327,12 @@ def test_edges_at_different_altitudes_differ_in_colour(heli: Case) -> None:
 def test_title_says_what_served_the_plan(heli: Case) -> None:
     session, snapshot = heli.session, heli.snapshot
     first = draw_plan_picture(session, snapshot, heli.result).figure.get_suptitle()
-    assert "served by the precomputed DiRECt tree 'heli_wires'" in first and "cache" not in first
+    assert "served by the precomputed DiRECt tree 'heli_wires'" in first
+    assert "cache" not in first
     # The same request again on the same maps: every check comes from the snapshot's cache.
     again = session.plan(snapshot, seed=0)
-    assert again.checks and all(c.cached for c in again.checks)
+    assert again.checks
+    assert all(c.cached for c in again.checks)
     title = draw_plan_picture(session, snapshot, again).figure.get_suptitle()
     assert f"served from cache: all {len(again.checks)} checks answered from map v1's check cache" in title
     # What a prior's session says of new queries (QueryPlanResult.query), first built and then reused.
@@ -331,7 +345,8 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
     )
     assert served_by(online, query_cached=True).startswith("served from cache: the library and DiRECt tree")
     connected = QueryPlanResult(**common, checks=(fresh,), query="connected")
-    assert "joined by new motions" in served_by(connected) and "cache" not in served_by(connected)
+    assert "joined by new motions" in served_by(connected)
+    assert "cache" not in served_by(connected)
     tree = QueryPlanResult(**common, checks=(reused,), query="tree:heli_wires")
     assert served_by(tree) == (
         "served from cache: all 1 checks answered from map v4's check cache; the precomputed DiRECt tree 'heli_wires'"
@@ -342,25 +357,32 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
 def test_helicopter_files_are_valid_and_deterministic(heli: Case, tmp_path: Path) -> None:
     first = plan_picture(heli.session, heli.snapshot, heli.result, tmp_path / "a" / "plan")
     again = plan_picture(heli.session, heli.snapshot, heli.result, tmp_path / "b" / "plan")
-    assert [p.suffix for p in first] == [".png", ".svg"] and all(p.is_file() for p in first)
+    assert [p.suffix for p in first] == [".png", ".svg"]
+    assert all(p.is_file() for p in first)
     width, height = _png_size(first[0])
-    assert 1200 <= width <= 2400 and 1200 <= height <= 2400
+    assert 1200 <= width <= 2400
+    assert 1200 <= height <= 2400
     assert first[0].stat().st_size > 50_000
     svg = first[1].read_text()
-    assert svg.startswith("<?xml") and "<svg" in svg and 'id="free_edges"' in svg
+    assert svg.startswith("<?xml")
+    assert "<svg" in svg
+    assert 'id="free_edges"' in svg
     for a, b in zip(first, again, strict=True):
         assert a.read_bytes() == b.read_bytes()
     only_svg = plan_picture(heli.session, heli.snapshot, heli.result, tmp_path / "plan.svg")
-    assert only_svg == [tmp_path / "plan.svg"] and not (tmp_path / "plan.png").exists()
+    assert only_svg == [tmp_path / "plan.svg"]
+    assert not (tmp_path / "plan.png").exists()
 
 
 def test_helicopter_failed_request(heli: Case, tmp_path: Path) -> None:
     capped = PlanningSession(heli.session.bundle, name="capped", max_checks=4)
     result = capped.plan(heli.snapshot, seed=0)
-    assert not result.ok and len(result.checks) == 4
+    assert not result.ok
+    assert len(result.checks) == 4
     drawing = draw_plan_picture(capped, heli.snapshot, result)
     title = drawing.figure.get_suptitle()
-    assert "NO PLAN" in title and "max_checks" in title
+    assert "NO PLAN" in title
+    assert "max_checks" in title
     assert _segments(drawing, "path") == []
     assert len(_segments(drawing, "free")) + len(_segments(drawing, "blocked")) == 4
     assert "start-goal line" in drawing.side.get_xlabel()
@@ -384,7 +406,8 @@ def test_missing_matplotlib_is_a_clear_error(
 def test_arm_drawing_shows_end_effector_paths(arm_session: PlanningSession, tmp_path: Path) -> None:
     case = _arm_case(arm_session, range(40, 80), ok=True)  # seed 40 with the shipped tree
     result = case.result
-    assert result.ok and result.num_blocked > 0
+    assert result.ok
+    assert result.num_blocked > 0
     domain = arm_session.domain
     drawing = draw_plan_picture(arm_session, case.snapshot, result)
     free = [c.edge for c in result.checks if c.free]
@@ -402,20 +425,23 @@ def test_arm_drawing_shows_end_effector_paths(arm_session: PlanningSession, tmp_
     start_tool = arm_session.positions(arm_session.vertex_state(domain.start))[0]
     assert plan[0] == pytest.approx(start_tool[:2])
     assert plan[-1] == pytest.approx(arm_session.goal_position[:2])
-    assert drawing.counts["solids"] == len(case.snapshot.obstacles) and drawing.counts["wires"] == 0
+    assert drawing.counts["solids"] == len(case.snapshot.obstacles)
+    assert drawing.counts["wires"] == 0
     assert drawing.side.get_ylabel() == "z (m)"
     # Numbers in both views, none across an obstacle's outline or on a footprint but the table's top.
     assert [len(p.labels) for p in drawing.panels] == [len(result.checks)] * 2
     assert _labels_over_obstacles(drawing) == []
     (path,) = plan_picture(arm_session, case.snapshot, result, tmp_path / "arm.png")
     width, height = _png_size(path)
-    assert width >= 1200 and 600 <= height <= width
+    assert width >= 1200
+    assert 600 <= height <= width
 
 
 def test_arm_without_a_free_path(arm_session: PlanningSession) -> None:
     case = _arm_case(arm_session, range(3, 43), ok=False)  # seed 3 with the shipped tree
     assert not case.result.ok
     drawing = draw_plan_picture(arm_session, case.snapshot, case.result)
-    assert "NO PLAN" in drawing.figure.get_suptitle() and "no library path" in drawing.figure.get_suptitle()
+    assert "NO PLAN" in drawing.figure.get_suptitle()
+    assert "no library path" in drawing.figure.get_suptitle()
     assert _segments(drawing, "path") == []
     assert drawing.counts["labels"] == len(case.result.checks)

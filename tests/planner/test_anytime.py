@@ -76,11 +76,16 @@ def _assert_every_path_was_checked_free(result: PlanResult) -> None:
 def test_the_first_path_is_the_long_route_and_the_budget_finds_the_short_one(routes: WorldPrior) -> None:
     planner = Planner(routes)
     first = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=0)
-    assert first.found and first.cost == COST["L"] and first.improvements == ()
+    assert first.found
+    assert first.cost == COST["L"]
+    assert first.improvements == ()
     oracle = CountingOracle(_world(L, M, S))
     better = planner.plan(0, 7, oracle, seed=0, improve_budget=20)
-    assert better.found and better.cost == COST["S"] and better.stage is PlanStage.IMPROVE
-    assert better.edges.tolist() == S and better.vertices.tolist() == [0, 6, 7]
+    assert better.found
+    assert better.cost == COST["S"]
+    assert better.stage is PlanStage.IMPROVE
+    assert better.edges.tolist() == S
+    assert better.vertices.tolist() == [0, 6, 7]
     assert better.improvements[0].cost == COST["L"]
     assert better.improve_stop == "optimal"  # S is the shortest path of the whole graph
     assert [c.edge for c in better.checks] == oracle.asked
@@ -128,7 +133,9 @@ def test_the_check_budget_is_respected_and_unaffordable_paths_are_not_started(
     extra = result.num_checks - first.num_checks
     assert extra <= checks
     if checks == 1:  # every shorter route needs at least 2 checks: nothing is started
-        assert extra == 0 and result.cost == COST["L"] and result.improve_stop == "patience"
+        assert extra == 0
+        assert result.cost == COST["L"]
+        assert result.improve_stop == "patience"
         assert result.stage is first.stage
     _assert_every_path_was_checked_free(result)
 
@@ -147,15 +154,18 @@ def test_a_seconds_budget_alone_works(routes: WorldPrior) -> None:
     result = Planner(routes).plan(
         0, 7, TableOracle(_world(L, M, S)), improve_budget=ImproveBudget(seconds=5.0)
     )
-    assert result.cost == COST["S"] and result.improve_stop == "optimal"
+    assert result.cost == COST["S"]
+    assert result.improve_stop == "optimal"
 
 
 def test_a_spent_seconds_budget_stops_before_any_check(routes: WorldPrior) -> None:
     planner = Planner(routes)
     first = planner.plan(0, 7, TableOracle(_world(L, M, S)))
     result = planner.plan(0, 7, TableOracle(_world(L, M, S)), improve_budget=ImproveBudget(seconds=1e-9))
-    assert result.improve_stop == "seconds" and result.num_checks == first.num_checks
-    assert result.cost == COST["L"] and len(result.improvements) == 1
+    assert result.improve_stop == "seconds"
+    assert result.num_checks == first.num_checks
+    assert result.cost == COST["L"]
+    assert len(result.improvements) == 1
 
 
 def test_same_seed_same_result(routes: WorldPrior) -> None:
@@ -175,7 +185,9 @@ def test_no_budget_is_the_plain_plan(routes: WorldPrior) -> None:
     plain = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=3)
     again = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=3, improve_budget=None)
     assert [c.edge for c in plain.checks] == [c.edge for c in again.checks]
-    assert again.improvements == () and again.improve_stop == "" and again.cost == COST["L"]
+    assert again.improvements == ()
+    assert again.improve_stop == ""
+    assert again.cost == COST["L"]
     assert all(c.stage != "improve" for c in again.checks)
 
 
@@ -279,7 +291,8 @@ def test_draws_come_from_consistent_worlds_or_the_tail_and_keep_every_outcome() 
         tail_probability=0.0,
         rng=np.random.default_rng(0),
     )
-    assert empty.num_consistent == 0 and empty.draw()[0] == (not worlds[0, 0])
+    assert empty.num_consistent == 0
+    assert empty.draw()[0] == (not worlds[0, 0])
 
 
 @pytest.fixture(scope="module")

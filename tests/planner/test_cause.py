@@ -33,11 +33,14 @@ def test_a_state_outside_the_lattice_is_refused_with_its_end_as_the_cause() -> N
     assert states is not None
     far = states[0] + np.array([1e5, 0.0, 0.0, 0.0])  # 100 km away
     start = planner.plan(far, 1, oracle)
-    assert start.status is PlanStatus.REFUSED and start.cause is PlanCause.START_OUTSIDE
+    assert start.status is PlanStatus.REFUSED
+    assert start.cause is PlanCause.START_OUTSIDE
     goal = planner.plan(0, far, oracle)
-    assert goal.status is PlanStatus.REFUSED and goal.cause is PlanCause.GOAL_OUTSIDE
+    assert goal.status is PlanStatus.REFUSED
+    assert goal.cause is PlanCause.GOAL_OUTSIDE
     malformed = planner.plan(0, np.array([np.nan, 0.0, 0.0, 0.0]), oracle)
-    assert malformed.status is PlanStatus.REFUSED and malformed.cause is None
+    assert malformed.status is PlanStatus.REFUSED
+    assert malformed.cause is None
     planned = planner.plan(prior.trees[0].start, prior.trees[0].goal, oracle)
     assert planned.status in (PlanStatus.FOUND, PlanStatus.NO_PATH)
     assert planned.status is not PlanStatus.FOUND or planned.cause is None

@@ -76,9 +76,11 @@ def test_an_off_graph_start_is_joined_checked_and_verified(
             continue
         found += 1
         v = prior.graph.num_vertices
-        assert result.vertices[0] == v and np.allclose(result.new_states[v], start)
+        assert result.vertices[0] == v
+        assert np.allclose(result.new_states[v], start)
         first = int(result.edges[0])
-        assert first >= prior.graph.num_edges and first in result.motions
+        assert first >= prior.graph.num_edges
+        assert first in result.motions
         assert checker.check_motion(result.motions[first])  # the motion really is free in this world
         assert oracle.motions_checked >= 1
         assert all(result.outcomes()[int(e)] for e in result.edges)
@@ -110,12 +112,15 @@ def test_refusals_for_unreachable_states_and_plain_oracles(
     planner = Planner(prior)
     row = problem.require_worlds().X[0]
     far = planner.plan([5.0, 5.0], problem.goal, PlanarWorldOracle(row, PlanarChecker(prior.graph, boxes[0])))  # type: ignore[arg-type]
-    assert far.status is PlanStatus.REFUSED and "reach" in far.reason
+    assert far.status is PlanStatus.REFUSED
+    assert "reach" in far.reason
     near = _off_graph_state(prior, np.random.default_rng(1), planner)
     plain = planner.plan(near, problem.goal, TableOracle(row))  # type: ignore[arg-type]
-    assert plain.status is PlanStatus.REFUSED and "check_motion" in plain.reason
+    assert plain.status is PlanStatus.REFUSED
+    assert "check_motion" in plain.reason
     off = Planner(prior, connect_states=False).plan(near, problem.goal, TableOracle(row))  # type: ignore[arg-type]
-    assert off.status is PlanStatus.REFUSED and "connector" in off.reason
+    assert off.status is PlanStatus.REFUSED
+    assert "connector" in off.reason
 
 
 @pytest.mark.slow
@@ -127,7 +132,8 @@ def test_imputed_free_probability_tracks_the_true_one(
     problem, boxes, prior = planar
     planner = Planner(prior)
     connector = planner.connector
-    assert connector is not None and prior.worlds is not None
+    assert connector is not None
+    assert prior.worlds is not None
     index = EdgeSampleIndex(prior.graph, None, position_dims=connector.position_dims)
     train = problem.require_worlds().train_ids
     rng = np.random.default_rng(7)
@@ -157,7 +163,8 @@ def test_the_explanation_protocol_is_optional_and_the_arm_checker_has_it(small_a
     from drd_planner.planner.connect import MotionExplainer
 
     checker = small_arm.scene_checker(Scene(margin=0.0))  # type: ignore[attr-defined]
-    assert isinstance(checker, MotionExplainer) and isinstance(checker, MotionOracle)
+    assert isinstance(checker, MotionExplainer)
+    assert isinstance(checker, MotionOracle)
     assert not isinstance(TableOracle(np.ones(3, dtype=bool)), MotionExplainer)
 
 

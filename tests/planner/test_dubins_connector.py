@@ -67,7 +67,8 @@ def test_an_off_lattice_start_joins_vertices_ahead_by_flyable_motions(lattice_gr
     assert len(motions) == 8
     for m in motions:
         end = states[m.vertex]
-        assert np.allclose(m.states[0], start) and np.allclose(m.states[-1], end)
+        assert np.allclose(m.states[0], start)
+        assert np.allclose(m.states[-1], end)
         assert np.linalg.norm(np.diff(m.states[:, :2], axis=0), axis=1).max() <= 5.0 + 1e-9
         horizontal = dubins_path(
             (start[0], start[1], start[3]), (end[0], end[1], end[3]), radius=RADIUS
@@ -93,12 +94,14 @@ def test_a_goal_joins_from_vertices_behind_it_with_or_without_a_heading(lattice_
     into = connector.connect(goal, lattice_graph, outgoing=False)
     assert len(into) == 6
     for m in into:
-        assert np.allclose(m.states[-1], goal) and np.allclose(m.states[0], states[m.vertex])
+        assert np.allclose(m.states[-1], goal)
+        assert np.allclose(m.states[0], states[m.vertex])
     free = np.array([480.0, -30.0, 60.0, np.nan])
     any_heading = connector.connect(free, lattice_graph, outgoing=False)
     assert len(any_heading) == 6
     for m in any_heading:
-        assert np.allclose(m.states[-1, :3], free[:3]) and np.isfinite(m.states).all()
+        assert np.allclose(m.states[-1, :3], free[:3])
+        assert np.isfinite(m.states).all()
     assert min(m.length for m in any_heading) <= min(m.length for m in into) + 1e-9
     with pytest.raises(QueryError, match="needs a heading"):
         connector.connect(free, lattice_graph, outgoing=True)
@@ -148,7 +151,8 @@ def test_sketches_lie_on_the_motions_they_stand_for(
         state, lattice_graph, vertices, outgoing=outgoing, fractions=fractions
     )
     motions = connector.motions_to(state, lattice_graph, vertices, outgoing=outgoing)
-    assert points.shape == (vertices.size, 5, 3) and len(motions) == vertices.size
+    assert points.shape == (vertices.size, 5, 3)
+    assert len(motions) == vertices.size
     assert np.allclose(lengths, [m.length for m in motions], atol=1e-6)
     for motion, sketch in zip(motions, points, strict=True):
         assert np.allclose(sketch[[0, -1]], motion.states[[0, -1], :3], atol=1e-6)

@@ -47,7 +47,9 @@ def test_walks_are_each_worlds_shortest_free_path(directed: bool) -> None:
             if walk is None:
                 continue
             path = arcs.edge_of(walk[:-1], walk[1:])
-            assert walk[0] == start and walk[-1] == goal and x[search.worlds[c], path].all()
+            assert walk[0] == start
+            assert walk[-1] == goal
+            assert x[search.worlds[c], path].all()
             assert graph.lengths[path].sum() == pytest.approx(graph.lengths[reference].sum())
 
 

@@ -31,7 +31,8 @@ def test_posterior_matches_a_brute_force_count() -> None:
 def test_weights_are_finite_and_prefer_likely_free_edges() -> None:
     graph = ExplicitGraph(np.array([[0, 1], [1, 2], [0, 2]]), np.array([1.0, 1.0, 1.0]), 3)
     weights = fallback_edge_weights(graph, np.array([0.9, 0.0, 0.1]))
-    assert np.all(np.isfinite(weights)) and np.all(weights >= 0)
+    assert np.all(np.isfinite(weights))
+    assert np.all(weights >= 0)
     assert weights[0] < weights[2]
     assert (
         posterior_free_probability(None, None, {0: True}, num_edges=3, alpha=0.99, pseudo_count=1.0)[1] == 0.5

@@ -31,28 +31,30 @@ def test_vertices_get_a_vertex_edge_and_are_joined_only_when_free() -> None:
     index = EdgeSampleIndex(query.graph, None, position_dims=2)
     grown = GrownGraph(query, index, worlds)
     ids, loops = grown.add_vertices(np.array([[0.5, 0.1], [0.5, 0.9]]))
-    assert ids.tolist() == [4, 5] and loops.tolist() == [4, 5]
-    assert not grown.usable[ids].any() and grown.usable[:4].all()
+    assert ids.tolist() == [4, 5]
+    assert loops.tolist() == [4, 5]
+    assert not grown.usable[ids].any()
+    assert grown.usable[:4].all()
     grown.mark_free(ids[:1])
-    assert grown.usable[4] and not grown.usable[5]
+    assert grown.usable[4]
+    assert not grown.usable[5]
     edge_ids = grown.add_edges(np.array([[0, 4]]), [np.linspace([0.0, 0.0], [0.5, 0.1], 4)])
     start_loop = grown.add_vertex_edge(0)
     q = grown.query()
-    assert edge_ids.tolist() == [6] and start_loop == 7
-    assert (
-        q.graph.num_vertices == 6
-        and q.graph.num_edges == 8
-        and q.worlds is not None
-        and q.worlds.shape == (3, 8)
-    )
-    assert q.graph.edges[4].tolist() == [4, 4] and q.motions[4].shape == (
+    assert edge_ids.tolist() == [6]
+    assert start_loop == 7
+    assert q.graph.num_vertices == 6
+    assert q.graph.num_edges == 8
+    assert q.worlds is not None
+    assert q.worlds.shape == (3, 8)
+    assert q.graph.edges[4].tolist() == [4, 4]
+    assert q.motions[4].shape == (
         1,
         2,
-    )  # the vertex edge: its one state
-    assert q.graph.lengths[4] == 0.0 and np.isclose(q.graph.lengths[6], np.hypot(0.5, 0.1))
-    assert (
-        (q.start, q.goal) == (0, 2)
-        and grown.vertices_added == 2
-        and grown.edges_added == 1
-        and grown.vertex_edges == 3
     )
+    assert q.graph.lengths[4] == 0.0
+    assert np.isclose(q.graph.lengths[6], np.hypot(0.5, 0.1))
+    assert (q.start, q.goal) == (0, 2)
+    assert grown.vertices_added == 2
+    assert grown.edges_added == 1
+    assert grown.vertex_edges == 3

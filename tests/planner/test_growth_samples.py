@@ -52,12 +52,15 @@ def test_draw_states_keeps_valid_ones_with_their_parents() -> None:
     drawn, parents = draw_states(
         np.random.default_rng(0), sampler, states, (np.array([0]), np.array([1, 2])), mix
     )
-    assert 0 < drawn.shape[0] <= 200 and parents.shape == (drawn.shape[0], 2)
+    assert 0 < drawn.shape[0] <= 200
+    assert parents.shape == (drawn.shape[0], 2)
     assert sampler.valid(drawn).all()
     gaussian = (parents[:, 0] >= 0) & (parents[:, 1] < 0)
     bridges = parents[:, 1] >= 0
     uniform = parents[:, 0] < 0
-    assert gaussian.any() and bridges.any() and uniform.any()
+    assert gaussian.any()
+    assert bridges.any()
+    assert uniform.any()
     near = np.linalg.norm(drawn[gaussian] - states[parents[gaussian, 0]], axis=1)
     assert np.median(near) < 0.2  # Gaussian samples stay near their centre
     again, _ = draw_states(np.random.default_rng(0), sampler, states, (np.array([0]), np.array([1, 2])), mix)
@@ -82,9 +85,7 @@ def test_straight_motions_drop_statically_invalid_ones() -> None:
         states, np.array([[0, 1], [2, 3]]), connector=connector, sampler=DiskSampler()
     )
     assert kept.tolist() == [[2, 3]]  # 0 -> 1 crosses the disk
-    assert (
-        motions[0].shape[1] == 2
-        and np.allclose(motions[0][0], states[2])
-        and np.allclose(motions[0][-1], states[3])
-    )
+    assert motions[0].shape[1] == 2
+    assert np.allclose(motions[0][0], states[2])
+    assert np.allclose(motions[0][-1], states[3])
     assert np.linalg.norm(np.diff(motions[0], axis=0), axis=1).max() <= 0.05 + 1e-12

@@ -66,10 +66,14 @@ def test_blocked_first_joins_grow_to_a_free_one(prior: WorldPrior) -> None:
     assert more_joins_of(planner.connector) is not None
     wall = JoinWall(prior, _first_joins(planner, 40))  # more than the first 16 and the next 16
     result = planner.plan(START, int(prior.trees[0].goal), wall)
-    assert result.status is PlanStatus.FOUND and result.stage is PlanStage.GROW
-    assert result.growth is not None and result.growth.rounds == 1  # 16 joins, then 64 more by the prior
+    # 16 joins, then 64 more by the prior
+    assert result.status is PlanStatus.FOUND
+    assert result.stage is PlanStage.GROW
+    assert result.growth is not None
+    assert result.growth.rounds == 1
     first = int(result.edges[0])
-    assert first in result.motions and np.allclose(result.motions[first][0], START)
+    assert first in result.motions
+    assert np.allclose(result.motions[first][0], START)
     assert wall.check_motion(result.motions[first])  # the join it flies is a free one
     again = Planner(prior, snap_tolerance=1e-6).plan(
         START, int(prior.trees[0].goal), JoinWall(prior, wall.blocked)
@@ -83,15 +87,20 @@ def test_when_every_join_is_blocked_the_reason_says_what_was_tried(prior: WorldP
     planner = Planner(prior, snap_tolerance=1e-6, growth=GrowthSettings(max_joins=64))
     wall = JoinWall(prior, _first_joins(planner, 10**6))
     result = planner.plan(START, int(prior.trees[0].goal), wall)
-    assert result.status is PlanStatus.NO_PATH and result.growth is not None
-    assert result.growth.stop == "exhausted" and result.growth.edges_added == 64 - 16  # max_joins 64
-    assert "blocked" in result.reason and "64" in result.reason
+    # max_joins 64
+    assert result.status is PlanStatus.NO_PATH
+    assert result.growth is not None
+    assert result.growth.stop == "exhausted"
+    assert result.growth.edges_added == 64 - 16
+    assert "blocked" in result.reason
+    assert "64" in result.reason
 
 
 def test_join_growth_is_only_for_queries_with_off_graph_states(prior: WorldPrior) -> None:
     planner = Planner(prior, snap_tolerance=1e-6)
     model = planner.query_model(0, int(prior.trees[0].goal))
-    assert not model.query.connected and planner._growth(model) is None
+    assert not model.query.connected
+    assert planner._growth(model) is None
     connected = planner.query_model(START, int(prior.trees[0].goal))
     assert isinstance(planner._growth(connected), JoinGrowth)
 
@@ -107,10 +116,12 @@ def test_joins_go_only_where_the_other_end_can_still_be_reached(prior: WorldPrio
 
     wall = GoalCutOff(prior, _first_joins(planner, 16) | {goal})  # no motion joins the goal either
     result = planner.plan(START, goal, wall)
-    assert result.status is PlanStatus.NO_PATH and result.growth is not None
+    assert result.status is PlanStatus.NO_PATH
+    assert result.growth is not None
     # Joins go only to vertices that may still reach the goal; as the edges into the goal turn out blocked there
     # are none left after the first round's 64 and a few more (not the 496 a join to every vertex would make).
-    assert result.growth.stop == "exhausted" and result.growth.edges_added <= 80
+    assert result.growth.stop == "exhausted"
+    assert result.growth.edges_added <= 80
     known = result.outcomes()
     assert all(known[e] is False for e in into_goal if e in known)
 
@@ -133,22 +144,26 @@ def test_a_goal_without_heading_grows_its_joins_too(prior: WorldPrior) -> None:
     assert isinstance(connector, DubinsConnector)
     first = set(connector.ranked(np.append(goal, np.nan), prior.graph, outgoing=False)[:20].tolist())
     result = planner.plan(0, goal, JoinWall(prior, first))
-    assert result.status is PlanStatus.FOUND and result.stage is PlanStage.GROW
+    assert result.status is PlanStatus.FOUND
+    assert result.stage is PlanStage.GROW
     last = result.motions[int(result.edges[-1])]
-    assert np.allclose(last[-1, :3], goal) and np.isfinite(last).all()
+    assert np.allclose(last[-1, :3], goal)
+    assert np.isfinite(last).all()
 
 
 def test_the_ranking_follows_the_lazy_weight_of_each_sketched_join(prior: WorldPrior) -> None:
     planner = Planner(prior, snap_tolerance=1e-6)
     connector = planner.connector
-    assert isinstance(connector, SketchedJoins) and isinstance(connector, DubinsConnector)
+    assert isinstance(connector, SketchedJoins)
+    assert isinstance(connector, DubinsConnector)
     ranking = connector.ranked(START, prior.graph, outgoing=True)
     lengths, points = connector.sketches(
         START, prior.graph, ranking, outgoing=True, fractions=np.linspace(0, 1, POINTS_PER_EDGE)
     )
     index = planner._models.sample_index()
     ordered = prior_ranking(ranking, lengths, points, index, prior)
-    assert sorted(ordered.tolist()) == sorted(ranking.tolist()) and not np.array_equal(ordered, ranking)
+    assert sorted(ordered.tolist()) == sorted(ranking.tolist())
+    assert not np.array_equal(ordered, ranking)
     theta = np.average(
         imputed_columns(index, prior.worlds, list(points)), axis=0, weights=prior.world_weights
     )
@@ -188,9 +203,11 @@ def test_hard_states_of_the_real_scale_prior_plan_within_a_few_hundred_checks(
     planner = Planner(lines, snap_tolerance=1e-6, growth=GrowthSettings(seconds=None, max_checks=200))
     start, goal = (state, int(domain.goal)) if is_start else (int(domain.start), state)
     result = planner.plan(start, goal, checker)
-    assert result.status is PlanStatus.FOUND and result.stage is PlanStage.GROW, result.reason
+    assert result.status is PlanStatus.FOUND, result.reason
+    assert result.stage is PlanStage.GROW, result.reason
     assert result.num_checks <= 250
     known = result.outcomes()
     assert all(known.get(int(e)) is True for e in result.edges)  # every edge and joining motion checked free
     joins = [result.motions[int(e)] for e in result.edges if int(e) in result.motions]
-    assert joins and all(checker.check_motion(m) for m in joins)
+    assert joins
+    assert all(checker.check_motion(m) for m in joins)

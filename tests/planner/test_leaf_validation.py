@@ -36,7 +36,8 @@ def test_the_paired_test() -> None:
     assert significantly_fewer(base - 3, base)
     assert not significantly_fewer(base, base)
     noisy = base + np.array([-6, 5, -6, 6, -5, 4, -6, 3])
-    assert noisy.mean() < base.mean() and not significantly_fewer(noisy, base)
+    assert noisy.mean() < base.mean()
+    assert not significantly_fewer(noisy, base)
     assert not significantly_fewer(base[:1] - 5, base[:1])
 
 
@@ -44,7 +45,9 @@ def test_given_settings_skip_validation_and_bad_input_is_refused() -> None:
     problem = make_planar_problem(model="one_wall", num_worlds=60, seed=0)
     assert leaf_from_options(problem, eta=0.4, pseudo_counts=(5.0,), seed=0)[:2] == (0.4, 5.0)
     eta, kappa, _, note = leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0)
-    assert kappa is None and 0 < eta <= 1 and "random queries" in note
+    assert kappa is None
+    assert 0 < eta <= 1
+    assert "random queries" in note
     with pytest.raises(ProblemError, match="candidate"):
         validate_query_leaf(problem, etas=())
 
@@ -58,9 +61,11 @@ def test_a_tree_whose_query_cannot_be_validated_uses_the_priors_setting() -> Non
         problem, worlds=dataclasses.replace(worlds, R=np.zeros_like(worlds.R))
     )  # no training world has a free library path: nothing to validate on
     leaf, _, note = tree_leaf_from_options(blocked, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
-    assert leaf is None and "not validated on this query" in note
+    assert leaf is None
+    assert "not validated on this query" in note
     leaf, _, note = tree_leaf_from_options(problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={})
-    assert leaf is not None and note.startswith("its own eta")
+    assert leaf is not None
+    assert note.startswith("its own eta")
 
 
 def test_region_rules_are_validated_on_the_same_episodes() -> None:
@@ -70,13 +75,15 @@ def test_region_rules_are_validated_on_the_same_episodes() -> None:
     choice = validate_query_leaf(
         problem, etas=(0.2, 1.0), pseudo_counts=(None,), region_rules=REGION_RULES, queries=4, seed=3
     )
-    assert set(choice.rule_means) == set(REGION_RULES) and choice.region_rule in REGION_RULES
+    assert set(choice.rule_means) == set(REGION_RULES)
+    assert choice.region_rule in REGION_RULES
     assert choice.best_mean == choice.rule_means[choice.region_rule]
     if choice.region_rule == "per_check":  # only a significant win replaces the paper's rule
         assert choice.rule_means["per_check"] < choice.rule_means["probability"]
     assert "region rule" in choice.summary_lines()[1]
     one = validate_query_leaf(problem, etas=(0.2, 1.0), pseudo_counts=(None,), queries=4, seed=3)
-    assert one.region_rule == "probability" and one.rule_means == {}
+    assert one.region_rule == "probability"
+    assert one.rule_means == {}
     assert (
         one.mean_checks
         == validate_query_leaf(
@@ -96,15 +103,18 @@ def test_a_trees_own_rule_is_validated_on_its_query() -> None:
     own = tree_leaf_from_options(
         problem, eta=None, pseudo_counts=(None,), seed=0, tree_options={}, region_rules=REGION_RULES
     )
-    assert own.leaf is not None and own.region_rule in REGION_RULES and "region rule" in own.note
+    assert own.leaf is not None
+    assert own.region_rule in REGION_RULES
+    assert "region rule" in own.note
     given = tree_leaf_from_options(
         problem, eta=0.2, pseudo_counts=(None,), seed=0, tree_options={"region_rule": "per_check"}
     )
-    assert given.leaf is None and given.region_rule == "per_check"
+    assert given.leaf is None
+    assert given.region_rule == "per_check"
     # eta and kappa given, the rule open: only the rule is validated, on the tree's own query
     rule_only = tree_leaf_from_options(
         problem, eta=0.2, pseudo_counts=(None,), seed=0, tree_options={}, region_rules=REGION_RULES
     )
-    assert (
-        rule_only.leaf is None and rule_only.region_rule in REGION_RULES and "region rule" in rule_only.note
-    )
+    assert rule_only.leaf is None
+    assert rule_only.region_rule in REGION_RULES
+    assert "region rule" in rule_only.note

@@ -28,7 +28,8 @@ def problem() -> Problem:
 @pytest.fixture(scope="module")
 def prior(problem: Problem) -> WorldPrior:
     tree = build_tree(problem, progress=False)
-    assert problem.start is not None and problem.goal is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     own = QueryTree("own", problem.start, problem.goal, problem.library, tree)
     return prior_from_problem(problem, domain="planar", trees=(own,), eta=0.2)
 
@@ -64,7 +65,8 @@ def test_every_found_path_was_checked_free_and_no_path_is_exact(problem: Problem
         if result.found:
             outcomes = result.outcomes()
             assert all(outcomes[int(e)] for e in result.edges)
-            assert result.vertices[0] == s and result.vertices[-1] == g
+            assert result.vertices[0] == s
+            assert result.vertices[-1] == g
             assert result.cost == pytest.approx(float(prior.graph.lengths[result.edges].sum()))
             assert worlds.X[world, result.edges].all()
         else:
@@ -106,7 +108,8 @@ def test_blocked_library_falls_back_to_the_graph(problem: Problem, prior: WorldP
     # A world in which every edge of every library path of the query is blocked, but a detour is free.
     planner = Planner(prior)
     s, g = problem.start, problem.goal
-    assert s is not None and g is not None
+    assert s is not None
+    assert g is not None
     library = planner.query_model(s, g).library
     assert library is not None
     # Block a small hitting set of the library (greedy: the edge on most unblocked paths, repeat).
@@ -121,7 +124,8 @@ def test_blocked_library_falls_back_to_the_graph(problem: Problem, prior: WorldP
     assert graph is not None
     assert ShortestPaths(GraphArcs(graph), graph.lengths).path(s, g, world) is not None
     result = planner.plan(s, g, TableOracle(world))
-    assert result.found and result.stage is PlanStage.GRAPH
+    assert result.found
+    assert result.stage is PlanStage.GRAPH
     assert world[result.edges].all()
     assert any(c.stage == "graph" for c in result.checks)
 
@@ -190,8 +194,10 @@ def test_states_snap_to_their_vertex(prior: WorldPrior) -> None:
 
 def test_start_equal_goal_is_the_empty_path(prior: WorldPrior) -> None:
     result = Planner(prior).plan(4, 4, TableOracle(np.ones(prior.graph.num_edges, dtype=bool)))
-    assert result.found and result.stage is PlanStage.TRIVIAL
-    assert result.edges.size == 0 and result.vertices.tolist() == [4]
+    assert result.found
+    assert result.stage is PlanStage.TRIVIAL
+    assert result.edges.size == 0
+    assert result.vertices.tolist() == [4]
 
 
 def test_every_plan_policy_runs(problem: Problem, prior: WorldPrior) -> None:
@@ -248,7 +254,8 @@ def test_a_query_no_training_world_connects_goes_straight_to_the_graph() -> None
     planner = Planner(prior_from_problem(problem, domain="planar"))
     assert planner.query_model(0, 2).library is None
     result = planner.plan(0, 2, TableOracle(np.ones(4, dtype=bool)))
-    assert result.found and result.stage is PlanStage.GRAPH
+    assert result.found
+    assert result.stage is PlanStage.GRAPH
 
 
 def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_priors(
@@ -274,7 +281,8 @@ def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_prio
     assert first_stage(planner, own.start, own.goal) == "tree"
     other = next((s, g) for s, g in _queries(problem, 50, seed=3) if (s, g) != (own.start, own.goal))
     result = planner.plan(*other, oracle, seed=0)
-    assert result.query == "online" and all(c.stage != "tree" for c in result.checks)
+    assert result.query == "online"
+    assert all(c.stage != "tree" for c in result.checks)
     # set_leaf overrides both (the validation's use).
     planner.set_leaf(1.0, None)
     assert first_stage(planner, own.start, own.goal) == "bisect"
@@ -285,12 +293,15 @@ def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_prio
 def test_new_queries_use_the_priors_region_rule(problem: Problem, prior: WorldPrior) -> None:
     planner = Planner(dataclasses.replace(prior, region_rule="per_check"))
     model = planner.query_model(3, 40)
-    assert model.tree is not None and model.tree.region_rule == "per_check"
+    assert model.tree is not None
+    assert model.tree.region_rule == "per_check"
     assert planner.query_model(problem.start, problem.goal).tree.region_rule == "probability"  # type: ignore[arg-type, union-attr]
     # Changing the rule drops the cached online trees, not the precomputed one.
     planner.set_leaf(0.2, None, region_rule="probability")
     again = planner.query_model(3, 40)
-    assert again is not model and again.tree is not None and again.tree.region_rule == "probability"
+    assert again is not model
+    assert again.tree is not None
+    assert again.tree.region_rule == "probability"
     with pytest.raises(ProblemError, match="known: probability, per_check"):
         planner.set_leaf(0.2, None, region_rule="cheapest")
     # Both rules verify every edge of the path they return.
@@ -313,7 +324,10 @@ def test_forgotten_queries_are_new_again_and_the_query_graph_is_the_priors(
     first = planner.plan(3, 40, TableOracle(row))
     planner.forget_queries()
     again = planner.plan(3, 40, TableOracle(row))
-    assert not again.query_cached and [c.edge for c in again.checks] == [c.edge for c in first.checks]
+    assert not again.query_cached
+    assert [c.edge for c in again.checks] == [c.edge for c in first.checks]
     assert planner.plan(3, 40, TableOracle(row)).query_cached
     query = planner.query_graph(3, 40)
-    assert query.graph is prior.graph and (query.start, query.goal) == (3, 40) and not query.connected
+    assert query.graph is prior.graph
+    assert (query.start, query.goal) == (3, 40)
+    assert not query.connected

@@ -34,7 +34,8 @@ REPO = Path(__file__).resolve().parents[2]
 def prior() -> WorldPrior:
     problem = make_planar_problem(model="forest", num_worlds=150, seed=2)
     tree = build_tree(problem, progress=False)
-    assert problem.start is not None and problem.goal is not None
+    assert problem.start is not None
+    assert problem.goal is not None
     own = QueryTree("own", problem.start, problem.goal, problem.library, tree)
     base = prior_from_problem(problem, domain="planar", trees=(own,), eta=0.4, pseudo_count=5.0)
     other, _ = query_tree(base, 3, 20, tree_options={})
@@ -44,7 +45,8 @@ def prior() -> WorldPrior:
 def test_round_trip_keeps_everything(prior: WorldPrior, tmp_path: Path) -> None:
     path = save_prior(tmp_path / "p.npz", prior)
     back = load_prior(path, expected_domain="planar")
-    assert back.worlds is not None and prior.worlds is not None
+    assert back.worlds is not None
+    assert prior.worlds is not None
     np.testing.assert_array_equal(back.worlds, prior.worlds)
     np.testing.assert_array_equal(back.graph.edges, prior.graph.edges)
     np.testing.assert_array_equal(back.graph.vertex_states, prior.graph.vertex_states)  # type: ignore[arg-type]
@@ -74,8 +76,10 @@ def test_a_tree_file_loads_as_a_prior_with_one_tree(prior: WorldPrior, tmp_path:
     problem = prior.query_problem(own)
     path = save_tree(tmp_path / "t.npz", TreeBundle(problem, own.tree, "planar", eta=0.3))
     loaded = load_prior(path)
-    assert loaded.worlds is None and not loaded.serves_any_query
-    assert len(loaded.trees) == 1 and loaded.trees[0].start == own.start
+    assert loaded.worlds is None
+    assert not loaded.serves_any_query
+    assert len(loaded.trees) == 1
+    assert loaded.trees[0].start == own.start
     assert loaded.eta == 0.3
     with pytest.raises(PriorFileError, match="'planar', not 'arm'"):
         load_prior(path, expected_domain="arm")

@@ -72,12 +72,14 @@ def test_deterministic_and_bounded(setup: tuple[object, np.ndarray]) -> None:
     graph = problem.graph  # type: ignore[attr-defined]
     a = query_library(_search(problem, X, seed=3), graph.edges, 0, 40, start_vertex=0, max_paths=5)
     b = query_library(_search(problem, X, seed=3), graph.edges, 0, 40, start_vertex=0, max_paths=5)
-    assert a is not None and b is not None
+    assert a is not None
+    assert b is not None
     assert a.num_paths <= 5
     assert all(np.array_equal(x, y) for x, y in zip(a.path_edges, b.path_edges, strict=True))
     assert a.vertex_paths is not None
     for vp in a.vertex_paths:
-        assert vp[0] == 0 and vp[-1] == 40
+        assert vp[0] == 0
+        assert vp[-1] == 40
 
 
 def test_joined_start_and_goal_take_the_best_free_join(setup: tuple[object, np.ndarray]) -> None:
@@ -95,7 +97,9 @@ def test_joined_start_and_goal_take_the_best_free_join(setup: tuple[object, np.n
     paths = library_paths(search, start, goal, max_paths=500)
     assert paths
     for p in paths:
-        assert p[0] == e + 1 and p[-1] == e + 3  # the only free joins
+        # the only free joins
+        assert p[0] == e + 1
+        assert p[-1] == e + 3
         inner = p[1:-1]
         assert X[:, inner].all(axis=1).any()
         length = float(graph.lengths[inner].sum())
@@ -124,4 +128,5 @@ def test_a_goal_with_more_joins_than_spare_arcs_searches_through_the_first(
     vertices = np.arange(k, dtype=np.int64)
     goal = Joins(vertices, np.ones(k), graph.num_edges + vertices, np.ones((X.shape[0], k), dtype=bool))
     paths = library_paths(search, 40 if 40 >= k else k + 1, goal, max_paths=50)
-    assert paths and all(int(p[-1]) < graph.num_edges + search.slots for p in paths)
+    assert paths
+    assert all(int(p[-1]) < graph.num_edges + search.slots for p in paths)

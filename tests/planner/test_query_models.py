@@ -32,10 +32,13 @@ def test_per_prior_work_is_done_once_and_models_are_cached(prior: WorldPrior) ->
     assert "edge_marginal" in models.prior.__dict__  # BiSECt's bias over the prior: no first query pays it
     search, columns = models.search, models.columns
     first = models.get(3, 40)
-    assert models.search is search and models.columns is columns
-    assert isinstance(first.tree, RootTree) and not first.reused
+    assert models.search is search
+    assert models.columns is columns
+    assert isinstance(first.tree, RootTree)
+    assert not first.reused
     again = models.get(3, 40)
-    assert again.reused and again.library is first.library
+    assert again.reused
+    assert again.library is first.library
     assert models.cached_queries() == [(3, 40)]
     other_start = models.get(7, 40)  # the goal's trees are kept: only walked again
     assert other_start.library is not None
@@ -52,15 +55,17 @@ def test_a_switch_threshold_below_one_grows_a_direct_tree(prior: WorldPrior) -> 
 def test_a_joined_query_keeps_the_priors_worlds_and_adds_only_its_columns(prior: WorldPrior) -> None:
     models = QueryModels(prior, straight_connector(prior), expand_threshold=0.01)
     states = prior.graph.vertex_states
-    assert states is not None and prior.worlds is not None
+    assert states is not None
+    assert prior.worlds is not None
     start = (states[3] + states[4]) / 2 + 0.01
     model = models.get(np.asarray(start), 40)
     worlds = model.query.worlds
-    assert model.query.connected and worlds is not None
-    assert worlds.base is prior.worlds and worlds.num_edges == prior.graph.num_edges + len(
-        model.query.motions
-    )
-    assert model.query.start_joins is not None and model.query.goal_joins is None
+    assert model.query.connected
+    assert worlds is not None
+    assert worlds.base is prior.worlds
+    assert worlds.num_edges == prior.graph.num_edges + len(model.query.motions)
+    assert model.query.start_joins is not None
+    assert model.query.goal_joins is None
     assert model.theta.shape == (worlds.num_edges,)
     expected = prior.alpha * worlds.dense.mean(axis=0) + (1 - prior.alpha) * 0.5
     assert np.allclose(model.theta, expected)

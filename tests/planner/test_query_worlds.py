@@ -16,7 +16,8 @@ def test_columns_counts_and_fractions_are_those_of_the_whole_matrix() -> None:
     extra = rng.random((90, 3)) < 0.4
     worlds = QueryWorlds(base, WorldColumns(base), extra)
     whole = np.concatenate([base, extra], axis=1)
-    assert worlds.shape == (90, 23) and worlds.num_base_edges == 20
+    assert worlds.shape == (90, 23)
+    assert worlds.num_base_edges == 20
     assert worlds.base is base  # the prior's matrix, not a copy
     for e in (0, 19, 20, 22):
         assert np.array_equal(worlds.column(e), whole[:, e])
@@ -26,7 +27,8 @@ def test_columns_counts_and_fractions_are_those_of_the_whole_matrix() -> None:
     assert np.allclose(worlds.free_fraction, whole.mean(axis=0))
     assert np.array_equal(worlds.dense, whole)
     more = worlds.with_columns(rng.random((90, 2)) < 0.5)
-    assert more.num_edges == 25 and more.base is base
+    assert more.num_edges == 25
+    assert more.base is base
 
 
 def test_packed_columns_of_other_worlds_are_refused() -> None:
@@ -34,4 +36,5 @@ def test_packed_columns_of_other_worlds_are_refused() -> None:
     with pytest.raises(ProblemError, match="base worlds"):
         QueryWorlds(base, WorldColumns(np.ones((11, 4), dtype=bool)))
     plain = QueryWorlds(base, WorldColumns(base))
-    assert plain.dense is base and plain.num_edges == 4
+    assert plain.dense is base
+    assert plain.num_edges == 4

@@ -35,26 +35,32 @@ def _checker(domain: Any, seed: int = CUT_WORLD) -> Any:
 def test_growth_finds_a_path_where_the_roadmap_has_none(shipped: tuple[WorldPrior, Any]) -> None:
     prior, domain = shipped
     without = Planner(prior, growth=None).plan(0, 1, _checker(domain))
-    assert without.status is PlanStatus.NO_PATH and without.growth is None
+    assert without.status is PlanStatus.NO_PATH
+    assert without.growth is None
     assert (
         "no free path from the start (vertex 0: [0.5, 0.7" in without.reason
     )  # configurations, not ids only
     result = Planner(prior).plan(0, 1, _checker(domain))
-    assert result.found and result.stage is PlanStage.GROW
+    assert result.found
+    assert result.stage is PlanStage.GROW
     growth = result.growth
-    assert growth is not None and growth.stop == "path" and growth.rounds >= 1
-    assert growth.vertices_added > 0 and growth.edges_added > 0 and "growth round" in result.reason
+    assert growth is not None
+    assert growth.stop == "path"
+    assert growth.rounds >= 1
+    assert growth.vertices_added > 0
+    assert growth.edges_added > 0
+    assert "growth round" in result.reason
     # Every edge of the path was checked free in this plan; the grown ones are motions of the grown graph.
     outcome = result.outcomes()
     assert all(outcome[int(e)] for e in result.edges)
     grown = [int(e) for e in result.edges if e >= prior.graph.num_edges]
-    assert grown and all(e in result.motions for e in grown)
+    assert grown
+    assert all(e in result.motions for e in grown)
     assert {c.stage for c in result.checks if c.edge in grown} == {GROWTH_STAGE}
     # And the whole dense path is free for a fresh checker of the same world (static rules and scene).
     dense = path_states(domain, prior, result)
-    assert np.allclose(dense[0], prior.graph.vertex_states[0]) and np.allclose(
-        dense[-1], prior.graph.vertex_states[1]
-    )
+    assert np.allclose(dense[0], prior.graph.vertex_states[0])
+    assert np.allclose(dense[-1], prior.graph.vertex_states[1])
     assert np.abs(np.diff(dense, axis=0)).max() <= domain.resolution + 1e-9
     assert _checker(domain).check_motion(dense)
 
@@ -63,10 +69,12 @@ def test_same_seed_same_checks_same_path(shipped: tuple[WorldPrior, Any]) -> Non
     prior, domain = shipped
     first = Planner(prior).plan(0, 1, _checker(domain), seed=4)
     again = Planner(prior).plan(0, 1, _checker(domain), seed=4)
-    assert first.found and again.found
+    assert first.found
+    assert again.found
     assert [(c.edge, c.free) for c in first.checks] == [(c.edge, c.free) for c in again.checks]
     assert first.edges.tolist() == again.edges.tolist()
-    assert first.growth is not None and again.growth is not None
+    assert first.growth is not None
+    assert again.growth is not None
     np.testing.assert_array_equal(
         first.growth.query.graph.vertex_states, again.growth.query.graph.vertex_states
     )
@@ -77,9 +85,12 @@ def test_a_growth_budget_ends_with_no_path_and_says_what_was_tried(shipped: tupl
     tiny = GrowthSettings(max_rounds=1, samples_per_round=1, bridges=0)
     result = Planner(prior, growth=tiny).plan(0, 1, _checker(domain))
     assert result.status is PlanStatus.NO_PATH
-    assert result.growth is not None and result.growth.stop == "rounds" and result.growth.rounds == 1
+    assert result.growth is not None
+    assert result.growth.stop == "rounds"
+    assert result.growth.rounds == 1
     assert "within the growth budget (1 growth round(s) added" in result.reason
-    assert "vertex 0: [0.5, 0.7" in result.reason and "vertex 1: [-0.5, 0.7" in result.reason
+    assert "vertex 0: [0.5, 0.7" in result.reason
+    assert "vertex 1: [-0.5, 0.7" in result.reason
 
 
 @pytest.mark.parametrize(
@@ -91,9 +102,12 @@ def test_the_plans_budgets_end_growth_with_their_own_status(
     prior, domain = shipped
     result = Planner(prior).plan(0, 1, _checker(domain), **budget)
     assert result.status is PlanStatus.BUDGET_EXHAUSTED
-    assert ran_out in result.reason and "budget ran out" in result.reason
+    assert ran_out in result.reason
+    assert "budget ran out" in result.reason
     if "max_checks" in budget:
-        assert result.num_checks <= 25 and result.growth is not None and result.growth.stop == "plan_checks"
+        assert result.num_checks <= 25
+        assert result.growth is not None
+        assert result.growth.stop == "plan_checks"
 
 
 def test_growth_checks_the_ends_first_and_stops_when_one_is_blocked(shipped: tuple[WorldPrior, Any]) -> None:
@@ -106,14 +120,16 @@ def test_growth_checks_the_ends_first_and_stops_when_one_is_blocked(shipped: tup
     scene.add(Box([0.15, 0.15, 0.15]), Pose(goal_tool.tolist()), name="can")
     result = Planner(prior).plan(0, 1, domain.scene_checker(scene))
     assert result.status is PlanStatus.NO_PATH
-    assert result.growth is not None and result.growth.stop == "goal_blocked" and result.growth.rounds == 0
-    assert "can exist" in result.reason and "goal state itself is blocked (checked): scene object 'can'" in (
-        result.reason
-    )
+    assert result.growth is not None
+    assert result.growth.stop == "goal_blocked"
+    assert result.growth.rounds == 0
+    assert "can exist" in result.reason
+    assert "goal state itself is blocked (checked): scene object 'can'" in (result.reason)
 
 
 def test_growth_settings_are_checked() -> None:
-    assert DEFAULT_GROWTH.seconds is not None and DEFAULT_GROWTH.max_rounds >= 1
+    assert DEFAULT_GROWTH.seconds is not None
+    assert DEFAULT_GROWTH.max_rounds >= 1
     for bad in (
         {"max_rounds": 0},
         {"seconds": -1.0},
@@ -135,9 +151,11 @@ def test_a_domain_without_a_sampler_does_not_grow() -> None:
     problem = make_planar_problem(model="forest", num_worlds=60, seed=7)
     prior = prior_from_problem(problem, domain="planar")
     graph = problem.graph
-    assert graph is not None and problem.start is not None
+    assert graph is not None
+    assert problem.start is not None
     world = np.ones(problem.num_edges, dtype=bool)
     world[(graph.edges == problem.start).any(axis=1)] = False
     result = Planner(prior).plan(problem.start, problem.goal, TableOracle(world))  # type: ignore[arg-type]
-    assert result.status is PlanStatus.NO_PATH and result.growth is None
+    assert result.status is PlanStatus.NO_PATH
+    assert result.growth is None
     assert "no free path from the start (vertex" in result.reason

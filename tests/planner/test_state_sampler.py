@@ -24,4 +24,6 @@ def test_sampler_of_finds_a_connectors_sampler() -> None:
     with_one = StraightConnector(reach=1.0, resolution=0.1, sampler=Box())
     without = StraightConnector(reach=1.0, resolution=0.1)
     assert isinstance(sampler_of(with_one), Box)
-    assert sampler_of(without) is None and sampler_of(None) is None and sampler_of(object()) is None
+    assert sampler_of(without) is None
+    assert sampler_of(None) is None
+    assert sampler_of(object()) is None

@@ -40,10 +40,12 @@ def test_the_robot_state_is_the_last_accepted_odometry_before_the_request(
     assert len(odometry) == 3  # at the start, at a vertex, between two vertices
     first, second = odometry[0], odometry[1]
     state, notes = robot_state_at(session, messages, first.time_ns, "map")
-    assert state is not None and not notes
+    assert state is not None
+    assert not notes
     np.testing.assert_allclose(state, session.vertex_state(int(session.domain.start)), atol=1e-9)
     later, _ = robot_state_at(session, messages, second.time_ns, "map")
-    assert later is not None and not np.allclose(later, state)
+    assert later is not None
+    assert not np.allclose(later, state)
     # Odometry in another frame is dropped with a note, and the last good state stays.
     second.message.header.frame_id = "odom"
     try:
@@ -51,7 +53,8 @@ def test_the_robot_state_is_the_last_accepted_odometry_before_the_request(
     finally:
         second.message.header.frame_id = "map"
     np.testing.assert_allclose(kept, state)  # type: ignore[arg-type]
-    assert len(notes) == 1 and "frame 'odom'" in notes[0]
+    assert len(notes) == 1
+    assert "frame 'odom'" in notes[0]
     # Nothing before the first message: no state.
     assert robot_state_at(session, messages, first.time_ns - 1, "map") == (None, ())
 
@@ -59,7 +62,8 @@ def test_the_robot_state_is_the_last_accepted_odometry_before_the_request(
 def test_goals_are_read_as_the_node_reads_them(session: QuerySession, messages: list[BagMessage]) -> None:
     requests = bag_requests(messages)
     goal = request_goal(session, requests[0], "map")
-    assert goal.position is not None and goal.joints is None
+    assert goal.position is not None
+    assert goal.joints is None
     np.testing.assert_allclose(goal.position, session.goal_position, atol=1e-9)
     with pytest.raises(MessageError, match="frame 'map'"):
         request_goal(session, requests[0], "odom")
@@ -88,4 +92,5 @@ def test_no_robot_state_is_an_error_unless_the_prior_start_is_asked_for(
     with pytest.raises(PlanningError, match="no accepted odom message before it"):
         plan_bag_request(session, stateless, 0, frame="map")
     plan = plan_bag_request(session, stateless, 0, frame="map", prior_start=True)
-    assert plan.start == int(session.domain.start) and plan.result.ok
+    assert plan.start == int(session.domain.start)
+    assert plan.result.ok

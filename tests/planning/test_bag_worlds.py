@@ -97,10 +97,13 @@ def test_a_bag_build_checks_each_snapshot_with_the_scene_checker(
         ).check_many(edges)
         for n in (1, 2, 4)
     ]
-    assert np.array_equal(ds.X, np.array(expected)) and not np.array_equal(ds.X[0], ds.X[1])
-    assert ds.world_model == "map_bags" and np.array_equal(ds.world_seeds, [0, 1, 2])
+    assert np.array_equal(ds.X, np.array(expected))
+    assert not np.array_equal(ds.X[0], ds.X[1])
+    assert ds.world_model == "map_bags"
+    assert np.array_equal(ds.world_seeds, [0, 1, 2])
     source = ds.provenance["world_source"]
-    assert source["frame"] == "map" and source["files"] == [FileRecord.of(bag).to_json()]
+    assert source["frame"] == "map"
+    assert source["files"] == [FileRecord.of(bag).to_json()]
     # The recorded command recreates the bytes, on two processes.
     again = tmp_path / "again.npz"
     assert main([*shlex.split(ds.provenance["command"])[1:], "--workers", "2", "--out", str(again)]) == 0
@@ -138,7 +141,8 @@ def test_refusals_name_the_bag_the_message_and_the_frame(
     assert _build(["--bags", str(mixed)], out) == 2
     err = capsys.readouterr().err
     assert f"bag {mixed}: /obstacles at {T0 + 2 * SEC} ns is refused:" in err
-    assert "in frame 'odom'; the planner works in 'map'" in err and "chosen with --frame" in err
+    assert "in frame 'odom'; the planner works in 'map'" in err
+    assert "chosen with --frame" in err
     assert _build(["--bags", str(bag), "--frame", "odom"], out) == 2
     assert "/terrain at" in capsys.readouterr().err
     assert not out.exists()

@@ -35,7 +35,8 @@ def test_a_token_raises_once_cancelled() -> None:
     token.cancel()
     with pytest.raises(PlanCancelled, match="after 3 checks") as caught:
         token.check(3)
-    assert caught.value.checks == 3 and token.cancelled
+    assert caught.value.checks == 3
+    assert token.cancelled
 
 
 def test_a_cancelled_plan_stops_between_checks_publishes_nothing_and_the_next_plan_runs(
@@ -47,6 +48,8 @@ def test_a_cancelled_plan_stops_between_checks_publishes_nothing_and_the_next_pl
     with pytest.raises(PlanCancelled) as caught:
         service.serve_request(far_goal, None, cancel=CancelAfter(4))
     assert caught.value.checks == 3  # three checks answered, the fourth never asked of the checker
-    assert service.published is None and not service.history
+    assert service.published is None
+    assert not service.history
     outcome = service.serve_request(goal, None, cancel=CancelToken())  # the planning lock was released
-    assert outcome.ok and service.published is not None
+    assert outcome.ok
+    assert service.published is not None

@@ -18,8 +18,10 @@ def test_straight_edges_move_at_most_the_resolution_per_step_and_end_on_the_vert
         resolution = 0.1
 
     states = straight_edge_states(Fine(), [0.0, 0.0], [0.35, -0.05])  # type: ignore[arg-type]
-    assert np.allclose(states[0], [0.0, 0.0]) and np.allclose(states[-1], [0.35, -0.05])
-    assert len(states) == 5 and np.max(np.abs(np.diff(states, axis=0))) <= 0.1 + 1e-12
+    assert np.allclose(states[0], [0.0, 0.0])
+    assert np.allclose(states[-1], [0.35, -0.05])
+    assert len(states) == 5
+    assert np.max(np.abs(np.diff(states, axis=0))) <= 0.1 + 1e-12
 
     class Stored:
         resolution = 0.0  # edges are stored trajectories: no straight-edge sampling
@@ -43,6 +45,8 @@ def test_one_checker_is_kept_for_the_latest_snapshot_and_answers_on_its_map() ->
     first = MapSnapshot(1, {}, None, 0.0, obstacle_map=True)
     assert checkers.prepare(first) > 0.0
     checker = checkers.checker(first)
-    assert checkers.checker(first) is checker and checker.check(edge)
+    assert checkers.checker(first) is checker
+    assert checker.check(edge)
     blocked = first.with_obstacles({"box": ((Box((40.0, 40.0, 40.0)), Pose(position=tuple(u[:3]))),)})
-    assert checkers.checker(blocked) is not checker and not checkers.checker(blocked).check(edge)
+    assert checkers.checker(blocked) is not checker
+    assert not checkers.checker(blocked).check(edge)

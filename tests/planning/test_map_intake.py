@@ -59,11 +59,11 @@ def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
     assert parts["ball/2"][0][0] == Sphere(1.5)
     assert parts["nofly/3"][0][0] == Cylinder(50.0, 200.0)
     mesh = parts["mesh/4"][0][0]
-    assert isinstance(mesh, TriangleMesh) and mesh.faces.shape == (4, 3)
+    assert isinstance(mesh, TriangleMesh)
+    assert mesh.faces.shape == (4, 3)
     chain = parts["wire/5"]
-    assert len(chain) == 4 and all(
-        isinstance(s, Capsule) and s.radius == pytest.approx(0.025) for s, _ in chain
-    )
+    assert len(chain) == 4
+    assert all(isinstance(s, Capsule) and s.radius == pytest.approx(0.025) for s, _ in chain)
 
 
 def test_wire_capsules_touch_what_the_wire_touches(msgs: Any) -> None:
@@ -98,7 +98,9 @@ def test_poses_and_shapes_convert_both_ways() -> None:
     np.testing.assert_array_equal(back.position, pose.position)
     np.testing.assert_array_equal(back.quaternion_xyzw, pose.quaternion_xyzw)
     data, where = obstacle_data(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), 0.3)
-    assert isinstance(data, LineStripData) and data.diameter == 0.3 and where == PoseData()
+    assert isinstance(data, LineStripData)
+    assert data.diameter == 0.3
+    assert where == PoseData()
     with pytest.raises(GeometryError, match="needs a Pose"):
         obstacle_data(Sphere(1.0), 0.5)
 

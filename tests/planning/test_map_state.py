@@ -116,12 +116,15 @@ def test_a_scene_copy_shares_objects_but_moves_its_own() -> None:
     first.add_terrain(Heightfield((-50.0, -50.0), 10.0, np.full((11, 11), -20.0)))
     assert first.collides(Box((0.5, 0.5, 0.5)), Pose((0.0, 0.0, 0.0)))  # builds the broadphase
     second = first.copy()
-    assert second.names == first.names and second.terrain is first.terrain and second.margin == 0.1
+    assert second.names == first.names
+    assert second.terrain is first.terrain
+    assert second.margin == 0.1
     second.set_pose("box", Pose((10.0, 0.0, 0.0)))
     second.add(Sphere(1.0), Pose((0.0, 10.0, 0.0)), name="ball")
     assert first.spheres_collide([[0.0, 0.0, 0.0]], 0.1)
     assert not first.spheres_collide([[10.0, 0.0, 0.0]], 0.1)
-    assert not first.spheres_collide([[0.0, 10.0, 0.0]], 0.1) and "ball" not in first
+    assert not first.spheres_collide([[0.0, 10.0, 0.0]], 0.1)
+    assert "ball" not in first
     assert second.spheres_collide([[10.0, 0.0, 0.0]], 0.1)
     assert not second.spheres_collide([[0.0, 0.0, 0.0]], 0.1)
     assert second.collides(Box((0.5, 0.5, 0.5)), Pose((10.0, 0.0, 0.0)))
@@ -147,7 +150,8 @@ def test_scenes_follow_terrain_and_obstacle_changes_across_snapshots() -> None:
     assert sorted(fewer.scene.names) == ["box/0#0", "terrain"]
     assert not base.scene.spheres_collide(probe, 0.1)  # the older snapshots' scenes did not change
     bare = MapSnapshot(0).with_obstacles({})  # another lineage without terrain: nothing of the others
-    assert bare.scene.names == () and bare.scene.terrain is None
+    assert bare.scene.names == ()
+    assert bare.scene.terrain is None
 
 
 def test_changed_parts_sees_a_new_unknown_terrain_option() -> None:
@@ -187,6 +191,8 @@ def test_each_lineage_of_snapshots_owns_its_cache() -> None:
     first = MapSnapshot(0).with_terrain(_terrain(1))
     second = first.with_obstacles({"box/0": ((Box((1.0, 1.0, 1.0)), Pose((4.0, 4.0, 5.0))),)})
     other = MapSnapshot(0).with_terrain(_terrain(1))
-    assert isinstance(first.cache, SceneCache) and second.cache is first.cache
+    assert isinstance(first.cache, SceneCache)
+    assert second.cache is first.cache
     assert other.cache is not first.cache
-    assert second.scene is second.scene and other.scene is not second.scene
+    assert second.scene is second.scene
+    assert other.scene is not second.scene

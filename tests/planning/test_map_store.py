@@ -52,25 +52,34 @@ def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp
     first, req0 = maps_at_request(messages, 0, frame_id="map", margin=2.0)
     assert (req0.index, req0.position) == (0, 2)
     snap = first.snapshot
-    assert snap.version == 2 and snap.margin == 2.0 and first.applied == 2 and not first.refused
+    assert snap.version == 2
+    assert snap.margin == 2.0
+    assert first.applied == 2
+    assert not first.refused
     expected = obstacle_update(obstacles_message(rb, T0).message, frame_id="map").apply({})
     assert set(snap.obstacles) == set(expected) == set(first.obstacles) == {"tower/0", "nofly/1", "wire/2"}
     assert all(snap.obstacles[k] == obstacle_parts(expected[k]) for k in expected)
-    assert snap.terrain is not None and snap.terrain.shape == (6, 9)
+    assert snap.terrain is not None
+    assert snap.terrain.shape == (6, 9)
     # The wrong-frame update is refused (map unchanged, version not bumped); the next one is applied.
     second, _ = maps_at_request(messages, 1, frame_id="map", margin=2.0)
-    assert second.snapshot.version == 3 and len(second.refused) == 1 and "frame 'odom'" in second.refused[0]
+    assert second.snapshot.version == 3
+    assert len(second.refused) == 1
+    assert "frame 'odom'" in second.refused[0]
     assert set(second.snapshot.obstacles) == {"tower/0", "nofly/1", "wire/2", "new_obstacle/0"}
     # The new sphere is really in the scene at request 1 and not at request 0.
     probe = (np.array([[5.0, 5.0, 50.0]]), np.array([0.5]))
-    assert second.snapshot.scene.spheres_collide(*probe) and not snap.scene.spheres_collide(*probe)
+    assert second.snapshot.scene.spheres_collide(*probe)
+    assert not snap.scene.spheres_collide(*probe)
     # maps_until is inclusive in time and agrees with maps_at_request.
     until = maps_until(messages, T0 + 3 * SEC // 2, frame_id="map", margin=2.0)
-    assert until.snapshot.version == 3 and set(until.snapshot.obstacles) == set(second.snapshot.obstacles)
+    assert until.snapshot.version == 3
+    assert set(until.snapshot.obstacles) == set(second.snapshot.obstacles)
     assert maps_until(messages, T0 + 3 * SEC // 2 - 1, frame_id="map", margin=2.0).snapshot.version == 2
     # A planner in another frame refuses every map.
     other, _ = maps_at_request(messages, 0, frame_id="odom", margin=0.0)
-    assert other.snapshot.version == 0 and len(other.refused) == 2
+    assert other.snapshot.version == 0
+    assert len(other.refused) == 2
 
 
 def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) -> None:
@@ -79,21 +88,24 @@ def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) ->
     )
     messages = [text, obstacles_message(rb, T0), goal_message(rb, T0 + 1, (0.0, 0.0, 0.0))]
     plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
-    assert (
-        plain.robot_description == "<robot/>" and plain.snapshot.version == 1 and plain.snapshot.robot is None
-    )
+    assert plain.robot_description == "<robot/>"
+    assert plain.snapshot.version == 1
+    assert plain.snapshot.robot is None
 
     def refuse(_urdf: str) -> Any:
         raise DrdError("no such robot")
 
     refused, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0, robot_loader=refuse)
-    assert refused.snapshot.version == 1 and "robot_description" in refused.refused[0]
+    assert refused.snapshot.version == 1
+    assert "robot_description" in refused.refused[0]
 
 
 def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: RosbagsMessages) -> None:
     store = MapStore(frame_id="map", margin=1.0, limits=MapLimits(max_markers=4))
     first = store.apply("/obstacles", obstacles_message(rb, T0).message)
-    assert first is not None and first.version == 1 and first.margin == 1.0
+    assert first is not None
+    assert first.version == 1
+    assert first.margin == 1.0
     update = obstacle_markers(
         [("new_obstacle/0", Sphere(3.0), Pose((5.0, 5.0, 50.0)))],
         frame_id="map",
@@ -108,14 +120,18 @@ def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: Ro
     )
     with pytest.raises(MessageError, match="max_markers = 4"):
         store.apply_obstacles(more)
-    assert store.snapshot is second and set(store.obstacles) == set(second.obstacles)
+    assert store.snapshot is second
+    assert set(store.obstacles) == set(second.obstacles)
     with pytest.raises(MessageError, match="frame 'odom'"):
         store.apply("obstacles", obstacles_message(rb, T0, frame="odom").message)
     terrain = store.apply("terrain", terrain_message(rb, T0).message)
-    assert terrain is not None and terrain.version == 3 and terrain.terrain is not None
+    assert terrain is not None
+    assert terrain.version == 3
+    assert terrain.terrain is not None
     assert store.apply("goal_pose", goal_message(rb, T0, (0.0, 0.0, 0.0)).message) is None
     assert store.apply("robot_description", rb("std_msgs/msg/String", data="<robot/>")) is None
-    assert store.robot_description == "<robot/>" and not store.has_robot_loader
+    assert store.robot_description == "<robot/>"
+    assert not store.has_robot_loader
 
 
 def test_a_terrain_no_loaded_prior_can_stand_on_is_refused_and_the_maps_are_kept(rb: RosbagsMessages) -> None:
@@ -123,7 +139,8 @@ def test_a_terrain_no_loaded_prior_can_stand_on_is_refused_and_the_maps_are_kept
     heli = domain_from_spec("helicopter")
     store = MapStore(frame_id="map", terrain_fit=terrain_fit_of([heli]))
     good = store.apply("terrain", terrain_message(rb, T0).message)
-    assert good is not None and good.version == 1
+    assert good is not None
+    assert good.version == 1
     far = Heightfield((20_000.0, 20_000.0), 10.0, np.zeros((4, 5)))
     cloud = cloud_from_heightfield(far, frame_id="map", stamp=(1, 0), msgs=rb)
     with pytest.raises(DrdError, match=r"not the prior's terrain: the terrain spans x \[20000, 20040\] m"):
@@ -189,7 +206,8 @@ def test_a_republished_map_builds_only_the_moved_marker(
     assert built == ["box/7"]
     assert converted == (["box/7"] if serialized else [f"box/{k}" for k in range(count)])
     assert read == ([8] if serialized else [])  # the bytes of the others are unchanged: not read again
-    assert second.version == 2 and set(second.obstacles) == set(first.obstacles)
+    assert second.version == 2
+    assert set(second.obstacles) == set(first.obstacles)
     assert all(second.obstacles[k] is first.obstacles[k] for k in first.obstacles if k != "box/7")
     assert store.obstacles["box/7"].pose.position == (22.5, 0.0, 5.0)
     # The moved cube's new place (x 22 to 23) is blocked, its old place (x 20.5 to 21.5) free

@@ -52,8 +52,10 @@ def test_joint_goal_and_start_in_the_arm_order() -> None:
         request([constraints({"j2": 2.0, "j1": 1.0})], {"j2": 0.5, "j1": -0.5}), JOINTS
     )
     assert isinstance(read, MotionRequest)
-    assert read.goal.joints is not None and read.goal.joints.tolist() == [1.0, 2.0]
-    assert read.start is not None and read.start.joints is not None
+    assert read.goal.joints is not None
+    assert read.goal.joints.tolist() == [1.0, 2.0]
+    assert read.start is not None
+    assert read.start.joints is not None
     assert read.start.joints.tolist() == [-0.5, 0.5]
     assert read.velocity_scaling == 1.0  # 0: MoveIt's default
 
@@ -61,8 +63,11 @@ def test_joint_goal_and_start_in_the_arm_order() -> None:
 def test_empty_start_is_the_robot_state_and_the_first_joint_set_is_the_goal() -> None:
     goals = [constraints(position=[Msg()]), constraints({"j1": 0.0, "j2": 0.1})]
     read = read_motion_request(request(goals, scaling=0.5), JOINTS)
-    assert isinstance(read, MotionRequest) and read.start is None and read.velocity_scaling == 0.5
-    assert read.goal.joints is not None and read.goal.joints.tolist() == [0.0, 0.1]
+    assert isinstance(read, MotionRequest)
+    assert read.start is None
+    assert read.velocity_scaling == 0.5
+    assert read.goal.joints is not None
+    assert read.goal.joints.tolist() == [0.0, 0.1]
 
 
 @pytest.mark.parametrize(
@@ -82,7 +87,9 @@ def test_empty_start_is_the_robot_state_and_the_first_joint_set_is_the_goal() ->
 )
 def test_refused_requests_have_moveit_codes(req: Msg, name: str, text: str) -> None:
     read = read_motion_request(req, JOINTS)
-    assert isinstance(read, MoveItError) and read.name == name and text in read.text
+    assert isinstance(read, MoveItError)
+    assert read.name == name
+    assert text in read.text
     assert read.code == MOVEIT_CODES[name]
 
 

@@ -81,7 +81,8 @@ def test_box_sphere_cylinder_and_mesh_placed_by_object_and_shape_poses() -> None
     parts = objects["table"].parts()
     assert [type(s) for s, _ in parts] == [Box, Sphere, Cylinder, TriangleMesh]
     box, box_pose = parts[0]
-    assert isinstance(box, Box) and box.size.tolist() == [0.1, 0.2, 0.3]
+    assert isinstance(box, Box)
+    assert box.size.tolist() == [0.1, 0.2, 0.3]
     np.testing.assert_allclose(box_pose.position, [1.0, 0.5, 0.0], atol=1e-12)  # rotated by the object
     cylinder = parts[2][0]
     assert isinstance(cylinder, Cylinder)
@@ -153,12 +154,14 @@ def test_refusals_say_why_and_change_nothing(bad: Msg, text: str) -> None:
 def test_map_store_holds_scene_objects_beside_marker_obstacles() -> None:
     store = MapStore(frame_id=FRAME)
     first = store.apply("monitored_planning_scene", scene(obj("a", primitives=[primitive(2, 0.1)])))
-    assert first is not None and set(first.obstacles) == {"moveit:a"}
+    assert first is not None
+    assert set(first.obstacles) == {"moveit:a"}
     second = store.apply(
         "/ns/monitored_planning_scene",
         scene(obj("b", primitives=[primitive(1, 1, 1, 1)]), diff=True),
     )
-    assert second is not None and second.version == first.version + 1
+    assert second is not None
+    assert second.version == first.version + 1
     assert set(second.obstacles) == {"moveit:a", "moveit:b"}
     assert second.obstacles["moveit:a"] is first.obstacles["moveit:a"]  # untouched parts kept as they were
     with pytest.raises(GeometryError, match="octomap"):
@@ -176,7 +179,8 @@ def test_a_marker_update_keeps_the_scene_objects_and_a_scene_keeps_the_markers()
     store.apply("monitored_planning_scene", scene(obj("a", primitives=[primitive(2, 0.1)])))
     markers = obstacle_markers([("m/1", Box((1.0, 1.0, 1.0)), Pose())], frame_id=FRAME, msgs=RclpyMessages())
     after_markers = store.apply("obstacles", markers)
-    assert after_markers is not None and {"moveit:a", "m/1"} <= set(after_markers.obstacles)
+    assert after_markers is not None
+    assert {"moveit:a", "m/1"} <= set(after_markers.obstacles)
     after_scene = store.apply("monitored_planning_scene", scene(obj("b", primitives=[primitive(2, 0.1)])))
     assert after_scene is not None
     assert "moveit:a" not in after_scene.obstacles  # a full scene replaced the scene's objects

@@ -66,10 +66,13 @@ def test_the_codes_are_nav2_jazzys() -> None:
 def test_a_plan_and_each_failure_get_their_one_code(prior: Any, messages: list[BagMessage]) -> None:
     service, goal = _ready(prior, messages)
     found = service.serve_request(goal, None, "compute_path_to_pose")
-    assert found.ok and found.sent is not None and nav2_error(found) == Nav2Error("NONE", "")
+    assert found.ok
+    assert found.sent is not None
+    assert nav2_error(found) == Nav2Error("NONE", "")
     far = Goal(position=np.array([1e5, 0.0, 65.0]), yaw=0.0)
     outside = nav2_error(service.serve_request(far, None))
-    assert outside.name == "GOAL_OUTSIDE_MAP" and "outside the lattice" in outside.text
+    assert outside.name == "GOAL_OUTSIDE_MAP"
+    assert "outside the lattice" in outside.text
     start_far = nav2_error(service.serve_request(goal, far))
     assert start_far.name == "START_OUTSIDE_MAP"
     assert nav2_error(service.serve_request(Goal(joints=np.zeros(7)), None)).name == "INVALID_PLANNER"
@@ -77,7 +80,8 @@ def test_a_plan_and_each_failure_get_their_one_code(prior: Any, messages: list[B
     assert nav2_error(service.serve_request(goal, no_yaw)).name == "TF_ERROR"
     timed_out, _ = _ready(prior, messages, max_checks=1)
     timeout = nav2_error(timed_out.serve_request(goal, None))
-    assert timeout.name == "TIMEOUT" and timeout.text.startswith("max checks ran out")
+    assert timeout.name == "TIMEOUT"
+    assert timeout.text.startswith("max checks ran out")
 
 
 def test_no_robot_state_and_no_maps_are_tf_error_and_unknown(prior: Any, messages: list[BagMessage]) -> None:
@@ -85,12 +89,14 @@ def test_no_robot_state_and_no_maps_are_tf_error_and_unknown(prior: Any, message
     service = PlannerService([session], Recorder(), frame_id="map", live=LiveSettings)
     goal = Goal(position=np.array([0.0, 0.0, 65.0]))
     outcome = service.serve_request(goal, None)
-    assert outcome.refused == "start" and nav2_error(outcome).name == "TF_ERROR"
+    assert outcome.refused == "start"
+    assert nav2_error(outcome).name == "TF_ERROR"
     assert "no robot state known yet" in nav2_error(outcome).text
     odom = next(m for m in messages if topic_base(m.topic) == "odom")
     service.take_robot_state("odom", odom.message)
     no_maps = service.serve_request(goal, None)
-    assert no_maps.refused == "maps" and nav2_error(no_maps).name == "UNKNOWN"
+    assert no_maps.refused == "maps"
+    assert nav2_error(no_maps).name == "UNKNOWN"
 
 
 def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[BagMessage]) -> None:

@@ -29,18 +29,26 @@ def test_a_served_path_is_re_checked_only_where_the_maps_changed(
 ) -> None:
     service, goal = _ready(prior, messages)
     outcome = service.serve_request(goal, None)
-    assert outcome.ok and outcome.result is not None and outcome.session is not None
+    assert outcome.ok
+    assert outcome.result is not None
+    assert outcome.session is not None
     served = ServedPaths(service.planning_lock)
     positions = outcome.result.states[:, :3]
     yaws = outcome.result.states[:, 3]
     assert outcome.snapshot is not None
     served.remember(outcome.session, outcome.result.path_edges, positions, outcome.snapshot)
     same = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert same.valid and same.served and same.rechecked == 0 and same.invalid == ()
+    assert same.valid
+    assert same.served
+    assert same.rechecked == 0
+    assert same.invalid == ()
     _box_at(service, positions[len(positions) // 2], key="blocking/1")
     blocked = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert not blocked.valid and blocked.served and blocked.rechecked >= 1
-    assert len(positions) // 2 in blocked.invalid and len(blocked.invalid) < len(positions)
+    assert not blocked.valid
+    assert blocked.served
+    assert blocked.rechecked >= 1
+    assert len(positions) // 2 in blocked.invalid
+    assert len(blocked.invalid) < len(positions)
 
 
 def test_a_kept_path_is_then_known_free_on_the_new_maps(
@@ -49,15 +57,20 @@ def test_a_kept_path_is_then_known_free_on_the_new_maps(
 ) -> None:
     service, goal = _ready(prior, messages)
     outcome = service.serve_request(goal, None)
-    assert outcome.result is not None and outcome.session is not None and outcome.snapshot is not None
+    assert outcome.result is not None
+    assert outcome.session is not None
+    assert outcome.snapshot is not None
     served = ServedPaths()
     positions, yaws = outcome.result.states[:, :3], outcome.result.states[:, 3]
     served.remember(outcome.session, outcome.result.path_edges, positions, outcome.snapshot)
     _box_at(service, positions[len(positions) // 2] + np.array([0.0, 0.0, 60.0]), key="near/3")  # near, free
     first = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert first.valid and first.served
+    assert first.valid
+    assert first.served
     again = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert again.valid and again.rechecked == 0  # verified on these maps already
+    # verified on these maps already
+    assert again.valid
+    assert again.rechecked == 0
 
 
 def test_a_path_it_did_not_serve_is_checked_pose_by_pose_and_an_empty_one_is_not_valid(
@@ -71,9 +84,13 @@ def test_a_path_it_did_not_serve_is_checked_pose_by_pose_and_an_empty_one_is_not
     yaws = outcome.result.states[:, 3]
     served = ServedPaths()
     free = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert free.valid and not free.served and free.rechecked == len(positions)
+    assert free.valid
+    assert not free.served
+    assert free.rechecked == len(positions)
     _box_at(service, positions[3])
     blocked = served.validity(positions, yaws, service.sessions, service.snapshot)
-    assert not blocked.valid and 3 in blocked.invalid
+    assert not blocked.valid
+    assert 3 in blocked.invalid
     empty = served.validity(np.zeros((0, 3)), np.zeros(0), service.sessions, service.snapshot)
-    assert not empty.valid and empty.invalid == ()
+    assert not empty.valid
+    assert empty.invalid == ()

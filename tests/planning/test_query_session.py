@@ -103,12 +103,16 @@ def test_off_graph_start_to_another_goal_on_a_real_map(
     num_edges = prior.graph.num_edges
     assert HELI_GOAL != prior.trees[0].goal
     assert np.linalg.norm(start - session.vertex_state(0)) == pytest.approx(30.0)
-    assert result.ok and result.status == "path_found" and result.query == "connected"
-    assert result.stage in ("tree", "bisect", "graph") and result.stage in result.message
+    assert result.ok
+    assert result.status == "path_found"
+    assert result.query == "connected"
+    assert result.stage in ("tree", "bisect", "graph")
+    assert result.stage in result.message
     # The path starts at the robot's state and ends at the goal vertex.
     np.testing.assert_allclose(result.states[0], start)
     np.testing.assert_allclose(result.states[-1], session.vertex_state(HELI_GOAL))
-    assert result.path_vertices[0] == prior.graph.num_vertices and result.path_vertices[-1] == HELI_GOAL
+    assert result.path_vertices[0] == prior.graph.num_vertices
+    assert result.path_vertices[-1] == HELI_GOAL
     motions = [e for e in result.path_edges if e >= num_edges]
     assert motions == [result.path_edges[0]]  # the start is joined by one new motion
     np.testing.assert_allclose(session.edge_states(motions[0])[0], start)
@@ -118,7 +122,8 @@ def test_off_graph_start_to_another_goal_on_a_real_map(
     assert {c.stage for c in result.checks} <= {"tree", "bisect", "graph"}
     # Dense states: at most one sample spacing (5 m, horizontal) apart, and free by an independent FCL check.
     steps = np.linalg.norm(np.diff(result.states[:, :2], axis=0), axis=1)
-    assert steps.max() <= 5.0 + 1e-6 and result.states.shape[0] > 2 * len(result.path_edges)
+    assert steps.max() <= 5.0 + 1e-6
+    assert result.states.shape[0] > 2 * len(result.path_edges)
     checker = _independent_checker(session, snapshot)
     assert checker.check_motion(result.states)
     for e in result.path_edges:
@@ -143,11 +148,9 @@ def test_every_found_path_is_free_and_every_failure_has_a_status(heli_prior: Wor
                 np.testing.assert_allclose(result.states[0], start)
                 np.testing.assert_allclose(result.states[-1], session.vertex_state(goal))
             else:
-                assert (
-                    result.status == "no_free_path"
-                    and result.path_edges == ()
-                    and "blocked" in result.message
-                )
+                assert result.status == "no_free_path"
+                assert result.path_edges == ()
+                assert "blocked" in result.message
     assert statuses == {"path_found", "no_free_path"}
 
 
@@ -189,11 +192,15 @@ def test_budgets_end_with_their_own_status(heli_prior: WorldPrior) -> None:
     session = QuerySession(heli_prior, name="heli", max_checks=1)
     snapshot = _heli_snapshot(session, 100)
     capped = session.plan(snapshot, _heli_start(session), HELI_GOAL)
-    assert not capped.ok and capped.status == "max_checks" and len(capped.checks) == 1
+    assert not capped.ok
+    assert capped.status == "max_checks"
+    assert len(capped.checks) == 1
     assert "check budget" in capped.message
     session.set_budgets(None, 1e-9)
     timed = session.plan(snapshot, _heli_start(session) + np.array([1.0, 0.0, 0.0, 0.0]), HELI_GOAL)
-    assert not timed.ok and timed.status == "time_budget" and "time budget" in timed.message
+    assert not timed.ok
+    assert timed.status == "time_budget"
+    assert "time budget" in timed.message
     with pytest.raises(ProblemError, match="max_checks"):
         session.set_budgets(0, None)
     with pytest.raises(ProblemError, match="time_budget_s"):
@@ -211,7 +218,8 @@ def test_an_improve_budget_publishes_a_shorter_path_checked_free_on_the_snapshot
     """Anytime improvement through the session: never longer, every edge checked free, the same first checks."""
     first_only = QuerySession(heli_prior, name="first")
     improving = QuerySession(heli_prior, name="improve", improve_budget=ImproveBudget(checks=60))
-    assert first_only.improve_budget is None and improving.improve_budget == ImproveBudget(checks=60)
+    assert first_only.improve_budget is None
+    assert improving.improve_budget == ImproveBudget(checks=60)
     # From the lattice's start vertex: an off-graph start 30 m behind it joins most goals of this small
     # lattice by one motion, leaving nothing to improve.
     start, shorter = 0, 0
@@ -223,7 +231,8 @@ def test_an_improve_budget_publishes_a_shorter_path_checked_free_on_the_snapshot
             after = improving.plan(_heli_snapshot(improving, seed), start, goal, seed=seed)
             assert after.ok == before.ok
             if not before.ok:
-                assert after.improve_stop == "" and after.improvements == 0
+                assert after.improve_stop == ""
+                assert after.improvements == 0
                 continue
             # The same first path (same seed, same checks), then only improvement checks. Motion ids are
             # per session (given as motions are first checked), so motions compare by their states.
@@ -231,12 +240,15 @@ def test_an_improve_budget_publishes_a_shorter_path_checked_free_on_the_snapshot
             assert [(_edge_key(improving, c.edge), c.free, c.stage) for c in after.checks[:n]] == [
                 (_edge_key(first_only, c.edge), c.free, c.stage) for c in before.checks
             ]
-            assert {c.stage for c in after.checks[n:]} <= {"improve"} and len(after.checks) - n <= 60
+            assert {c.stage for c in after.checks[n:]} <= {"improve"}
+            assert len(after.checks) - n <= 60
             assert after.improve_stop in ("optimal", "checks", "patience"), after.improve_stop
-            assert after.first_cost == pytest.approx(before.cost) and after.cost <= before.cost + 1e-9
+            assert after.first_cost == pytest.approx(before.cost)
+            assert after.cost <= before.cost + 1e-9
             assert (after.improvements > 0) == (after.cost < before.cost - 1e-9)
             assert (after.stage == "improve") == (after.improvements > 0)
-            assert before.improve_stop == "" and "improvement" not in before.message
+            assert before.improve_stop == ""
+            assert "improvement" not in before.message
             assert f"improvement stopped: {after.improve_stop}" in after.message
             shorter += after.cost < before.cost - 1e-9
             # Every edge of the published path was checked free in this plan, and FCL agrees.
@@ -252,12 +264,15 @@ def test_an_improve_budget_publishes_a_shorter_path_checked_free_on_the_snapshot
     # path needs keeps the first path (an int budget is checks).
     uncapped = QuerySession(heli_prior, name="uncapped", improve_budget=100)
     free_run = uncapped.plan(_heli_snapshot(uncapped, 102), start, 9, seed=102)
-    assert free_run.ok and free_run.improvements >= 1
+    assert free_run.ok
+    assert free_run.improvements >= 1
     first = sum(c.stage != "improve" for c in free_run.checks)
     assert first < len(free_run.checks)  # the improvement needed checks of its own
     capped = QuerySession(heli_prior, name="capped", max_checks=len(free_run.checks) - 1, improve_budget=100)
     result = capped.plan(_heli_snapshot(capped, 102), start, 9, seed=102)
-    assert result.ok and result.improvements == 0 and len(result.checks) < len(free_run.checks)
+    assert result.ok
+    assert result.improvements == 0
+    assert len(result.checks) < len(free_run.checks)
     assert result.cost == pytest.approx(free_run.first_cost)
     with pytest.raises(ProblemError, match="ImproveBudget"):
         QuerySession(heli_prior, name="bad", improve_budget=1.5)  # type: ignore[arg-type]
@@ -278,8 +293,11 @@ def test_unreachable_or_malformed_starts_are_refused(
 ) -> None:
     session, snapshot, _ = heli_plan
     result = session.plan(snapshot, start, HELI_GOAL)  # type: ignore[arg-type]
-    assert not result.ok and result.status == "refused" and fragment in result.message
-    assert result.checks == () and result.path_edges == ()
+    assert not result.ok
+    assert result.status == "refused"
+    assert fragment in result.message
+    assert result.checks == ()
+    assert result.path_edges == ()
 
 
 def test_no_maps_is_refused(heli_prior: WorldPrior) -> None:
@@ -300,13 +318,16 @@ def test_recheck_finds_a_box_on_a_motion_edge(
         {**snapshot.obstacles, "probe/far": ((Box([5.0, 5.0, 5.0]), Pose([5000.0, 0, 0])),)}
     )
     kept = recheck_plan(session, result.path_edges, snapshot, far)
-    assert kept.kept and kept.rechecked == ()
+    assert kept.kept
+    assert kept.rechecked == ()
     new = snapshot.with_obstacles(
         {**snapshot.obstacles, "probe/mid": ((Box([3.0, 3.0, 3.0]), Pose(middle)),)}
     )
     assert motion in affected_edges(session, result.path_edges, snapshot, new)
     outcome = recheck_plan(session, result.path_edges, snapshot, new)
-    assert not outcome.kept and outcome.blocked == (motion,) and "replanning" in outcome.reason
+    assert not outcome.kept
+    assert outcome.blocked == (motion,)
+    assert "replanning" in outcome.reason
     assert not session.checker(new).check_motion(states)
     # Replan from where the robot is now (along the first graph edge) on the new map.
     along = session.edge_states(result.path_edges[1])
@@ -329,7 +350,8 @@ def test_an_off_graph_goal_state_is_joined_too(
         session.vertex_state(HELI_GOAL)[:3] + np.array([20.0, 0.0, 0.0]), yaw=0.0
     )
     result = session.plan(snapshot, 0, goal, seed=0)
-    assert result.ok and result.path_vertices[0] == 0
+    assert result.ok
+    assert result.path_vertices[0] == 0
     np.testing.assert_allclose(result.states[0], session.vertex_state(0))
     np.testing.assert_allclose(result.states[-1], goal)
     assert result.path_edges[-1] >= session.prior.graph.num_edges  # the goal is joined by a new motion
@@ -350,9 +372,12 @@ def test_a_legacy_tree_file_serves_its_own_query_only(tmp_path: Path) -> None:
     parts = {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}
     snapshot = MapSnapshot(1, parts, world.terrain, session.margin)
     own = session.plan(snapshot, tree.start, tree.goal, seed=0)
-    assert own.ok and own.query == f"tree:{tree.name}" and own.stage in ("tree", "bisect")
+    assert own.ok
+    assert own.query == f"tree:{tree.name}"
+    assert own.stage in ("tree", "bisect")
     other = session.plan(snapshot, tree.start, tree.goal - 1, seed=0)
-    assert other.status == "refused" and "drd build-tree" in other.message
+    assert other.status == "refused"
+    assert "drd build-tree" in other.message
     assert session.library_edges().size > 0
 
 
@@ -379,9 +404,13 @@ def test_pose_helpers_and_motion_ids() -> None:
         yaw_from_quaternion([0.0, 0.0, 0.0, 0.0])
     registry = MotionRegistry(10, capacity=2)
     a, b = np.zeros((2, 2)), np.ones((2, 2))
-    assert registry.id_for(a) == 10 and registry.id_for(b) == 11 and registry.id_for(a.copy()) == 10
+    assert registry.id_for(a) == 10
+    assert registry.id_for(b) == 11
+    assert registry.id_for(a.copy()) == 10
     assert registry.id_for(np.full((2, 2), 2.0)) == 12  # b, the least recently used, is forgotten
-    assert registry.states(11) is None and registry.is_motion_id(11) and registry.id_for(b) == 13
+    assert registry.states(11) is None
+    assert registry.is_motion_id(11)
+    assert registry.id_for(b) == 13
 
 
 # --------------------------------------------------------------------------------------------------
@@ -410,7 +439,8 @@ def _arm_start(session: QuerySession) -> np.ndarray:
 def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySession, MapSnapshot]) -> None:
     session, snapshot = arm
     start = _arm_start(session)
-    assert session.domain.plans_joint_goals and len(session.joint_names) == 7
+    assert session.domain.plans_joint_goals
+    assert len(session.joint_names) == 7
     checker = _independent_checker(session, snapshot)
     found = 0
     for vertex in ARM_GOALS:
@@ -432,7 +462,9 @@ def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySe
     with pytest.raises(PlanningError, match=r"farther than the tolerance 0\.050 m"):
         session.goal_state_from_position([5.0, 5.0, 5.0])
     far = session.plan(snapshot, start + 10.0, ARM_GOALS[0])
-    assert far.status == "refused" and "beyond the joint limits" in far.message  # one reason per cause
+    # one reason per cause
+    assert far.status == "refused"
+    assert "beyond the joint limits" in far.message
 
 
 def test_arm_recheck_finds_a_box_on_a_motion_edge(arm: tuple[QuerySession, MapSnapshot]) -> None:
@@ -450,12 +482,15 @@ def test_arm_recheck_finds_a_box_on_a_motion_edge(arm: tuple[QuerySession, MapSn
     )
     assert not session.checker(new).check_motion(states)
     outcome = recheck_plan(session, result.path_edges, snapshot, new)
-    assert motion in outcome.affected and not outcome.kept and outcome.blocked == (motion,)
+    assert motion in outcome.affected
+    assert not outcome.kept
+    assert outcome.blocked == (motion,)
     far = snapshot.with_obstacles(
         {**snapshot.obstacles, "probe/far": ((Box([0.1, 0.1, 0.1]), Pose([3.0, 3.0, 0.5])),)}
     )
     kept = recheck_plan(session, result.path_edges, snapshot, far)
-    assert kept.kept and kept.affected == ()
+    assert kept.kept
+    assert kept.affected == ()
 
 
 @pytest.mark.slow
@@ -471,16 +506,19 @@ def test_a_plan_that_grew_the_roadmap_is_verified_with_session_ids_for_its_new_e
     snapshot = MapSnapshot(1, {o.name: ((o.shape, o.pose),) for o in world.obstacles}, None, session.margin)
     start, goal = session.vertex_state(0), session.vertex_state(1)
     result = session.plan(snapshot, start, goal, seed=0)
-    assert result.ok and result.stage == "grow"
+    assert result.ok
+    assert result.stage == "grow"
     num_edges = session.prior.graph.num_edges
     grown = [e for e in result.path_edges if e >= num_edges]
-    assert grown and all(session.motion_states(e) is not None for e in grown)
+    assert grown
+    assert all(session.motion_states(e) is not None for e in grown)
     assert all(c.free for c in result.checks if c.edge in result.path_edges)
     np.testing.assert_allclose(result.states[0], start)
     np.testing.assert_allclose(result.states[-1], goal)
     assert _independent_checker(session, snapshot).check_motion(result.states)
     again = session.plan(snapshot, start, goal, seed=0)  # the same answers, now from the snapshot's cache
-    assert again.path_edges == result.path_edges and all(c.cached for c in again.checks)
+    assert again.path_edges == result.path_edges
+    assert all(c.cached for c in again.checks)
     # A map update on the grown part of the path reaches its motions like any edge (re-checks after updates).
     edge = grown[len(grown) // 2]
     middle = session.edge_states(edge)[len(session.edge_states(edge)) // 2]
@@ -501,12 +539,11 @@ def test_a_start_below_the_terrain_or_far_outside_gets_its_own_reason(heli_prior
     snapshot = MapSnapshot(1, {}, hill, session.margin)
     below = session.plan(snapshot, np.array([120.0, 10.0, 45.0, 0.0]), HELI_GOAL)
     assert below.status == "no_free_path"
-    assert (
-        "the start state itself is blocked" in below.message
-        and "the terrain (below it, ground at 55.0 m)" in below.message
-    )
+    assert "the start state itself is blocked" in below.message
+    assert "the terrain (below it, ground at 55.0 m)" in below.message
     far = session.plan(snapshot, np.array([4120.0, 10.0, 65.0, 0.0]), HELI_GOAL)
-    assert far.status == "refused" and "outside the lattice's horizontal extent" in far.message
+    assert far.status == "refused"
+    assert "outside the lattice's horizontal extent" in far.message
     off_line = session.plan(
         _heli_snapshot(session, 101), session.vertex_state(0) + np.array([27.0, 2.0, 0.0, 0.0]), HELI_GOAL
     )

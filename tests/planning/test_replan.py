@@ -73,7 +73,8 @@ def heli() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
     parts = {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}
     snapshot = MapSnapshot(1, parts, world.terrain, session.margin)
     plan = session.plan(snapshot, seed=0)
-    assert plan.ok and len(plan.path_edges) >= 3
+    assert plan.ok
+    assert len(plan.path_edges) >= 3
     return session, snapshot, plan
 
 
@@ -88,7 +89,8 @@ def test_heli_sweep_boxes_hold_every_checked_sphere(
     assert lo.shape == hi.shape == (len(plan.path_edges), 3)
     for k, e in enumerate(plan.path_edges):
         xyz = domain.lattice.trajectory(e)[:, :3]  # what the checker sweeps
-        assert np.all(xyz - reach >= lo[k]) and np.all(xyz + reach <= hi[k])
+        assert np.all(xyz - reach >= lo[k])
+        assert np.all(xyz + reach <= hi[k])
         # Not absurdly loose: at most half a sample spacing (plus slack) beyond the swept spheres.
         slack = 0.5 * domain.lattice.params.sample_spacing + 1e-3
         assert np.all(lo[k] >= xyz.min(axis=0) - reach - slack)
@@ -119,11 +121,17 @@ def test_heli_far_obstacle_affects_nothing(heli: tuple[PlanningSession, MapSnaps
     far = _with(snapshot, {"probe/far": ((Box([20.0, 20.0, 20.0]), Pose([5000.0, 4000.0, 100.0])),)})
     assert affected_edges(session, plan.path_edges, snapshot, far) == ()
     result = recheck_plan(session, plan.path_edges, snapshot, far)
-    assert result.kept and result.rechecked == () and result.blocked == () and result.check_ms == ()
-    assert result.map_version == far.version and "plan kept" in result.reason
+    assert result.kept
+    assert result.rechecked == ()
+    assert result.blocked == ()
+    assert result.check_ms == ()
+    assert result.map_version == far.version
+    assert "plan kept" in result.reason
     # Nothing changed at all: no check either.
     same = recheck_plan(session, plan.path_edges, snapshot, snapshot.with_obstacles(snapshot.obstacles))
-    assert same.kept and same.affected == () and not same.all_edges
+    assert same.kept
+    assert same.affected == ()
+    assert not same.all_edges
 
 
 def test_heli_box_on_a_plan_edge_blocks_it(heli: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
@@ -133,12 +141,17 @@ def test_heli_box_on_a_plan_edge_blocks_it(heli: tuple[PlanningSession, MapSnaps
     middle = states[states.shape[0] // 2, :3]
     new = _with(snapshot, {"probe/mid": ((Box([3.0, 3.0, 3.0]), Pose(middle)),)})
     affected = affected_edges(session, plan.path_edges, snapshot, new)
-    assert edge in affected and len(affected) < len(plan.path_edges)
+    assert edge in affected
+    assert len(affected) < len(plan.path_edges)
     result = recheck_plan(session, plan.path_edges, snapshot, new)
-    assert not result.kept and result.blocked == (edge,)
-    assert result.rechecked[-1] == edge and set(result.rechecked) <= set(affected)
-    assert len(result.check_ms) == len(result.rechecked) and result.total_check_ms > 0.0
-    assert f"plan edge {edge} blocked" in result.reason and "replanning" in result.reason
+    assert not result.kept
+    assert result.blocked == (edge,)
+    assert result.rechecked[-1] == edge
+    assert set(result.rechecked) <= set(affected)
+    assert len(result.check_ms) == len(result.rechecked)
+    assert result.total_check_ms > 0.0
+    assert f"plan edge {edge} blocked" in result.reason
+    assert "replanning" in result.reason
     assert session.checker(new).check(edge) is False  # the full check agrees
 
 
@@ -153,8 +166,11 @@ def test_heli_small_change_near_the_plan_is_rechecked_and_kept(
     above = states[states.shape[0] // 2, :3] + [0.0, 0.0, domain.vehicle_radius + session.margin + 1.5]
     new = _with(snapshot, {"probe/above": ((Sphere(0.5), Pose(above)),)})
     result = recheck_plan(session, plan.path_edges, snapshot, new)
-    assert edge in result.affected and len(result.rechecked) > 0
-    assert result.kept and result.blocked == () and result.rechecked == result.affected
+    assert edge in result.affected
+    assert len(result.rechecked) > 0
+    assert result.kept
+    assert result.blocked == ()
+    assert result.rechecked == result.affected
     assert "re-checked free; plan kept" in result.reason
     assert bool(session.checker(new).check_many(plan.path_edges).all())
 
@@ -168,11 +184,15 @@ def test_heli_terrain_change_rechecks_every_edge(
     lower = snapshot.with_terrain(Heightfield(terrain.origin, terrain.cell_size, terrain.heights - 1.0))
     assert affected_edges(session, plan.path_edges, snapshot, lower) == plan.path_edges
     result = recheck_plan(session, plan.path_edges, snapshot, lower)
-    assert result.kept and result.all_edges and result.rechecked == plan.path_edges
+    assert result.kept
+    assert result.all_edges
+    assert result.rechecked == plan.path_edges
     assert "terrain" in result.reason
     flooded = snapshot.with_terrain(Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 2000.0))
     drowned = recheck_plan(session, plan.path_edges, snapshot, flooded)
-    assert not drowned.kept and drowned.blocked == (plan.path_edges[0],) and drowned.all_edges
+    assert not drowned.kept
+    assert drowned.blocked == (plan.path_edges[0],)
+    assert drowned.all_edges
     # The same heights in a new object are no change; another margin changes every check.
     copy = snapshot.with_terrain(Heightfield(terrain.origin, terrain.cell_size, terrain.heights.copy()))
     assert affected_edges(session, plan.path_edges, snapshot, copy) == ()
@@ -201,7 +221,8 @@ def test_heli_map_resent_through_messages_is_compared_by_value(
     again = snapshot_of(2)  # DELETEALL + every marker again: new objects, same geometry
     assert differing_parts(first, again) == []
     result = recheck_plan(session, plan.path_edges, first, again)
-    assert result.kept and result.rechecked == ()
+    assert result.kept
+    assert result.rechecked == ()
     renamed = again.with_obstacles({f"renamed/{k}": parts for k, parts in again.obstacles.items()})
     assert changed_parts(first, renamed)  # per key, every part moved ...
     assert differing_parts(first, renamed) == []  # ... but the scene is the same
@@ -240,7 +261,10 @@ def test_heli_affected_edges_are_conservative(heli: tuple[PlanningSession, MapSn
         events += len(newly_blocked)
         near_but_free += len(affected - newly_blocked)
         pruned += pool.size - len(affected)
-    assert events >= 10 and near_but_free > 0 and pruned > 0  # the test saw all three kinds of edge
+    # the test saw all three kinds of edge
+    assert events >= 10
+    assert near_but_free > 0
+    assert pruned > 0
 
 
 # --------------------------------------------------------------------------------------------------
@@ -260,7 +284,8 @@ def arm() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
     parts = {o.name: ((o.shape, o.pose),) for o in world.obstacles}
     snapshot = MapSnapshot(1, parts, None, session.margin)
     plan = session.plan(snapshot, seed=0)
-    assert plan.ok and len(plan.path_edges) >= 3
+    assert plan.ok
+    assert len(plan.path_edges) >= 3
     return session, snapshot, plan
 
 
@@ -278,9 +303,8 @@ def test_arm_sweep_boxes_hold_the_continuous_motion(
         u, v = domain.graph.edges[e]
         t = np.linspace(0.0, 1.0, 400)  # far finer than the checker's samples
         centres = domain.robot.sphere_centres(states[u] + t[:, None] * (states[v] - states[u]))
-        assert np.all(centres - radii[:, None] - 0.01 >= lo[k]) and np.all(
-            centres + radii[:, None] + 0.01 <= hi[k]
-        )
+        assert np.all(centres - radii[:, None] - 0.01 >= lo[k])
+        assert np.all(centres + radii[:, None] + 0.01 <= hi[k])
 
 
 def test_arm_far_obstacle_and_blocking_box(arm: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
@@ -289,7 +313,9 @@ def test_arm_far_obstacle_and_blocking_box(arm: tuple[PlanningSession, MapSnapsh
     assert isinstance(domain, ArmDomain)
     far = _with(snapshot, {"probe/far": ((Box([0.1, 0.1, 0.1]), Pose([3.0, 3.0, 0.5])),)})
     result = recheck_plan(session, plan.path_edges, snapshot, far)
-    assert result.kept and result.affected == () and result.rechecked == ()
+    assert result.kept
+    assert result.affected == ()
+    assert result.rechecked == ()
     states = domain.graph.vertex_states
     assert states is not None
     edge = plan.path_edges[len(plan.path_edges) // 2]
@@ -299,7 +325,9 @@ def test_arm_far_obstacle_and_blocking_box(arm: tuple[PlanningSession, MapSnapsh
     new = _with(snapshot, {"probe/hand": ((Box([0.05, 0.05, 0.05]), Pose(hand)),)})
     assert session.checker(new).check(edge) is False
     result = recheck_plan(session, plan.path_edges, snapshot, new)
-    assert edge in result.affected and not result.kept and len(result.blocked) == 1
+    assert edge in result.affected
+    assert not result.kept
+    assert len(result.blocked) == 1
     assert session.checker(new).check(result.blocked[0]) is False
     assert "replanning" in result.reason
 
@@ -325,4 +353,6 @@ def test_arm_affected_edges_are_conservative(arm: tuple[PlanningSession, MapSnap
         pruned += pool.size - len(affected)
         plan_only = recheck_plan(session, plan.path_edges, snapshot, new)
         assert plan_only.kept == bool(session.checker(new).check_many(plan.path_edges).all())
-    assert events >= 3 and near_but_free > 0 and pruned > 0
+    assert events >= 3
+    assert near_but_free > 0
+    assert pruned > 0

@@ -85,17 +85,16 @@ def test_a_goal_yaw_is_honoured_and_a_goal_without_orientation_takes_any_heading
     off = goal_endpoint(
         session, Goal(position=position + np.array([0.0, 37.0, 0.0]), yaw=None), MapSnapshot(0)
     )
-    assert (
-        isinstance(off, np.ndarray)
-        and np.isnan(off[3])
-        and np.allclose(off[:3], position + np.array([0.0, 37.0, 0.0]))
-    )
+    assert isinstance(off, np.ndarray)
+    assert np.isnan(off[3])
+    assert np.allclose(off[:3], position + np.array([0.0, 37.0, 0.0]))
     pose = PoseStamped()
     pose.header.frame_id = "map"
     pose.pose.position.x, pose.pose.position.y = 10.0, 20.0
     pose.pose.orientation.w = 0.0  # ROS 2's default is the identity (yaw 0); all four zero: no yaw
     free = goal_from_pose(pose, "map")
-    assert free.yaw is None and "any yaw" in free.describe()
+    assert free.yaw is None
+    assert "any yaw" in free.describe()
     pose.pose.orientation.z = 0.5  # not a unit quaternion: still refused
     with pytest.raises(MessageError, match="unit quaternion"):
         goal_from_pose(pose, "map")
@@ -133,7 +132,9 @@ def test_one_prior_per_domain_serves_requests(session: QuerySession) -> None:
     twin = QuerySession(load_prior(TREE), name="again")
     assert ambiguity([session]) is None
     reason = ambiguity([session, twin])
-    assert reason is not None and "helicopter" in reason and "'again'" in reason
+    assert reason is not None
+    assert "helicopter" in reason
+    assert "'again'" in reason
     assert pick_session([session], _goal(np.zeros(3))) is session
     assert pick_session([session], Goal(joints=np.zeros(7))) is None  # joints need an arm prior
 
@@ -143,12 +144,16 @@ def test_one_parser_reads_goals_and_robot_states_of_any_namespace(session: Query
     pose.header.frame_id = "map"
     pose.pose.position.x, pose.pose.orientation.w = 5.0, 1.0
     goal = read_goal("/robot1/goal_pose", pose, [session], "map")
-    assert goal.joints is None and goal.position is not None and goal.position[0] == 5.0
+    assert goal.joints is None
+    assert goal.position is not None
+    assert goal.position[0] == 5.0
     with pytest.raises(PlanningError, match="no prior that plans joint-space goals"):
         read_goal("goal_joints", JointState(), [session], "map")
     odom = Odometry()
     odom.header.frame_id = "map"
     odom.pose.pose.orientation.w = 1.0
     read = read_robot_state("odom", odom, [session], "map")
-    assert read is not None and read[0] == "odom" and read[1].shape == (4,)
+    assert read is not None
+    assert read[0] == "odom"
+    assert read[1].shape == (4,)
     assert read_robot_state("/robot1/joint_states", JointState(), [session], "map") is None  # not ours

@@ -46,7 +46,9 @@ def test_a_request_that_needs_growth_is_planned_and_verified(prior: WorldPrior) 
     request = SceneRequest(FAMILY / f"scene{SCENE}.yaml", FAMILY / f"request{SCENE}.yaml", seed=0)
     plan = plan_moveit_request(prior, request)
     result = plan.result
-    assert result.found and result.growth is not None and result.growth.stop == "path"
+    assert result.found
+    assert result.growth is not None
+    assert result.growth.stop == "path"
     np.testing.assert_allclose(plan.path_states[0], plan.start)
     np.testing.assert_allclose(plan.path_states[-1], plan.goal)
     assert np.allclose(plan.start, [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])  # the fingers are ignored
@@ -54,12 +56,11 @@ def test_a_request_that_needs_growth_is_planned_and_verified(prior: WorldPrior) 
     assert np.abs(np.diff(plan.path_states, axis=0)).max() <= domain.resolution + 1e-9
     record = plan.to_json()
     assert {"status", "checks", "path_edges", "time_s", "reason"} <= set(record)
-    assert (
-        record["status"] == "found"
-        and record["checks"] == result.num_checks
-        and record["growth"]["rounds"] >= 1
-    )
-    assert record["path_edges"] == [int(e) for e in result.edges] and record["time_s"] > 0
+    assert record["status"] == "found"
+    assert record["checks"] == result.num_checks
+    assert record["growth"]["rounds"] >= 1
+    assert record["path_edges"] == [int(e) for e in result.edges]
+    assert record["time_s"] > 0
 
 
 def test_the_command_writes_the_json(
@@ -81,8 +82,11 @@ def test_the_command_writes_the_json(
     assert main(argv) == 0
     assert f"request{SCENE}.yaml in scene{SCENE}.yaml: found after" in capsys.readouterr().out
     record = json.loads(out.read_text())
-    assert record["status"] == "found" and record["checks"] > 0 and record["path_edges"]
-    assert record["scene"] == str(scene) and len(record["path_states"][0]) == 7
+    assert record["status"] == "found"
+    assert record["checks"] > 0
+    assert record["path_edges"]
+    assert record["scene"] == str(scene)
+    assert len(record["path_states"][0]) == 7
 
 
 def test_a_goal_in_degrees_is_refused_with_the_limits(prior: WorldPrior, tmp_path: Path) -> None:
@@ -99,7 +103,8 @@ def test_a_goal_in_degrees_is_refused_with_the_limits(prior: WorldPrior, tmp_pat
     ]
     assert main([*argv, "--json", str(out)]) == 1
     record = json.loads(out.read_text())
-    assert record["status"] == "refused" and record["checks"] == 0
+    assert record["status"] == "refused"
+    assert record["checks"] == 0
     assert record["reason"].startswith(
         "goal joint values are beyond the joint limits: panda_joint2 = -45.000 not in"
     )
@@ -119,7 +124,8 @@ def test_errors_are_one_line_and_exit_2(
         main(["plan", "--prior", str(PRIOR), "--scene", scene, "--request", str(tmp_path / "none.yaml")]) == 2
     )
     err = capsys.readouterr().err.strip()
-    assert err.startswith("drd: error: cannot read motion plan request") and "\n" not in err
+    assert err.startswith("drd: error: cannot read motion plan request")
+    assert "\n" not in err
     bad_scene = tmp_path / "scene.yaml"
     bad_scene.write_text("world: {collision_objects: [{id: m, meshes: [{}]}]}\n")
     request = FAMILY / "request0001.yaml"

@@ -108,25 +108,29 @@ def test_the_service_plans_each_bag_request_as_drd_plan_does(messages: list[BagM
     for m in messages:
         _feed(service, m)
     served = [r for r in out.records if r.request["request"] == "goal_pose"]
-    assert len(served) == len(bag_requests(messages)) == 4 and not out.errors
+    assert len(served) == len(bag_requests(messages)) == 4
+    assert not out.errors
     session = service.sessions[0]
     for index, record in enumerate(served):
         offline = plan_bag_request(session, messages, index, frame="map").result
-        assert record.result.ok and offline.ok
+        assert record.result.ok
+        assert offline.ok
         assert [(c.edge, c.free) for c in record.result.checks] == [(c.edge, c.free) for c in offline.checks]
         assert list(record.result.path_edges) == list(offline.path_edges)
     # The safety invariant: every published plan's edges were checked free on the maps it was planned on.
     for plan in out.plans:
         free = {c.edge for c in plan.checks if c.free}
         assert set(plan.path_edges) <= free
-    assert service.published is not None and service.published.result is out.plans[-1]
+    assert service.published is not None
+    assert service.published.result is out.plans[-1]
     # The update at 1.5 s blocked the first plan: it was replanned, never withdrawn.
     assert [r.request["request"] for r in out.records].count("map_update") == 1
     assert out.withdrawn == 0
     # The same obstacle map again: nothing near the plan changed, so it is kept without a new plan.
     plans = len(out.plans)
     _feed(service, [m for m in messages if topic_base(m.topic) == "obstacles"][-1])
-    assert out.kept_versions == [service.snapshot.version] and len(out.plans) == plans
+    assert out.kept_versions == [service.snapshot.version]
+    assert len(out.plans) == plans
 
 
 def test_requests_for_one_prior_are_coalesced(messages: list[BagMessage]) -> None:
@@ -136,11 +140,13 @@ def test_requests_for_one_prior_are_coalesced(messages: list[BagMessage]) -> Non
     for m in messages[:first_request]:
         _feed(service, m)
     goal = read_goal("goal_pose", messages[first_request].message, service.sessions, "map")
-    assert service.enqueue(goal, "goal_pose", "1.0") and service.enqueue(goal, "goal_pose", "2.0")
+    assert service.enqueue(goal, "goal_pose", "1.0")
+    assert service.enqueue(goal, "goal_pose", "2.0")
     assert service.pending == 1
     service.serve()
     assert [(r.request["request_stamp"], r.request["coalesced"]) for r in out.records] == [("2.0", 1)]
-    assert service.pending == 0 and len(service.history) == 1
+    assert service.pending == 0
+    assert len(service.history) == 1
 
 
 def test_bad_input_is_refused_and_the_service_goes_on(messages: list[BagMessage]) -> None:
@@ -149,7 +155,8 @@ def test_bad_input_is_refused_and_the_service_goes_on(messages: list[BagMessage]
     goal = Goal(position=np.array([0.0, 0.0, 65.0]))
     service.enqueue(goal, "goal_pose", "0.0")
     service.serve()
-    assert "no robot state known yet" in out.errors[-1] and "'odom'" in out.errors[-1]
+    assert "no robot state known yet" in out.errors[-1]
+    assert "'odom'" in out.errors[-1]
     obstacles = next(m for m in messages if topic_base(m.topic) == "obstacles")
     before = service.snapshot
     service.maps.frame_id = "elsewhere"
@@ -169,7 +176,8 @@ def test_an_inactive_output_publishes_no_plan_to_re_check(messages: list[BagMess
     service = _service(out)
     for m in messages[: bag_requests(messages)[0].position + 1]:
         _feed(service, m)
-    assert out.plans and service.published is None
+    assert out.plans
+    assert service.published is None
 
 
 def test_a_plan_after_a_refused_map_says_so(messages: list[BagMessage]) -> None:
@@ -189,7 +197,8 @@ def test_a_plan_after_a_refused_map_says_so(messages: list[BagMessage]) -> None:
     service.maps.frame_id = "map"
     service.plan_now(goal, None)  # planned on the older maps: the summary says a newer one was refused
     record = out.records[-1]
-    assert record.snapshot.version == used and record.result.map_version == used
+    assert record.snapshot.version == used
+    assert record.result.map_version == used
     assert record.request["newer_map_refused"].startswith("obstacles refused:")
     assert "frame" in record.request["newer_map_refused"]
     service.take_map("obstacles", obstacles.message)  # a newer map accepted: the refusal is history
@@ -220,7 +229,8 @@ def test_a_terrain_above_every_vertex_is_refused_and_the_next_plan_says_so(
         service.take_map("terrain", cloud)
     service.plan_now(goal, None)
     record = out.records[-1]
-    assert record.result.ok and record.snapshot.version == used
+    assert record.result.ok
+    assert record.snapshot.version == used
     assert record.request["newer_map_refused"].startswith("terrain refused: not the prior's terrain")
 
 
@@ -241,10 +251,17 @@ def test_an_unverified_path_is_a_bug_reported_as_one_and_nothing_is_published(
     goal = read_goal("goal_pose", messages[first_request].message, service.sessions, "map")
     assert service.enqueue(goal, "goal_pose", "1.0")
     service.serve()  # the planning thread: the bug is reported, the thread goes on
-    assert not out.plans and not out.records and service.published is None
+    assert not out.plans
+    assert not out.records
+    assert service.published is None
     assert not any("refused" in e for e in out.errors)  # a bug, never a refused request
-    assert len(out.bugs) == 1 and isinstance(out.bugs[0][1], UnverifiedPathError)
-    assert out.bugs[0][0].startswith("goal_pose: internal error") and "edge 3" in out.bugs[0][0]
+    assert len(out.bugs) == 1
+    assert isinstance(out.bugs[0][1], UnverifiedPathError)
+    assert out.bugs[0][0].startswith("goal_pose: internal error")
+    assert "edge 3" in out.bugs[0][0]
     outcome = service.serve_request(goal, None, "get_plan")  # a service call: answered empty, not refused
-    assert outcome.sent is None and outcome.refusal == "" and "edge 3" in outcome.internal_error
-    assert len(out.bugs) == 2 and not out.plans
+    assert outcome.sent is None
+    assert outcome.refusal == ""
+    assert "edge 3" in outcome.internal_error
+    assert len(out.bugs) == 2
+    assert not out.plans

@@ -68,18 +68,23 @@ def test_plan_is_verified_and_matches_the_offline_episode(bundle: TreeBundle) ->
         ]
         checked = {c.edge: c.free for c in result.checks}
         if seed in BLOCKED_SEEDS:  # every library path is blocked in these worlds
-            assert not result.ok and result.status == "no_free_path", result.message
-            assert result.path_edges == () and "checks" in result.message
+            assert not result.ok, result.message
+            assert result.status == "no_free_path", result.message
+            assert result.path_edges == ()
+            assert "checks" in result.message
             continue
         assert result.ok, f"seed {seed}: {result.message}"  # these worlds have a free library path
-        assert result.status == "path_found" and result.path_edges
+        assert result.status == "path_found"
+        assert result.path_edges
         assert all(checked.get(e) is True for e in result.path_edges)
         vertices = result.path_vertices
-        assert vertices[0] == session.domain.start and vertices[-1] == session.domain.goal
+        assert vertices[0] == session.domain.start
+        assert vertices[-1] == session.domain.goal
         edges = session.domain.graph.edges
         for k, e in enumerate(result.path_edges):  # each edge joins consecutive path vertices
             assert tuple(int(v) for v in edges[e]) == (vertices[k], vertices[k + 1])
-        assert result.states.shape[1] == 4 and result.states.shape[0] > len(result.path_edges)
+        assert result.states.shape[1] == 4
+        assert result.states.shape[0] > len(result.path_edges)
         np.testing.assert_allclose(result.states[0], session.vertex_state(vertices[0]))
         np.testing.assert_allclose(result.states[-1], session.vertex_state(vertices[-1]))
 
@@ -94,7 +99,8 @@ def test_checks_are_cached_per_map_version(bundle: TreeBundle) -> None:
     assert all(c.cached and c.check_ms == 0.0 for c in again.checks)
     moved = snapshot.with_obstacles(snapshot.obstacles)
     third = session.plan(moved, seed=1)
-    assert not any(c.cached for c in third.checks) and third.map_version == snapshot.version + 1
+    assert not any(c.cached for c in third.checks)
+    assert third.map_version == snapshot.version + 1
 
 
 def test_empty_map_is_refused(bundle: TreeBundle) -> None:
@@ -153,7 +159,8 @@ def test_snapshots_with_the_same_terrain_share_its_collider_and_answer_alike() -
     obstacles = {f"p/{k}": ((shape, pose),) for k, (_, shape, pose) in enumerate(world_parts(world))}
     first = MapSnapshot(1, {}, world.terrain, session.margin).with_obstacles(obstacles)
     second = first.with_obstacles({})
-    assert first.scene is not second.scene and first.scene.terrain is second.scene.terrain
+    assert first.scene is not second.scene
+    assert first.scene.terrain is second.scene.terrain
     assert first.cache.terrain_collider(world.terrain) is second.cache.terrain_collider(
         world.terrain
     )  # built once

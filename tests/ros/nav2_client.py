@@ -57,7 +57,8 @@ def main() -> None:
     node = rclpy.create_node("nav2_style_client")
     client = ActionClient(node, ComputePathToPose, "compute_path_to_pose")
     validity = node.create_client(IsPathValid, "is_path_valid")
-    assert client.wait_for_server(timeout_sec=30.0) and validity.wait_for_service(timeout_sec=30.0)
+    assert client.wait_for_server(timeout_sec=30.0)
+    assert validity.wait_for_service(timeout_sec=30.0)
 
     status, plan = result(node, send(node, client, scenario["goal"]))
     poses = [[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in plan.path.poses]

@@ -36,11 +36,13 @@ os.environ["ROS_DOMAIN_ID"] = str(140 + os.getpid() % 20)
 def _parameters(path: Path) -> tuple[str, dict[str, Any]]:
     """(node key, parameters) of a parameter file holding one node's parameters."""
     data = yaml.safe_load(path.read_text())
-    assert isinstance(data, dict) and len(data) == 1, f"{path.name}: one node section expected"
+    assert isinstance(data, dict), f"{path.name}: one node section expected"
+    assert len(data) == 1, f"{path.name}: one node section expected"
     ((key, section),) = data.items()
     assert set(section) == {"ros__parameters"}, f"{path.name}: only ros__parameters expected"
     params = section["ros__parameters"]
-    assert isinstance(params, dict) and params
+    assert isinstance(params, dict)
+    assert params
     return str(key), params
 
 

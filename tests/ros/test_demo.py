@@ -32,15 +32,19 @@ def test_main_job_plans_prints_the_check_logs_records_and_draws(
     # The request, the replan forced by the blocking obstacle, the repeated request, then two requests
     # from where the robot has moved: a new goal, and from between two vertices.
     assert "plan 0: goal_pose on map version 2" in out
-    assert "plan 1: map_update" in out and "blocked by the update" in out
+    assert "plan 1: map_update" in out
+    assert "blocked by the update" in out
     assert "plan 2: goal_pose" in out
-    assert out.count("check   1: edge") == 5 and "BLOCKED" in out
+    assert out.count("check   1: edge") == 5
+    assert "BLOCKED" in out
     # The stages of the check log: the tree of the real-scale prior chooses the first checks, BiSECt the rest.
-    assert "[tree  ]" in out and "[bisect]" in out
+    assert "[tree  ]" in out
+    assert "[bisect]" in out
     served = [line for line in out.splitlines() if line.startswith("  served by:")]
     assert len(served) == 5
     assert all("precomputed DiRECt tree 'heli_lines'" in line for line in served[:3])
-    assert "built online" in served[3] and "off the graph" in served[4]
+    assert "built online" in served[3]
+    assert "off the graph" in served[4]
     assert "(1 new motions)" in out
     for k in range(5):
         png = tmp_path / f"plan_{k}.png"
@@ -92,7 +96,9 @@ def test_two_demos_at_once_beside_a_cpu_hog_tell_the_same_story_on_private_domai
         hog.wait()
     assert [run.returncode for run in runs] == [0, 0], outs
     domains = [re.search(r"ROS domain (\d+) \(private\)", out) for out in outs]
-    assert all(domains) and domains[0].group(1) != domains[1].group(1)  # type: ignore[union-attr]
+    # type: ignore[union-attr]
+    assert all(domains)
+    assert domains[0].group(1) != domains[1].group(1)
     stories = [_story(out) for out in outs]
     assert stories[0] == stories[1]
     assert [line.split(" on ")[0] for line in stories[0] if line.startswith("plan ")] == [

@@ -64,7 +64,8 @@ def test_launch_file_names_the_package_executable_node_and_config_that_exist() -
     assert {"config", "namespace", "autostart"} <= declared
     # Both automatic transitions are emitted: configure, then activate once inactive.
     source = LAUNCH.read_text()
-    assert "Transition.TRANSITION_CONFIGURE" in source and "Transition.TRANSITION_ACTIVATE" in source
+    assert "Transition.TRANSITION_CONFIGURE" in source
+    assert "Transition.TRANSITION_ACTIVATE" in source
 
 
 def test_launched_node_name_is_the_node_class_default() -> None:
@@ -77,7 +78,8 @@ def test_launched_node_name_is_the_node_class_default() -> None:
 
 def _load() -> ModuleType:
     spec = importlib.util.spec_from_file_location("planner_launch", LAUNCH)
-    assert spec is not None and spec.loader is not None
+    assert spec is not None
+    assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -99,7 +101,8 @@ def test_generate_launch_description_builds_the_lifecycle_node_and_its_transitio
     assert arguments["autostart"].default_value is not None
     nodes = [e for e in entities if isinstance(e, launch_ros.actions.LifecycleNode)]
     assert len(nodes) == 1
-    assert nodes[0].node_package == "drd_planner" and nodes[0].node_executable == "planner_node"
+    assert nodes[0].node_package == "drd_planner"
+    assert nodes[0].node_executable == "planner_node"
     assert sum(isinstance(e, EmitEvent) for e in entities) == 1  # configure
     assert sum(isinstance(e, RegisterEventHandler) for e in entities) == 1  # activate when inactive
     # The handler is registered before the node starts, so the first transition cannot be missed.

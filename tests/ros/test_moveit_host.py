@@ -166,19 +166,22 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
             _say(process, "applied")
 
             plan = _next(executor, lines, process)
-            assert plan["step"] == "plan" and plan["code"] == 1, plan["message"]  # SUCCESS
+            assert plan["step"] == "plan", plan["message"]
+            assert plan["code"] == 1, plan["message"]  # SUCCESS
             assert plan["joints"] == list(session.joint_names)
             points = np.array(plan["points"])
             np.testing.assert_allclose(points[0], start, atol=1e-9)
             np.testing.assert_allclose(points[-1], goal, atol=1e-9)
-            assert np.all(np.diff(plan["times"]) > 0) and plan["times"][0] == 0.0
+            assert np.all(np.diff(plan["times"]) > 0)
+            assert plan["times"][0] == 0.0
             assert plan["planning_time"] > 0
             # every edge checked free on that scene, by the arm's own checker, and not the blocked straight line
             assert checker.check_motion(_dense(points, session.domain.resolution))
             assert len(points) > 2
 
             position = _next(executor, lines, process)
-            assert position["code"] == -16 and "inverse kinematics" in position["message"]
+            assert position["code"] == -16
+            assert "inverse kinematics" in position["message"]
 
             assert _next(executor, lines, process) == {"step": "octomap"}
             assert spin_until(
@@ -218,4 +221,5 @@ def test_without_moveit_msgs_the_node_runs_without_the_interface(
     with active_planner(context, node, peer):
         assert node._moveit is None
         names = [name for name, _ in node.get_service_names_and_types()]
-        assert "/get_plan" in names and "/plan_kinematic_path" not in names
+        assert "/get_plan" in names
+        assert "/plan_kinematic_path" not in names

@@ -145,10 +145,13 @@ def test_a_nav2_client_plans_fails_with_codes_asks_validity_and_cancels(
         try:
             lines = _lines(process)
             plan = _next(executor, lines, process)
-            assert (
-                plan["step"] == "plan" and plan["status"] == 4 and plan["error_code"] == 0
-            )  # SUCCEEDED, NONE
-            assert plan["poses"] > 10 and plan["frame"] == "map" and plan["planning_time"] > 0
+            # SUCCEEDED, NONE
+            assert plan["step"] == "plan"
+            assert plan["status"] == 4
+            assert plan["error_code"] == 0
+            assert plan["poses"] > 10
+            assert plan["frame"] == "map"
+            assert plan["planning_time"] > 0
             assert plan["last"] == pytest.approx(goal, abs=1e-6)
             outside = _next(executor, lines, process)
             assert (outside["status"], outside["error_code"]) == (6, 204)  # ABORTED, GOAL_OUTSIDE_MAP
@@ -172,13 +175,19 @@ def test_a_nav2_client_plans_fails_with_codes_asks_validity_and_cancels(
             process.stdin.write("blocked\n")
             process.stdin.flush()
             after = _next(executor, lines, process)
-            assert after["step"] == "valid_after" and not after["is_valid"] and after["invalid"]
+            assert after["step"] == "valid_after"
+            assert not after["is_valid"]
+            assert after["invalid"]
 
             published = len(peer.plans)
             begun = len(checks)
             cancel = _next(executor, lines, process)
-            assert cancel["step"] == "cancel" and cancel["status"] == 5 and cancel["poses"] == 0  # CANCELED
-            assert cancel["seconds"] < 2.0 and "canceled" in cancel["error_msg"]
+            # CANCELED
+            assert cancel["step"] == "cancel"
+            assert cancel["status"] == 5
+            assert cancel["poses"] == 0
+            assert cancel["seconds"] < 2.0
+            assert "canceled" in cancel["error_msg"]
             made = len(checks) - begun
             assert 1 <= made <= 8, made  # stopped between checks, long before its end
             assert _next(executor, lines, process) == {"step": "imports", "drd": []}
@@ -207,4 +216,5 @@ def test_without_nav2_msgs_the_node_runs_without_the_interface_and_says_why(
     with active_planner(context, node, peer):
         assert node._nav2 is None
         names = [name for name, _ in node.get_service_names_and_types()]
-        assert "/get_plan" in names and "/is_path_valid" not in names
+        assert "/get_plan" in names
+        assert "/is_path_valid" not in names

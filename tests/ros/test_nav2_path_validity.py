@@ -26,4 +26,5 @@ def test_path_arrays_reads_positions_and_yaws() -> None:
     assert positions.tolist() == [[0.0, 2.0, 65.0], [1.0, 2.0, 65.0], [0.0, 0.0, 0.0]]
     assert np.allclose(yaws, [0.0, math.pi / 2, 0.0])
     empty_positions, empty_yaws = path_arrays(PathMsg())
-    assert empty_positions.shape == (0, 3) and empty_yaws.shape == (0,)
+    assert empty_positions.shape == (0, 3)
+    assert empty_yaws.shape == (0,)

@@ -33,13 +33,19 @@ def test_frames_empty_is_the_planning_frame_another_is_tf_error() -> None:
     parsed = request_poses(request, "map")
     assert not isinstance(parsed, Nav2Error)
     goal, start = parsed
-    assert start is None and goal.position is not None and goal.position[0] == 10.0 and goal.yaw == 0.0
+    assert start is None
+    assert goal.position is not None
+    assert goal.position[0] == 10.0
+    assert goal.yaw == 0.0
     request.use_start = True  # now the start's frame counts
     refused = request_poses(request, "map")
-    assert isinstance(refused, Nav2Error) and refused.name == "TF_ERROR" and "'odom'" in refused.text
+    assert isinstance(refused, Nav2Error)
+    assert refused.name == "TF_ERROR"
+    assert "'odom'" in refused.text
 
 
 def test_a_malformed_pose_is_unknown() -> None:
     request = SimpleNamespace(goal=_pose("map", x=math.nan), start=_pose("map"), use_start=False)
     refused = request_poses(request, "map")
-    assert isinstance(refused, Nav2Error) and refused.name == "UNKNOWN"
+    assert isinstance(refused, Nav2Error)
+    assert refused.name == "UNKNOWN"

@@ -90,7 +90,8 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
         peer.goals.publish(_goal(session))
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.checks))
         plan, log = peer.plans[-1], peer.checks[-1]
-        assert plan.header.frame_id == "map" and len(plan.poses) > 2
+        assert plan.header.frame_id == "map"
+        assert len(plan.poses) > 2
         last = plan.poses[-1].pose.position
         assert np.allclose([last.x, last.y, last.z], session.goal_state[:3])
         # Every edge of the plan was checked free, and the log equals the offline session on the same maps.
@@ -193,7 +194,8 @@ def test_crafted_tree_files_fail_configure_with_their_reason(context: Any, tmp_p
         for reason, path in _crafted_trees(tmp_path).items():
             node.set_parameters([Parameter("tree_paths", value=[str(path)])])
             assert node.trigger_configure() == TransitionCallbackReturn.FAILURE, reason
-            assert reason in node.errors[-1] and path.name in node.errors[-1], node.errors[-1]
+            assert reason in node.errors[-1], node.errors[-1]
+            assert path.name in node.errors[-1], node.errors[-1]
             assert node._state_machine.current_state[1] == "unconfigured"
         node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
@@ -207,19 +209,22 @@ def test_bad_requests_and_maps_leave_errors_not_plans(context: Any) -> None:
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
         session = node.sessions[0]
         wrong_frame = _goal(session, frame="odom")
-        assert node.plan_for(wrong_frame) is None and "frame 'odom'" in node.errors[-1]
+        assert node.plan_for(wrong_frame) is None
+        assert "frame 'odom'" in node.errors[-1]
         far = _goal(session)
         far.pose.position.x += 500.0
-        assert (
-            node.plan_for(far) is None and "no maps received yet" in node.errors[-1]
-        )  # any goal, once maps come
+        # any goal, once maps come
+        assert node.plan_for(far) is None
+        assert "no maps received yet" in node.errors[-1]
         nan = _goal(session)
         nan.pose.position.z = float("nan")
-        assert node.plan_for(nan) is None and "finite" in node.errors[-1]
+        assert node.plan_for(nan) is None
+        assert "finite" in node.errors[-1]
         cloud = PointCloud2()
         cloud.header.frame_id = "map"
         node._on_map("terrain", cloud)
-        assert "terrain refused" in node.errors[-1] and node.snapshot.version == 0
+        assert "terrain refused" in node.errors[-1]
+        assert node.snapshot.version == 0
         assert State.PRIMARY_STATE_INACTIVE == node._state_machine.current_state[0]
     finally:
         node.destroy_node()
@@ -294,7 +299,8 @@ def test_maps_are_prepared_on_arrival_and_a_bug_in_a_plan_leaves_the_node_planni
         peer.goals.publish(_goal(session))  # the planning thread is still there
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()))
         summary = peer.summaries()[-1]
-        assert summary["result"] == "path_found" and float(summary["prepare_s"]) < 1e-3
+        assert summary["result"] == "path_found"
+        assert float(summary["prepare_s"]) < 1e-3
         assert float(summary["plan_messaging_s"]) <= float(summary["messaging_s"])
         assert float(summary["selection_s"]) <= float(summary["policy_s"])
 
@@ -375,7 +381,8 @@ def test_an_unverified_path_is_logged_with_its_traceback_and_nothing_is_publishe
         assert not any("refused" in e for e in node.errors)  # a bug, never a refused request
         assert not peer.plans
         bug_lines = [line for line in logged if "UnverifiedPathError" in line]
-        assert bug_lines and "Traceback (most recent call last)" in bug_lines[-1]
+        assert bug_lines
+        assert "Traceback (most recent call last)" in bug_lines[-1]
         peer.goals.publish(_goal(session))  # the node is still up and plans
         assert spin_until(executor, lambda: bool(peer.plans))
 
@@ -390,7 +397,8 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         peer.goals.publish(_goal(session))
         assert spin_until(executor, lambda: bool(peer.plans))
         first = node.published
-        assert first is not None and first.ok
+        assert first is not None
+        assert first.ok
         # Far from every plan edge: nothing to re-check, the plan stays, no new plan is published.
         far = Pose(position=(-5000.0, -5000.0, 0.0))
         update = obstacle_markers(
@@ -399,8 +407,10 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         peer.obstacles.publish(update)
         assert spin_until(executor, lambda: bool(peer.summaries("drd_planner: map update")))
         kept = peer.summaries("drd_planner: map update")[-1]
-        assert kept["result"] == "plan_kept" and kept["rechecked"] == "0"
-        assert len(peer.plans) == 1 and node.published is first
+        assert kept["result"] == "plan_kept"
+        assert kept["rechecked"] == "0"
+        assert len(peer.plans) == 1
+        assert node.published is first
         # A box on the middle of a plan edge: the plan is blocked, a new one is published and says why.
         edge = first.path_edges[len(first.path_edges) // 2]
         states = session.edge_states(edge)
@@ -419,7 +429,8 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         replanned = replans()[-1]
         assert f"plan edge {edge} blocked" in replanned["replan_reason"]
         second = node.published
-        assert second is not None and edge not in second.path_edges
+        assert second is not None
+        assert edge not in second.path_edges
         free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
         assert set(second.path_edges) <= free  # the new plan was checked free on the new map
         assert second.map_version == node.snapshot.version
@@ -431,13 +442,15 @@ def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_value
     peer = Peer(context)
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
-        assert session.improve_budget == ImproveBudget(checks=40) and session.max_checks is None
+        assert session.improve_budget == ImproveBudget(checks=40)
+        assert session.max_checks is None
         _publish_world(executor, node, peer)  # Wires world 3
         peer.goals.publish(_goal(session))
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()) and bool(peer.checks))
         record = node.history[-1]
         best, summary = record.result, peer.summaries()[-1]
-        assert node.published is best and best.ok
+        assert node.published is best
+        assert best.ok
         # The first path of the same request, offline on the same maps, without improvement.
         markers, cloud = _world(session)
         snapshot = MapSnapshot(
@@ -448,12 +461,13 @@ def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_value
         )
         start, goal = int(session.domain.start), int(session.domain.goal)
         first = QuerySession(session.prior, name="first").plan(snapshot, start, goal, seed=0)
-        assert first.ok and best.first_cost == pytest.approx(first.cost)
+        assert first.ok
+        assert best.first_cost == pytest.approx(first.cost)
         assert best.cost < first.cost  # measured: 739.29 -> 700.0 m, 1 shorter path, 24 checks
-        assert best.improvements >= 1 and best.stage == "improve"
-        assert (
-            summary["improvements"] == str(best.improvements) and summary["improve_stop"] == best.improve_stop
-        )
+        assert best.improvements >= 1
+        assert best.stage == "improve"
+        assert summary["improvements"] == str(best.improvements)
+        assert summary["improve_stop"] == best.improve_stop
         assert int(summary["improve_checks"]) == len(best.checks) - len(first.checks) > 0
         assert f"improvement stopped: {best.improve_stop}" in summary["message"]
         # What is on `plan` is that path, and every edge of it was checked free in the published log.
@@ -469,14 +483,19 @@ def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_value
         assert spin_until(executor, lambda: len(peer.plans) >= 2 and len(peer.checks) >= 2)
         assert spin_until(executor, lambda: peer.summaries()[-1]["request"] == "map_update")
         again, summary = node.published, peer.summaries()[-1]
-        assert again is not None and again is node.history[-1].result and edge not in again.path_edges
-        assert f"plan edge {edge} blocked" in summary["replan_reason"] and summary["improve_stop"]
+        assert again is not None
+        assert again is node.history[-1].result
+        assert edge not in again.path_edges
+        assert f"plan edge {edge} blocked" in summary["replan_reason"]
+        assert summary["improve_stop"]
         free = {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
-        assert set(again.path_edges) <= free and again.map_version == node.snapshot.version
+        assert set(again.path_edges) <= free
+        assert again.map_version == node.snapshot.version
         # A negative value is refused with its name; the old value stays.
         for name, bad in (("improve_checks", -1), ("improve_time_budget", -1.0)):
             (result,) = node.set_parameters([Parameter(name, value=bad)])
-            assert not result.successful and name in result.reason
+            assert not result.successful
+            assert name in result.reason
         assert node.get_parameter("improve_checks").value == 40
         assert node.get_parameter("improve_time_budget").value == 0.0
     assert parameter_problems({"improve_checks": -1}) == ["improve_checks must be >= 0, got -1"]

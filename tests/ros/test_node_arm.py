@@ -73,7 +73,8 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
     with active_planner(context, node, peer) as executor:
         session = node.sessions[0]
         domain = session.domain
-        assert isinstance(domain, ArmDomain) and session.domain.plans_joint_goals
+        assert isinstance(domain, ArmDomain)
+        assert session.domain.plans_joint_goals
         markers = _world_markers(domain, 5)
         peer.obstacles.publish(markers)
         assert spin_until(executor, lambda: node.snapshot.version >= 1)
@@ -90,7 +91,8 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         times = [p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 for p in trajectory.points]
         assert np.all(np.diff(times) > 0)
         # The end-effector path follows the trajectory by forward kinematics.
-        assert path.header.frame_id == FRAME and len(path.poses) == len(trajectory.points)
+        assert path.header.frame_id == FRAME
+        assert len(path.poses) == len(trajectory.points)
         xyz = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in path.poses])
         np.testing.assert_allclose(xyz, domain.end_effector_positions(q), atol=1e-9)
         # Same checks as the offline session on the same decoded map; the plan's edges were checked free.
@@ -123,7 +125,8 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
         urdf = (default_panda_dir() / "panda.urdf").read_text(encoding="utf-8")
         node._on_map("robot_description", String(data=urdf))
         robot = node.snapshot.robot
-        assert robot is not None and node.snapshot.version == 1
+        assert robot is not None
+        assert node.snapshot.version == 1
         assert robot.chain.joint_names == domain.robot.chain.joint_names
         assert robot.spheres.count == domain.robot.spheres.count
         # Plans then check with that model (self-collision included): still the offline answer.
@@ -136,7 +139,8 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
         )
         assert stretched != urdf
         node._on_map("robot_description", String(data=stretched))
-        assert node.snapshot.robot is not None and node.snapshot.robot is not robot
+        assert node.snapshot.robot is not None
+        assert node.snapshot.robot is not robot
         moved = session.positions(session.goal_state, node.snapshot)[0]
         assert np.linalg.norm(moved - session.goal_position) > 0.05
         # Refused: not XML, and a robot with other joints; the model stays as it was.
@@ -186,6 +190,7 @@ def test_bad_joint_goals_are_refused(context: Any) -> None:
         # A valid goal before any obstacle map: refused, nothing planned.
         node._on_request("goal_joints", _joint_goal(session))
         node._serve()
-        assert "no maps" in node.errors[-1] and node.published is None
+        assert "no maps" in node.errors[-1]
+        assert node.published is None
     finally:
         node.destroy_node()

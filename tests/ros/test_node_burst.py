@@ -58,7 +58,8 @@ RSS_BOUND = 8 * 2**20
 def _script(name: str) -> ModuleType:
     path = ROOT / "scripts" / "experiments" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
+    assert spec is not None
+    assert spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # dataclasses look their module up here
     spec.loader.exec_module(module)
@@ -89,7 +90,8 @@ def _growths(report: Any) -> list[dict[str, int]]:  # during (when measured), th
     row: then only before -> after is measured.
     """
     during, quiet = bench.memory_growth(report, start=50), bench.quiescent_growth(report)
-    assert quiet is not None and quiet["to"] == BURST, f"no before/after rows: {report}"
+    assert quiet is not None, f"no before/after rows: {report}"
+    assert quiet["to"] == BURST, f"no before/after rows: {report}"
     if during is None:
         assert len(report.memory) == 1, f"too few memory rows: {report.memory}"
         return [quiet]
@@ -114,7 +116,8 @@ def test_topic_burst_is_answered_or_coalesced_with_flat_memory(harness: Any) -> 
             report = bench.topic_burst(harness, requests=BURST)
             bench.print_report(report)
             assert report.lost == 0, f"{report.lost} requests neither answered nor coalesced"
-            assert report.answered >= 1 and set(report.results) == {"path_found"}
+            assert report.answered >= 1
+            assert set(report.results) == {"path_found"}
             reports.append(report)
     finally:
         tracemalloc.stop()
@@ -135,7 +138,8 @@ def test_service_burst_answers_every_call_with_flat_memory(harness: Any) -> None
     report = bench.service_burst(harness, requests=BURST)
     bench.print_report(report)
     assert report.answered == BURST, f"{BURST - report.answered} calls got no response"
-    assert len(set(report.results)) == 1 and int(report.results[0]) > 2, "responses differ or are empty"
+    assert len(set(report.results)) == 1, "responses differ or are empty"
+    assert int(report.results[0]) > 2, "responses differ or are empty"
     assert wait_for(lambda: harness.plans - plans == BURST, 5.0), "one plan per call on plan"
     growths = _growths(report)
     for growth in growths:
@@ -157,14 +161,19 @@ def test_burst_script_prints_the_table(tmp_path: Path) -> None:
     args = ["--requests", "10", "--every", "5", "--repeat", "1", "--trace", "none", "--warm-up-calls", "1"]
     args += ["--json", str(out)]
     text = _run_script(["scripts/experiments/bench_node_burst.py", *args], 210 + os.getpid() % 20)
-    assert "topic burst: 10 requests" in text and "service burst: 10 requests" in text
-    assert "RSS MiB" in text and "latency of answered requests" in text
+    assert "topic burst: 10 requests" in text
+    assert "service burst: 10 requests" in text
+    assert "RSS MiB" in text
+    assert "latency of answered requests" in text
     reports = json.loads(out.read_text())
     assert [r["mode"] for r in reports] == ["topic", "service"]
     for r in reports:  # 10 requests fit the node's request queue: none may be lost
-        assert r["answered"] + r["coalesced"] == 10 and r["lost"] == 0
-        assert r["memory"] and r["memory"][-1]["handled"] == 10
-        assert r["before"] is not None and r["after"]["handled"] == 10
+        assert r["answered"] + r["coalesced"] == 10
+        assert r["lost"] == 0
+        assert r["memory"]
+        assert r["memory"][-1]["handled"] == 10
+        assert r["before"] is not None
+        assert r["after"]["handled"] == 10
 
 
 def test_latency_script_reports_the_split(tmp_path: Path) -> None:
@@ -174,18 +183,22 @@ def test_latency_script_reports_the_split(tmp_path: Path) -> None:
         210 + (os.getpid() + 7) % 20,
     )
     assert "cold: a new map snapshot before each request: 3 requests" in text
-    assert "warm: the same snapshot" in text and "selection + messaging:" in text
+    assert "warm: the same snapshot" in text
+    assert "selection + messaging:" in text
     assert "it would be 10% with checks of" in text
     results = json.loads(out.read_text())
     cold, warm = results["cold"]["samples"], results["warm"]["samples"]
     assert len(cold) == len(warm) == 3
     # Cold: each request on a new snapshot, with real checks; warm: one snapshot, every check cached.
-    assert len({s["map_version"] for s in cold}) == 3 and all(s["check"] > 0 for s in cold)
-    assert len({s["map_version"] for s in warm}) == 1 and all(s["check"] == 0 for s in warm)
+    assert len({s["map_version"] for s in cold}) == 3
+    assert all(s["check"] > 0 for s in cold)
+    assert len({s["map_version"] for s in warm}) == 1
+    assert all(s["check"] == 0 for s in warm)
     for s in cold + warm:
         assert 0 < s["selection"] <= s["policy"]
         assert s["check"] + s["policy"] + s["prepare"] <= s["total"] < s["latency"]
-        assert s["wait"] >= 0 and s["plan_messaging"] > 0
+        assert s["wait"] >= 0
+        assert s["plan_messaging"] > 0
         # The Path can reach the peer's thread before publish() returns to the node's (CI: by 0.24 ms), so
         # the node's messaging time overlaps the latency's end; what precedes the publish does not.
         assert s["wait"] + s["total"] < s["latency"]
@@ -193,6 +206,7 @@ def test_latency_script_reports_the_split(tmp_path: Path) -> None:
     assert all(s["prepare"] < 0.2 * s["check"] for s in cold)
     for run in ("cold", "warm"):
         shares = results[run]["shares"]
-        assert 0 <= shares["checks"] < 1 and 0 < shares["overhead"] <= 1
+        assert 0 <= shares["checks"] < 1
+        assert 0 < shares["overhead"] <= 1
         assert results[run]["break_even_check_ms"] > 0
     assert results["warm"]["shares"]["checks"] == 0

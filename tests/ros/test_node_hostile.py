@@ -133,17 +133,20 @@ def test_an_unavailable_transition_id_is_refused_and_the_node_stays_active(conte
             request.transition.id = transition
             future = client.call_async(request)
             assert spin_until(executor, future.done)  # before the guard the executor raised here
-            assert future.result() is not None and not future.result().success
+            assert future.result() is not None
+            assert not future.result().success
             assert "is not available in state 'active'" in node.errors[-1]
         assert node._state_machine.current_state[0] == State.PRIMARY_STATE_ACTIVE
         by_label = ChangeState.Request()
         by_label.transition.label = "deactivate"
         future = client.call_async(by_label)
-        assert spin_until(executor, future.done) and future.result().success
+        assert spin_until(executor, future.done)
+        assert future.result().success
         request = ChangeState.Request()
         request.transition.id = Transition.TRANSITION_ACTIVATE  # available now
         future = client.call_async(request)
-        assert spin_until(executor, future.done) and future.result().success
+        assert spin_until(executor, future.done)
+        assert future.result().success
         _plans_again(executor, node, peer)
 
 
@@ -170,7 +173,8 @@ def test_a_map_that_arrives_while_the_first_plan_is_made_is_checked_before_it_st
         peer.goals.publish(_goal(session))
         assert spin_until(executor, lambda: bool(made))
         first = made[0]
-        assert first.ok and node.published is None
+        assert first.ok
+        assert node.published is None
         edge = first.path_edges[len(first.path_edges) // 2]
         version = node.snapshot.version
         peer.block_edge(session, edge)
@@ -198,7 +202,8 @@ def test_error_texts_are_bounded_whatever_the_input_quotes(context: Any) -> None
         assert all(len(e) <= MAX_ERROR_CHARS for e in node.errors)
         assert "goal_pose is in frame 'fff" in node.errors[-1]  # quoted, but only its beginning
         reports = [s for array in peer.diagnostics for s in array.status if s.level == b"\x02"]
-        assert reports and all(len(s.message) <= MAX_ERROR_CHARS for s in reports)
+        assert reports
+        assert all(len(s.message) <= MAX_ERROR_CHARS for s in reports)
 
 
 @pytest.mark.parametrize("value", [math.inf, math.nan, -1.0, 0.0])
@@ -206,7 +211,8 @@ def test_a_bad_goal_tolerance_is_refused_at_runtime_and_at_configure(context: An
     node = _node(context)
     try:
         (result,) = node.set_parameters([Parameter("goal_tolerance", value=value)])
-        assert not result.successful and "goal_tolerance" in result.reason
+        assert not result.successful
+        assert "goal_tolerance" in result.reason
         assert node.get_parameter("goal_tolerance").value == 1.0
     finally:
         node.destroy_node()
@@ -229,16 +235,21 @@ def _planner_node() -> str:
 
 def test_planner_node_help_prints_usage_and_unknown_arguments_are_refused() -> None:
     done = subprocess.run([_planner_node(), "--help"], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 0 and "usage: planner_node" in done.stdout and "goal_tolerance" in done.stdout
+    assert done.returncode == 0
+    assert "usage: planner_node" in done.stdout
+    assert "goal_tolerance" in done.stdout
     done = subprocess.run([_planner_node(), "--bogus"], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 2 and "unrecognised arguments: --bogus" in done.stderr
+    assert done.returncode == 2
+    assert "unrecognised arguments: --bogus" in done.stderr
 
 
 def test_planner_node_rejects_an_out_of_range_override_with_one_line() -> None:
     args = [_planner_node(), "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "goal_tolerance:=-1.0"]
     env = {**os.environ, "ROS_DOMAIN_ID": str(120 + os.getpid() % 20)}
     done = subprocess.run(args, capture_output=True, text=True, timeout=60, env=env)
-    assert done.returncode == 2 and "planner_node: error:" in done.stderr and "Traceback" not in done.stderr
+    assert done.returncode == 2
+    assert "planner_node: error:" in done.stderr
+    assert "Traceback" not in done.stderr
 
 
 #: Background starts of the signal test, and the seconds a signal may take to end the node.
@@ -292,7 +303,8 @@ def test_a_signal_while_the_node_modules_import_ends_the_process_at_once_with_st
         "print('still running')\n"
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 130 and "still running" not in done.stdout, done
+    assert done.returncode == 130, done
+    assert "still running" not in done.stdout, done
     assert "Traceback" not in done.stderr, done.stderr
 
 
@@ -318,7 +330,9 @@ def test_maps_beyond_the_limit_parameters_are_refused_naming_them_and_the_map_is
         (result,) = node.set_parameters([Parameter("max_terrain_cells", value=rows * cols - 1)])
         assert result.successful
         (result,) = node.set_parameters([Parameter("unknown_terrain", value="unknown")])
-        assert not result.successful and "highest_neighbour" in result.reason  # names the valid choices
+        # names the valid choices
+        assert not result.successful
+        assert "highest_neighbour" in result.reason
         assert node.trigger_deactivate().name == "SUCCESS"
         assert node.trigger_cleanup().name == "SUCCESS"
         assert node.trigger_configure().name == "SUCCESS"  # limits are read at configure
@@ -348,8 +362,10 @@ def test_a_robot_state_stream_in_the_wrong_frame_is_reported_once_per_period(con
             spin_for(executor, 0.01)
         spin_for(executor, 0.3)
         refused = [e for e in node.errors if e.startswith("odometry refused")]
-        assert len(refused) == 1 and "frame 'odom'" in refused[0]
-        assert node.service is not None and node.service.robot_states.get("odom") is None
+        assert len(refused) == 1
+        assert "frame 'odom'" in refused[0]
+        assert node.service is not None
+        assert node.service.robot_states.get("odom") is None
 
 
 def test_a_signal_whose_interrupt_an_import_swallowed_still_ends_the_start(
@@ -451,10 +467,10 @@ def test_a_bugs_traceback_is_logged_whole_or_by_its_last_characters() -> None:
     except ZeroDivisionError as exc:
         caught = exc
     text = traceback_of(caught)
-    assert text.startswith("Traceback (most recent call last)") and text.endswith(
-        "ZeroDivisionError: deep down"
-    )
+    assert text.startswith("Traceback (most recent call last)")
+    assert text.endswith("ZeroDivisionError: deep down")
     assert text.count(", in raise_deep") == 4  # the four frames, every one named
     cut = traceback_of(caught, limit=60)
-    assert cut.endswith("ZeroDivisionError: deep down") and cut.startswith("[")
+    assert cut.endswith("ZeroDivisionError: deep down")
+    assert cut.startswith("[")
     assert cut == f"[{len(text) - 60} characters before]..." + text[-60:]

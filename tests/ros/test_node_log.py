@@ -36,11 +36,13 @@ def test_lines_go_to_rcutils_named_after_the_caller_and_filtered_by_level() -> N
     line = here.f_lineno - 1
     log.warning("kept")
     assert written[0] == (INFO, "drd_planner", "planned", here.f_code.co_name, __file__, line)
-    assert written[1][:3] == (WARN, "drd_planner", "kept") and written[1][5] == line + 2
+    assert written[1][:3] == (WARN, "drd_planner", "kept")
+    assert written[1][5] == line + 2
     quiet = NodeLog(_Logger(level=WARN), write=lambda *args: written.append(args))
     quiet.info("hidden")
     quiet.warning("shown")
-    assert [w[2] for w in written] == ["planned", "kept", "shown"] and not logger.own
+    assert [w[2] for w in written] == ["planned", "kept", "shown"]
+    assert not logger.own
 
 
 def test_a_logger_without_rclpy_interface_is_called_as_it_is() -> None:

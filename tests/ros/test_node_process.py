@@ -25,5 +25,6 @@ def test_an_override_out_of_range_ends_the_process_with_one_line_and_status_2() 
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=dict(os.environ)
     )
     assert done.returncode == 2, done
-    assert done.stderr.startswith("planner_node: error:") and "goal_tolerance" in done.stderr
+    assert done.stderr.startswith("planner_node: error:")
+    assert "goal_tolerance" in done.stderr
     assert "Traceback" not in done.stderr

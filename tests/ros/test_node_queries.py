@@ -108,7 +108,8 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         _publish_world(executor, node, peer, 100)
         peer.goals.publish(goal)  # no robot state yet: a clear refusal, nothing planned
         assert spin_until(executor, lambda: bool(node.errors))
-        assert "no robot state known yet" in node.errors[-1] and "'odom'" in node.errors[-1]
+        assert "no robot state known yet" in node.errors[-1]
+        assert "'odom'" in node.errors[-1]
         start = session.vertex_state(0) + np.array([-30.0, 0.0, 0.0, 0.0])  # off the graph
         odom.publish(_pose(Odometry(), start))
         assert spin_until(
@@ -130,7 +131,8 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         np.testing.assert_allclose(_xyz(path, 0), start[:3], atol=1e-4)  # from where the robot is ...
         np.testing.assert_allclose(_xyz(path, -1), goal_state[:3], atol=1e-4)  # ... to a goal no tree was for
         published = node.published
-        assert published is not None and set(published.path_edges) <= _checked_free(peer)
+        assert published is not None
+        assert set(published.path_edges) <= _checked_free(peer)
         assert any(e >= session.prior.graph.num_edges for e in published.path_edges)  # a checked new motion
         # get_plan with an explicit start plans from there.
         other = session.vertex_state(1) + np.array([-20.0, 0.0, 0.0, 0.0])
@@ -150,7 +152,8 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
             lambda: node.service is not None and np.allclose(node.service.robot_states["odom"], moved),
         )
         future = replan.call_async(Trigger.Request())
-        assert spin_until(executor, future.done) and future.result().success, future.result().message
+        assert spin_until(executor, future.done), future.result().message
+        assert future.result().success, future.result().message
         # The plan topic may trail the response: wait until the newest plan on it starts where the robot is.
         assert spin_until(
             executor,
@@ -172,11 +175,10 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
         assert f"plan edge {edge} blocked" in replans()[-1]["replan_reason"]
         if last.poses:  # replanned from where the robot is
             np.testing.assert_allclose(_xyz(last, 0), moved[:3], atol=1e-4)
-            assert node.published is not None and edge not in node.published.path_edges
+            assert node.published is not None
+            assert edge not in node.published.path_edges
         else:  # no free path from where the robot is: the blocked plan was withdrawn
             message = replans()[-1]["message"]  # the robot's own state (off the graph) to the goal vertex
-            assert (
-                node.published is None
-                and "from the start [" in message
-                and f"to the goal (vertex {GOAL}:" in message
-            )
+            assert node.published is None
+            assert "from the start [" in message
+            assert f"to the goal (vertex {GOAL}:" in message

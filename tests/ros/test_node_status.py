@@ -43,7 +43,9 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
     with active_planner(context, node, peer) as executor:
         assert spin_until(executor, lambda: bool(peer.summaries("heli_planner: heartbeat")), timeout=3.0)
         beat = peer.summaries("heli_planner: heartbeat")[-1]
-        assert beat["state"] == "active" and beat["maps_known"] == "False" and beat["last_plan"] == "none"
+        assert beat["state"] == "active"
+        assert beat["maps_known"] == "False"
+        assert beat["last_plan"] == "none"
         bad = PointCloud2()
         bad.header.frame_id = "map"
         peer.terrain.publish(bad)  # a map error is filed under maps, not plans
@@ -64,7 +66,8 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         assert {m["source"] for m in maps} == {"terrain", "obstacles"}
         rows, cols = node.snapshot.terrain.shape  # type: ignore[union-attr]
         assert any(m["terrain"].startswith(f"{rows} x {cols} cells") for m in maps)
-        assert maps[-1]["map_version"] == "2" and int(maps[-1]["obstacles"]) > 0
+        assert maps[-1]["map_version"] == "2"
+        assert int(maps[-1]["obstacles"]) > 0
         goal = PoseStamped()
         goal.header.frame_id = "map"
         goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
@@ -73,16 +76,17 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         peer.goals.publish(goal)
         assert spin_until(executor, lambda: bool(peer.summaries("heli_planner: plan")))
         plan = peer.summaries("heli_planner: plan")[-1]
-        assert float(plan["planning_time"]) > 0 and int(plan["checks"]) == int(plan["free"]) + int(
-            plan["blocked"]
-        )
+        assert float(plan["planning_time"]) > 0
+        assert int(plan["checks"]) == int(plan["free"]) + int(plan["blocked"])
         count = len(peer.summaries("heli_planner: heartbeat"))
         assert spin_until(
             executor, lambda: len(peer.summaries("heli_planner: heartbeat")) >= count + 2, timeout=3.5
         )
         beat = peer.summaries("heli_planner: heartbeat")[-1]
-        assert beat["maps_known"] == "True" and beat["plan_published"] == "True"
-        assert beat["last_plan"] == "path_found (goal_pose)" and float(beat["last_plan_age_s"]) < 5
+        assert beat["maps_known"] == "True"
+        assert beat["plan_published"] == "True"
+        assert beat["last_plan"] == "path_found (goal_pose)"
+        assert float(beat["last_plan_age_s"]) < 5
 
 
 def test_outputs_are_silent_until_activate(context: Any) -> None:
@@ -112,9 +116,14 @@ def test_outputs_are_silent_until_activate(context: Any) -> None:
             float(v) for v in session.goal_state[:3]
         )
         node.plan_for(goal)
-        assert node.history and node.history[-1].result.ok  # planned ...
+        # planned ...
+        assert node.history
+        assert node.history[-1].result.ok
         spin_for(executor, 0.5)
-        assert not peer.plans and not peer.checks and node.published is None  # ... but nothing went out
+        # ... but nothing went out
+        assert not peer.plans
+        assert not peer.checks
+        assert node.published is None
         assert node.trigger_activate().name == "SUCCESS"
         node.plan_for(goal)
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.checks))

@@ -66,12 +66,15 @@ def test_a_helicopter_plan_goes_out_as_bytes_of_the_path_its_message_gives() -> 
     session = SimpleNamespace(domain=SimpleNamespace(publishes_joint_trajectory=False))
     sent = outputs.plan(session, SimpleNamespace(states=states), MapSnapshot(1), (4, 5))  # type: ignore[arg-type]
     [(topic, data)] = node.sent
-    assert topic == "plan" and isinstance(data, bytes)
+    assert topic == "plan"
+    assert isinstance(data, bytes)
     path = sent.path()
-    assert deserialize_message(data, Path) == path and len(path.poses) == 3
+    assert deserialize_message(data, Path) == path
+    assert len(path.poses) == 3
     assert (path.header.frame_id, path.header.stamp.sec, path.poses[2].pose.position.z) == ("map", 4, 60.0)
     outputs.withdraw(session)  # type: ignore[arg-type]
-    assert node.sent[-1][0] == "plan" and len(deserialize_message(node.sent[-1][1], Path).poses) == 0
+    assert node.sent[-1][0] == "plan"
+    assert len(deserialize_message(node.sent[-1][1], Path).poses) == 0
 
 
 def test_an_arm_plan_sends_its_trajectory_then_its_tool_path() -> None:
@@ -95,9 +98,11 @@ def test_an_arm_plan_sends_its_trajectory_then_its_tool_path() -> None:
         seconds_per_point=0.05 / TRAJECTORY_JOINT_SPEED,
         msgs=RclpyMessages(),
     )
-    assert trajectory == expected and trajectory.points[1].time_from_start.nanosec == 100_000_000
+    assert trajectory == expected
+    assert trajectory.points[1].time_from_start.nanosec == 100_000_000
     path = deserialize_message(node.sent[1][1], Path)
-    assert path == sent.path() and [p.pose.position.z for p in path.poses] == [1.0] * 7
+    assert path == sent.path()
+    assert [p.pose.position.z for p in path.poses] == [1.0] * 7
     outputs.withdraw(session)  # type: ignore[arg-type]
     assert [topic for topic, _ in node.sent[2:]] == ["plan", "joint_trajectory"]
     assert deserialize_message(node.sent[3][1], JointTrajectory).joint_names == ["j1", "j2"]
@@ -120,7 +125,9 @@ def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
     assert deserialize_message(node.sent[-1][1], DiagnosticArray) == expected
     outputs.status("plan", ok=False, message="no free path", values={"checks": 2, "total_s": "0.5"})
     [status] = deserialize_message(node.sent[-1][1], DiagnosticArray).status
-    assert node.sent[-1][0] == "/diagnostics" and status.name == "planner: plan" and status.level == b"\x02"
+    assert node.sent[-1][0] == "/diagnostics"
+    assert status.name == "planner: plan"
+    assert status.level == b"\x02"
     outputs.status("maps", ok=True, message="accepted", values={"map_version": 3}, stamp=(1, 2))
     summary = summary_status(
         ok=True,
@@ -155,9 +162,9 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     assert (values["tree_checks"], values["bisect_checks"]) == (2, 1)
     assert values["planning_time"] == values["total_s"] == "0.250000"
     assert (values["query"], values["stage"], values["library_s"]) == ("online", "bisect", "0.125000")
-    assert (
-        values["result"] == "path_found" and values["request"] == "goal_pose" and values["map_version"] == 3
-    )
+    assert values["result"] == "path_found"
+    assert values["request"] == "goal_pose"
+    assert values["map_version"] == 3
 
 
 def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:

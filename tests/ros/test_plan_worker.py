@@ -108,7 +108,8 @@ def test_stop_lets_the_running_work_finish_and_can_restart() -> None:
     worker.wake()
     assert started.wait(5.0)
     assert worker.stop()
-    assert finished.is_set() and not worker.running
+    assert finished.is_set()
+    assert not worker.running
     finished.clear()
     worker.start()
     try:

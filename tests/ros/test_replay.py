@@ -122,7 +122,8 @@ def _check_requests(
         free = {int(s.name.split("/")[1]) for s in log.status if _ok(s)}
         assert set(offline.path_edges) <= free, "every plan edge was checked free for this request"
         plan = _response(by_topic["/plan"], sent[k], until).message
-        assert plan.header.frame_id == frame and len(plan.poses) >= 2
+        assert plan.header.frame_id == frame
+        assert len(plan.poses) >= 2
         if session.domain.publishes_joint_trajectory:
             trajectory = _response(by_topic["/joint_trajectory"], sent[k], until).message
             got = np.array([p.positions for p in trajectory.points])
@@ -164,7 +165,8 @@ def test_heli_bag_replays_into_the_node_and_matches_drd_plan(name: str, context:
     summary, node = _replay(context, f"{name}.npz", "map", BAGS / f"{name}.mcap", out)
     try:
         _check_requests(summary, BAGS / f"{name}.mcap", out, f"{name}.npz", "map")
-        assert summary.record_path == out and not summary.interrupted
+        assert summary.record_path == out
+        assert not summary.interrupted
         assert not node.errors, node.errors
     finally:
         node.destroy_node()
@@ -178,7 +180,9 @@ def test_replaying_a_bag_twice_gives_identical_check_logs(context: Any, tmp_path
         node.destroy_node()
         checks = [m.message for m in read_bag(out) if m.topic == "/edge_checks"]
         logs.append([[(s.name, _ok(s)) for s in log.status] for log in checks])
-    assert len(logs[0]) == 5 and all(logs[0])  # four requests and the replan after the update, each checked
+    # four requests and the replan after the update, each checked
+    assert len(logs[0]) == 5
+    assert all(logs[0])
     assert logs[0] == logs[1]
 
 
@@ -214,19 +218,22 @@ def test_a_stepped_replay_waits_until_the_node_took_each_message_and_answered(
         return node.inputs_taken >= published and node.planning_idle
 
     try:
-        assert node.trigger_configure().name == "SUCCESS" and node.trigger_activate().name == "SUCCESS"
+        assert node.trigger_configure().name == "SUCCESS"
+        assert node.trigger_activate().name == "SUCCESS"
         options = ReplayOptions(
             record=tmp_path / "o.mcap", rate=50.0, settle_until=lambda: node.planning_idle, ready=ready
         )
         summary = replay_bag(bag, context=context, nodes=[node], options=options)
-        assert len(summary.published) == 10 and node.inputs_taken == 10
+        assert len(summary.published) == 10
+        assert node.inputs_taken == 10
         # Every message after the first went out only once the node had taken all before it and was idle.
         last = {n: (taken, idle) for n, taken, idle in asked}
         assert sorted(last) == list(range(1, 10))
         assert all(taken >= n and idle for n, (taken, idle) in last.items())
         # The story in order: the four requests and the replan after the blocking update, each planned.
         logs = [m.message for m in read_bag(tmp_path / "o.mcap") if m.topic == "/edge_checks"]
-        assert len(logs) == 5 and all(log.status for log in logs)
+        assert len(logs) == 5
+        assert all(log.status for log in logs)
     finally:
         node.destroy_node()
 
@@ -238,7 +245,8 @@ def test_replay_without_a_planner_records_nothing(context: Any, tmp_path: Path) 
     lines: list[str] = []
     options = ReplayOptions(record=tmp_path / "o.mcap", rate=10.0, settle=0.1, wait=0.2, log=lines.append)
     summary = replay_bag(bag, context=context, options=options)
-    assert len(summary.published) == 10 and not summary.recorded
+    assert len(summary.published) == 10
+    assert not summary.recorded
     assert set(summary.unmatched) == {"/terrain", "/obstacles", "/odom", "/goal_pose"}
     assert summary.seconds < 5.0  # 5.5 s of bag at rate 10
     assert any("no subscriber on /goal_pose" in line for line in lines)
@@ -263,7 +271,9 @@ def test_cli_errors_are_one_line_and_exit_2(tmp_path: Path, capsys: pytest.Captu
     for argv, text in cases:
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith("drd_replay: error:") and text in err[0], err
+        assert len(err) == 1, err
+        assert err[0].startswith("drd_replay: error:"), err
+        assert text in err[0], err
 
 
 def test_cli_without_a_running_planner_exits_2_and_writes_no_bag(
@@ -276,5 +286,6 @@ def test_cli_without_a_running_planner_exits_2_and_writes_no_bag(
     out = tmp_path / "out.mcap"
     assert main([str(bag), "--record", str(out), "--wait", "0.5", "--rate", "10"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "no node subscribes to any of the bag's topics" in err[0], err
+    assert len(err) == 1, err
+    assert "no node subscribes to any of the bag's topics" in err[0], err
     assert not out.exists()

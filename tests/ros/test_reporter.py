@@ -84,16 +84,17 @@ def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
     assert reporter.result(record, wait_s=0.5, publish=publish) == "path"
     assert [k for k, _ in outputs.sent] == ["plan", "checks", "markers", "plan"]
     summary = outputs.sent[-1][1]
-    assert (
-        summary["result"] == "path_found"
-        and summary["wait_s"] == "0.500000"
-        and summary["request"] == "goal_pose"
-    )
-    assert reporter.last_plan is not None and reporter.last_plan.request == "goal_pose"
-    assert logger.lines == ["info t: m"] and not errors
+    assert summary["result"] == "path_found"
+    assert summary["wait_s"] == "0.500000"
+    assert summary["request"] == "goal_pose"
+    assert reporter.last_plan is not None
+    assert reporter.last_plan.request == "goal_pose"
+    assert logger.lines == ["info t: m"]
+    assert not errors
     reporter.error("bad", "maps")
     reporter.withdraw(session)  # type: ignore[arg-type]
-    assert errors == [("bad", "maps")] and outputs.sent[-1] == ("withdraw", session)
+    assert errors == [("bad", "maps")]
+    assert outputs.sent[-1] == ("withdraw", session)
 
 
 def test_no_plan_is_logged_as_a_warning() -> None:
@@ -115,4 +116,5 @@ def test_a_bug_goes_to_the_nodes_bug_report_with_its_exception() -> None:
     )
     exc = RuntimeError("broken")
     reporter.bug("goal_pose: internal error", exc)
-    assert bugs == [("goal_pose: internal error", exc)] and not errors
+    assert bugs == [("goal_pose: internal error", exc)]
+    assert not errors
