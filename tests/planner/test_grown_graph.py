@@ -48,10 +48,7 @@ def test_vertices_get_a_vertex_edge_and_are_joined_only_when_free() -> None:
     assert q.worlds is not None
     assert q.worlds.shape == (3, 8)
     assert q.graph.edges[4].tolist() == [4, 4]
-    assert q.motions[4].shape == (
-        1,
-        2,
-    )
+    assert q.motions[4].shape == (1, 2)  # the vertex edge: its one state
     assert q.graph.lengths[4] == 0.0
     assert np.isclose(q.graph.lengths[6], np.hypot(0.5, 0.1))
     assert (q.start, q.goal) == (0, 2)
