@@ -93,8 +93,8 @@ def test_refused_requests_have_moveit_codes(req: Msg, name: str, text: str) -> N
     assert read.code == MOVEIT_CODES[name]
 
 
-def result(ok: bool, status: str = "path_found", message: str = "") -> Any:
-    return Msg(ok=ok, status=status, message=message)
+def result(ok: bool, status: str = "path_found", message: str = "", cause: str = "") -> Any:
+    return Msg(ok=ok, status=status, message=message, cause=cause)
 
 
 @pytest.mark.parametrize(
@@ -102,11 +102,15 @@ def result(ok: bool, status: str = "path_found", message: str = "") -> Any:
     [
         (PlanOutcome(result=result(True)), "SUCCESS"),
         (
-            PlanOutcome(result=result(False, "no_free_path", "the start state itself is blocked")),
+            PlanOutcome(
+                result=result(False, "no_free_path", "the start state itself is blocked", "start_blocked")
+            ),
             "START_STATE_IN_COLLISION",
         ),
         (
-            PlanOutcome(result=result(False, "no_free_path", "the goal state itself is blocked")),
+            PlanOutcome(
+                result=result(False, "no_free_path", "the goal state itself is blocked", "goal_blocked")
+            ),
             "GOAL_IN_COLLISION",
         ),
         (PlanOutcome(result=result(False, "max_checks", "10 checks")), "TIMED_OUT"),
