@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Dataset-generation speed-up: ``drd build-dataset`` with 1 worker vs N local worker processes.
 
-Runs the real command (``python -m drd_planner.data.dataset_cli build-dataset``, the code behind
+Runs the real command (``python -m drd_planner.cli.build_dataset build-dataset``, the code behind
 ``drd build-dataset``) in a fresh process per worker count and repeat, each from scratch into a
 temporary folder; checks that every run wrote a byte-identical file; prints the best wall time per worker
 count and the speed-up over the first count. The goal for 2 workers is >= 1.7x on an otherwise idle
@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from drd_planner.data.dataset_cli import parse_domain_spec
+from drd_planner.cli.build_dataset import parse_domain_spec
 from drd_planner.data.domain_factory import make_domain
 
 
@@ -67,7 +67,7 @@ def machine_ceiling(workers: int, n: int = 3_000_000) -> float:
 
 def run_build(args: argparse.Namespace, model: str, workers: int, out: Path) -> tuple[float, float]:
     """(wall seconds, checks seconds) of one ``build-dataset`` run in a fresh process."""
-    argv = [sys.executable, "-m", "drd_planner.data.dataset_cli", "build-dataset"]
+    argv = [sys.executable, "-m", "drd_planner.cli.build_dataset", "build-dataset"]
     argv += ["--domain", args.domain, "--world-model", model, "--worlds", str(args.worlds)]
     argv += [
         "--seed",

@@ -10,7 +10,7 @@ import pytest
 from conftest import REPO_ROOT
 
 from drd_msgs_py.bags import BagMessage, read_bag, write_bag
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request
 from drd_planner.planning.query_session import QuerySession

@@ -10,7 +10,7 @@ import pytest
 from conftest import gccd_folder
 
 from drd_planner import progress
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.core.switch_threshold import DEFAULT_ETA_CANDIDATES
 from drd_planner.data.gccd import load_gccd_folder
 

@@ -11,7 +11,7 @@ from conftest import gccd_folder
 from drd_planner.bench.check_cost import Timed
 from drd_planner.bench.cost_bench import cost_markdown, summarize_costs
 from drd_planner.bench.cost_episodes import EpisodeTime
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 
 
 def _argv(folder: Path, out: Path, costs: str) -> list[str]:

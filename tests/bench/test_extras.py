@@ -46,7 +46,7 @@ def test_bench_runs_without_extras(tmp_path: Path) -> None:
     out = tmp_path / "bench.json"
     args = ["--gccd", str(folder), "--max-worlds", "2", "--eta", "0.2", "--kappa", "none"]
     policies = ["--policies", "bisect,direct_bisect,ompl_lazyprm", "--json", str(out)]
-    proc = _run_bare("drd_planner.cli:main", "bench", *args, *policies, cwd=tmp_path)
+    proc = _run_bare("drd_planner.cli.main:main", "bench", *args, *policies, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "| dataset_2d_1 |" in proc.stdout
     assert out.is_file()
@@ -58,7 +58,7 @@ def test_bench_runs_without_extras(tmp_path: Path) -> None:
 def test_bench_figures_without_matplotlib_names_the_extra(tmp_path: Path) -> None:
     folder = gccd_folder("dataset_2d_1")
     args = ["--gccd", str(folder), "--max-worlds", "2", "--figures", str(tmp_path / "figs")]
-    proc = _run_bare("drd_planner.cli:main", "bench", *args, cwd=tmp_path)
+    proc = _run_bare("drd_planner.cli.main:main", "bench", *args, cwd=tmp_path)
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert proc.stderr.strip() == (
@@ -69,7 +69,7 @@ def test_bench_figures_without_matplotlib_names_the_extra(tmp_path: Path) -> Non
 
 def test_planner_demo_without_pictures_runs_without_extras(tmp_path: Path) -> None:
     proc = _run_bare(
-        "drd_planner.ros.demo:main", "--no-pictures", "--out", str(tmp_path / "out"), cwd=tmp_path
+        "drd_planner.cli.planner_demo:main", "--no-pictures", "--out", str(tmp_path / "out"), cwd=tmp_path
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "out" / "outputs.mcap").is_file()

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from conftest import gccd_folder
 
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.planner.query_sampling import draw_queries, reachable_fraction
 

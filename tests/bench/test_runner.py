@@ -76,7 +76,7 @@ def test_policy_context_carries_the_training_worlds(problem: Problem) -> None:
 
 
 def test_bench_runs_the_learned_lazysp_selectors(problem: Problem, tmp_path: Path) -> None:
-    from drd_planner.cli import main
+    from drd_planner.cli.main import main
 
     names = ["lazysp", "lazysp_posterior", "lazysp_posterior_delta"]
     out = tmp_path / "lazy.json"

@@ -9,7 +9,7 @@ import pytest
 from conftest import gccd_folder
 
 from drd_planner.bench.suite import SuiteOptions, resolve_settings
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.core.region_rule import REGION_RULES
 from drd_planner.data.planar_problem import make_planar_problem
 

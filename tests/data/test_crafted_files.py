@@ -233,7 +233,7 @@ def test_a_named_pipe_is_refused_without_blocking(tmp_path: Path) -> None:
 def test_drd_prints_one_line_for_a_crafted_tree(
     base_tree: tuple[dict[str, Any], Arrays], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from drd_planner.cli import main
+    from drd_planner.cli.main import main
 
     path = TREE_CASES["deep_json"].write(base_tree, tmp_path / "deep.npz")
     assert main(["plan", "--bag", "heli_wires", "--tree", str(path)]) == 2

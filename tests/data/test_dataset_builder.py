@@ -335,7 +335,7 @@ def test_resume_after_killing_the_build_process(reference: Path, tmp_path: Path)
     slow = {"block_probability": 0.25, "delay_s": 0.08, "size": 4}
     spec = json.dumps(slow)
     argv = [
-        sys.executable, "-m", "drd_planner.data.dataset_cli", "build-dataset",
+        sys.executable, "-m", "drd_planner.cli.build_dataset", "build-dataset",
         "--domain", "grid_test", "--domain-factory", GRID_FACTORY, "--domain-spec", spec,
         "--world-model", "uniform", "--worlds", "40", "--seed", "7", "--chunk-size", "6",
         "--max-paths", "30", "--workers", "2", "--out", str(out),

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from conftest import SHARED_DATA
 
+from drd_planner.cli.build_dataset import main
 from drd_planner.data.dataset_builder import FILE_WORLD_RULE, build_dataset
-from drd_planner.data.dataset_cli import main
 from drd_planner.data.dataset_file import load_dataset
 from drd_planner.data.dataset_options import ALL_WORLDS, BuildOptions, DatasetRecipe
 from drd_planner.data.scene_source import SceneWorlds, request_files, scene_files, spec_defaults

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from test_dataset_builder import GridDomain
 
-from drd_planner.data.dataset_cli import main
+from drd_planner.cli.build_dataset import main
 from drd_planner.data.dataset_file import load_dataset
 from drd_planner.data.terrain_source import TerrainWorlds, resolve, site_fractions, terrain_keys
 from drd_planner.data.world_sources import FileRecord, TerrainFile

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import SHARED_DATA
 
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.planner import load_tree_bundle
 

@@ -25,6 +25,7 @@ from drd_planner.planner import (
     prior_from_problem,
     save_prior,
 )
+from drd_planner.planner.build_settings import TreeSettings
 from drd_planner.planner.commands import query_tree
 
 REPO = Path(__file__).resolve().parents[2]
@@ -38,7 +39,7 @@ def prior() -> WorldPrior:
     assert problem.goal is not None
     own = QueryTree("own", problem.start, problem.goal, problem.library, tree)
     base = prior_from_problem(problem, domain="planar", trees=(own,), eta=0.4, pseudo_count=5.0)
-    other, _ = query_tree(base, 3, 20, tree_options={})
+    other, _ = query_tree(base, 3, 20, tree=TreeSettings())
     return WorldPrior(**{**base.__dict__, "trees": (own, other)})
 
 
@@ -243,7 +244,7 @@ def test_the_region_rule_round_trips_and_a_bad_one_is_refused(prior: WorldPrior,
 
 
 def test_a_dataset_file_given_as_a_prior_says_how_to_make_the_prior(tmp_path: Path) -> None:
-    from drd_planner.cli import main
+    from drd_planner.cli.main import main
 
     dataset = tmp_path / "data.npz"
     argv = [

@@ -17,7 +17,7 @@ from bag_messages import SEC, T0, goal_message, obstacles_message, terrain_messa
 
 from drd_msgs_py.bags import BagMessage, jazzy_typestore, read_bag, write_bag
 from drd_msgs_py.factory import RosbagsMessages
-from drd_planner.data.dataset_cli import main
+from drd_planner.cli.build_dataset import main
 from drd_planner.data.dataset_file import load_dataset
 from drd_planner.data.world_sources import FileRecord
 from drd_planner.domains.base import domain_from_spec

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from conftest import SHARED_DATA
 
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts

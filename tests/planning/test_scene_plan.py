@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from conftest import REPO_ROOT, SHARED_DATA
 
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planning.query_support import rebuild_domain
 from drd_planner.planning.scene_plan import SceneRequest, plan_moveit_request

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.core.episode import run_episode
 from drd_planner.core.policies import POLICIES
 from drd_planner.data.tree_file import TreeBundle

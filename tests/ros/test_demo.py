@@ -14,7 +14,7 @@ pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installe
 from harness import use_domain
 
 from drd_msgs_py.bags import open_bag
-from drd_planner.ros.demo import main
+from drd_planner.cli.planner_demo import main
 
 pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
 

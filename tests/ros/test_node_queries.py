@@ -23,7 +23,7 @@ from rclpy.parameter import Parameter  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
-from drd_planner.cli import main as drd  # noqa: E402
+from drd_planner.cli.main import main as drd  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402

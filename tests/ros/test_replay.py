@@ -24,11 +24,12 @@ rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not 
 from rclpy.parameter import Parameter  # noqa: E402
 
 from drd_msgs_py.bags import BagMessage, bag_requests, open_bag, read_bag  # noqa: E402
+from drd_planner.cli.replay import main  # noqa: E402
 from drd_planner.planner import load_prior  # noqa: E402
 from drd_planner.planning.bag_plan import plan_bag_request  # noqa: E402
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
-from drd_planner.ros.replay import ReplayOptions, ReplaySummary, main, replay_bag  # noqa: E402
+from drd_planner.ros.replay import ReplayOptions, ReplaySummary, replay_bag  # noqa: E402
 
 pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
 

@@ -57,10 +57,10 @@ setup(
     license="BSD-3-Clause",
     entry_points={
         "console_scripts": [
-            "drd = drd_planner.cli:main",
+            "drd = drd_planner.cli.main:main",
             "planner_node = drd_planner.ros.planner_node:main",
-            "drd_replay = drd_planner.ros.replay:main",
-            "planner_demo = drd_planner.ros.demo:main",
+            "drd_replay = drd_planner.cli.replay:main",
+            "planner_demo = drd_planner.cli.planner_demo:main",
         ],
     },
 )

@@ -83,7 +83,7 @@ def _mean(values: Sequence[float] | Sequence[int]) -> float | None:
 
 def anytime_prior(problem: Problem, *, seed: int = 0) -> WorldPrior:
     """The prior of the problem's training worlds with its own DiRECt tree (default eta and kappa)."""
-    from drd_planner.data.dataset_cli import problem_domain
+    from drd_planner.data.problem_source import problem_domain
 
     if problem.start is None or problem.goal is None:
         raise DrdError(f"{problem.name}: the anytime benchmark plans the dataset's own query; it has none")

@@ -110,7 +110,7 @@ def validate_query_leaf(
     )
     fit = np.setdiff1d(train, held)
     sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held))
-    from drd_planner.data.dataset_cli import problem_domain
+    from drd_planner.data.problem_source import problem_domain
 
     planner = Planner(prior_from_problem(sub, domain=problem_domain(problem)), cache_size=queries + 1)
     pairs = draw_queries(sub, queries, seed=seed)

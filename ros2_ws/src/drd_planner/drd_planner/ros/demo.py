@@ -16,16 +16,16 @@ on any machine, however loaded.
 
 Defaults: the real-scale helicopter prior (``trees/heli_lines.npz``: power-line corridors, known no-fly
 zones and registration error over 2.5 km of real terrain, 20 999 lattice edges) and ``bags/heli_lines.mcap``;
-``--tree heli_wires --bag heli_wires`` runs the small Wires corridor, ``--tree arm_table_clutter --bag
-arm_table_clutter`` the arm.
+``--prior heli_wires --bag heli_wires`` runs the small Wires corridor, ``--prior arm_table_clutter --bag
+arm_table_clutter`` the arm. The flags are parsed in :mod:`drd_planner.cli.planner_demo`, which calls
+:func:`run_planner_demo` with a :class:`PlannerDemoOptions`.
 """
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
-from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +42,30 @@ from drd_planner.ros.node import PlannerNode
 from drd_planner.ros.private_domain import private_domain
 from drd_planner.ros.replay import ReplayOptions, replay_bag
 
-__all__ = ["main", "print_record"]
+__all__ = ["PlannerDemoOptions", "print_record", "run_planner_demo"]
+
+
+@dataclass(frozen=True)
+class PlannerDemoOptions:
+    """One ``planner_demo`` run.
+
+    Attributes:
+        prior: the prior file, or a shipped tree's name.
+        bag: the bag file, or a bundled bag's name.
+        out: the output folder (``outputs.mcap`` and ``plan_<k>.png`` go there; made if missing).
+        rate: playback speed factor (> 0; 2 plays twice as fast).
+        seed: the policy's seed.
+        pictures: draw a picture of each plan (needs matplotlib).
+        domain_id: the ROS domain to run on, in [0, 232] (None: a private one where no other node is seen).
+    """
+
+    prior: str = "heli_lines"
+    bag: str = "heli_lines"
+    out: Path = Path("out")
+    rate: float = 2.0
+    seed: int = 0
+    pictures: bool = True
+    domain_id: int | None = None
 
 
 def print_record(number: int, record: PlanRecord) -> None:
@@ -91,51 +114,28 @@ def _served_by(query: str) -> str:
     return query or "-"
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``planner_demo`` argument parser."""
-    parser = argparse.ArgumentParser(prog="planner_demo", description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--tree", default="heli_lines", help="tree file or shipped tree name (default heli_lines)"
-    )
-    parser.add_argument(
-        "--bag", default="heli_lines", help="bag file or bundled bag name (default heli_lines)"
-    )
-    parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default ./out)")
-    parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2)")
-    parser.add_argument("--seed", type=int, default=0, help="policy seed (default 0)")
-    parser.add_argument("--no-pictures", action="store_true", help="skip the pictures (no matplotlib needed)")
-    parser.add_argument(
-        "--domain-id",
-        type=int,
-        default=None,
-        help="ROS domain to run on (default: a private one where no other node is seen)",
-    )
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
+def run_planner_demo(options: PlannerDemoOptions) -> int:
     """Run the main job; 0 when every request got a verified plan, 1 if one did not, 2 on bad input."""
-    args = build_parser().parse_args(argv)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     try:
-        bag_path = resolve_bag_path(args.bag)
+        bag_path = resolve_bag_path(options.bag)
         bag = open_bag(bag_path)
         frame = bag_frame(read_bag(bag_path)) or "map"
-        if args.domain_id is not None and not 0 <= args.domain_id <= 232:
-            raise DrdError(f"--domain-id must lie in [0, 232], got {args.domain_id}")
-        domain_id = private_domain() if args.domain_id is None else args.domain_id
+        if options.domain_id is not None and not 0 <= options.domain_id <= 232:
+            raise DrdError(f"--domain-id must lie in [0, 232], got {options.domain_id}")
+        domain_id = private_domain() if options.domain_id is None else options.domain_id
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
-    print(f"ROS domain {domain_id}" + (" (private)" if args.domain_id is None else ""))
+    print(f"ROS domain {domain_id}" + (" (private)" if options.domain_id is None else ""))
     context = rclpy.context.Context()
     rclpy.init(context=context, domain_id=domain_id)
     node = PlannerNode(
         context=context,
         parameter_overrides=[
-            Parameter("tree_paths", value=[args.tree]),
+            Parameter("tree_paths", value=[options.prior]),
             Parameter("frame_id", value=frame),
-            Parameter("seed", value=args.seed),
+            Parameter("seed", value=options.seed),
         ],
     )
     try:
@@ -146,18 +146,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             return 2
         node.trigger_activate()
-        args.out.mkdir(parents=True, exist_ok=True)
-        record = args.out / "outputs.mcap"
+        options.out.mkdir(parents=True, exist_ok=True)
+        record = options.out / "outputs.mcap"
         print(f"replaying {bag_path} into the planner node (frame {frame!r}, tree {node.sessions[0].name})")
         # Each message after the node took the ones before and answered; after the bag, until it answered.
-        options = ReplayOptions(
+        replay_options = ReplayOptions(
             record=record,
             overwrite=True,
-            rate=args.rate,
+            rate=options.rate,
             settle_until=lambda: node.planning_idle,
             ready=lambda published: node.inputs_taken >= published and node.planning_idle,
         )
-        summary = replay_bag(bag, context=context, nodes=[node], options=options)
+        summary = replay_bag(bag, context=context, nodes=[node], options=replay_options)
         print(
             f"published {len(summary.published)} bag messages; recorded "
             + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))
@@ -168,7 +168,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         history = node.history
         for k, served in enumerate(history):
             print_record(k, served)
-        if not args.no_pictures:
+        if options.pictures:
             from drd_planner.pictures.plan import plan_picture
 
             for k, served in enumerate(history):
@@ -178,7 +178,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     served.session,
                     served.snapshot,
                     served.result,
-                    args.out / f"plan_{k}.png",
+                    options.out / f"plan_{k}.png",
                     query_cached=served.result.query_cached,
                 )
                 print(f"picture: {', '.join(str(f) for f in files)}")
@@ -192,7 +192,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         node.destroy_node()
         context.try_shutdown()
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

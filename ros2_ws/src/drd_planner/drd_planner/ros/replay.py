@@ -17,9 +17,10 @@ planner's outputs (``plan``, ``joint_trajectory``, ``edge_checks``, ``/diagnosti
 are stamped on the *bag's* timeline (bag start + elapsed wall time x ``rate``), so input and output
 bags line up, and written with the QoS their publisher offers (from the ROS graph).
 
-Command line (replays into an already running node; the node must be active)::
+Command line (replays into an already running node; the node must be active; its flags are parsed in
+:mod:`drd_planner.cli.replay`, which calls :func:`replay_command`)::
 
-    python -m drd_planner.ros.replay BAG [--record OUT.mcap] [--rate R] [--settle S] [--wait S]
+    drd_replay BAG [--record OUT.mcap] [--rate R] [--settle S] [--wait S]
 
 A missing or corrupt bag, or no node subscribed to any of its topics after ``--wait`` seconds, exits
 with status 2 and one line ``drd_replay: error: ...`` (no output bag is written).
@@ -27,7 +28,6 @@ with status 2 and one line ``drd_replay: error: ...`` (no output bag is written)
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -52,7 +52,6 @@ from drd_msgs_py.bags import (
 )
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.factory import RclpyMessages
-from drd_planner.argtypes import bounded_float
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.shipped import resolve_bag_path
 from drd_planner.ros.bag_qos import offered_qos, rclpy_qos
@@ -63,9 +62,9 @@ __all__ = [
     "ReplayError",
     "ReplayOptions",
     "ReplaySummary",
-    "main",
     "rclpy_qos",
     "replay_bag",
+    "replay_command",
 ]
 
 #: What the planner publishes (names relative to its namespace, as in docs/ros-node.md) -> type.
@@ -430,55 +429,24 @@ def replay_bag(
 # Command line
 
 
-_positive = bounded_float(above=0.0)
-_seconds = bounded_float(at_least=0.0)
+def replay_command(bag: str, options: ReplayOptions) -> int:
+    """``drd_replay``: replay ``bag`` (a path or a shipped bag's name) into a running node with ``options``.
 
-
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``drd_replay``."""
-    parser = argparse.ArgumentParser(
-        prog="drd_replay",
-        description="Replay a rosbag2 MCAP bag of maps and requests into a running drd_planner node "
-        "and record its outputs.",
-    )
-    parser.add_argument("bag", help="the bag: an .mcap file, a rosbag2 folder, or a shipped bag's name")
-    parser.add_argument("--record", metavar="OUT.mcap", help="write the planner's outputs to this MCAP file")
-    parser.add_argument("--overwrite", action="store_true", help="replace an existing --record file")
-    parser.add_argument("--rate", type=_positive, default=1.0, help="playback speed factor (default 1)")
-    parser.add_argument(
-        "--settle", type=_seconds, default=2.0, help="seconds to keep listening after the last message"
-    )
-    parser.add_argument(
-        "--wait", type=_seconds, default=5.0, help="seconds to wait for the node's subscriptions first"
-    )
-    parser.add_argument("--namespace", default=None, help="the planner node's namespace")
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``drd_replay``: errors (missing or corrupt bag, existing --record file) print one line and exit 2."""
-    args = build_parser().parse_args(argv)
+    Errors (missing or corrupt bag, existing ``record`` file without ``overwrite``, nobody listening when
+    ``options.require_listener``) print one line ``drd_replay: error: ...`` and return 2; an interrupted
+    replay returns 130 (after writing what was recorded), else 0.
+    """
     try:
-        contents = open_bag(resolve_bag_path(args.bag))
+        contents = open_bag(resolve_bag_path(bag))
         if not contents.messages:
-            raise BagError(f"bag {args.bag} has no messages")
-        if args.record and Path(args.record).exists() and not args.overwrite:
-            raise BagError(f"{args.record} exists already (use --overwrite)")
+            raise BagError(f"bag {bag} has no messages")
+        if options.record and Path(options.record).exists() and not options.overwrite:
+            raise BagError(f"{options.record} exists already (use --overwrite)")
     except (MessageError, DrdError) as exc:
         print(f"drd_replay: error: {exc}", file=sys.stderr)
         return 2
     rclpy.init()
     try:
-        options = ReplayOptions(
-            record=args.record,
-            overwrite=args.overwrite,
-            rate=args.rate,
-            settle=args.settle,
-            wait=args.wait,
-            namespace=args.namespace,
-            log=lambda line: print(line, flush=True),
-            require_listener=True,
-        )
         summary = replay_bag(contents, options=options)
     except (MessageError, DrdError) as exc:
         print(f"drd_replay: error: {exc}", file=sys.stderr)
@@ -486,7 +454,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         try_shutdown()
     return 130 if summary.interrupted else 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

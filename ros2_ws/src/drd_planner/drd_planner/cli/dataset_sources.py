@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, NoReturn
 
-from drd_planner.argtypes import bounded_float
+from drd_planner.cli.argtypes import bounded_float
 from drd_planner.data.world_sources import CROP_CHOICES, MapBags, SceneFolder, TerrainFile, WorldSourceRequest
 from drd_planner.exceptions import DatasetError
 

@@ -1,4 +1,4 @@
-"""Tests for drd_planner.command_errors: one stderr line and the exit status of a failed or interrupted command."""
+"""Tests for drd_planner.cli.errors: one stderr line and the exit status of a failed or interrupted command."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 
 import pytest
 
-from drd_planner.command_errors import ERROR_EXIT, INTERRUPT_EXIT, run_command
+from drd_planner.cli.errors import ERROR_EXIT, INTERRUPT_EXIT, run_command
 from drd_planner.exceptions import DatasetError, DrdError, InvariantError, UnverifiedPathError
 
 

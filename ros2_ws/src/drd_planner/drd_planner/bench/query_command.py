@@ -1,10 +1,9 @@
-"""``drd bench --queries N``: the random-query benchmark from the command line."""
+"""``drd bench --queries N``: the random-query benchmark, as a library call (:func:`run_query_bench`)."""
 
 from __future__ import annotations
 
-import argparse
 import time
-from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,32 +25,61 @@ from drd_planner.bench.runner import require_test_worlds, write_bench_files
 from drd_planner.core.episode import TableOracle
 from drd_planner.core.problem import Problem
 from drd_planner.core.tree import build_tree
+from drd_planner.data.problem_source import ProblemSource, problem_domain
 from drd_planner.exceptions import DrdError
-from drd_planner.planner.leaf_validation import PriorLeaf
+from drd_planner.planner.build_settings import LeafChoice, TreeSettings
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import QueryTree, WorldPrior, prior_from_problem
 from drd_planner.planner.prior_file import load_prior
 from drd_planner.planner.query_sampling import draw_queries
 
-Leaf = Callable[[Problem, argparse.Namespace], PriorLeaf]
+
+@dataclass(frozen=True)
+class QueryBenchOptions:
+    """One ``drd bench --queries N`` run.
+
+    Attributes:
+        source: the dataset (one; ``--all`` is refused by the command line).
+        queries: how many random (start, goal) queries to draw (the dataset's own first; at least 1).
+        prior: plan with this prior file (None: build one from the training worlds).
+        policies: the policies to run (None: :data:`~drd_planner.bench.queries.DEFAULT_QUERY_POLICIES`).
+        check_cost_ms: also time every policy with these milliseconds of CPU added to each check, as
+            comma-separated text (:func:`~drd_planner.bench.check_cost.parse_check_costs`; None: no timing).
+        max_checks: per-episode check cap (None: none; at least 1).
+        seed: the seed of the queries, the episodes and the prior's validation and library.
+        json: write the results JSON here (None: not written).
+        markdown: write the markdown report here (None: not written).
+        leaf: how the built prior's eta, kappa and region rule are chosen.
+        tree: how the built prior's tree is grown.
+    """
+
+    source: ProblemSource
+    queries: int
+    prior: str | None = None
+    policies: tuple[str, ...] | None = None
+    check_cost_ms: str | None = None
+    max_checks: int | None = None
+    seed: int = 0
+    json: str | None = None
+    markdown: str | None = None
+    leaf: LeafChoice = field(default_factory=LeafChoice)
+    tree: TreeSettings = field(default_factory=TreeSettings)
 
 
-def benchmark_prior(
-    problem: Problem, args: argparse.Namespace, *, leaf: Leaf, tree_options: dict[str, Any]
-) -> tuple[WorldPrior, str]:
-    """The prior the query benchmark plans with: ``--tree``'s, or one built from the training worlds."""
-    from drd_planner.data.dataset_cli import problem_domain
-
+def benchmark_prior(problem: Problem, options: QueryBenchOptions) -> tuple[WorldPrior, str]:
+    """The prior the query benchmark plans with: ``options.prior``'s, or one built from the training worlds."""
     domain = problem_domain(problem)
-    if args.tree:
-        prior = load_prior(args.tree, expected_domain=domain)
+    if options.prior:
+        prior = load_prior(options.prior, expected_domain=domain)
         if problem.graph is None or not np.array_equal(prior.graph.edges, problem.graph.edges):
-            raise DrdError(f"{args.tree} was built for another graph than {problem.name!r}")
+            raise DrdError(f"{options.prior} was built for another graph than {problem.name!r}")
         return prior, (
-            f"prior {args.tree} (eta {prior.eta:g}, kappa {prior.pseudo_count}, region rule {prior.region_rule})"
+            f"prior {options.prior} (eta {prior.eta:g}, kappa {prior.pseudo_count}, region rule {prior.region_rule})"
         )
-    setting = leaf(problem, args)
-    tree = build_tree(problem, progress=False, **{**tree_options, "region_rule": setting.region_rule})
+    setting = options.leaf.prior_leaf(problem)
+    tree = build_tree(
+        problem, progress=False, **{**options.tree.kwargs(), "region_rule": setting.region_rule}
+    )
     assert problem.start is not None and problem.goal is not None
     own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
     prior = prior_from_problem(
@@ -61,43 +89,41 @@ def benchmark_prior(
         eta=setting.eta,
         pseudo_count=setting.pseudo_count,
         region_rule=setting.region_rule,
-        library_seed=args.seed,
+        library_seed=options.seed,
     )
     return prior, setting.note
 
 
-def cmd_bench_queries(args: argparse.Namespace, *, leaf: Leaf, tree_options: dict[str, Any]) -> int:
-    """Run the query benchmark on ``--gccd`` or ``--dataset`` and print (and write) its table."""
-    from drd_planner.data.dataset_cli import load_problem_from_args
-
-    if args.all:
-        raise DrdError("--queries runs on one dataset (--gccd DIR or --dataset FILE), not --all")
-    if args.queries < 1:
-        raise DrdError(f"--queries must be at least 1, got {args.queries}")
-    if args.max_checks is not None and args.max_checks < 1:
-        raise DrdError(f"--max-checks must be at least 1, got {args.max_checks}")
-    costs = parse_check_costs(args.check_cost_ms) if getattr(args, "check_cost_ms", None) is not None else ()
-    policies = tuple(args.policies) if args.policies else DEFAULT_QUERY_POLICIES
+def run_query_bench(options: QueryBenchOptions) -> int:
+    """Run the query benchmark on one dataset and print (and write) its table; exit status 0."""
+    if options.queries < 1:
+        raise DrdError(f"--queries must be at least 1, got {options.queries}")
+    if options.max_checks is not None and options.max_checks < 1:
+        raise DrdError(f"--max-checks must be at least 1, got {options.max_checks}")
+    costs = parse_check_costs(options.check_cost_ms) if options.check_cost_ms is not None else ()
+    policies = options.policies or DEFAULT_QUERY_POLICIES
     if costs:
         check_cost_policies(policies)
     t0 = time.perf_counter()
-    problem = load_problem_from_args(args)
+    problem = options.source.load()
     require_test_worlds(problem)
-    prior, note = benchmark_prior(problem, args, leaf=leaf, tree_options=tree_options)
+    prior, note = benchmark_prior(problem, options)
     prepare_s = time.perf_counter() - t0
     planner = Planner(prior)
-    queries = draw_queries(problem, args.queries, seed=args.seed)
+    queries = draw_queries(problem, options.queries, seed=options.seed)
     doc = run_query_benchmark(
-        problem, planner, queries, policies=policies, seed=args.seed, max_checks=args.max_checks
+        problem, planner, queries, policies=policies, seed=options.seed, max_checks=options.max_checks
     )
     doc["settings"]["leaf"] = note
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     if costs:
-        report += time_at_check_costs(problem, prior, queries, doc, costs, policies=policies, seed=args.seed)
+        report += time_at_check_costs(
+            problem, prior, queries, doc, costs, policies=policies, seed=options.seed
+        )
     print(report, end="")
     print(f"eta, kappa and region rule: {note}")
-    write_bench_files(doc, report, json_path=args.json, markdown_path=args.markdown)
+    write_bench_files(doc, report, json_path=options.json, markdown_path=options.markdown)
     print(
         f"total wall time {time.perf_counter() - t0:.1f} s (loading, eta and kappa and the tree "
         f"{prepare_s:.1f} s, episodes {doc['seconds']:.1f} s)"

@@ -1,6 +1,6 @@
 """How the command-line entry points end: an error is one line on stderr and exit status 2.
 
-Both ``drd`` (:mod:`drd_planner.cli`) and the stand-alone dataset tool (:mod:`drd_planner.data.dataset_cli`)
+Both ``drd`` (:mod:`drd_planner.cli.main`) and the stand-alone dataset tool (:mod:`drd_planner.cli.build_dataset`)
 run their chosen subcommand through :func:`run_command`, so a :class:`~drd_planner.exceptions.DrdError`
 prints ``drd: error: <message>`` and returns 2, and Ctrl-C prints the caller's interrupt line and returns
 130 (128 + SIGINT, as a shell reports it). Any other exception is a bug and keeps its traceback, a broken

@@ -1,14 +1,43 @@
-"""``drd plan --bag``: plan a bag's request offline as the node would, and print its check log."""
+"""``drd plan --bag``: plan a bag's request offline as the node would, and print its check log.
+
+:func:`plan_bag` takes a :class:`BagPlanOptions` (made by :mod:`drd_planner.cli.plan`).
+"""
 
 from __future__ import annotations
 
-import argparse
+from dataclasses import dataclass
 
 import numpy as np
 
 from drd_planner.exceptions import DrdError
 
-__all__ = ["cmd_plan_bag", "print_check"]
+__all__ = ["BagPlanOptions", "plan_bag", "print_check"]
+
+
+@dataclass(frozen=True)
+class BagPlanOptions:
+    """One ``drd plan --bag``.
+
+    Attributes:
+        prior: the prior file, or a shipped tree's name (:func:`~drd_planner.planning.shipped.resolve_tree_path`).
+        bag: the rosbag2 MCAP bag, or a shipped bag's name.
+        request: the 0-based index of the bag's request to plan.
+        frame: the planning frame (None: the bag's map frame, else "map").
+        prior_start: plan from the prior's start when the bag has no robot state before the request.
+        skip_refused_maps: plan on the maps before a map message the node would refuse (False: stop with
+            its reason).
+        max_checks: end the plan after this many checks (None: no cap).
+        seed: the policy's seed.
+    """
+
+    prior: str
+    bag: str
+    request: int = 0
+    frame: str | None = None
+    prior_start: bool = False
+    skip_refused_maps: bool = False
+    max_checks: int | None = None
+    seed: int = 0
 
 
 def print_check(number: int, edge: int, ends: tuple[int, int] | None, free: bool, stage: str) -> None:
@@ -24,8 +53,8 @@ def _where(value: object) -> str:
     return "state " + str(np.round(np.asarray(value, dtype=np.float64), 3).tolist())
 
 
-def cmd_plan_bag(args: argparse.Namespace) -> int:
-    """Plan the ``--request``-th request of ``--bag`` with the prior ``--tree``; 0 when a path was found.
+def plan_bag(options: BagPlanOptions) -> int:
+    """Plan the ``request``-th request of ``bag`` with the prior ``prior``; 0 when a path was found.
 
     The plan starts at the robot's state in the bag before the request (``odom`` / ``joint_states``;
     ``--prior-start`` uses the prior's start when there is none) and goes to the request's goal as the
@@ -40,33 +69,34 @@ def cmd_plan_bag(args: argparse.Namespace) -> int:
     from drd_planner.planning.query_session import QuerySession
     from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
 
-    if args.policy != "direct_bisect":
-        raise DrdError("--bag plans as the node does (direct_bisect); --policy cannot be changed")
-    if args.world is not None or args.query is not None:
-        raise DrdError("--world and --query select a dataset world and query; with --bag use --request")
-    tree_path = resolve_tree_path(args.tree)
-    session = QuerySession(load_prior(tree_path), name=tree_path.stem, max_checks=args.max_checks)
+    tree_path = resolve_tree_path(options.prior)
+    session = QuerySession(load_prior(tree_path), name=tree_path.stem, max_checks=options.max_checks)
     try:
-        messages = read_bag(resolve_bag_path(args.bag))
-        frame = args.frame or bag_frame(messages) or "map"
+        messages = read_bag(resolve_bag_path(options.bag))
+        frame = options.frame or bag_frame(messages) or "map"
         plan = plan_bag_request(
-            session, messages, args.request, frame=frame, seed=args.seed, prior_start=args.prior_start
+            session,
+            messages,
+            options.request,
+            frame=frame,
+            seed=options.seed,
+            prior_start=options.prior_start,
         )
     except MessageError as exc:
         raise DrdError(str(exc)) from exc
-    if plan.maps.refused and not args.skip_refused_maps:  # a corrupt or foreign map: say so, plan nothing
+    if plan.maps.refused and not options.skip_refused_maps:  # a corrupt or foreign map: say so, plan nothing
         raise DrdError(
-            f"bag {args.bag}: {plan.maps.refused[0]} ({len(plan.maps.refused)} map message(s) before request "
-            f"{args.request} refused; the node would plan on the maps before them, map version "
+            f"bag {options.bag}: {plan.maps.refused[0]} ({len(plan.maps.refused)} map message(s) before request "
+            f"{options.request} refused; the node would plan on the maps before them, map version "
             f"{plan.maps.snapshot.version}: --skip-refused-maps plans that way)"
         )
     if plan.result.status == "refused":  # a start or goal the prior cannot serve
-        raise DrdError(f"request {args.request} refused: {plan.result.message}")
+        raise DrdError(f"request {options.request} refused: {plan.result.message}")
     snapshot, request, result = plan.maps.snapshot, plan.request, plan.result
     terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
     robot = "" if plan.maps.robot_description is None else ", robot_description"
     print(
-        f"bag {args.bag}: request {request.index} ({request.kind} at +{(request.time_ns - messages[0].time_ns) / 1e9:.2f} s); "
+        f"bag {options.bag}: request {request.index} ({request.kind} at +{(request.time_ns - messages[0].time_ns) / 1e9:.2f} s); "
         f"maps in {frame!r}: version {snapshot.version}, {len(snapshot.obstacles)} obstacles, terrain {terrain}{robot}"
     )
     for line in (*plan.maps.refused, *plan.notes):

@@ -1,13 +1,11 @@
-"""Command-line glue for datasets: ``drd build-dataset`` and the ``--gccd DIR | --dataset FILE`` source.
+"""``drd build-dataset``: its flags, made into the options of a dataset build.
 
-``drd_planner.cli`` wires these in with::
+They become a :class:`~drd_planner.data.dataset_options.DatasetRecipe` and
+:class:`~drd_planner.data.dataset_options.BuildOptions` for :func:`~drd_planner.data.dataset_builder.build_dataset`.
 
-    add_build_dataset_parser(sub)                 # registers "build-dataset" (func=cmd_build_dataset)
-    add_problem_source_arguments(bench_parser)    # --gccd DIR | --dataset FILE (one required)
-    problem = load_problem_from_args(args)        # either source as a Problem with worlds
-    load_tree(args.tree, expected_domain=problem_domain(problem))
-
-The module also runs on its own: ``python -m drd_planner.data.dataset_cli build-dataset ...``.
+:mod:`drd_planner.cli.main` registers it with ``add_build_dataset_parser(sub)``; the world-source flags are
+:mod:`drd_planner.cli.dataset_sources`. The module also runs on its own:
+``python -m drd_planner.cli.build_dataset build-dataset ...``.
 """
 
 from __future__ import annotations
@@ -21,22 +19,18 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from drd_planner.argtypes import bounded_float, bounded_int
-from drd_planner.command_errors import run_command
-from drd_planner.core.problem import Problem
-from drd_planner.data.source_cli import add_source_arguments
+from drd_planner.cli.argtypes import bounded_float, bounded_int
+from drd_planner.cli.dataset_sources import add_source_arguments
+from drd_planner.cli.errors import run_command
 from drd_planner.domains.base import DOMAIN_CLASSES
 from drd_planner.exceptions import DatasetError
 
 __all__ = [
     "add_build_dataset_parser",
-    "add_problem_source_arguments",
     "cmd_build_dataset",
     "default_workers",
-    "load_problem_from_args",
     "main",
     "parse_domain_spec",
-    "problem_domain",
 ]
 
 
@@ -83,9 +77,9 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
     Raises:
         DrdError: any user-triggered failure (the caller prints one line and exits 2).
     """
+    from drd_planner.cli.dataset_sources import check_required, print_spec, source_from_args, source_summary
     from drd_planner.data.dataset_builder import build_dataset
     from drd_planner.data.dataset_options import ALL_WORLDS, BuildOptions, DatasetRecipe
-    from drd_planner.data.source_cli import check_required, print_spec, source_from_args, source_summary
 
     if getattr(args, "print_spec", False):
         return print_spec(args.domain)
@@ -191,34 +185,6 @@ def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_source_arguments(p)
     p.set_defaults(func=cmd_build_dataset, build_dataset_error=p.error)
     return p
-
-
-def add_problem_source_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the required choice ``--gccd DIR`` (authors' folder) | ``--dataset FILE`` (our dataset file)."""
-    group = parser.add_mutually_exclusive_group(required=True)
-    group.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
-    group.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
-
-
-def load_problem_from_args(args: argparse.Namespace) -> Problem:
-    """The problem (with worlds) named by ``--dataset`` or ``--gccd``.
-
-    Raises:
-        DatasetError: the file or folder is missing, corrupt or inconsistent.
-    """
-    from drd_planner.data.dataset_file import load_dataset_problem
-    from drd_planner.data.gccd import load_gccd_folder
-
-    if getattr(args, "dataset", None):
-        return load_dataset_problem(args.dataset)
-    if getattr(args, "gccd", None):
-        return load_gccd_folder(args.gccd)
-    raise DatasetError("give a dataset: --gccd DIR or --dataset FILE")
-
-
-def problem_domain(problem: Problem) -> str:
-    """The domain a tree for ``problem`` must be built for: the dataset's domain, or "gccd"."""
-    return str(problem.metadata.get("domain", "gccd"))
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -11,16 +11,15 @@ import numpy as np
 import pytest
 from test_dataset_builder import GRID_FACTORY
 
-from drd_planner.data.dataset_cli import (
+from drd_planner.cli.build_dataset import (
     add_build_dataset_parser,
-    add_problem_source_arguments,
     cmd_build_dataset,
-    load_problem_from_args,
     main,
     parse_domain_spec,
-    problem_domain,
 )
+from drd_planner.cli.main import main as drd
 from drd_planner.data.dataset_file import load_dataset
+from drd_planner.data.problem_source import ProblemSource, problem_domain
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import DatasetError, DrdError
 
@@ -165,14 +164,8 @@ def test_domain_spec_parsing(tmp_path: Path) -> None:
 # drd bench --dataset FILE
 
 
-def _source_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="drd bench")
-    add_problem_source_arguments(parser)
-    return parser
-
-
 def test_dataset_source_gives_the_problem(built: Path) -> None:
-    problem = load_problem_from_args(_source_parser().parse_args(["--dataset", str(built)]))
+    problem = ProblemSource(dataset=str(built)).load()
     ds = load_dataset(built)
     worlds = problem.require_worlds()
     assert problem.name == "grid"
@@ -185,7 +178,7 @@ def test_gccd_source_still_works() -> None:
     from conftest import gccd_folder
 
     folder = gccd_folder("dataset_2d_1")
-    problem = load_problem_from_args(_source_parser().parse_args(["--gccd", str(folder)]))
+    problem = ProblemSource(gccd=str(folder)).load()
     assert problem.name == "dataset_2d_1"
     assert problem_domain(problem) == "gccd"
 
@@ -195,10 +188,12 @@ def test_source_needs_exactly_one_of_gccd_and_dataset(
 ) -> None:
     for argv in ([], ["--gccd", "a", "--dataset", "b"]):
         with pytest.raises(SystemExit) as info:
-            _source_parser().parse_args(argv)
+            drd(["bench", *argv])
         assert info.value.code == 2
     with pytest.raises(DatasetError, match="dataset file not found"):
-        load_problem_from_args(_source_parser().parse_args(["--dataset", str(tmp_path / "none.npz")]))
+        ProblemSource(dataset=str(tmp_path / "none.npz")).load()
+    with pytest.raises(DatasetError, match="give a dataset"):
+        ProblemSource().load()
 
 
 # --------------------------------------------------------------------------------------------------

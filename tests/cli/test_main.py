@@ -21,7 +21,7 @@ from drd_planner.bench.runner import (
     markdown_table,
     run_benchmark,
 )
-from drd_planner.cli import main
+from drd_planner.cli.main import main
 from drd_planner.core.region_rule import REGION_RULES
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.planner import load_prior, load_tree_bundle
@@ -209,7 +209,7 @@ def test_bench_with_saved_tree(
     d2d1: Path, tree_2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "o.json"
-    argv = ["bench", "--gccd", str(d2d1), "--tree", str(tree_2d1), "--max-worlds", "3", "--json", str(out)]
+    argv = ["bench", "--gccd", str(d2d1), "--prior", str(tree_2d1), "--max-worlds", "3", "--json", str(out)]
     assert main(argv) == 0
     doc = json.loads(out.read_text())
     bundle = load_tree_bundle(tree_2d1)
@@ -223,7 +223,7 @@ def test_tree_for_another_dataset_is_refused(
     tree_2d1: Path, command: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     other = gccd_folder("dataset_2d_4")
-    argv = [command, "--tree", str(tree_2d1), "--gccd", str(other)]
+    argv = [command, "--prior", str(tree_2d1), "--gccd", str(other)]
     argv += ["--world", "0"] if command == "plan" else ["--max-worlds", "1"]
     capsys.readouterr()
     assert main(argv) == 2
@@ -292,7 +292,7 @@ def test_missing_tree_file_exits_2(d2d1: Path, tmp_path: Path, capsys: pytest.Ca
 def test_corrupt_tree_file_exits_2(d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"PK\x03\x04 definitely not a tree")
-    assert main(["bench", "--gccd", str(d2d1), "--tree", str(bad)]) == 2
+    assert main(["bench", "--gccd", str(d2d1), "--prior", str(bad)]) == 2
     _one_error_line(capsys.readouterr().err)
 
 
@@ -521,8 +521,8 @@ def test_bench_all_bad_folders_exit_2(tmp_path: Path, capsys: pytest.CaptureFixt
 
 
 def test_bench_all_refuses_a_tree_file(two_dataset_root: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["bench", "--all", str(two_dataset_root), "--tree", "t.npz"]) == 2
-    assert "--tree" in _one_error_line(capsys.readouterr().err)
+    assert main(["bench", "--all", str(two_dataset_root), "--prior", "t.npz"]) == 2
+    assert "--prior" in _one_error_line(capsys.readouterr().err)
 
 
 @pytest.mark.parametrize(("flag", "value"), [("--max-worlds", "0"), ("--max-checks", "-1")])
@@ -546,7 +546,7 @@ def test_build_dataset_then_bench_and_plan_on_it(tmp_path: Path, capsys: pytest.
     build = ["build-dataset", "--domain", "planar", "--world-model", "one_wall", "--worlds", "40"]
     assert main([*build, "--seed", "1", "--max-paths", "20", "--workers", "1", "--out", str(data)]) == 0
     assert main(["build-tree", "--dataset", str(data), "--out", str(tree)]) == 0
-    argv = ["bench", "--dataset", str(data), "--tree", str(tree), "--policies", "direct_bisect,bisect"]
+    argv = ["bench", "--dataset", str(data), "--prior", str(tree), "--policies", "direct_bisect,bisect"]
     assert main([*argv, "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["dataset"] == "pl"
@@ -560,7 +560,7 @@ def test_build_dataset_then_bench_and_plan_on_it(tmp_path: Path, capsys: pytest.
     assert "check   1:" in capsys.readouterr().out
     # A gccd tree does not fit a dataset of another domain.
     assert (
-        main(["bench", "--gccd", str(gccd_folder("dataset_2d_1")), "--tree", str(tree), "--max-worlds", "1"])
+        main(["bench", "--gccd", str(gccd_folder("dataset_2d_1")), "--prior", str(tree), "--max-worlds", "1"])
         == 2
     )
     _one_error_line(capsys.readouterr().err)

@@ -8,7 +8,7 @@ from typing import NoReturn
 
 import pytest
 
-from drd_planner.data.source_cli import (
+from drd_planner.cli.dataset_sources import (
     add_source_arguments,
     check_required,
     source_from_args,
