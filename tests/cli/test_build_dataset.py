@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import shlex
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from test_dataset_builder import GRID_FACTORY
 
 from drd_planner.cli.build_dataset import (
     add_build_dataset_parser,
@@ -22,6 +22,14 @@ from drd_planner.data.dataset_file import load_dataset
 from drd_planner.data.problem_source import ProblemSource, problem_domain
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.exceptions import DatasetError, DrdError
+
+# The grid test domain is named by its module (--domain-factory test_dataset_builder:GridDomain), which lives in
+# tests/data: put that folder on sys.path, as pytest does when it collects it.
+DATA_TESTS = str(Path(__file__).resolve().parents[1] / "data")
+if DATA_TESTS not in sys.path:
+    sys.path.insert(0, DATA_TESTS)
+
+from test_dataset_builder import GRID_FACTORY  # noqa: E402
 
 GRID = ["--domain", "grid_test", "--domain-factory", GRID_FACTORY, "--world-model", "uniform"]
 SMALL = ["--worlds", "20", "--seed", "3", "--chunk-size", "5", "--max-paths", "20", "--workers", "1"]
