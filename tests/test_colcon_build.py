@@ -133,7 +133,7 @@ def test_launch_file_and_config_files_are_installed(install: Path) -> None:
 
 
 def test_shipped_trees_are_installed_for_bare_tree_names(install: Path) -> None:
-    """``tree_paths: ["heli_wires"]`` resolves in share/drd_planner/trees of an installed package."""
+    """``prior_paths: ["heli_wires"]`` resolves in share/drd_planner/trees of an installed package."""
     trees = sorted(p.name for p in (REPO / "trees").glob("*.npz"))
     assert trees, "no shipped trees"
     installed = install / "drd_planner" / "share" / "drd_planner" / "trees"

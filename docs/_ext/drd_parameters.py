@@ -2,7 +2,8 @@
 
 The rows come from :data:`drd_planner.ros.parameters.PARAMETERS`, the table the node declares its
 parameters from, so the docs list exactly what ``ros2 param describe`` shows: name, type, default and
-description, with the advertised range and read-only flag added to the description.
+description, with the advertised range and read-only flag added to the description, and a deprecated
+alias marked as such (its name cell says ``(deprecated)``, its description names the replacement).
 """
 
 from __future__ import annotations
@@ -41,8 +42,9 @@ def _number(value: float) -> str:
 
 
 def describe(spec: ParameterSpec) -> str:
-    """The description with the range ``ros2 param describe`` shows and the read-only flag."""
-    notes = [spec.description]
+    """The description with the range ``ros2 param describe`` shows, the read-only flag and a deprecation."""
+    notes = [] if spec.deprecated_for is None else [f"Deprecated: use {spec.deprecated_for}."]
+    notes.append(spec.description)
     if spec.float_range is not None:
         notes.append(f"Range [{_number(spec.float_range[0])}, {_number(spec.float_range[1])}].")
     if spec.int_range is not None and spec.int_range[1] < 2**63 - 1:
@@ -53,8 +55,19 @@ def describe(spec: ParameterSpec) -> str:
 
 
 def rows(specs: Sequence[ParameterSpec] = PARAMETERS) -> list[tuple[str, str, str, str]]:
-    """One row (name, type, default, description) per parameter, in declaration order."""
-    return [(spec.name, ros_type(spec.default), repr(spec.default), describe(spec)) for spec in specs]
+    """One row (name, type, default, description) per parameter, in declaration order.
+
+    A deprecated alias's name reads ``<name> (deprecated)``.
+    """
+    return [
+        (
+            spec.name if spec.deprecated_for is None else f"{spec.name} (deprecated)",
+            ros_type(spec.default),
+            repr(spec.default),
+            describe(spec),
+        )
+        for spec in specs
+    ]
 
 
 def _entry(text: str, *, code: bool) -> Any:

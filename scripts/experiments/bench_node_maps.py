@@ -136,7 +136,7 @@ def start_node(tree: str, markers: int, domain_id: int, name: str) -> subprocess
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     args = [sys.executable, "-m", "drd_planner.ros.planner_node", "--ros-args", "-r", f"__node:={name}"]
     for param in (
-        f"tree_paths:=[{tree}]",
+        f"prior_paths:=[{tree}]",
         "autostart:=true",
         "start_without_robot_state:=prior_start",
         f"max_markers:={markers}",
@@ -148,7 +148,7 @@ def start_node(tree: str, markers: int, domain_id: int, name: str) -> subprocess
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--markers", type=int, default=100_000, help="cubes in the map (plus a DELETEALL)")
-    parser.add_argument("--tree", default="heli_wires", help="the prior the node loads (tree_paths)")
+    parser.add_argument("--tree", default="heli_wires", help="the prior the node loads (prior_paths)")
     parser.add_argument("--domain-id", type=int, default=171, help="ROS_DOMAIN_ID of the node and the peer")
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one update")
     args = parser.parse_args()

@@ -40,7 +40,7 @@ def main() -> None:
     from drd_planner.ros.node import PlannerNode
 
     rclpy.init()
-    node = PlannerNode(parameter_overrides=[Parameter("tree_paths", value=["heli_wires"])])
+    node = PlannerNode(parameter_overrides=[Parameter("prior_paths", value=["heli_wires"])])
     try:
         if node.trigger_configure().name != "SUCCESS":
             raise SystemExit(f"configure failed: {node.errors}")

@@ -2,7 +2,7 @@
 
 Each file is given to rclpy exactly as ``ros2 run ... --ros-args --params-file FILE`` and the launch
 file give it (the context's global arguments), then the node's declared parameters are compared with
-the file's, the values are read back, and ``configure`` loads the trees the file names.
+the file's, the values are read back, and ``configure`` loads the priors the file names.
 """
 
 from __future__ import annotations
@@ -23,12 +23,14 @@ from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
 from drd_planner.domains.arm import default_panda_dir  # noqa: E402
 from drd_planner.exceptions import ProblemError  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
-from drd_planner.ros.parameters import plan_budgets_of  # noqa: E402
+from drd_planner.ros.parameters import PARAMETERS, plan_budgets_of  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[2] / "ros2_ws" / "src" / "drd_planner" / "config"
 SHIPPED = ("heli_wires.yaml", "arm_table_clutter.yaml")
 # Parameters every rclpy node declares itself.
 BUILTIN = {"use_sim_time", "start_type_description_service"}
+# Deprecated aliases the node still declares; the shipped files use the new names only.
+DEPRECATED = {spec.name for spec in PARAMETERS if spec.deprecated_for is not None}
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 os.environ["ROS_DOMAIN_ID"] = str(140 + os.getpid() % 20)
 
@@ -88,7 +90,9 @@ def test_file_sets_exactly_the_declared_parameters_and_they_take_effect(
     key, params = _parameters(path)
     # The section matches the node in any namespace (the launch file's `namespace` argument).
     assert key == f"/**/{node.get_name()}"
-    declared = set(node.list_parameters([], 0).names) - BUILTIN
+    declared = set(node.list_parameters([], 0).names) - BUILTIN - DEPRECATED
+    assert DEPRECATED == {"tree_paths"}
+    assert not DEPRECATED & set(params), "a shipped file sets a deprecated parameter"
     assert set(params) == declared, f"missing {declared - set(params)}, unknown {set(params) - declared}"
     for param, value in params.items():
         got = node.get_parameter(param).value
@@ -103,10 +107,10 @@ def test_file_sets_exactly_the_declared_parameters_and_they_take_effect(
 
 
 def _configures(node: PlannerNode, path: Path) -> None:
-    """``configure`` loads exactly the trees the file names; ``cleanup`` forgets them again."""
+    """``configure`` loads exactly the priors the file names; ``cleanup`` forgets them again."""
     _, params = _parameters(path)
     assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS, node.errors
-    assert [s.name for s in node.sessions] == params["tree_paths"]
+    assert [s.name for s in node.sessions] == params["prior_paths"]
     assert all(s.improve_budget is None for s in node.sessions)  # the anytime improvement ships off
     assert node.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
     assert not node.sessions

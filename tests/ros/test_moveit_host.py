@@ -130,7 +130,7 @@ def test_duration_of_splits_seconds() -> None:
 def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(context: Any) -> None:
     assert moveit_interfaces()[1].Response().motion_plan_response.error_code.SUCCESS == 1
     params = [
-        Parameter("tree_paths", value=[str(TREE)]),
+        Parameter("prior_paths", value=[str(TREE)]),
         Parameter("frame_id", value=FRAME),
         Parameter("start_without_robot_state", value="prior_start"),
     ]
@@ -216,7 +216,7 @@ def test_without_moveit_msgs_the_node_runs_without_the_interface(
         raise ImportError("No module named 'moveit_msgs'")
 
     monkeypatch.setattr(moveit_host, "moveit_interfaces", missing)
-    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("prior_paths", value=[str(TREE)])])
     peer = Peer(context)
     with active_planner(context, node, peer):
         assert node._moveit is None

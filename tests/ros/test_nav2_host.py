@@ -108,7 +108,7 @@ def test_a_nav2_client_plans_fails_with_codes_asks_validity_and_cancels(
 ) -> None:
     assert nav2_interfaces()[0].Result.GOAL_OUTSIDE_MAP == 204
     params = [
-        Parameter("tree_paths", value=[str(TREE)]),
+        Parameter("prior_paths", value=[str(TREE)]),
         Parameter("start_without_robot_state", value="prior_start"),
         Parameter("replan_on_map_update", value=False),  # the cancel step's plan is the first on the new map
     ]
@@ -211,7 +211,7 @@ def test_without_nav2_msgs_the_node_runs_without_the_interface_and_says_why(
         raise ImportError("No module named 'nav2_msgs'")
 
     monkeypatch.setattr(nav2_host, "nav2_interfaces", missing)
-    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("prior_paths", value=[str(TREE)])])
     peer = Peer(context)
     with active_planner(context, node, peer):
         assert node._nav2 is None

@@ -55,7 +55,7 @@ def context() -> Iterator[Any]:
 
 def _node(ctx: Any, trees: list[str], **overrides: Any) -> PlannerNode:
     params = [
-        Parameter("tree_paths", value=trees),
+        Parameter("prior_paths", value=trees),
         Parameter("start_without_robot_state", value="prior_start"),
         *(Parameter(name, value=value) for name, value in overrides.items()),
     ]
@@ -132,7 +132,7 @@ def test_bad_tree_file_fails_configure_and_the_node_stays_up(context: Any, tmp_p
         assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
         assert any("not a readable prior or tree file" in e for e in node.errors)
         assert node._state_machine.current_state[1] == "unconfigured"
-        node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
+        node.set_parameters([Parameter("prior_paths", value=[str(TREE)])])
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
     finally:
         node.destroy_node()
@@ -187,17 +187,75 @@ def _crafted_trees(folder: Path) -> dict[str, Path]:
     return out
 
 
+class _Warnings:
+    """A node's logger that records its warnings (and passes every call on to the real one)."""
+
+    def __init__(self, real: Any) -> None:
+        self.real = real
+        self.lines: list[str] = []
+
+    def warning(self, text: str, *args: Any, **kwargs: Any) -> Any:
+        self.lines.append(text)
+        return self.real.warning(text, *args, **kwargs)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.real, name)
+
+
+def test_the_deprecated_tree_paths_still_loads_and_warns_once_naming_prior_paths(
+    context: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(TREE)])])
+    try:
+        logger = _Warnings(node.get_logger())
+        monkeypatch.setattr(node, "get_logger", lambda: logger)
+        assert node.get_parameter("prior_paths").value == [""]
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS, node.errors
+        assert [s.name for s in node.sessions] == ["heli_wires"]
+        deprecations = [line for line in logger.lines if "deprecated" in line]
+        assert len(deprecations) == 1
+        assert "tree_paths" in deprecations[0]
+        assert "use prior_paths" in deprecations[0]
+        assert not node.errors
+    finally:
+        node.destroy_node()
+
+
+def test_prior_paths_and_tree_paths_both_set_fail_configure_with_one_error_naming_both(context: Any) -> None:
+    overrides = [Parameter("prior_paths", value=[str(TREE)]), Parameter("tree_paths", value=[str(TREE)])]
+    node = PlannerNode(context=context, parameter_overrides=overrides)
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
+        assert len(node.errors) == 1
+        assert "prior_paths and tree_paths are both set" in node.errors[0]
+        assert not node.sessions
+        assert node._state_machine.current_state[1] == "unconfigured"
+        node.set_parameters([Parameter("tree_paths", value=[""])])
+        assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS, node.errors
+    finally:
+        node.destroy_node()
+
+
+def test_no_prior_named_fails_configure_naming_prior_paths(context: Any) -> None:
+    node = PlannerNode(context=context)
+    try:
+        assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
+        assert any("parameter prior_paths names no prior file" in e for e in node.errors)
+    finally:
+        node.destroy_node()
+
+
 def test_crafted_tree_files_fail_configure_with_their_reason(context: Any, tmp_path: Path) -> None:
     """Issue 19 item 7: a hostile tree never escapes configure as a traceback; its reason is logged."""
     node = _node(context, [str(TREE)])
     try:
         for reason, path in _crafted_trees(tmp_path).items():
-            node.set_parameters([Parameter("tree_paths", value=[str(path)])])
+            node.set_parameters([Parameter("prior_paths", value=[str(path)])])
             assert node.trigger_configure() == TransitionCallbackReturn.FAILURE, reason
             assert reason in node.errors[-1], node.errors[-1]
             assert path.name in node.errors[-1], node.errors[-1]
             assert node._state_machine.current_state[1] == "unconfigured"
-        node.set_parameters([Parameter("tree_paths", value=[str(TREE)])])
+        node.set_parameters([Parameter("prior_paths", value=[str(TREE)])])
         assert node.trigger_configure() == TransitionCallbackReturn.SUCCESS
     finally:
         node.destroy_node()
@@ -313,7 +371,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
         pytest.skip(
             "the planner_node console script is not installed (pip install -e ros2_ws/src/drd_planner)"
         )
-    args = ["--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    args = ["--ros-args", "-p", "prior_paths:=[heli_wires]", "-p", "autostart:=true"]
     args += ["-p", "start_without_robot_state:=prior_start"]
     process = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     peer = Peer(context)
@@ -341,7 +399,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
             output, _ = process.communicate()
         executor.shutdown()
         peer.node.destroy_node()
-    assert "loaded 1 tree(s): heli_wires" in output
+    assert "loaded 1 prior(s): heli_wires" in output
     assert "Traceback" not in output
 
 

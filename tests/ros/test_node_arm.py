@@ -43,7 +43,7 @@ def _node(ctx: Any) -> PlannerNode:
     return PlannerNode(
         context=ctx,
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("prior_paths", value=[str(TREE)]),
             Parameter("frame_id", value=FRAME),
             Parameter("start_without_robot_state", value="prior_start"),
         ],

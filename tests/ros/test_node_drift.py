@@ -66,7 +66,7 @@ def _drifted(state: np.ndarray, rng: np.random.Generator, side: float) -> np.nda
 
 
 def test_odometry_drifting_off_the_lattice_replans_every_request(context: Any) -> None:
-    node = PlannerNode(context=context, parameter_overrides=[Parameter("tree_paths", value=[str(PRIOR)])])
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("prior_paths", value=[str(PRIOR)])])
     peer = Peer(context)
     odom = peer.node.create_publisher(Odometry, "odom", 10)
     get_plan = peer.node.create_client(GetPlan, "get_plan")

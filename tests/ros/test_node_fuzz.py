@@ -292,7 +292,7 @@ def _start(ctx: Any, tree: Path, frame: str) -> tuple[PlannerNode, _Peer, Any]:
     node = PlannerNode(
         context=ctx,
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(tree)]),
+            Parameter("prior_paths", value=[str(tree)]),
             Parameter("frame_id", value=frame),
             Parameter("start_without_robot_state", value="prior_start"),
         ],

@@ -50,7 +50,7 @@ def context() -> Iterator[Any]:
 
 def _node(ctx: Any, **overrides: Any) -> PlannerNode:
     params = [
-        Parameter("tree_paths", value=[str(TREE)]),
+        Parameter("prior_paths", value=[str(TREE)]),
         Parameter("start_without_robot_state", value="prior_start"),
     ]
     params += [Parameter(k, value=v) for k, v in overrides.items()]
@@ -244,7 +244,7 @@ def test_planner_node_help_prints_usage_and_unknown_arguments_are_refused() -> N
 
 
 def test_planner_node_rejects_an_out_of_range_override_with_one_line() -> None:
-    args = [_planner_node(), "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "goal_tolerance:=-1.0"]
+    args = [_planner_node(), "--ros-args", "-p", "prior_paths:=[heli_wires]", "-p", "goal_tolerance:=-1.0"]
     env = {**os.environ, "ROS_DOMAIN_ID": str(120 + os.getpid() % 20)}
     done = subprocess.run(args, capture_output=True, text=True, timeout=60, env=env)
     assert done.returncode == 2
@@ -261,7 +261,7 @@ SIGNAL_DEADLINE_S = 2.0
 def test_sigint_and_sigterm_end_background_started_nodes_at_any_moment_within_2_s() -> None:
     """20 starts as a shell script's `cmd &` makes them (SIGINT ignored), signalled at seeded moments."""
     rng = np.random.default_rng(19)
-    args = [_planner_node(), "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    args = [_planner_node(), "--ros-args", "-p", "prior_paths:=[heli_wires]", "-p", "autostart:=true"]
     env = {**os.environ, "ROS_DOMAIN_ID": str(140 + os.getpid() % 20)}
     slow: list[str] = []
     for k in range(SIGNAL_STARTS):
@@ -381,7 +381,7 @@ def test_a_signal_whose_interrupt_an_import_swallowed_still_ends_the_start(
     stop = threading.Timer(10.0, lambda: os.kill(os.getpid(), signal.SIGTERM))
     stop.start()
     try:
-        assert planner_node.main(["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]) == 130
+        assert planner_node.main(["planner_node", "--ros-args", "-p", "prior_paths:=[heli_wires]"]) == 130
     finally:
         stop.cancel()
         for s, handler in before.items():
@@ -406,7 +406,7 @@ def test_a_signal_during_the_autostart_transition_ends_the_node_with_status_0(
         return result
 
     monkeypatch.setattr(PlannerNode, "on_configure", configure_then_shutdown)
-    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]", "-p", "autostart:=true"]
+    args = ["planner_node", "--ros-args", "-p", "prior_paths:=[heli_wires]", "-p", "autostart:=true"]
     assert node_module.main(args) == 0
 
 
@@ -419,7 +419,7 @@ def test_an_import_that_a_signal_broke_half_way_ends_the_start_with_130(
 
     before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     monkeypatch.setitem(sys.modules, "drd_planner.ros.node_process", None)  # its import now fails
-    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]
+    args = ["planner_node", "--ros-args", "-p", "prior_paths:=[heli_wires]"]
     try:
         monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGINT)])
         assert planner_node.main(args) == 130
@@ -444,7 +444,7 @@ def test_a_start_that_fails_after_a_signal_ends_with_130(monkeypatch: pytest.Mon
 
     before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     monkeypatch.setattr(node_module, "main", failing_start)
-    args = ["planner_node", "--ros-args", "-p", "tree_paths:=[heli_wires]"]
+    args = ["planner_node", "--ros-args", "-p", "prior_paths:=[heli_wires]"]
     try:
         monkeypatch.setattr(planner_node, "_RECEIVED", [int(signal.SIGINT)])
         assert planner_node.main(args) == 130

@@ -39,7 +39,7 @@ def _maps_reach_the_node(ctx: Any, *, transient_local: bool, publisher_qos: Any,
     node = PlannerNode(
         context=ctx,
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("prior_paths", value=[str(TREE)]),
             Parameter("map_subscribe_transient_local", value=transient_local),
         ],
     )
@@ -98,7 +98,7 @@ def test_map_qos_can_be_overridden_and_survives_reactivation(context: Any) -> No
     node = PlannerNode(
         context=context,
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("prior_paths", value=[str(TREE)]),
             Parameter("qos_overrides./terrain.subscription.depth", value=3),
         ],
     )

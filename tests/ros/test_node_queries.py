@@ -95,7 +95,7 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
     context: Any, prior_file: Path
 ) -> None:
     node = PlannerNode(
-        context=context, parameter_overrides=[Parameter("tree_paths", value=[str(prior_file)])]
+        context=context, parameter_overrides=[Parameter("prior_paths", value=[str(prior_file)])]
     )
     peer = Peer(context)
     odom = peer.node.create_publisher(Odometry, "odom", 10)

@@ -35,7 +35,7 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         context=context,
         node_name="heli_planner",
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("prior_paths", value=[str(TREE)]),
             Parameter("start_without_robot_state", value="prior_start"),
         ],
     )
@@ -94,7 +94,7 @@ def test_outputs_are_silent_until_activate(context: Any) -> None:
     node = PlannerNode(
         context=context,
         parameter_overrides=[
-            Parameter("tree_paths", value=[str(TREE)]),
+            Parameter("prior_paths", value=[str(TREE)]),
             Parameter("start_without_robot_state", value="prior_start"),
         ],
     )

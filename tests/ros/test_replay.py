@@ -58,7 +58,7 @@ def _replay(ctx: Any, tree: str, frame: str, bag: Path, out: Path) -> tuple[Repl
     if not bag.is_file():
         pytest.skip(f"{bag} not generated (python scripts/tools/make_bags.py)")
     params = [
-        Parameter("tree_paths", value=[str(TREES / tree)]),
+        Parameter("prior_paths", value=[str(TREES / tree)]),
         Parameter("frame_id", value=frame),
     ]
     node = PlannerNode(context=ctx, parameter_overrides=params)
@@ -208,7 +208,7 @@ def test_a_stepped_replay_waits_until_the_node_took_each_message_and_answered(
     if not bag.is_file():
         pytest.skip(f"{bag} not generated")
     params = [
-        Parameter("tree_paths", value=[str(TREES / "heli_wires.npz")]),
+        Parameter("prior_paths", value=[str(TREES / "heli_wires.npz")]),
         Parameter("frame_id", value="map"),
     ]
     node = PlannerNode(context=context, parameter_overrides=params)

@@ -15,7 +15,7 @@ Arguments:
 The transitions are launch events (``ChangeState``), so they work on Jazzy, whose ``LifecycleNode``
 action has no ``autostart`` argument (that arrived in launch_ros 0.28, Kilted). The node's own
 ``autostart`` parameter is forced to false here so that only the launch file drives the lifecycle.
-A failed ``configure`` (a bad tree file, say) leaves the node up and *unconfigured* with the reason in
+A failed ``configure`` (a bad prior file, say) leaves the node up and *unconfigured* with the reason in
 its log and on ``/diagnostics``; nothing is activated.
 """
 

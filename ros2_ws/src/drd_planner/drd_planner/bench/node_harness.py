@@ -67,7 +67,7 @@ class Harness:
         self.node = PlannerNode(
             context=self.context,
             parameter_overrides=[
-                Parameter("tree_paths", value=[str(tree)]),
+                Parameter("prior_paths", value=[str(tree)]),
                 Parameter("start_without_robot_state", value="prior_start"),
                 Parameter("frame_id", value=frame_id),
                 *parameters,

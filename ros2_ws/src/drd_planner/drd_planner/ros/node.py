@@ -20,8 +20,8 @@ Interface (names relative to the node namespace):
   and a 1 Hz ``<node name>: heartbeat``.
 
 Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
---help`` lists them). Each file in ``tree_paths`` is a world prior (a tree file is a prior of its one
-query) served by a :class:`~drd_planner.planning.query_session.QuerySession`; a request goes to the prior
+--help`` lists them). Each file in ``prior_paths`` (or its deprecated alias ``tree_paths``) is a world
+prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.query_session.QuerySession`; a request goes to the prior
 of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.planning.requests`).
 
 The node keeps the lifecycle, the parameters and the ROS I/O. Maps, requests, coalescing, planning and
@@ -75,6 +75,7 @@ from drd_planner.ros.parameters import (
     map_limits_of,
     parameter_problems,
     plan_budgets_of,
+    prior_paths_of,
 )
 from drd_planner.ros.plan_worker import PlanWorker
 from drd_planner.ros.reporter import NodeReporter
@@ -174,14 +175,25 @@ class PlannerNode(LifecycleNode):
         return self.get_parameter(name).value
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Load the trees named in ``tree_paths``; any bad file fails the transition with its reason."""
+        """Load the priors named in ``prior_paths``; any bad file fails the transition with its reason.
+
+        The deprecated alias ``tree_paths`` is read while ``prior_paths`` is left at its default (with one
+        warning naming ``prior_paths``); both set fails the transition.
+        """
         values = {spec.name: self._parameter(spec.name) for spec in PARAMETERS}
         problems = parameter_problems(values)
         if problems:
             self._report_error(f"configure: invalid parameters: {'; '.join(problems)}", topic="node")
             return TransitionCallbackReturn.FAILURE
         try:
-            sessions = self._load_sessions([p for p in values["tree_paths"] if p], values)
+            names, deprecation = prior_paths_of(values)
+        except ValueError as exc:
+            self._report_error(f"configure: {exc}", topic="node")
+            return TransitionCallbackReturn.FAILURE
+        if deprecation is not None:
+            self.get_logger().warning(deprecation)
+        try:
+            sessions = self._load_sessions(names, values)
         except DrdError as exc:
             self._report_error(f"configure: {exc}", topic="node")
             return TransitionCallbackReturn.FAILURE
@@ -196,13 +208,13 @@ class PlannerNode(LifecycleNode):
             live=self._live_settings,
             wake=self._worker.wake,
         )
-        self.get_logger().info(f"loaded {len(sessions)} tree(s): {', '.join(s.name for s in sessions)}")
+        self.get_logger().info(f"loaded {len(sessions)} prior(s): {', '.join(s.name for s in sessions)}")
         return TransitionCallbackReturn.SUCCESS
 
     def _load_sessions(self, names: list[str], values: dict[str, Any]) -> list[QuerySession]:
-        """One prior per file of ``tree_paths`` (DrdError: none named, a bad file, or priors that disagree)."""
+        """One prior per file of ``names`` (DrdError: none named, a bad file, or priors that disagree)."""
         if not names:
-            raise DrdError("parameter tree_paths names no tree file")
+            raise DrdError("parameter prior_paths names no prior file")
         budgets = plan_budgets_of(values)  # max_checks, time_budget_s, improve_budget
         sessions = []
         for name in names:
@@ -213,7 +225,7 @@ class PlannerNode(LifecycleNode):
             raise DrdError(ambiguous)
         margins = {s.margin for s in sessions}
         if len(margins) != 1:
-            raise DrdError(f"the trees use different collision margins {sorted(margins)}")
+            raise DrdError(f"the priors use different collision margins {sorted(margins)}")
         return sessions
 
     def _live_settings(self) -> LiveSettings:
@@ -291,7 +303,7 @@ class PlannerNode(LifecycleNode):
         return super().on_deactivate(state)
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Forget the trees and the maps."""
+        """Forget the priors and the maps."""
         self._drop_interfaces()
         self._service = None
         self._out.forget()
@@ -338,7 +350,7 @@ class PlannerNode(LifecycleNode):
             self._report_error(f"{source} refused, {_UNCHANGED[source]}: {exc}", topic="maps")
             return
         if snapshot is None:
-            self.get_logger().info(f"{source} ignored: no arm tree is loaded")
+            self.get_logger().info(f"{source} ignored: no arm prior is loaded")
 
     def _log_accepted(self, source: str, snapshot: MapSnapshot) -> None:
         """Log and report an accepted map version (before anything is re-checked against it)."""

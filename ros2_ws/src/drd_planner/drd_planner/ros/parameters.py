@@ -3,9 +3,10 @@
 :func:`declare_parameters` declares them with ``ParameterDescriptor`` s (description, range, read-only),
 :func:`parameter_problems` checks a set of values; the node runs it at ``configure`` (over the values
 it starts from, overrides included) and on every runtime change (a bad change is refused with its
-reason, the old value stays). Parameters read at ``configure`` (trees, frame, tolerances, check cap,
+reason, the old value stays). Parameters read at ``configure`` (priors, frame, tolerances, check cap,
 budgets) take effect at the next ``configure``; ``seed`` and ``replan_on_map_update`` at the next plan.
-:func:`plan_budgets_of` turns the budget parameters into the priors' plan budgets.
+:func:`plan_budgets_of` turns the budget parameters into the priors' plan budgets; :func:`prior_paths_of`
+reads the prior files from ``prior_paths`` or its deprecated alias ``tree_paths``.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ __all__ = [
     "map_limits_of",
     "parameter_problems",
     "plan_budgets_of",
+    "prior_paths_of",
 ]
 
 #: Largest goal tolerance (metres) a goal may be off the tree's goal; beyond it a request would match
@@ -82,10 +84,10 @@ def _non_negative_seconds(value: Any) -> str | None:
     return None if math.isfinite(v) and 0.0 <= v <= 3600.0 else f"must be finite, >= 0 and <= 3600 s, got {v}"
 
 
-def _tree_paths(value: Any) -> str | None:
+def _prior_paths(value: Any) -> str | None:
     names = [str(v) for v in value]
     if len(names) > 64 or any(len(n) > 4096 for n in names):
-        return "names at most 64 tree files of at most 4096 characters each"
+        return "names at most 64 prior files of at most 4096 characters each"
     return None
 
 
@@ -101,6 +103,8 @@ class ParameterSpec:
         read_only: changing it after the node started is refused (it shapes what was loaded).
         float_range: ``(low, high)`` advertised in the descriptor (metres or radians), or None.
         int_range: ``(low, high)`` advertised in the descriptor, or None.
+        deprecated_for: the parameter that replaces this one (a deprecated alias, read only while the
+            new one is left at its default), or None.
     """
 
     name: str
@@ -110,6 +114,7 @@ class ParameterSpec:
     read_only: bool = False
     float_range: tuple[float, float] | None = None
     int_range: tuple[int, int] | None = None
+    deprecated_for: str | None = None
 
     def descriptor(self) -> ParameterDescriptor:
         """The rclpy descriptor (shown by ``ros2 param describe``)."""
@@ -130,10 +135,19 @@ INT64_MAX = 2**63 - 1
 #: Every parameter of the node.
 PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
+        "prior_paths",
+        [""],
+        "World prior files (.npz; a tree file loads as a prior of its one query), or the names of shipped "
+        "priors such as heli_wires; read at configure.",
+        _prior_paths,
+    ),
+    ParameterSpec(
         "tree_paths",
         [""],
-        "Tree or prior files, or shipped tree names such as heli_wires; read at configure.",
-        _tree_paths,
+        "Deprecated alias of prior_paths (removed in the next release): read at configure only while "
+        "prior_paths is left at its default; setting both fails configure.",
+        _prior_paths,
+        deprecated_for="prior_paths",
     ),
     ParameterSpec(
         "frame_id", "map", "The planning frame: maps and goals must be in it; read at configure.", _frame
@@ -251,6 +265,32 @@ PARAMETERS = PARAMETERS + MAP_LIMIT_PARAMETERS
 def map_limits_of(values: Mapping[str, Any]) -> MapLimits:
     """The :class:`MapLimits` of the node's parameter values (name -> value; other names are ignored)."""
     return MapLimits.from_parameters(values)
+
+
+def _names(value: Any) -> list[str]:
+    return [str(v) for v in value if str(v)]
+
+
+def prior_paths_of(values: Mapping[str, Any]) -> tuple[list[str], str | None]:
+    """The prior files to load (empty entries dropped) and the deprecation warning to log, or None.
+
+    ``prior_paths`` is read; while it names no file, the deprecated alias ``tree_paths`` is read instead
+    and the warning names the new parameter. A parameter counts as set when it names a file (its default
+    ``[""]`` names none). Missing names count as unset.
+
+    Raises:
+        ValueError: both ``prior_paths`` and ``tree_paths`` are set (the message names both).
+    """
+    priors = _names(values.get("prior_paths", []))
+    trees = _names(values.get("tree_paths", []))
+    if priors and trees:
+        raise ValueError(
+            "parameters prior_paths and tree_paths are both set; tree_paths is the deprecated name of "
+            "prior_paths: set prior_paths only"
+        )
+    if trees:
+        return trees, "parameter tree_paths is deprecated and will be removed: use prior_paths instead"
+    return priors, None
 
 
 def goal_tolerances_of(values: Mapping[str, Any]) -> GoalTolerances:

@@ -16,7 +16,7 @@ ends the process with status 130.
 
 Usage::
 
-    planner_node [--help] [--ros-args -p tree_paths:=[heli_wires] -p autostart:=true ...]
+    planner_node [--help] [--ros-args -p prior_paths:=[heli_wires] -p autostart:=true ...]
 """
 
 from __future__ import annotations
@@ -60,7 +60,10 @@ def usage() -> str:
 
     lines = [USAGE]
     for spec in PARAMETERS:
-        lines.append(f"  {spec.name} (default {spec.default!r}){' [read-only]' if spec.read_only else ''}")
+        flags = (" [read-only]" if spec.read_only else "") + (
+            f" [deprecated: use {spec.deprecated_for}]" if spec.deprecated_for is not None else ""
+        )
+        lines.append(f"  {spec.name} (default {spec.default!r}){flags}")
         lines.append(f"      {spec.description}")
     return "\n".join(lines) + "\n"
 
