@@ -336,7 +336,7 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
     title = draw_plan_picture(session, snapshot, again).figure.get_suptitle()
     assert f"served from cache: all {len(again.checks)} checks answered from map v1's check cache" in title
     # What a prior's session says of new queries (QueryPlanResult.query), first built and then reused.
-    common = {"ok": True, "status": "path_found", "message": "m", "map_version": 4, "tree": "t"}
+    common = {"ok": True, "status": "path_found", "message": "m", "map_version": 4, "prior": "t"}
     fresh = SessionCheck(1, 5, (0, 1), True, "bisect", 0.1, 0.0, False)
     reused = dataclasses.replace(fresh, step=2, edge=6, cached=True)
     online = QueryPlanResult(**common, checks=(fresh, reused), query="online")

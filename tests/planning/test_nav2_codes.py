@@ -114,7 +114,7 @@ def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[B
 
 
 def _failed(message: str, status: str = "no_free_path", cause: str = "") -> PlanOutcome:
-    result = QueryPlanResult(ok=False, status=status, message=message, map_version=1, tree="t", cause=cause)
+    result = QueryPlanResult(ok=False, status=status, message=message, map_version=1, prior="t", cause=cause)
     return PlanOutcome(result=result)
 
 

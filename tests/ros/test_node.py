@@ -358,6 +358,7 @@ def test_maps_are_prepared_on_arrival_and_a_bug_in_a_plan_leaves_the_node_planni
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()))
         summary = peer.summaries()[-1]
         assert summary["result"] == "path_found"
+        assert summary["prior"] == summary["tree"] == "heli_wires"  # tree: deprecated, kept for one release
         assert float(summary["prepare_s"]) < 1e-3
         assert float(summary["plan_messaging_s"]) <= float(summary["messaging_s"])
         assert float(summary["selection_s"]) <= float(summary["policy_s"])
@@ -467,6 +468,8 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         kept = peer.summaries("drd_planner: map update")[-1]
         assert kept["result"] == "plan_kept"
         assert kept["rechecked"] == "0"
+        assert kept["prior"] == "heli_wires"
+        assert kept["tree"] == "heli_wires"  # the deprecated key, kept for one release
         assert len(peer.plans) == 1
         assert node.published is first
         # A box on the middle of a plan edge: the plan is blocked, a new one is published and says why.

@@ -46,6 +46,8 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         assert beat["state"] == "active"
         assert beat["maps_known"] == "False"
         assert beat["last_plan"] == "none"
+        assert beat["priors"] == "1"
+        assert beat["trees"] == "1"  # the deprecated key, kept for one release
         bad = PointCloud2()
         bad.header.frame_id = "map"
         peer.terrain.publish(bad)  # a map error is filed under maps, not plans

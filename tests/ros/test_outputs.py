@@ -148,7 +148,7 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
         status="path_found",
         message="found",
         map_version=3,
-        tree="heli",
+        prior="heli",
         path_edges=(1, 3),
         checks=checks,
         seconds={"total": 0.25, "checks": 0.0015, "library": 0.125},
@@ -165,11 +165,14 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     assert values["result"] == "path_found"
     assert values["request"] == "goal_pose"
     assert values["map_version"] == 3
+    assert values["prior"] == "heli"
+    assert values["tree"] == "heli"  # the deprecated key, kept for one release
+    assert result.tree == result.prior  # the deprecated read-only alias of the field
 
 
 def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:
     checks = (_check(1, True, "tree"), _check(2, True, "improve"), _check(3, False, "improve"))
-    common = {"ok": True, "status": "path_found", "message": "found", "map_version": 1, "tree": "heli"}
+    common = {"ok": True, "status": "path_found", "message": "found", "map_version": 1, "prior": "heli"}
     plain = plan_summary_values(
         QueryPlanResult(**common, checks=checks[:1], cost=751.1),  # type: ignore[arg-type]
         {"request": "goal_pose"},

@@ -10,8 +10,8 @@ import pytest
 
 pytest.importorskip("rcl_interfaces", reason="rcl_interfaces (ROS or the PyPI wheels) not installed")
 
-from drd_planner.ros.parameters import PARAMETERS, parameter_problems, prior_paths_of  # noqa: E402
-from drd_planner.ros.planner_node import usage  # noqa: E402
+from drd_planner.ros.parameters import PARAMETERS, parameter_problems, prior_paths_of
+from drd_planner.ros.planner_node import usage
 
 DOCS_EXT = Path(__file__).resolve().parents[2] / "docs" / "_ext" / "drd_parameters.py"
 

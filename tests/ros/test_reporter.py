@@ -57,7 +57,7 @@ def _result(ok: bool) -> Any:
         ok=ok,
         status="path_found" if ok else "no_free_path",
         message="m",
-        tree="t",
+        prior="t",
         query="q",
         stage="s",
         map_version=1,
@@ -87,6 +87,8 @@ def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
     assert summary["result"] == "path_found"
     assert summary["wait_s"] == "0.500000"
     assert summary["request"] == "goal_pose"
+    assert summary["prior"] == "t"
+    assert summary["tree"] == "t"  # the deprecated key, kept for one release
     assert reporter.last_plan is not None
     assert reporter.last_plan.request == "goal_pose"
     assert logger.lines == ["info t: m"]

@@ -75,7 +75,7 @@ def served_by(result: PlanResult, *, query_cached: bool = False) -> str:
         query_cached: the query's library and tree came from the planner's query cache (the caller
             knows; only meaningful for ``online`` and ``connected`` queries).
     """
-    query = result.query if isinstance(result, QueryPlanResult) else f"tree:{result.tree}"
+    query = result.query if isinstance(result, QueryPlanResult) else f"tree:{result.prior}"
     online = query in ("online", "connected")
     if query.startswith("tree:"):
         source = f"the precomputed DiRECt tree {query[5:]!r}"

@@ -354,7 +354,7 @@ class QuerySession(DomainSession):
         }
         common: dict[str, Any] = {
             "map_version": snapshot.version,
-            "tree": self._name,
+            "prior": self._name,
             "checks": checks,
             "query": result.query,
             "query_cached": result.query_cached,

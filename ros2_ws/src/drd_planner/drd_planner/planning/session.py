@@ -72,7 +72,7 @@ class PlanResult:
         status: ``path_found``, ``no_free_path``, ``max_checks`` or ``policy_gave_up``.
         message: one line for logs and diagnostics.
         map_version: the snapshot planned on.
-        tree: name of the tree used.
+        prior: name of the prior that planned it (its file stem; a tree file loads as a prior).
         path_edges: edge ids of the path, in order (empty unless ok).
         path_vertices: its vertex ids (start ... goal).
         states: (K, d) the path's states (trajectory samples; x, y, z metres first, or joint angles).
@@ -89,13 +89,18 @@ class PlanResult:
     status: str
     message: str
     map_version: int
-    tree: str
+    prior: str
     path_edges: tuple[int, ...] = ()
     path_vertices: tuple[int, ...] = ()
     states: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     checks: tuple[SessionCheck, ...] = ()
     seconds: dict[str, float] = field(default_factory=dict)
     cause: str = ""
+
+    @property
+    def tree(self) -> str:
+        """Deprecated alias of :attr:`prior` (read-only; removed in the next release)."""
+        return self.prior
 
     @property
     def num_blocked(self) -> int:
@@ -312,7 +317,7 @@ class PlanningSession(DomainSession):
             "selection": sum(c.select_ms for c in checks) / 1e3,
             "policy": max(episode_s - check_s, 0.0),
         }
-        common: dict[str, Any] = {"map_version": snapshot.version, "tree": self._name, "checks": checks}
+        common: dict[str, Any] = {"map_version": snapshot.version, "prior": self._name, "checks": checks}
         if episode.status is not EpisodeStatus.PATH_FOUND or episode.path_edges is None:
             seconds["total"] = time.perf_counter() - t0
             reason = {

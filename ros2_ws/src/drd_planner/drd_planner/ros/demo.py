@@ -72,7 +72,7 @@ def print_record(number: int, record: PlanRecord) -> None:
     """Print one served request: what asked, the per-check log, and the plan (or why there is none)."""
     result, session = record.result, record.session
     asked = record.request.get("request", "request")
-    print(f"\nplan {number}: {asked} on map version {result.map_version}, tree {result.tree}")
+    print(f"\nplan {number}: {asked} on map version {result.map_version}, prior {result.prior}")
     if "replan_reason" in record.request:
         print(f"  why: {record.request['replan_reason']}")
     cached = (
@@ -133,7 +133,7 @@ def run_planner_demo(options: PlannerDemoOptions) -> int:
     node = PlannerNode(
         context=context,
         parameter_overrides=[
-            Parameter("tree_paths", value=[options.prior]),
+            Parameter("prior_paths", value=[options.prior]),
             Parameter("frame_id", value=frame),
             Parameter("seed", value=options.seed),
         ],
@@ -148,7 +148,7 @@ def run_planner_demo(options: PlannerDemoOptions) -> int:
         node.trigger_activate()
         options.out.mkdir(parents=True, exist_ok=True)
         record = options.out / "outputs.mcap"
-        print(f"replaying {bag_path} into the planner node (frame {frame!r}, tree {node.sessions[0].name})")
+        print(f"replaying {bag_path} into the planner node (frame {frame!r}, prior {node.sessions[0].name})")
         # Each message after the node took the ones before and answered; after the bag, until it answered.
         replay_options = ReplayOptions(
             record=record,

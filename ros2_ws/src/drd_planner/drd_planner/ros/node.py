@@ -462,7 +462,7 @@ class PlannerNode(LifecycleNode):
         values = heartbeat_values(
             state=str(self._state_machine.current_state[1]),
             snapshot=self.snapshot,
-            trees=len(self.sessions),
+            priors=len(self.sessions),
             published=service is not None and service.published is not None,
             pending=service.pending if service is not None else 0,
             errors=errors,

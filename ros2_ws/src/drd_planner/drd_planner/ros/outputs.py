@@ -98,6 +98,7 @@ def plan_summary_values(
 ) -> dict[str, Any]:
     """The key/values of a plan's ``<node>: plan`` summary (counts, and times in seconds as text).
 
+    ``prior`` names the prior that planned it (``tree``: the same, a deprecated key kept for one release).
     ``query`` says what served it (``tree:<name>`` a precomputed tree, ``online`` a library and tree
     built for a new query, ``connected`` the same with new motions to off-graph states) and ``stage``
     what proved the path; ``library_s`` is the time spent finding or building the query's library.
@@ -107,7 +108,8 @@ def plan_summary_values(
     """
     seconds = result.seconds
     values: dict[str, Any] = {
-        "tree": result.tree,
+        "prior": result.prior,
+        "tree": result.prior,  # deprecated: the prior's name under its old key, for one release
         "query": result.query,
         "stage": result.stage,
         "map_version": result.map_version,

@@ -94,13 +94,13 @@ class NodeReporter:
         self._out.status("plan", ok=result.ok, message=result.message, values=values, stamp=stamp)
         if "newer_map_refused" in extra:
             self._logger.warning(
-                f"{result.tree}: planned on map version {snapshot.version}; a newer map was refused "
+                f"{result.prior}: planned on map version {snapshot.version}; a newer map was refused "
                 f"({extra['newer_map_refused']})"
             )
         if result.ok:
-            self._logger.info(f"{result.tree}: {result.message}")
+            self._logger.info(f"{result.prior}: {result.message}")
         else:
-            self._logger.warning(f"{result.tree}: {result.message}; nothing published on plan")
+            self._logger.warning(f"{result.prior}: {result.message}; nothing published on plan")
         return path
 
     def plan(
@@ -116,7 +116,8 @@ class NodeReporter:
             ok=True,
             message=outcome.reason,
             values={
-                "tree": session.name,
+                "prior": session.name,
+                "tree": session.name,  # deprecated: the prior's name under its old key, for one release
                 "map_version": snapshot.version,
                 "affected": len(outcome.affected),
                 "rechecked": len(outcome.rechecked),

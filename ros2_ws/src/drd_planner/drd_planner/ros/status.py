@@ -35,7 +35,7 @@ def map_values(snapshot: MapSnapshot) -> dict[str, Any]:
     values["obstacle_parts"] = sum(len(parts) for parts in snapshot.obstacles.values())
     robot = snapshot.robot
     values["robot_description"] = (
-        "tree's own model" if robot is None else f"{robot.chain.robot_name}, {robot.dof} joints"
+        "prior's own model" if robot is None else f"{robot.chain.robot_name}, {robot.dof} joints"
     )
     return values
 
@@ -59,15 +59,18 @@ def heartbeat_values(
     *,
     state: str,
     snapshot: MapSnapshot,
-    trees: int,
+    priors: int,
     published: bool,
     pending: int,
     errors: int,
     last: LastPlan | None,
     now: float,
 ) -> dict[str, Any]:
-    """The heartbeat's key/values: lifecycle state, maps known, the published plan, the last plan and its age (s)."""
-    values: dict[str, Any] = {"state": state, "trees": trees, **map_values(snapshot)}
+    """The heartbeat's key/values: lifecycle state, priors loaded, maps known, the published plan, the last plan and its age (s).
+
+    ``priors`` counts the loaded priors (``trees``: the same, a deprecated key kept for one release).
+    """
+    values: dict[str, Any] = {"state": state, "priors": priors, "trees": priors, **map_values(snapshot)}
     values["maps_known"] = snapshot.has_maps
     values["plan_published"] = published
     values["pending_requests"] = pending
