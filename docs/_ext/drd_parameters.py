@@ -43,8 +43,7 @@ def _number(value: float) -> str:
 
 def describe(spec: ParameterSpec) -> str:
     """The description with the range ``ros2 param describe`` shows, the read-only flag and a deprecation."""
-    notes = [] if spec.deprecated_for is None else [f"Deprecated: use {spec.deprecated_for}."]
-    notes.append(spec.description)
+    notes = [spec.full_description]
     if spec.float_range is not None:
         notes.append(f"Range [{_number(spec.float_range[0])}, {_number(spec.float_range[1])}].")
     if spec.int_range is not None and spec.int_range[1] < 2**63 - 1:

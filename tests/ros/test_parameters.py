@@ -64,15 +64,16 @@ def test_the_alias_is_declared_with_the_same_default_and_marked_deprecated() -> 
     assert specs["tree_paths"].deprecated_for == "prior_paths"
     assert specs["tree_paths"].default == specs["prior_paths"].default
     assert [spec.name for spec in PARAMETERS if spec.deprecated_for is not None] == ["tree_paths"]
-    assert "Deprecated alias of prior_paths" in specs["tree_paths"].descriptor().description
+    assert specs["tree_paths"].descriptor().description.startswith("Deprecated: use prior_paths. Alias")
+    assert specs["prior_paths"].descriptor().description == specs["prior_paths"].description
 
 
 def test_help_marks_the_alias_deprecated() -> None:
     lines = usage().splitlines()
-    (alias,) = [line for line in lines if line.strip().startswith("tree_paths ")]
-    (new,) = [line for line in lines if line.strip().startswith("prior_paths ")]
-    assert alias.endswith("[deprecated: use prior_paths]")
-    assert "deprecated" not in new
+    (alias,) = [k for k, line in enumerate(lines) if line.strip().startswith("tree_paths ")]
+    (new,) = [k for k, line in enumerate(lines) if line.strip().startswith("prior_paths ")]
+    assert lines[alias + 1].strip().startswith("Deprecated: use prior_paths.")
+    assert "eprecated" not in lines[new] + lines[new + 1]
 
 
 def test_the_docs_table_lists_the_alias_as_deprecated() -> None:
@@ -81,5 +82,6 @@ def test_the_docs_table_lists_the_alias_as_deprecated() -> None:
     assert "tree_paths" not in rows
     _, kind, default, description = rows["tree_paths (deprecated)"]
     assert (kind, default) == ("string array", "['']")
-    assert description.startswith("Deprecated: use prior_paths.")
+    assert description.startswith("Deprecated: use prior_paths. Alias of prior_paths")
+    assert description.count("Deprecated") == 1
     assert not rows["prior_paths"][3].startswith("Deprecated")

@@ -116,9 +116,16 @@ class ParameterSpec:
     int_range: tuple[int, int] | None = None
     deprecated_for: str | None = None
 
+    @property
+    def full_description(self) -> str:
+        """The description, after ``Deprecated: use <new name>.`` for a deprecated alias."""
+        if self.deprecated_for is None:
+            return self.description
+        return f"Deprecated: use {self.deprecated_for}. {self.description}"
+
     def descriptor(self) -> ParameterDescriptor:
         """The rclpy descriptor (shown by ``ros2 param describe``)."""
-        descriptor = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        descriptor = ParameterDescriptor(description=self.full_description, read_only=self.read_only)
         if self.float_range is not None:
             descriptor.floating_point_range = [
                 FloatingPointRange(from_value=self.float_range[0], to_value=self.float_range[1], step=0.0)
@@ -144,8 +151,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         "tree_paths",
         [""],
-        "Deprecated alias of prior_paths (removed in the next release): read at configure only while "
-        "prior_paths is left at its default; setting both fails configure.",
+        "Alias of prior_paths, removed in the next release: read at configure only while prior_paths is "
+        "left at its default; setting both fails configure.",
         _prior_paths,
         deprecated_for="prior_paths",
     ),

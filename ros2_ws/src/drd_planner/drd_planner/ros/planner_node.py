@@ -60,11 +60,8 @@ def usage() -> str:
 
     lines = [USAGE]
     for spec in PARAMETERS:
-        flags = (" [read-only]" if spec.read_only else "") + (
-            f" [deprecated: use {spec.deprecated_for}]" if spec.deprecated_for is not None else ""
-        )
-        lines.append(f"  {spec.name} (default {spec.default!r}){flags}")
-        lines.append(f"      {spec.description}")
+        lines.append(f"  {spec.name} (default {spec.default!r}){' [read-only]' if spec.read_only else ''}")
+        lines.append(f"      {spec.full_description}")
     return "\n".join(lines) + "\n"
 
 
