@@ -35,8 +35,8 @@ __all__ = [
     "prior_paths_of",
 ]
 
-#: Largest goal tolerance (metres) a goal may be off the tree's goal; beyond it a request would match
-#: goals the tree does not plan to.
+#: Largest goal tolerance (metres) a goal may be off a graph vertex and be that vertex; beyond it a request
+#: would match vertices far from the goal it asked for.
 MAX_GOAL_TOLERANCE_M = 100.0
 #: Largest joint tolerance (radians).
 MAX_JOINT_TOLERANCE_RAD = math.pi
@@ -172,14 +172,17 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         "goal_tolerance",
         1.0,
-        "Metres per axis within which a goal position matches a tree's goal; read at configure.",
+        "Metres per axis within which a goal position is a graph vertex (the prior's stored goal first; "
+        "farther, a helicopter goal is joined by new motions, an arm's end-effector goal is refused); read "
+        "at configure.",
         _positive_at_most(MAX_GOAL_TOLERANCE_M, "m"),
         float_range=(0.0, MAX_GOAL_TOLERANCE_M),
     ),
     ParameterSpec(
         "joint_tolerance",
         0.05,
-        "Radians per joint within which an arm goal matches a tree's goal; read at configure.",
+        "Radians per joint within which an arm goal is a roadmap vertex (the prior's stored goal first; "
+        "farther, new motions join it); read at configure.",
         _positive_at_most(MAX_JOINT_TOLERANCE_RAD, "rad"),
         float_range=(0.0, MAX_JOINT_TOLERANCE_RAD),
     ),
