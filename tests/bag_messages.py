@@ -49,9 +49,7 @@ def obstacles_message(rb: RosbagsMessages, t: int, extra: bool = False, frame: s
     return BagMessage("/obstacles", "visualization_msgs/msg/MarkerArray", t, markers)
 
 
-def goal_message(
-    rb: RosbagsMessages, t: int, xyz: tuple[float, float, float], frame: str = "map"
-) -> BagMessage:
+def goal_message(rb: RosbagsMessages, t: int, xyz: tuple[float, float, float], frame: str = "map") -> BagMessage:
     """A ``/goal_pose`` at ``xyz`` (m) in ``frame``, identity orientation, at ``t``."""
     pose = rb(
         "geometry_msgs/msg/Pose",

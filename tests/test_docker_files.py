@@ -111,9 +111,7 @@ def _pip_requirements(dockerfile: list[tuple[str, str]]) -> dict[str, Requiremen
             continue
         for command in args.split("&&"):
             words = shlex.split(command)
-            if "install" in words and any(
-                PurePosixPath(w).name == "pip" for w in words[: words.index("install")]
-            ):
+            if "install" in words and any(PurePosixPath(w).name == "pip" for w in words[: words.index("install")]):
                 for word in words[words.index("install") + 1 :]:
                     if not word.startswith("-"):
                         req = Requirement(word)

@@ -55,8 +55,7 @@ def _mirrored_test(dotted: str) -> list[Path]:
     return sorted(
         path
         for path in candidates
-        if path.is_file()
-        and (path.stem == f"test_{parts[-1]}" or path.stem.removeprefix("test_") not in siblings)
+        if path.is_file() and (path.stem == f"test_{parts[-1]}" or path.stem.removeprefix("test_") not in siblings)
     )
 
 
@@ -88,12 +87,8 @@ def test_every_module_has_a_test_that_exercises_it(dotted: str, path: Path) -> N
     if _mirrored_test(dotted):
         return
     table = _docs_table()
-    assert dotted in table, (
-        f"{dotted} has no tests/.../test_{path.stem}.py and no row in docs/tests.md's table"
-    )
-    assert (REPO / table[dotted]).is_file(), (
-        f"docs/tests.md names {table[dotted]} for {dotted}, which does not exist"
-    )
+    assert dotted in table, f"{dotted} has no tests/.../test_{path.stem}.py and no row in docs/tests.md's table"
+    assert (REPO / table[dotted]).is_file(), f"docs/tests.md names {table[dotted]} for {dotted}, which does not exist"
 
 
 def test_the_docs_table_names_only_modules_without_a_mirrored_test() -> None:
@@ -135,17 +130,13 @@ def test_the_online_side_never_asks_for_a_concrete_domain() -> None:
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, ast.Name) and node.id in CONCRETE_DOMAINS:
-                pytest.fail(
-                    f"{path.relative_to(REPO)}:{node.lineno} names {node.id}; ask the OnlineDomain instead"
-                )
+                pytest.fail(f"{path.relative_to(REPO)}:{node.lineno} names {node.id}; ask the OnlineDomain instead")
 
 
 @pytest.mark.parametrize("subpackage", ["core", "planner", "planning", "pictures", "ros"])
 def test_the_product_imports_nothing_from_the_benchmark_package(subpackage: str) -> None:
     for path in (PACKAGES["drd_planner"] / subpackage).rglob("*.py"):
-        bad = sorted(
-            n for n in _imports(path) if n == "drd_planner.bench" or n.startswith("drd_planner.bench.")
-        )
+        bad = sorted(n for n in _imports(path) if n == "drd_planner.bench" or n.startswith("drd_planner.bench."))
         assert not bad, f"{path.relative_to(REPO)} imports {bad}"
 
 
@@ -164,9 +155,7 @@ def test_no_script_imports_another_or_edits_sys_path() -> None:
     for path in scripts:
         text = path.read_text(encoding="utf-8")
         others = sorted(n.split(".")[0] for n in _imports(path) if n.split(".")[0] in names)
-        assert not others, (
-            f"{path.relative_to(REPO)} imports the scripts {others}; move the code to drd_planner"
-        )
+        assert not others, f"{path.relative_to(REPO)} imports the scripts {others}; move the code to drd_planner"
         assert "sys.path" not in text, f"{path.relative_to(REPO)} edits sys.path"
 
 
@@ -216,8 +205,7 @@ def _upward_imports() -> list[tuple[str, str, int]]:
     found = []
     root = PACKAGES["drd_planner"]
     inits = [
-        (".".join(("drd_planner", *p.parent.relative_to(root).parts)), p)
-        for p in sorted(root.glob("*/__init__.py"))
+        (".".join(("drd_planner", *p.parent.relative_to(root).parts)), p) for p in sorted(root.glob("*/__init__.py"))
     ]
     for dotted, path in [*_modules(), *inits]:
         if not dotted.startswith("drd_planner."):

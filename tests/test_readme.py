@@ -13,9 +13,7 @@ README = (REPO / "README.md").read_text()
 #: The docs page with the install and ``drd`` walk-through.
 GETTING_STARTED = (REPO / "docs" / "getting-started.md").read_text()
 #: Where a user reads commands: the README and every docs page.
-PAGES = {"README.md": README} | {
-    f"docs/{path.name}": path.read_text() for path in sorted((REPO / "docs").glob("*.md"))
-}
+PAGES = {"README.md": README} | {f"docs/{path.name}": path.read_text() for path in sorted((REPO / "docs").glob("*.md"))}
 #: Options of ``drd`` that name a file or folder it writes.
 OUTPUT_OPTIONS = ("--out", "--json", "--markdown", "--figures")
 #: The README's size limit in bytes: what it is, the two commands, an example, the node; the rest is in docs/.
@@ -47,9 +45,7 @@ def _drd_commands(text: str) -> list[list[str]]:
 
 
 def _ignored_top_folders() -> set[str]:
-    return {
-        line.strip().strip("/") for line in (REPO / ".gitignore").read_text().splitlines() if line.strip()
-    }
+    return {line.strip().strip("/") for line in (REPO / ".gitignore").read_text().splitlines() if line.strip()}
 
 
 def test_examples_write_only_into_git_ignored_folders() -> None:
@@ -62,9 +58,7 @@ def test_examples_write_only_into_git_ignored_folders() -> None:
                 if option in OUTPUT_OPTIONS and not value.isupper():  # DIR, FILE: placeholders
                     written.append(value)
                     top = Path(value).parts[0]
-                    assert top in ignored, (
-                        f"{page}: drd {' '.join(words[1:])} writes {value}, not in an ignored folder"
-                    )
+                    assert top in ignored, f"{page}: drd {' '.join(words[1:])} writes {value}, not in an ignored folder"
                     assert top != "trees", value
     assert len(written) >= 6, written  # the examples were found
 
@@ -93,9 +87,7 @@ def test_run_sh_demo_says_how_to_reach_the_commands() -> None:
 def test_readme_is_short_and_no_file_cites_documents_the_repository_lacks() -> None:
     size = len(README.encode())
     assert size <= README_MAX_BYTES, f"README.md is {size} bytes; move detail to a page in docs/"
-    tracked = subprocess.run(
-        ["git", "ls-files", "-z"], cwd=REPO, capture_output=True, check=True
-    ).stdout.split(b"\0")
+    tracked = subprocess.run(["git", "ls-files", "-z"], cwd=REPO, capture_output=True, check=True).stdout.split(b"\0")
     citations = []
     for name in filter(None, tracked):
         path = REPO / name.decode()

@@ -6,7 +6,8 @@ first path's checks in all), reported side by side (``drd_planner.bench.anytime`
 
     python scripts/experiments/bench_anytime.py                       # SE(2) and helicopter sets of ../shared/data/gccd
     python scripts/experiments/bench_anytime.py --factors 1,3 --json results/anytime.json --markdown results/anytime.md
-    python scripts/experiments/bench_anytime.py --gccd ../shared/data/gccd/dataset_2d_3 --dataset datasets/heli_wires.npz
+    python scripts/experiments/bench_anytime.py --gccd ../shared/data/gccd/dataset_2d_3 --dataset
+    datasets/heli_wires.npz
 
 Datasets: the folders named by ``--gccd`` and the files named by ``--dataset``; with neither, the SE(2)
 (``dataset_xyh_1,3,4,5``) and helicopter (``dataset_heli_canyon_1``) folders under ``../shared/data/gccd``
@@ -40,9 +41,7 @@ def _factors(text: str) -> list[float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--gccd", action="append", default=[], help="an authors'-format dataset folder")
     parser.add_argument("--dataset", action="append", default=[], help="a dataset file built by drd")
     parser.add_argument("--factors", type=_factors, default=[1.0], help="extra budgets as multiples of c")
@@ -65,9 +64,7 @@ def main(argv: list[str] | None = None) -> int:
         if not folders:
             print(f"no dataset given and none of {', '.join(DEFAULT_SETS)} under {SHARED / 'gccd'}")
             return 2
-    sources: list[tuple[str, Callable[[], Problem]]] = [
-        (str(f), partial(load_gccd_folder, f)) for f in folders
-    ]
+    sources: list[tuple[str, Callable[[], Problem]]] = [(str(f), partial(load_gccd_folder, f)) for f in folders]
     sources += [(d, partial(load_dataset_problem, d)) for d in args.dataset]
     docs = []
     t0 = time.perf_counter()

@@ -16,7 +16,8 @@ worlds (seeds 0, 1, ...) and the first ``--scenes`` MotionBenchMaker scenes of `
 4. **Time to a verified plan** (start 0 -> goal 1) with each checker for ``direct_bisect`` (the prior's tree),
    ``lazysp`` and ``ompl_lazyprm`` on the first ``--plan-worlds`` worlds; a plan counts only when every edge
    of its path was checked free in that run. Each plan is timed ``--repeats`` times with fresh checkers and
-   the least time kept (repeats make the same checks; the machine may be loaded). Ratios are mesh / sphere over the worlds where both verified
+   the least time kept (repeats make the same checks; the machine may be loaded). Ratios are mesh / sphere over the
+   worlds where both verified
    a plan: of the mean times, and the median of the per-world ratios.
 
 ``--quick``: 2 + 2 seeded worlds, 2 scenes per family, 400 edges each, plans on 6 worlds.
@@ -51,9 +52,7 @@ QUERY = (0, 1)
 
 
 def parse() -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="a small run (about a minute)")
     parser.add_argument("--table-clutter", type=int, default=10, help="seeded table_clutter worlds")
     parser.add_argument("--clutter", type=int, default=10, help="seeded clutter worlds")
@@ -74,9 +73,7 @@ def parse() -> argparse.Namespace:
 
 def recipes(args: argparse.Namespace) -> list[WorldRecipe]:
     mbm = shared_data_dir() / "mbm"
-    out = seeded_recipes("table_clutter", range(args.table_clutter)) + seeded_recipes(
-        "clutter", range(args.clutter)
-    )
+    out = seeded_recipes("table_clutter", range(args.table_clutter)) + seeded_recipes("clutter", range(args.clutter))
     for family in ("table_pick_panda", "box_panda"):
         if args.scenes and (mbm / family).is_dir():
             out += scene_recipes(mbm / family, args.scenes)

@@ -50,13 +50,9 @@ STATUS = {"found": "solved", "no_path": "no_path", "budget_exhausted": "budget",
 
 
 def parse() -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--families", default=",".join(FAMILIES), help="comma-separated family folders")
-    parser.add_argument(
-        "--train", type=int, default=80, help="training scenes: the first N (the rest held out)"
-    )
+    parser.add_argument("--train", type=int, default=80, help="training scenes: the first N (the rest held out)")
     parser.add_argument("--budget", type=float, default=5.0, help="seconds per request, both planners")
     parser.add_argument("--seed", type=int, default=0, help="dataset seed and the planners' seed")
     parser.add_argument("--workers", type=int, default=2, help="processes of the dataset build")
@@ -107,9 +103,7 @@ def ours(prior_path: Path, family: Path, keys: list[str], args: argparse.Namespa
         record["outcome"] = STATUS[record["status"]]
         record.pop("path_states")
         records.append(record)
-        print(
-            f"  ours {key}: {record['outcome']} in {plan.wall_s:.2f} s, {record['checks']} checks", flush=True
-        )
+        print(f"  ours {key}: {record['outcome']} in {plan.wall_s:.2f} s, {record['checks']} checks", flush=True)
     return records
 
 
@@ -126,9 +120,7 @@ def rrt(prior_path: Path, family: Path, keys: list[str], args: argparse.Namespac
         start = joint_vector(request.start, domain.joint_names, where=key, allow_extra=True)
         goal = joint_vector(request.goals[0], domain.joint_names, where=key)
         tasks.append(RrtTask(key, family / f"scene{key}.yaml", start, goal))
-    records = run_rrt_connect(
-        domain, dict(prior.domain_spec), tasks, time_limit_s=args.budget, seed=args.seed
-    )
+    records = run_rrt_connect(domain, dict(prior.domain_spec), tasks, time_limit_s=args.budget, seed=args.seed)
     for record in records:
         record["outcome"] = "solved" if record["solved"] else "budget"
         record["checks"] = record["motion_checks"] + record["state_checks"]
@@ -145,10 +137,7 @@ def summary(records: list[dict[str, Any]]) -> dict[str, Any]:
     checks = [int(r["checks"]) for r in solved]
     return {
         "requests": len(records),
-        **{
-            name: sum(r["outcome"] == name for r in records)
-            for name in ("solved", "no_path", "budget", "refused")
-        },
+        **{name: sum(r["outcome"] == name for r in records) for name in ("solved", "no_path", "budget", "refused")},
         "wall_median_s": statistics.median(wall) if wall else float("nan"),
         "wall_mean_s": float(np.mean(wall)) if wall else float("nan"),
         "wall_max_s": max(wall) if wall else float("nan"),

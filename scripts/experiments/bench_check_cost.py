@@ -63,9 +63,7 @@ def ompl_episodes(
             by_pair.setdefault((int(q.start), int(q.goal)), []).append(i)  # type: ignore[arg-type]
     out: list[EpisodeTime] = []
     for (start, goal), indices in by_pair.items():
-        live = LiveWorlds(
-            prior.domain, dict(prior.domain_spec), tuple(recipes[queries[i].world] for i in indices)
-        )
+        live = LiveWorlds(prior.domain, dict(prior.domain_spec), tuple(recipes[queries[i].world] for i in indices))
         result = run_ompl_lazyprm_live(prior.graph, start, goal, live, check_costs_ms=costs)
         blocks = iter(result["worlds"])
         for i in indices:
@@ -73,9 +71,7 @@ def ompl_episodes(
                 b = next(blocks)
                 spent = Timed(1e3 * float(b["cpu_s"]), 1e3 * float(b["wall_s"]))
                 out.append(
-                    EpisodeTime(
-                        "ompl_lazyprm", i, queries[i].kind, cost, bool(b["success"]), int(b["checks"]), spent
-                    )
+                    EpisodeTime("ompl_lazyprm", i, queries[i].kind, cost, bool(b["success"]), int(b["checks"]), spent)
                 )
     return out
 
@@ -100,9 +96,7 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
     def oracle_of(world: int) -> Any:
         return domain.checker(worlds[world])
 
-    episodes = run_cost_episodes(
-        planner, queries, oracle_of, costs, policies=POLICIES, seed=args.seed, rows=rows
-    )
+    episodes = run_cost_episodes(planner, queries, oracle_of, costs, policies=POLICIES, seed=args.seed, rows=rows)
     if ompl:
         episodes += ompl_episodes(prior, queries, recipes, costs)
     summary = summarize_costs(episodes, costs)
@@ -111,9 +105,7 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
         "check_all: the world's E edges checked once (batched) and charged to each query, plus E x C ms",
     ]
     if ompl:
-        notes.append(
-            "ompl_lazyprm: vertex queries only (its roadmap is the prior's graph); CPU of its worker"
-        )
+        notes.append("ompl_lazyprm: vertex queries only (its roadmap is the prior's graph); CPU of its worker")
     title = f"{name}: time to a verified plan (median CPU ms)"
     print(f"{name}: done ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
     return {
@@ -145,9 +137,7 @@ def ratio_lines(results: dict[str, Any], costs: tuple[float, ...]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--priors", default=",".join(WORLD_MODELS), help="comma-separated shipped priors")
     parser.add_argument("--costs", default="0,0.2,1,5", help="ms of CPU per check, comma-separated")
     parser.add_argument("--worlds", type=int, default=4, help="held-out worlds per prior")
@@ -170,9 +160,7 @@ def main(argv: list[str] | None = None) -> int:
         print(ompl_available()[1], file=sys.stderr)
     results = {name: run_prior(name, args, costs, ompl) for name in names}
     text = "\n".join(r["markdown"] for r in results.values())
-    text += "\n## direct_bisect / lazysp, median CPU ms to a verified plan\n\n" + "\n".join(
-        ratio_lines(results, costs)
-    )
+    text += "\n## direct_bisect / lazysp, median CPU ms to a verified plan\n\n" + "\n".join(ratio_lines(results, costs))
     text += "\n"
     print(text)
     if args.markdown:

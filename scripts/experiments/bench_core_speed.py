@@ -61,12 +61,8 @@ def time_tree_builds(problem: Problem, repeats: int) -> dict[str, DecisionTree]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    parser.add_argument(
-        "--gccd", default=str(Path(__file__).resolve().parents[3] / "shared" / "data" / "gccd")
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--gccd", default=str(Path(__file__).resolve().parents[3] / "shared" / "data" / "gccd"))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", help="also write the numbers here")
     args = parser.parse_args()

@@ -92,9 +92,7 @@ def run_build(args: argparse.Namespace, model: str, workers: int, out: Path) -> 
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--domain", default="planar")
     parser.add_argument("--world-model", default=None, help="default: the domain's first world model")
     parser.add_argument("--worlds", type=int, default=300)
@@ -104,9 +102,7 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--max-paths", type=int, default=500)
     parser.add_argument("--domain-spec", default=None, help="inline JSON or a JSON file")
-    parser.add_argument(
-        "--domain-factory", default=None, help="MODULE:ATTR for a domain outside the registry"
-    )
+    parser.add_argument("--domain-factory", default=None, help="MODULE:ATTR for a domain outside the registry")
     parser.add_argument("--json", help="also write the numbers here")
     args = parser.parse_args()
 
@@ -133,7 +129,8 @@ def main() -> int:
                 out.unlink()
                 runs[workers].append({"wall_s": wall, "checks_s": checks})
                 print(
-                    f"  repeat {rep + 1}/{args.repeats}, {workers} worker(s): {wall:7.2f} s wall, {checks:7.2f} s checks"
+                    f"  repeat {rep + 1}/{args.repeats}, {workers} worker(s): {wall:7.2f} s wall, {checks:7.2f} s "
+                    "checks"
                 )
     best = {w: min(r["wall_s"] for r in runs[w]) for w in counts}
     best_checks = {w: min(r["checks_s"] for r in runs[w]) for w in counts}

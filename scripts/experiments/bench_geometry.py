@@ -103,9 +103,7 @@ def arm_spheres(q: np.ndarray) -> np.ndarray:
     for link in range(4):
         if link > 0:
             pitch = pitch + q[:, link]
-        direction = np.stack(
-            [np.cos(q[:, 0]) * np.cos(pitch), np.sin(q[:, 0]) * np.cos(pitch), np.sin(pitch)], axis=1
-        )
+        direction = np.stack([np.cos(q[:, 0]) * np.cos(pitch), np.sin(q[:, 0]) * np.cos(pitch), np.sin(pitch)], axis=1)
         if link == 0:
             direction = np.tile((0.0, 0.0, 1.0), (q.shape[0], 1))
         seg = slice(link * SPHERES_PER_LINK, (link + 1) * SPHERES_PER_LINK)
@@ -149,9 +147,7 @@ def rate(label: str, check: Callable[[np.ndarray], bool], edges: list[np.ndarray
 
 def main() -> None:
     """Build both scenes, time both queries on the same edges, print edges per second."""
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--edges", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--data", type=Path, default=DEFAULT_DATA)

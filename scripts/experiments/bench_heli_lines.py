@@ -83,9 +83,7 @@ def _world(domain: HelicopterDomain, seed: int, single: int) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--spec", type=Path, default=REPO / "trees" / "heli_lines_spec.json")
     parser.add_argument("--worlds", type=int, default=5)
     parser.add_argument("--single", type=int, default=500, help="edges checked one by one per world")

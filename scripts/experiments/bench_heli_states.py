@@ -96,9 +96,7 @@ def _random_state(rng: np.random.Generator, vertices: np.ndarray, offset: float)
     v = vertices[int(rng.integers(vertices.shape[0]))]
     angle = rng.uniform(0.0, 2.0 * np.pi)
     z = rng.uniform(vertices[:, 2].min(), vertices[:, 2].max())
-    return np.array(
-        [v[0] + offset * np.cos(angle), v[1] + offset * np.sin(angle), z, rng.uniform(-np.pi, np.pi)]
-    )
+    return np.array([v[0] + offset * np.cos(angle), v[1] + offset * np.sin(angle), z, rng.uniform(-np.pi, np.pi)])
 
 
 def _refusal_kind(reason: str) -> str:
@@ -147,9 +145,7 @@ def run_prior(name: str, args: argparse.Namespace) -> dict[str, Any]:
                 world_seed = args.seed * 1_000_000 + int(offset) * 1_000 + i * 2 + (kind == "goal")
                 checker = cast("MotionOracle", domain.checker(domain.make_world(model, world_seed)))
                 state = _random_state(rng, vertices, offset)
-                for _ in range(
-                    args.free_states * MAX_REDRAWS
-                ):  # --free-states: only states clear of the world
+                for _ in range(args.free_states * MAX_REDRAWS):  # --free-states: only states clear of the world
                     if checker.check_motion(state[None, :]):
                         break
                     cell.redrawn += 1
@@ -211,7 +207,8 @@ def markdown(results: list[dict[str, Any]]) -> str:
                 share = row["planned_of_existing"]
                 lines.append(
                     f"| {res['prior']} | {kind} | {off} | {row['states']} | {row.get('refused', 0)} | "
-                    f"{row.get('in collision', 0)} ({row.get('redrawn_in_collision', 0)}) | {row.get('no free path', 0)} | "
+                    f"{row.get('in collision', 0)} ({row.get('redrawn_in_collision', 0)}) | "
+                    f"{row.get('no free path', 0)} | "
                     f"{row['path_exists']} | "
                     f"{row.get('planned', 0)} ({'-' if share is None else f'{100 * share:.0f} %'}) | "
                     f"{_num(row['checks_median'], '.0f')} | {_num(row['cpu_ms_median'], '.0f')} |"
@@ -237,9 +234,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--priors", default="heli_wires,heli_lines")
     parser.add_argument("--states", type=int, default=20, help="states per prior, offset and kind")
-    parser.add_argument(
-        "--offsets", default="0,2,10,30,50", help="metres off the nearest vertex, comma-separated"
-    )
+    parser.add_argument("--offsets", default="0,2,10,30,50", help="metres off the nearest vertex, comma-separated")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--reference-joins", type=int, default=96, help="joins of the reference planner")
     parser.add_argument(

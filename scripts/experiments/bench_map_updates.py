@@ -150,9 +150,7 @@ def case_terrain(size: int) -> list[dict[str, Any]]:
     rows[-1] |= {"scene": scene, "rss": _rss_mib()}
     one = _cubes(_msgs(), ["box/0"], delete_all_first=False)
     _snap, convert, scene = _obstacle_step(store, one)
-    rows.append(
-        {"case": "terrain: one-marker update", "size": size * size, "convert": convert, "scene": scene}
-    )
+    rows.append({"case": "terrain: one-marker update", "size": size * size, "convert": convert, "scene": scene})
     rows[-1]["rss"] = _rss_mib()
     return rows
 
@@ -260,9 +258,7 @@ def main() -> None:
     parser.add_argument("--terrain", type=int, nargs="*", default=[100, 300, 700, 1000, 4000])
     parser.add_argument("--mesh", type=int, nargs="*", default=[10_000, 1_000_000])
     parser.add_argument("--urdf", type=int, nargs="*", default=[400, 8000])
-    parser.add_argument(
-        "--limit", action="append", default=[], metavar="NAME=VALUE", help="a MapLimits value"
-    )
+    parser.add_argument("--limit", action="append", default=[], metavar="NAME=VALUE", help="a MapLimits value")
     parser.add_argument("--child", nargs=2, metavar=("KIND", "SIZE"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     limits = {}

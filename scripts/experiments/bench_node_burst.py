@@ -247,16 +247,12 @@ def percentiles(values: list[float]) -> dict[str, float]:
 def print_report(report: BurstReport, *, note: str = "") -> None:
     """The memory table, the latencies and the counts of one burst."""
     traced = "tracemalloc on" if report.after is not None and report.after.traced else "tracemalloc off"
-    print(
-        f"\n== {report.mode} burst: {report.requests} requests ({', '.join(filter(None, (note, traced)))}) =="
-    )
+    print(f"\n== {report.mode} burst: {report.requests} requests ({', '.join(filter(None, (note, traced)))}) ==")
     print(f"{'':>7} {'handled':>8} {'RSS MiB':>9} {'traced MiB':>11} {'gc objects':>11}")
     labelled = [("before", report.before), *(("", r) for r in report.memory), ("after", report.after)]
     for label, row in labelled:
         if row is not None:
-            print(
-                f"{label:>7} {row.handled:>8} {row.rss / 2**20:>9.1f} {row.traced / 2**20:>11.3f} {row.objects:>11}"
-            )
+            print(f"{label:>7} {row.handled:>8} {row.rss / 2**20:>9.1f} {row.traced / 2**20:>11.3f} {row.objects:>11}")
     for what, growth in (
         ("during the burst", memory_growth(report, start=50)),
         ("before -> after", quiescent_growth(report)),
@@ -271,10 +267,7 @@ def print_report(report: BurstReport, *, note: str = "") -> None:
         f"latency of answered requests (ms): mean {lat['mean']:.1f}  p50 {lat['p50']:.1f}  "
         f"p95 {lat['p95']:.1f}  max {lat['max']:.1f}"
     )
-    print(
-        f"answered {report.answered}  coalesced {report.coalesced}  lost {report.lost}  "
-        f"in {report.seconds:.2f} s"
-    )
+    print(f"answered {report.answered}  coalesced {report.coalesced}  lost {report.lost}  in {report.seconds:.2f} s")
 
 
 def memory_growth(report: BurstReport, *, start: int) -> dict[str, int] | None:
@@ -322,9 +315,7 @@ def warm_up(harness: Harness, *, burst: int = 50, calls: int | None = None) -> N
     for run, count in ((topic_burst, 1), *((service_burst, 1) for _ in range(calls))):
         warm = run(harness, requests=count, stall=30.0)
         if warm.answered != count or warm.results[0] in ("none", "0"):
-            raise RuntimeError(
-                f"the warm-up {warm.mode} request was not answered: {harness.node.errors[-3:]}"
-            )
+            raise RuntimeError(f"the warm-up {warm.mode} request was not answered: {harness.node.errors[-3:]}")
     topic_burst(harness, requests=burst, stall=2.0)
 
 
@@ -338,9 +329,7 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=25, help="memory row every N handled requests")
     parser.add_argument("--domain-id", type=int, default=None, help="ROS domain id (default: ROS_DOMAIN_ID)")
     parser.add_argument("--json", type=Path, default=None)
-    parser.add_argument(
-        "--repeat", type=int, default=2, help="bursts per mode (the first traced one warms up)"
-    )
+    parser.add_argument("--repeat", type=int, default=2, help="bursts per mode (the first traced one warms up)")
     parser.add_argument(
         "--warm-up-calls",
         type=int,

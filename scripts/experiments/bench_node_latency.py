@@ -3,9 +3,11 @@
 """Request-to-plan latency of the planner node on a bundled scenario, split into checks and the rest.
 
 The real node (as ``planner_node`` runs it: a ``SingleThreadedExecutor`` for maps and requests, its
-own planning thread for plans) and a peer run in threads of this process (the harness of ``bench_node_burst.py``). Maps: the first ``/obstacles`` and ``/terrain`` of
+own planning thread for plans) and a peer run in threads of this process (the harness of ``bench_node_burst.py``).
+Maps: the first ``/obstacles`` and ``/terrain`` of
 the bag (default ``bags/heli_wires.mcap``; ``--tree trees/arm_table_clutter.npz --bag
-bags/arm_table_clutter.mcap --frame-id panda_link0`` for the arm), else the helicopter "wires" world of the tree's domain
+bags/arm_table_clutter.mcap --frame-id panda_link0`` for the arm), else the helicopter "wires" world of the tree's
+domain
 drawn with ``--world-seed``. Each measured request is one ``goal_pose`` at the tree's goal (the arm's
 tool-point position), sent when the node is idle; its latency is the wall time from publishing it
 to the ``Path`` arriving at the peer (subscribed raw: timed when its bytes arrive; rclpy's decoding
@@ -13,7 +15,8 @@ of a Path into Python objects, 35 to 75 us a pose, is a Python subscriber's own 
 apart). Its time outside the planner is that latency less the plan's ``total_s``: the goal is 5 ms
 at the median. The "new query" run sends each request to another goal (a
 vertex of a seeded order the node has not been asked for: its library and DiRECt tree are built
-online, ``library_s``) instead; a goal with no free path on the map is skipped and counted. The node's summary on ``/diagnostics`` splits it (seconds):
+online, ``library_s``) instead; a goal with no free path on the map is skipped and counted. The node's summary on
+``/diagnostics`` splits it (seconds):
 
 - ``check_s``: time in the collision checker (FCL) for the checks of this plan;
 - ``policy_s``: the policy's work: choosing each edge (``selection_s``: DiRECt tree walk, BiSECt)
@@ -173,9 +176,7 @@ class Probe:
         def done() -> bool:
             with self._lock:
                 summary = self._summaries.get(key)
-                return summary is not None and (
-                    len(self._plans) > plans or summary.get("result") != "path_found"
-                )
+                return summary is not None and (len(self._plans) > plans or summary.get("result") != "path_found")
 
         if not wait_for(done, timeout):
             raise RuntimeError(f"no plan for request {key}: {self.harness.node.errors[-3:]}")
@@ -263,7 +264,8 @@ def _samples(
 
 
 def decode_ms(data: bytes, repeat: int = 5) -> float:
-    """Median ms rclpy takes to decode the serialized Path ``data`` into message objects (a Python subscriber's cost)."""
+    """Median ms rclpy takes to decode the serialized Path ``data`` into message objects (a Python subscriber pays "
+    "it)."""
     times = []
     for _ in range(repeat):
         start = time.perf_counter()
@@ -414,9 +416,7 @@ def main() -> None:
         "--frame-id", default="map", help="planning frame of the node and the maps (the arm bag: panda_link0)"
     )
     parser.add_argument("--no-warm", action="store_true", help="skip the warm run (same snapshot)")
-    parser.add_argument(
-        "--no-new", action="store_true", help="skip the new-query run (another goal each time)"
-    )
+    parser.add_argument("--no-new", action="store_true", help="skip the new-query run (another goal each time)")
     parser.add_argument("--domain-id", type=int, default=None, help="ROS domain id (default: ROS_DOMAIN_ID)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
@@ -445,9 +445,7 @@ def main() -> None:
             print_outside(warm, path)
             results["warm"] = _result(warm)
         if not args.no_new:
-            new, skipped, path = run(
-                harness, markers, requests=args.requests, cold=True, goals=new_goals(harness)
-            )
+            new, skipped, path = run(harness, markers, requests=args.requests, cold=True, goals=new_goals(harness))
             print_table("new query: another goal and a new map snapshot before each request", new)
             print_outside(new, path)
             print_comparison(cold, new, skipped)

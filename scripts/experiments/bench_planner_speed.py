@@ -33,15 +33,11 @@ DEFAULT = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "gccd
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--gccd", type=Path, default=DEFAULT)
     parser.add_argument("--queries", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--eta", type=float, default=0.2, help="switch threshold (below 1: DiRECt at the root)"
-    )
+    parser.add_argument("--eta", type=float, default=0.2, help="switch threshold (below 1: DiRECt at the root)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args()
 
@@ -91,9 +87,7 @@ def main() -> None:
             "p90_ms": float(np.percentile(arr, 90)),
             "target_ms": target,
         }
-        print(
-            f"{name:22s} median {out['median_ms']:8.3f} ms   p90 {out['p90_ms']:8.3f} ms   target {target:g} ms"
-        )
+        print(f"{name:22s} median {out['median_ms']:8.3f} ms   p90 {out['p90_ms']:8.3f} ms   target {target:g} ms")
         return out
 
     print(

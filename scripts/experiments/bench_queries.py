@@ -3,7 +3,8 @@
 "lower bound" is the mean of the fewest checks any planner needs knowing each episode's world: the fewest
 edges of a free path, or the smallest cut of blocked edges (``bench.queries.certificate_size``).
 
-    python scripts/experiments/bench_queries.py --run      # drd bench --queries 100 --seed 1 on every dataset (about 25 min)
+    python scripts/experiments/bench_queries.py --run      # drd bench --queries 100 --seed 1 on every dataset (about
+    25 min)
     python scripts/experiments/bench_queries.py            # the table from results/queries/*.json
 
 Datasets: every authors' folder under ``../shared/data/gccd`` (DRD_SHARED_DATA) with a graph, and our
@@ -56,7 +57,8 @@ def table(out: Path) -> str:
     """The markdown table of every ``results/queries/*.json``."""
     lines = [
         "| dataset | episodes (no free path) | lower bound | direct_bisect | bisect | lazysp_set | lazysp | "
-        "check_all | direct_bisect / lazysp | direct_bisect failures, false no-path | direct_bisect with a free path: checks, "
+        "check_all | direct_bisect / lazysp | direct_bisect failures, false no-path | direct_bisect with a free "
+        "path: checks, "
         "path cost ratio |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
@@ -84,9 +86,7 @@ def table(out: Path) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--run", action="store_true", help="run the benchmark first")
     parser.add_argument("--queries", type=int, default=100)
     parser.add_argument("--seed", type=int, default=1)

@@ -66,9 +66,7 @@ def _off_graph(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--prior", default="heli_lines", choices=sorted(WORLD_MODELS))
     parser.add_argument("--queries", type=int, default=30)
     parser.add_argument("--worlds", type=int, default=2)

@@ -110,9 +110,7 @@ def report(rows: list[dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the comparison; 0 on success."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--root", type=Path, default=Path(__file__).resolve().parents[2] / "../shared/data/gccd"
-    )
+    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[2] / "../shared/data/gccd")
     parser.add_argument("--sets", default="", help="comma-separated folder names (default: every graph set)")
     parser.add_argument("--max-worlds", type=int, default=None, help="first K test worlds per set")
     parser.add_argument("--json", type=Path, default=None, help="write the rows here")

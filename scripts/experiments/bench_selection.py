@@ -248,18 +248,14 @@ def print_setting(prior: str, setting: str, entry: dict[str, Any]) -> None:
             f"{r['select_ms_median']:8.3f} / {r['select_ms_mean']:7.3f} {r['first_ms_median']:9.3f}"
         )
     for row in entry.get("profile", []):
-        print(
-            f"    {row['own_pct']:5.1f}% own {row['cum_pct']:5.1f}% cum {row['calls']:7d}  {row['function']}"
-        )
+        print(f"    {row['own_pct']:5.1f}% own {row['cum_pct']:5.1f}% cum {row['calls']:7d}  {row['function']}")
 
 
 def compare(logs: dict[str, Any], reference: dict[str, Any]) -> None:
     """Print how many episodes have the same checks, status and path as ``reference``."""
     common = sorted(set(logs) & set(reference))
     differ = [k for k in common if logs[k] != reference[k]]
-    print(
-        f"\nchecks compared on {len(common)} episodes: {len(common) - len(differ)} identical, {len(differ)} differ"
-    )
+    print(f"\nchecks compared on {len(common)} episodes: {len(common) - len(differ)} identical, {len(differ)} differ")
     for key in differ[:10]:
         print(f"  differs: {key}")
     missing = len(set(reference) - set(logs))
@@ -268,9 +264,7 @@ def compare(logs: dict[str, Any], reference: dict[str, Any]) -> None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--priors", default=",".join(DEFAULT_PRIORS))
     parser.add_argument("--queries", type=int, default=20)
     parser.add_argument("--worlds", type=int, default=10)

@@ -85,9 +85,7 @@ def speedup(worlds: int) -> dict[str, Any]:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--worlds", type=int, default=5, help="worlds per throughput case")
     parser.add_argument("--speedup-worlds", type=int, default=96, help="worlds of the 1-vs-2-worker build")
     parser.add_argument("--no-speedup", action="store_true")
@@ -97,9 +95,7 @@ def main() -> int:
     print("| domain / model | edges | free | check_many edges/CPU-s | check() edges/CPU-s | scene build ms |")
     print("|---|---|---|---|---|---|")
     for r in rows:
-        ok = (
-            "ok" if min(r["check_many_edges_per_cpu_s"], r["check_edges_per_cpu_s"]) >= GOAL else "BELOW GOAL"
-        )
+        ok = "ok" if min(r["check_many_edges_per_cpu_s"], r["check_edges_per_cpu_s"]) >= GOAL else "BELOW GOAL"
         print(
             f"| {r['domain']} {r['model']} | {r['edges']} | {r['free_fraction']:.2f} | "
             f"{r['check_many_edges_per_cpu_s']:,.0f} | {r['check_edges_per_cpu_s']:,.0f} ({ok}) | "

@@ -100,9 +100,7 @@ def connected_fraction(graph: ExplicitGraph, x: np.ndarray, start: int, goal: in
     return float(hits / max(1, x.shape[0]))
 
 
-def _stats(
-    graph: ExplicitGraph, x: np.ndarray, r: np.ndarray | None, start: int, goal: int, paths: int
-) -> Stats:
+def _stats(graph: ExplicitGraph, x: np.ndarray, r: np.ndarray | None, start: int, goal: int, paths: int) -> Stats:
     """Stats of X (n, E) and R (n, m) (R None when no library could be built)."""
     n, e = x.shape
     solvable = float(r.any(axis=1).mean()) if r is not None and r.size else 0.0
@@ -164,8 +162,10 @@ def table(rows: list[tuple[Case, Stats, Stats | None]]) -> str:
         g = None if t is None else t
         lines.append(
             f"| {case.label} ({case.folder}) | {_pair(o.vertices, None if g is None else g.vertices, 'd')} "
-            f"| {_pair(o.edges, None if g is None else g.edges, 'd')} | {_pair(o.worlds, None if g is None else g.worlds, 'd')} "
-            f"| {_pair(o.paths, None if g is None else g.paths, 'd')} | {_pair(o.free_edges, None if g is None else g.free_edges, '.3f')} "
+            f"| {_pair(o.edges, None if g is None else g.edges, 'd')} | "
+            f"{_pair(o.worlds, None if g is None else g.worlds, 'd')} "
+            f"| {_pair(o.paths, None if g is None else g.paths, 'd')} | "
+            f"{_pair(o.free_edges, None if g is None else g.free_edges, '.3f')} "
             f"| {_pair(o.connected, None if g is None else g.connected, '.3f')} "
             f"| {_pair(o.solvable, None if g is None else g.solvable, '.3f')} "
             f"| {_pair(o.mean_valid_paths, None if g is None else g.mean_valid_paths, '.1f')} |"
@@ -215,8 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     print(table(rows))
     if args.json is not None:
         payload = [
-            {"case": asdict(c), "ours": asdict(o), "authors": None if t is None else asdict(t)}
-            for c, o, t in rows
+            {"case": asdict(c), "ours": asdict(o), "authors": None if t is None else asdict(t)} for c, o, t in rows
         ]
         args.json.write_text(json.dumps(payload, indent=2))
     return 0

@@ -27,9 +27,7 @@ from drd_planner.exceptions import DrdError
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("datasets", nargs="+", type=Path, help="dataset files written by drd build-dataset")
     parser.add_argument("--folds", type=int, default=10)
     parser.add_argument("--policies", default="direct_bisect,bisect")
@@ -43,9 +41,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.reference not in policies:
             raise DrdError(f"--reference {args.reference} must be one of --policies")
         summaries = []
-        print(
-            f"| dataset | worlds | {' | '.join(policies)} | oracle bound | paired difference to {args.reference} |"
-        )
+        print(f"| dataset | worlds | {' | '.join(policies)} | oracle bound | paired difference to {args.reference} |")
         print(f"|---|---:|{'---:|' * len(policies)}---:|---|")
         for path in args.datasets:
             t0 = time.perf_counter()
@@ -70,7 +66,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(
-        f"\n{args.folds} folds over the feasible worlds, seed {args.seed}; eta, kappa and the region rule validated per fold on its training worlds."
+        f"\n{args.folds} folds over the feasible worlds, seed {args.seed}; eta, kappa and the region rule validated "
+        "per fold on its training worlds."
     )
     if args.json is not None:
         args.json.write_text(json.dumps(summaries, indent=2) + "\n", encoding="utf-8")

@@ -115,9 +115,7 @@ def _report(problem: Problem, result: CrossValidationResult, policies: tuple[str
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("dataset", type=Path, help="dataset file written by drd build-dataset")
     parser.add_argument("--folds", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
@@ -136,8 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     summary["seconds"] = time.perf_counter() - t0
     print(
-        f"\n{args.folds} folds over {result.worlds.size} feasible worlds, seed {args.seed}; "
-        f"{summary['seconds']:.0f} s"
+        f"\n{args.folds} folds over {result.worlds.size} feasible worlds, seed {args.seed}; {summary['seconds']:.0f} s"
     )
     if args.json is not None:
         args.json.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")

@@ -9,7 +9,8 @@ defaults, i.e. eta, the posterior leaf's kappa and the region rule validated per
 ``--paper-leaf`` keeps the paper's fixed leaf bias and region rule (only eta validated:
 ``drd bench --kappa none --region-rule probability``).
 
-Usage: python scripts/experiments/full_benchmark.py [--gccd ../shared/data/gccd] [--out results] [--max-worlds K] [--paper-leaf]
+Usage: python scripts/experiments/full_benchmark.py [--gccd ../shared/data/gccd] [--out results] [--max-worlds K]
+[--paper-leaf]
 """
 
 from __future__ import annotations
@@ -32,9 +33,7 @@ SHARED = Path(os.environ.get("DRD_SHARED_DATA", REPO.parent / "shared" / "data")
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--gccd", default=str(SHARED / "gccd"), help="folder holding the dataset folders")
     parser.add_argument("--out", default=str(REPO / "results"), help="output folder (gitignored)")
     parser.add_argument("--max-worlds", type=int, default=None, help="only the first K test worlds")
@@ -76,7 +75,8 @@ def main() -> int:
         per_policy = ", ".join(f"{k} {v.episode_seconds:.1f}" for k, v in run.result.policies.items())
         print(f"{run.result.dataset}: {run.seconds:.1f} s ({per_policy})")
     print(
-        f"wrote {out / 'benchmark.json'}, {out / 'table1.md'} and {len(figures) + sum(len(r.figures) for r in suite.runs)} figure files"
+        f"wrote {out / 'benchmark.json'}, {out / 'table1.md'} and "
+        f"{len(figures) + sum(len(r.figures) for r in suite.runs)} figure files"
     )
     print(f"total wall time {time.perf_counter() - t0:.1f} s")
     return 0

@@ -164,10 +164,12 @@ def report(rows: list[dict[str, Any]]) -> str:
         f"- the paper's tree: direct_bisect_fixed / bisect {ratio('direct_bisect_fixed', 'bisect'):.3f}",
         "- validated eta and kappa (paper's rule): direct_bisect_paper_rule / direct_bisect_fixed "
         f"{ratio('direct_bisect_paper_rule', 'direct_bisect_fixed'):.3f}",
-        f"- region rule validated: direct_bisect / direct_bisect_paper_rule {ratio('direct_bisect', 'direct_bisect_paper_rule'):.3f}",
+        "- region rule validated: direct_bisect / direct_bisect_paper_rule "
+        f"{ratio('direct_bisect', 'direct_bisect_paper_rule'):.3f}",
         f"- all together: direct_bisect / direct_bisect_fixed {ratio('direct_bisect', 'direct_bisect_fixed'):.3f}, "
         f"direct_bisect / bisect {ratio('direct_bisect', 'bisect'):.3f}",
-        f"- direct_bisect / oracle bound {_geomean([m / o for m, o in zip(means['direct_bisect'], oracle, strict=True)]):.3f}",
+        "- direct_bisect / oracle bound "
+        f"{_geomean([m / o for m, o in zip(means['direct_bisect'], oracle, strict=True)]):.3f}",
         "",
         "| dataset | direct_bisect | oracle | proved path | blocked | free off the path | proved - oracle |",
         "|---|---:|---:|---:|---:|---:|---:|",
@@ -198,12 +200,8 @@ def report(rows: list[dict[str, Any]]) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    parser.add_argument(
-        "--root", default=str(Path(__file__).resolve().parents[3] / "shared" / "data" / "gccd")
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--root", default=str(Path(__file__).resolve().parents[3] / "shared" / "data" / "gccd"))
     parser.add_argument("--sets", default="", help="comma-separated folder names (default: every graph set)")
     parser.add_argument("--max-worlds", type=int, default=None)
     parser.add_argument("--seed", type=int, default=0)

@@ -23,9 +23,7 @@ from drd_planner.planner.connect import EdgeSampleIndex, imputed_outcomes
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--models", default="forest,one_wall,baffle")
     parser.add_argument("--states", type=int, default=60)
     parser.add_argument("--seed", type=int, default=7)

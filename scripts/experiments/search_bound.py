@@ -44,9 +44,7 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.settings import shared_data_dir
 
 
-def bound_set(
-    folder: Path, group_sizes: list[int], told: list[int], seed: int, node_budget: int
-) -> dict[str, Any]:
+def bound_set(folder: Path, group_sizes: list[int], told: list[int], seed: int, node_budget: int) -> dict[str, Any]:
     """The bound for each group size on one dataset's test worlds (None where the search gave up) and
     the told direct_bisect's mean checks for each ``told`` size (same shuffle)."""
     problem = load_gccd_folder(folder)
@@ -113,9 +111,7 @@ def policy_means(bench: Path, policies: list[str]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _values(
-    row: dict[str, Any], bench: dict[str, dict[str, Any]], policies: list[str]
-) -> dict[str, float | None]:
+def _values(row: dict[str, Any], bench: dict[str, dict[str, Any]], policies: list[str]) -> dict[str, float | None]:
     """One dataset's columns: oracle, bound per group size, told (the lower of the two rules), policies."""
     values: dict[str, float | None] = {"oracle": row["oracle"]}
     values.update({f"bound g={g}": b for g, b in row["bounds"].items()})
@@ -158,9 +154,7 @@ def report(
         out.append(f"| {r['dataset']} | " + " | ".join(cells) + " |")
     out += ["", "Geometric means over the sets:"]
     for g in group_sizes:
-        out.append(
-            f"- bound with groups of {g} / oracle bound: {_geomean_ratio(table, f'bound g={g}', 'oracle')}"
-        )
+        out.append(f"- bound with groups of {g} / oracle bound: {_geomean_ratio(table, f'bound g={g}', 'oracle')}")
     for g in told:
         out.append(
             f"- direct_bisect told groups of {g} / oracle bound: {_geomean_ratio(table, f'told g={g}', 'oracle')}"
@@ -177,17 +171,13 @@ def report(
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument(
         "--root", default=str(shared_data_dir() / "gccd"), help="folder of the authors' dataset folders"
     )
     parser.add_argument("--sets", default="", help="comma-separated folder names (default: every graph set)")
     parser.add_argument("--group-sizes", default="1,5,10", help="comma-separated group sizes")
-    parser.add_argument(
-        "--told", default="10,100", help="group sizes for the told direct_bisect ('' for none)"
-    )
+    parser.add_argument("--told", default="10,100", help="group sizes for the told direct_bisect ('' for none)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the shuffle that forms the groups")
     parser.add_argument("--node-budget", type=int, default=DEFAULT_NODE_BUDGET, help="search nodes per group")
     parser.add_argument("--bench", default=None, help="a drd bench JSON with the policies' checks")

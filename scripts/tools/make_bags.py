@@ -127,9 +127,7 @@ def _middle_out(edges: tuple[int, ...]) -> Iterator[int]:
 
 
 def _snapshot(session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str) -> Any:
-    maps = maps_until(
-        messages, time_ns, frame_id=frame, margin=session.margin, robot_loader=session.robot_loader
-    )
+    maps = maps_until(messages, time_ns, frame_id=frame, margin=session.margin, robot_loader=session.robot_loader)
     if maps.refused:
         raise DrdError(f"generated maps were refused: {maps.refused}")
     return maps.snapshot
@@ -137,14 +135,10 @@ def _snapshot(session: QuerySession, messages: list[BagMessage], time_ns: int, f
 
 def _plan(session: QuerySession, messages: list[BagMessage], index: int, frame: str) -> BagPlan:
     """Request ``index`` of time-ordered ``messages``, planned as the node plans it."""
-    return plan_bag_request(
-        session, sorted(messages, key=lambda m: m.time_ns), index, frame=frame, seed=PLAN_SEED
-    )
+    return plan_bag_request(session, sorted(messages, key=lambda m: m.time_ns), index, frame=frame, seed=PLAN_SEED)
 
 
-def _edge_blocked(
-    session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str, edge: int
-) -> bool:
+def _edge_blocked(session: QuerySession, messages: list[BagMessage], time_ns: int, frame: str, edge: int) -> bool:
     return not session.checker(_snapshot(session, messages, time_ns, frame)).check(edge)
 
 
@@ -164,9 +158,7 @@ def _pose(msgs: RosbagsMessages, state: Any) -> Any:
     return msgs(
         "geometry_msgs/msg/Pose",
         position=msgs("geometry_msgs/msg/Point", x=float(state[0]), y=float(state[1]), z=float(state[2])),
-        orientation=msgs(
-            "geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0)
-        ),
+        orientation=msgs("geometry_msgs/msg/Quaternion", x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0)),
     )
 
 
@@ -180,9 +172,7 @@ def _request(msgs: RosbagsMessages, session: QuerySession, goal: Any, frame: str
     return BagMessage("/goal_pose", "geometry_msgs/msg/PoseStamped", time_ns, msg)
 
 
-def _robot_state(
-    msgs: RosbagsMessages, session: QuerySession, state: Any, frame: str, time_ns: int
-) -> BagMessage:
+def _robot_state(msgs: RosbagsMessages, session: QuerySession, state: Any, frame: str, time_ns: int) -> BagMessage:
     """The robot at ``state``: ``/odom`` (helicopter) or ``/joint_states`` (arm)."""
     if session.domain.plans_joint_goals:
         msg = _joints(msgs, session, state, frame, time_ns)
@@ -266,9 +256,7 @@ def _tour(
     mid = len(path) // 2
     stops = sorted(range(1, len(path) - 1), key=lambda i: (abs(i - mid), i)) if any_stop else []
     for at in [mid, *(i for i in stops if i != mid)]:
-        found = _tour_from(
-            scenario, session, msgs, snapshot, int(path[at]), _reachable(graph, free, path[at]), onward
-        )
+        found = _tour_from(scenario, session, msgs, snapshot, int(path[at]), _reachable(graph, free, path[at]), onward)
         if found is not None:
             return found
     return None
@@ -346,9 +334,7 @@ def _first_plan(session: QuerySession, base: list[BagMessage], frame: str, msgs:
     return _plan(session, messages, 0, frame).result
 
 
-def heli_scenario(
-    msgs: RosbagsMessages, *, first_seed: int, tries: int, name: str = "heli_wires"
-) -> Scenario:
+def heli_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int, name: str = "heli_wires") -> Scenario:
     """A helicopter bag (prior ``trees/<name>.npz``, its world model :data:`HELI_BAGS` ``[name]``, frame ``map``)."""
     bag = HELI_BAGS[name]
     session = QuerySession(load_prior(REPO / "trees" / f"{name}.npz"), name=name)
@@ -391,16 +377,12 @@ def heli_scenario(
             if scenario is not None:
                 scenario = _tour(scenario, session, msgs, any_stop=bag.any_stop, onward=True)
             if scenario is not None:
-                scenario.notes.append(
-                    f"sphere r={HELI_SPHERE_RADIUS} m at {np.round(centre, 2).tolist()} (map)"
-                )
+                scenario.notes.append(f"sphere r={HELI_SPHERE_RADIUS} m at {np.round(centre, 2).tolist()} (map)")
                 return scenario
     raise DrdError(f"no helicopter world seed in [{first_seed}, {first_seed + tries}) fits the scenario")
 
 
-def arm_scenario(
-    msgs: RosbagsMessages, *, first_seed: int, tries: int, robot_description: str | None
-) -> Scenario:
+def arm_scenario(msgs: RosbagsMessages, *, first_seed: int, tries: int, robot_description: str | None) -> Scenario:
     """The arm Table+Clutter bag (prior ``trees/arm_table_clutter.npz``, frame ``panda_link0``)."""
     session = QuerySession(load_prior(REPO / "trees" / "arm_table_clutter.npz"), name="arm_table_clutter")
     session.planner.growth = None  # the scenario is chosen on the roadmap alone (its plans need no growth)
@@ -444,10 +426,7 @@ def arm_scenario(
 
 def _planned(session: QuerySession, messages: list[BagMessage], frame: str) -> list[BagPlan]:
     """Every request of time-ordered ``messages``, planned as the node plans it."""
-    return [
-        plan_bag_request(session, messages, r.index, frame=frame, seed=PLAN_SEED)
-        for r in bag_requests(messages)
-    ]
+    return [plan_bag_request(session, messages, r.index, frame=frame, seed=PLAN_SEED) for r in bag_requests(messages)]
 
 
 def _verify(path: Path, scenario: Scenario, prior_file: str) -> None:
@@ -466,9 +445,7 @@ def _verify(path: Path, scenario: Scenario, prior_file: str) -> None:
             )
     queries = [p.result.query for p in again]
     if not all(p.result.ok for p in again) or queries[2:] != ["online", "connected"]:
-        raise DrdError(
-            f"{path}: the requests do not plan as intended: {[p.result.status for p in again]}, {queries}"
-        )
+        raise DrdError(f"{path}: the requests do not plan as intended: {[p.result.status for p in again]}, {queries}")
 
 
 def _where(endpoint: Any) -> str:

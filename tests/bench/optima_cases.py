@@ -25,9 +25,7 @@ def random_paths(rng: np.random.Generator, num_edges: int, num_paths: int, max_l
 
 def all_worlds(num_edges: int) -> npt.NDArray[np.bool_]:
     """(2^E, E) every outcome vector."""
-    return np.array(list(itertools.product([False, True], repeat=num_edges)), dtype=bool).reshape(
-        -1, num_edges
-    )
+    return np.array(list(itertools.product([False, True], repeat=num_edges)), dtype=bool).reshape(-1, num_edges)
 
 
 def bernoulli_prior(worlds: npt.NDArray[np.bool_], theta: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:

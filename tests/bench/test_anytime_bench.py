@@ -32,9 +32,7 @@ def doc(problem: Problem) -> dict:  # type: ignore[type-arg]
 def test_the_ratios_the_gap_and_the_budget_per_world(problem: Problem, doc: dict) -> None:  # type: ignore[type-arg]
     worlds = problem.require_worlds()
     assert doc["test_worlds"] == worlds.test_ids.size
-    assert (
-        doc["no_free_path"] + doc["first_path_failed"] + doc["factors"]["1"]["episodes"] == doc["test_worlds"]
-    )
+    assert doc["no_free_path"] + doc["first_path_failed"] + doc["factors"]["1"]["episodes"] == doc["test_worlds"]
     for factor, s in doc["factors"].items():
         first, after = np.array(s["first_ratios"]), np.array(s["after_ratios"])
         assert s["episodes"] == first.size > 0

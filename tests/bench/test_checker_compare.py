@@ -49,9 +49,7 @@ def test_outcomes_are_the_checkers_own(small_arm: ArmDomain, meshes: ArmDomain) 
     assert block["time_ratio"] == pytest.approx(block["ms_meshes_mean"] / block["ms_spheres_mean"])
 
 
-def test_a_box_the_spheres_miss_is_reported_with_where(
-    small_arm: ArmDomain, meshes: ArmDomain, tmp_path: Path
-) -> None:
+def test_a_box_the_spheres_miss_is_reported_with_where(small_arm: ArmDomain, meshes: ArmDomain, tmp_path: Path) -> None:
     (tmp_path / "scene0001.yaml").write_text(REAR)
     recipe = WorldRecipe("rear", "rear", scene=str(tmp_path / "scene0001.yaml"))
     result = compare_world(small_arm, meshes, recipe, np.arange(5))
@@ -68,9 +66,7 @@ def test_a_box_the_spheres_miss_is_reported_with_where(
     assert summary["misses_by_link"]["panda_link0"]["sphere_clearance_mm_median"] > 40
 
 
-def test_the_two_domains_must_share_a_roadmap_and_differ_in_model(
-    small_arm: ArmDomain, meshes: ArmDomain
-) -> None:
+def test_the_two_domains_must_share_a_roadmap_and_differ_in_model(small_arm: ArmDomain, meshes: ArmDomain) -> None:
     recipe = seeded_recipes("clutter", [4])[0]
     with pytest.raises(ProblemError, match="collision_model 'meshes'"):
         compare_world(small_arm, small_arm, recipe, np.arange(2))

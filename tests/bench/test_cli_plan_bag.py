@@ -49,10 +49,7 @@ def test_plan_bag_prints_the_offline_check_log_and_path(
     planned = plan_bag_request(session, read_bag(bag), request_index, frame="map", seed=0)
     want, request = planned.result, planned.request
     assert _log(out) == [(c.edge, c.free, c.stage) for c in want.checks]
-    assert (
-        f"request {request_index} (goal_pose at +{(request.time_ns - read_bag(bag)[0].time_ns) / 1e9:.2f} s)"
-        in out
-    )
+    assert f"request {request_index} (goal_pose at +{(request.time_ns - read_bag(bag)[0].time_ns) / 1e9:.2f} s)" in out
     assert f"path edges: {list(want.path_edges)}" in out
     assert f"verified free after {len(want.checks)} checks [query {want.query}, stage {want.stage}]" in out
     num_vertices = session.prior.graph.num_vertices
@@ -103,9 +100,7 @@ def test_plan_bag_errors_are_one_line(bag: Path, tmp_path: Path, capsys: pytest.
         far.append(BagMessage(m.topic, m.msgtype, m.time_ns, m.message))
     moved = write_bag(tmp_path / "far.mcap", far)
     assert main(["plan", "--bag", str(moved), "--tree", str(TREE)]) == 2
-    assert "goal position (1100.0, 0.0) m is outside the lattice's horizontal extent x [0, 700] m" in _error(
-        capsys
-    )
+    assert "goal position (1100.0, 0.0) m is outside the lattice's horizontal extent x [0, 700] m" in _error(capsys)
     # No robot state before the request: an error, or the prior's start with --prior-start.
     stateless = write_bag(tmp_path / "stateless.mcap", [m for m in read_bag(bag) if m.topic != "/odom"])
     assert main(["plan", "--bag", str(stateless), "--tree", str(TREE)]) == 2

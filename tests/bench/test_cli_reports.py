@@ -55,10 +55,7 @@ def test_build_tree_reports_progress_and_a_short_summary(
     err = captured.err.splitlines()
     total = len(DEFAULT_ETA_CANDIDATES) * 2 * 64  # eta candidates x 2 rules x 64 episodes
     assert err[0] == f"validating eta x kappa x region rule: {total} episodes"
-    assert any(
-        re.match(rf"validating eta x kappa x region rule: \d+/{total} episodes \(\d+%\)", line)
-        for line in err
-    )
+    assert any(re.match(rf"validating eta x kappa x region rule: \d+/{total} episodes \(\d+%\)", line) for line in err)
 
 
 @pytest.mark.usefixtures("every_update_reported")
@@ -76,9 +73,7 @@ def test_bench_max_worlds_also_limits_the_validation(
     assert "validated in" in summary
     assert "on 3 held-out training worlds" in summary
     assert len(summary) <= MAX_LINE
-    total = re.fullmatch(
-        r"total wall time ([\d.]+) s \(eta and kappa validation ([\d.]+) s of it\)", lines[-1]
-    )
+    total = re.fullmatch(r"total wall time ([\d.]+) s \(eta and kappa validation ([\d.]+) s of it\)", lines[-1])
     assert total
     assert float(total.group(1)) >= float(total.group(2))
     assert float(total.group(2)) == pytest.approx(selection["seconds"], abs=0.06)
@@ -97,9 +92,7 @@ def _one_error_line(err: str) -> str:
     return lines[0]
 
 
-def test_a_dataset_without_test_worlds_is_refused_by_bench(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_a_dataset_without_test_worlds_is_refused_by_bench(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     data = tmp_path / "train_only.npz"
     build = ["build-dataset", "--domain", "planar", "--world-model", "one_wall", "--worlds", "40"]
     argv = [*build, "--seed", "1", "--max-paths", "20", "--workers", "1", "--test-fraction", "0"]
@@ -115,13 +108,9 @@ def test_a_dataset_without_test_worlds_is_refused_by_bench(
     assert main(["build-tree", "--dataset", str(data), "--out", str(tmp_path / "p.npz"), "--eta", "0.2"]) == 0
 
 
-def test_plan_on_a_training_world_says_so(
-    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_plan_on_a_training_world_says_so(d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     prior = tmp_path / "p.npz"
-    assert (
-        main(["build-tree", "--gccd", str(d2d1), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]) == 0
-    )
+    assert main(["build-tree", "--gccd", str(d2d1), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]) == 0
     worlds = load_gccd_folder(d2d1).require_worlds()
     for world, training in ((int(worlds.train_ids[0]), True), (int(worlds.test_ids[0]), False)):
         capsys.readouterr()

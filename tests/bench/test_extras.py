@@ -50,9 +50,7 @@ def test_bench_runs_without_extras(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "| dataset_2d_1 |" in proc.stdout
     assert out.is_file()
-    assert (
-        f"ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): {install_hint('peer')}" in proc.stderr
-    )
+    assert f"ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): {install_hint('peer')}" in proc.stderr
 
 
 def test_bench_figures_without_matplotlib_names_the_extra(tmp_path: Path) -> None:
@@ -68,9 +66,7 @@ def test_bench_figures_without_matplotlib_names_the_extra(tmp_path: Path) -> Non
 
 
 def test_planner_demo_without_pictures_runs_without_extras(tmp_path: Path) -> None:
-    proc = _run_bare(
-        "drd_planner.cli.planner_demo:main", "--no-pictures", "--out", str(tmp_path / "out"), cwd=tmp_path
-    )
+    proc = _run_bare("drd_planner.cli.planner_demo:main", "--no-pictures", "--out", str(tmp_path / "out"), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "out" / "outputs.mcap").is_file()
     assert not list((tmp_path / "out").glob("*.png"))

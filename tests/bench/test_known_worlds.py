@@ -40,9 +40,7 @@ def test_two_worlds_with_disjoint_paths_pay_one_check_that_finds_out() -> None:
 @pytest.mark.parametrize("seed", range(40))
 def test_equals_the_exact_episode_optimum_when_every_edge_is_a_library_edge(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    x, paths = _feasible_instance(
-        rng, int(rng.integers(3, 9)), int(rng.integers(1, 8)), int(rng.integers(1, 6))
-    )
+    x, paths = _feasible_instance(rng, int(rng.integers(3, 9)), int(rng.integers(1, 8)), int(rng.integers(1, 6)))
     costs = rng.integers(1, 4, size=x.shape[1]).astype(float) if seed % 2 else np.ones(x.shape[1])
     value = known_worlds_optimum(x, paths, costs)
     assert value == pytest.approx(exact_episode_optimum(x, paths, costs), abs=TOL)

@@ -55,9 +55,7 @@ DETOUR_WORLDS[0, [1, 7]] = False
 DETOUR_WORLDS[1, [0, 2]] = False
 
 
-def policy(
-    graph: ExplicitGraph, worlds: np.ndarray, *, delta: bool = False, kappa: float = TINY
-) -> PosteriorLazySP:
+def policy(graph: ExplicitGraph, worlds: np.ndarray, *, delta: bool = False, kappa: float = TINY) -> PosteriorLazySP:
     return PosteriorLazySP(graph, 0, 3, all_edge_outcomes(worlds), PosteriorSettings(kappa, delta))
 
 
@@ -260,9 +258,7 @@ def test_registry_needs_the_training_worlds() -> None:
         assert isinstance(pol, GraphPathPolicy)
     # kappa is DEFAULT_PSEUDO_COUNT whatever the context's pseudo-count (direct_bisect's) says.
     for kappa in (None, TINY):
-        ctx = PolicyContext(
-            *args, pseudo_count=kappa, graph=DETOURS, start=0, goal=3, train_worlds=DETOUR_WORLDS
-        )
+        ctx = PolicyContext(*args, pseudo_count=kappa, graph=DETOURS, start=0, goal=3, train_worlds=DETOUR_WORLDS)
         pol = POLICIES["lazysp_posterior"](ctx)
         assert isinstance(pol, PosteriorLazySP)
         pol.observe(7, False)  # leaves world A, where e1 is blocked
@@ -304,9 +300,7 @@ def test_dataset_episodes_find_the_shortest_feasible_path() -> None:
     for delta in (False, True):
         for w in worlds.test_ids[:4]:
             x = worlds.X[w]
-            pol = PosteriorLazySP(
-                graph, problem.start, problem.goal, outcomes, PosteriorSettings(20.0, delta)
-            )
+            pol = PosteriorLazySP(graph, problem.start, problem.goal, outcomes, PosteriorSettings(20.0, delta))
             result = run_episode(problem.library, problem.edge_costs, pol, TableOracle(x))
             edges = [c.edge for c in result.checks]
             assert len(set(edges)) == len(edges)
@@ -315,6 +309,4 @@ def test_dataset_episodes_find_the_shortest_feasible_path() -> None:
             assert path is not None
             assert set(path.tolist()) <= set(edges)
             assert x[path].all()
-            assert graph.lengths[path].sum() == pytest.approx(
-                shortest_length(graph, x, problem.start, problem.goal)
-            )
+            assert graph.lengths[path].sum() == pytest.approx(shortest_length(graph, x, problem.start, problem.goal))

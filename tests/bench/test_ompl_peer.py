@@ -142,8 +142,7 @@ def test_problem_without_graph_is_refused() -> None:
 
 def test_skip_message_names_the_extra() -> None:
     assert SKIP_MESSAGE == (
-        "ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): "
-        "pip install -e 'ros2_ws/src/drd_planner[peer]'"
+        "ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): pip install -e 'ros2_ws/src/drd_planner[peer]'"
     )
     ok, message = ompl_available()
     assert message.startswith("OMPL ") if ok else message.startswith("ompl_lazyprm skipped")
@@ -164,9 +163,7 @@ def test_lazyprm_on_two_route_graph(embedding: Literal["coords", "index"]) -> No
         assert block["success"] == (path is not None)
         assert block["path_edges"] == (path or [])
         assert block["roadmap"]["exact"], block["roadmap"]  # no edge beyond ours and the 2 connectors
-        assert block["roadmap"]["edges_removed"] == sum(
-            1 for e in checked if TINY_WORLDS[block["world"]][0][e] == 0
-        )
+        assert block["roadmap"]["edges_removed"] == sum(1 for e in checked if TINY_WORLDS[block["world"]][0][e] == 0)
         assert block["state_checks"] >= 2  # start and goal at least; counted apart from edge checks
         # The goal-side connector is asked once; the start-side one only when a whole path was free.
         assert block["connector_calls"] == (2 if path else 1)
@@ -253,9 +250,7 @@ def test_live_mode_answers_with_the_domains_own_checker(small_arm: ArmDomain) ->
     require_ompl()
     graph = small_arm.graph
     recipes = (*seeded_recipes("clutter", [2, 3]), *seeded_recipes("table_clutter", [2]))
-    result = run_ompl_lazyprm_live(
-        graph, 0, 1, LiveWorlds("arm", small_arm.spec(), recipes), time_limit_s=20.0
-    )
+    result = run_ompl_lazyprm_live(graph, 0, 1, LiveWorlds("arm", small_arm.spec(), recipes), time_limit_s=20.0)
     assert [w["label"] for w in result["worlds"]] == [r.label for r in recipes]
     for block, recipe in zip(result["worlds"], recipes, strict=True):
         here = small_arm.checker(recipe.make(small_arm))
@@ -264,9 +259,7 @@ def test_live_mode_answers_with_the_domains_own_checker(small_arm: ArmDomain) ->
         assert block["checks"] == len(set(asked))
         assert block["wall_s"] >= block["check_s"] > 0
         if block["success"]:
-            assert set(block["path_edges"]) <= {
-                e for e, f in zip(asked, block["checked_free"], strict=True) if f
-            }
+            assert set(block["path_edges"]) <= {e for e, f in zip(asked, block["checked_free"], strict=True) if f}
         else:
             assert not block["ompl_solved"] or block["failure_reason"]
     assert any(w["success"] for w in result["worlds"])

@@ -175,9 +175,7 @@ def test_drd_optimum_below_direct_greedy() -> None:
         n = int(rng.integers(4, 15))
         num_edges = int(rng.integers(4, 11))
         X = rng.random((n, num_edges)) < rng.uniform(0.4, 0.85)
-        library = PathLibrary.from_sequences(
-            random_paths(rng, num_edges, int(rng.integers(2, 6)), 4), num_edges
-        )
+        library = PathLibrary.from_sequences(random_paths(rng, num_edges, int(rng.integers(2, 6)), 4), num_edges)
         R = library.valid_paths(X)
         costs = np.ones(num_edges) if trial % 3 else rng.uniform(0.5, 2.0, num_edges)
         prior = None if trial % 4 else rng.uniform(0.2, 1.0, n)
@@ -281,9 +279,7 @@ def test_episode_and_bernoulli_refuse_large_instances() -> None:
         exact_episode_optimum(np.ones((2, big), dtype=bool), paths, np.ones(big))
     with pytest.raises(ProblemError, match="edges"):
         exact_bernoulli_optimum(paths, np.full(big, 0.5), np.ones(big))
-    never_called = bisect_factory(
-        PathLibrary.from_sequences(paths, big), np.full(big, 0.5), np.ones(big), True
-    )
+    never_called = bisect_factory(PathLibrary.from_sequences(paths, big), np.full(big, 0.5), np.ones(big), True)
     with pytest.raises(ProblemError, match="edges"):
         expected_policy_cost_bernoulli(paths, np.full(big, 0.5), np.ones(big), never_called)
     with pytest.raises(ProblemError):

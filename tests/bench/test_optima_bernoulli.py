@@ -142,12 +142,8 @@ def test_policy_cost_bernoulli_equals_database_enumeration() -> None:
                     policy.observe(edge, bool(worlds[h, edge]))
                 return total
 
-            tree = expected_policy_cost_bernoulli(
-                paths, theta, costs, bisect_factory(library, theta, costs, mpr)
-            )
-            enumerated = expected_policy_cost_database(
-                worlds, paths, costs, run_one, bernoulli_prior(worlds, theta)
-            )
+            tree = expected_policy_cost_bernoulli(paths, theta, costs, bisect_factory(library, theta, costs, mpr))
+            enumerated = expected_policy_cost_database(worlds, paths, costs, run_one, bernoulli_prior(worlds, theta))
             assert tree == pytest.approx(enumerated, abs=TOL)
 
 
@@ -163,9 +159,7 @@ def test_bisect_never_beats_the_bernoulli_optimum() -> None:
         opt = exact_bernoulli_optimum(paths, theta, costs)
         assert opt > 0
         for mpr in (True, False):
-            cost = expected_policy_cost_bernoulli(
-                paths, theta, costs, bisect_factory(library, theta, costs, mpr)
-            )
+            cost = expected_policy_cost_bernoulli(paths, theta, costs, bisect_factory(library, theta, costs, mpr))
             assert cost >= opt - TOL, (trial, mpr, cost, opt)
             ratios[mpr].append(cost / opt)
     for mpr, r in ratios.items():

@@ -50,9 +50,7 @@ def test_recording_oracle_and_checked_free(small_arm: ArmDomain) -> None:
 def test_lazysp_and_direct_bisect_runs_verify_their_paths(small_arm: ArmDomain) -> None:
     graph = small_arm.graph
     edges = np.arange(graph.num_edges)
-    rows = np.array(
-        [small_arm.checker(small_arm.make_world("clutter", s)).check_many(edges) for s in range(12)]
-    )
+    rows = np.array([small_arm.checker(small_arm.make_world("clutter", s)).check_many(edges) for s in range(12)])
     prior = WorldPrior("small", "arm", graph, np.ones(graph.num_edges), rows[:10])
     planner = Planner(prior)
     found = 0
@@ -64,9 +62,7 @@ def test_lazysp_and_direct_bisect_runs_verify_their_paths(small_arm: ArmDomain) 
         )
         assert lazy.checks == reference.num_checks
         assert lazy.method == "lazysp"
-        plan = time_planner(
-            planner, small_arm.checker(world), (0, 1), model="spheres", world=f"clutter:{seed}"
-        )
+        plan = time_planner(planner, small_arm.checker(world), (0, 1), model="spheres", world=f"clutter:{seed}")
         again = planner.plan(0, 1, Table(rows[seed]), policy="direct_bisect")
         assert plan.found == (again.status is PlanStatus.FOUND) == lazy.found
         assert plan.checks == again.num_checks
@@ -81,9 +77,7 @@ def test_lazysp_and_direct_bisect_runs_verify_their_paths(small_arm: ArmDomain) 
 
 def test_summary_compares_the_same_worlds() -> None:
     def run(model: str, world: str, seconds: float, verified: bool = True) -> PlanRun:
-        return PlanRun(
-            "lazysp", model, world, verified, verified, 3, seconds, seconds / 2, [0] if verified else []
-        )
+        return PlanRun("lazysp", model, world, verified, verified, 3, seconds, seconds / 2, [0] if verified else [])
 
     runs = [
         run("spheres", "a", 0.012),

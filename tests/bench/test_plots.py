@@ -117,9 +117,7 @@ def test_plot_checked_edges_writes_png_and_svg(
         assert f"{name}: {result.num_checks} checks" in svg
 
 
-def test_checked_edges_need_coordinates(
-    problem: Problem, episodes: dict[str, EpisodeResult], tmp_path: Path
-) -> None:
+def test_checked_edges_need_coordinates(problem: Problem, episodes: dict[str, EpisodeResult], tmp_path: Path) -> None:
     assert problem.graph is not None
     bare = dataclasses.replace(problem, graph=dataclasses.replace(problem.graph, vertex_states=None))
     assert has_vertex_xy(problem)
@@ -149,9 +147,7 @@ def test_normalised_costs_draw_the_medians(tmp_path: Path) -> None:
     ax = Figure().add_subplot()
     draw_normalised_costs(ax, table, ["bisect", "random"], failures={"random": 2, "bisect": 0})
     assert [t.get_text() for t in ax.get_xticklabels()] == ["bisect", "random (2 failed)"]
-    paths = plot_normalised_costs(
-        {"a": table, "b": table, "c": table}, ["bisect", "random"], tmp_path / "costs"
-    )
+    paths = plot_normalised_costs({"a": table, "b": table, "c": table}, ["bisect", "random"], tmp_path / "costs")
     _assert_written(paths)
     with pytest.raises(ProblemError):
         plot_normalised_costs({}, ["bisect"], tmp_path / "none")

@@ -23,9 +23,7 @@ def _task(domain: object, key: str) -> RrtTask:
     request = read_motion_plan_request(FAMILY / f"request{key}.yaml")
     assert request.start is not None
     start = joint_vector(request.start, names, where="start", allow_extra=True)
-    return RrtTask(
-        key, FAMILY / f"scene{key}.yaml", start, joint_vector(request.goals[0], names, where="goal")
-    )
+    return RrtTask(key, FAMILY / f"scene{key}.yaml", start, joint_vector(request.goals[0], names, where="goal"))
 
 
 @pytest.fixture(scope="module")

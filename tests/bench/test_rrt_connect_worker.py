@@ -14,9 +14,7 @@ def test_states_and_motions_are_answered_by_the_checker_and_counted(small_arm: A
     start = np.asarray(small_arm.params.start, dtype=np.float64)
     goal = np.asarray(small_arm.params.goal, dtype=np.float64)
     scene = Scene(margin=0.0)
-    scene.add(
-        Box([0.15, 0.15, 0.15]), Pose(small_arm.end_effector_positions(goal[None])[0].tolist()), name="can"
-    )
+    scene.add(Box([0.15, 0.15, 0.15]), Pose(small_arm.end_effector_positions(goal[None])[0].tolist()), name="can")
     checker = small_arm.scene_checker(scene)
     counter = _Counter(checker, small_arm.resolution, 7)
     assert counter.state_valid(start.tolist())

@@ -49,9 +49,7 @@ def test_default_policies_are_the_registered_table1_set() -> None:
 
 
 def test_policy_context_passes_the_graph_when_supported(problem: Problem, tree: DecisionTree) -> None:
-    ctx = policy_context(
-        problem, theta=train_bias(problem), tree=tree, seed=5, settings=PolicySettings(eta=0.3)
-    )
+    ctx = policy_context(problem, theta=train_bias(problem), tree=tree, seed=5, settings=PolicySettings(eta=0.3))
     assert ctx.seed == 5
     assert ctx.eta == 0.3
     assert ctx.tree is tree
@@ -91,9 +89,7 @@ def test_bench_runs_the_learned_lazysp_selectors(problem: Problem, tmp_path: Pat
 
 
 def test_run_world_reproduces_the_benchmark_episodes(problem: Problem, tree: DecisionTree) -> None:
-    res = run_benchmark(
-        problem, policies=["direct_only", "bisect"], tree=tree, seed=7, max_worlds=4, progress=False
-    )
+    res = run_benchmark(problem, policies=["direct_only", "bisect"], tree=tree, seed=7, max_worlds=4, progress=False)
     theta = train_bias(problem)
     for name in ("direct_only", "bisect"):
         again = [
@@ -115,9 +111,7 @@ def test_failures_and_the_check_cap(problem: Problem, tree: DecisionTree) -> Non
     res = run_benchmark(problem, policies=["bisect", "direct_only"], tree=tree, max_worlds=5, progress=False)
     for stats in res.policies.values():
         assert stats.failures == len(stats.failed_worlds)
-    capped = run_benchmark(
-        problem, policies=["bisect"], tree=tree, max_worlds=5, max_checks=3, progress=False
-    )
+    capped = run_benchmark(problem, policies=["bisect"], tree=tree, max_worlds=5, max_checks=3, progress=False)
     stats = capped.policies["bisect"]
     full = res.policies["bisect"].checks
     # With the cap every episode stops at min(its uncapped checks, 3); those that needed more fail.
@@ -176,15 +170,11 @@ def test_benchmark_json_without_the_reference_has_null_relative_blocks() -> None
     assert doc["oracle_lower_bound"]["relative"] is None
     # Another reference works.
     doc = benchmark_json(res, reference="bisect", tie_subset=["bisect", "random"])
-    assert doc["policies"]["random"]["relative"]["per_world"] == pytest.approx(
-        [1.0, -1 / 6, -1 / 3, -0.5, -0.5]
-    )
+    assert doc["policies"]["random"]["relative"]["per_world"] == pytest.approx([1.0, -1 / 6, -1 / 3, -0.5, -0.5])
 
 
 def test_benchmark_json_file_round_trip(problem: Problem, tree: DecisionTree, tmp_path: Path) -> None:
-    res = run_benchmark(
-        problem, policies=["direct_bisect", "bisect"], tree=tree, max_worlds=3, progress=False
-    )
+    res = run_benchmark(problem, policies=["direct_bisect", "bisect"], tree=tree, max_worlds=3, progress=False)
     path = tmp_path / "b.json"
     path.write_text(json.dumps(benchmark_json(res), allow_nan=False))
     doc = json.loads(path.read_text())
@@ -230,9 +220,7 @@ def test_direct_bisect_fixed_runs_on_a_paper_rule_tree() -> None:
     assert mixed.tree_info["region_rule"] == "per_check"
 
 
-def test_run_benchmark_trains_the_imitation_selector_once(
-    problem: Problem, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_run_benchmark_trains_the_imitation_selector_once(problem: Problem, monkeypatch: pytest.MonkeyPatch) -> None:
     from drd_planner.bench import runner
     from drd_planner.bench.lazysp_imitation import DaggerSettings, ImitationModel, train_for_problem
 
@@ -243,9 +231,7 @@ def test_run_benchmark_trains_the_imitation_selector_once(
         return train_for_problem(prob, seed=seed, settings=DaggerSettings(work_budget=2e6, rollouts=False))
 
     monkeypatch.setattr(runner, "train_for_problem", quick)
-    res = run_benchmark(
-        problem, policies=["lazysp", "lazysp_imitation"], seed=3, max_worlds=4, progress=False
-    )
+    res = run_benchmark(problem, policies=["lazysp", "lazysp_imitation"], seed=3, max_worlds=4, progress=False)
     assert calls == [3]  # once per dataset, with the run's seed, not once per episode
     assert res.imitation_model is not None
     assert res.settings["imitation"]["episodes"] >= 1
@@ -254,9 +240,7 @@ def test_run_benchmark_trains_the_imitation_selector_once(
     settings = PolicySettings(imitation_model=res.imitation_model)
     theta = train_bias(problem)
     again = [
-        run_world(
-            problem, "lazysp_imitation", w, theta=theta, tree=None, seed=3 + k, settings=settings
-        ).num_checks
+        run_world(problem, "lazysp_imitation", w, theta=theta, tree=None, seed=3 + k, settings=settings).num_checks
         for k, w in enumerate(res.test_ids)
     ]
     assert again == res.policies["lazysp_imitation"].checks

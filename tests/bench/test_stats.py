@@ -224,9 +224,7 @@ def test_table1_stats_is_deterministic_and_json_safe() -> None:
 def test_table1_stats_needs_the_reference() -> None:
     with pytest.raises(BenchmarkError, match="direct_bisect"):
         table1_stats({"bisect": [1, 2]})
-    table = table1_stats(
-        {"bisect": [4, 8], "lazysp": [8, 8]}, reference="bisect", tie_subset=["bisect", "lazysp"]
-    )
+    table = table1_stats({"bisect": [4, 8], "lazysp": [8, 8]}, reference="bisect", tie_subset=["bisect", "lazysp"])
     assert table.policies["lazysp"].per_world.tolist() == [1.0, 0.0]
     assert table.kept.tolist() == [True, False]
 

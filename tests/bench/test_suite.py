@@ -29,18 +29,13 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
     assert resolved.pseudo_counts == (choice.pseudo_count,)
     # The paper's rule stays unless the other is better by more than its validation noise.
     if chosen == "per_check":
-        assert scores["per_check"] < scores["probability"] - choice.standard_error(
-            (choice.eta, choice.pseudo_count)
-        )
+        assert scores["per_check"] < scores["probability"] - choice.standard_error((choice.eta, choice.pseudo_count))
     else:
-        per_check_alone = SuiteOptions(
-            policies=("direct_bisect",), region_rules=("per_check",), validation_folds=2
-        )
+        per_check_alone = SuiteOptions(policies=("direct_bisect",), region_rules=("per_check",), validation_folds=2)
         _, other, _ = resolve_settings(problem, per_check_alone, progress=False)
         assert other is not None
         assert (
-            scores["per_check"]
-            >= scores["probability"] - other.standard_error((other.eta, other.pseudo_count)) - 1e-12
+            scores["per_check"] >= scores["probability"] - other.standard_error((other.eta, other.pseudo_count)) - 1e-12
         )
     # By default both rules are validated, as the command line's --region-rule auto does.
     assert SuiteOptions().region_rules == REGION_RULES
@@ -52,9 +47,7 @@ def test_each_rule_is_validated_and_the_paper_rule_needs_to_be_beaten(problem) -
     assert "region_rule" not in plain.tree_options
 
 
-def test_bench_reports_the_rule_and_fold_validation(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_bench_reports_the_rule_and_fold_validation(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = gccd_folder("dataset_2d_1")
     out = tmp_path / "b.json"
     argv = ["bench", "--gccd", str(folder), "--policies", "direct_bisect,bisect", "--max-worlds", "6"]

@@ -191,9 +191,7 @@ def test_gccd_source_still_works() -> None:
     assert problem_domain(problem) == "gccd"
 
 
-def test_source_needs_exactly_one_of_gccd_and_dataset(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_source_needs_exactly_one_of_gccd_and_dataset(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     for argv in ([], ["--gccd", "a", "--dataset", "b"]):
         with pytest.raises(SystemExit) as info:
             drd(["bench", *argv])

@@ -42,9 +42,7 @@ def test_each_source_flag_gives_its_request(tmp_path: Path) -> None:
     assert isinstance(bags, MapBags)
     assert [Path(f).name for f in bags.files] == ["a.mcap", "b.mcap"]
     assert bags.frame == "odom"
-    args, _ = _parse(
-        ["--terrain", "t.asc", "--site", "5e5,4.4e6", "--site-jitter", "40", "--crop-scale", "25"]
-    )
+    args, _ = _parse(["--terrain", "t.asc", "--site", "5e5,4.4e6", "--site-jitter", "40", "--crop-scale", "25"])
     terrain = source_from_args(args, _error)
     assert isinstance(terrain, TerrainFile)
     assert terrain.site == (5e5, 4.4e6)
@@ -69,9 +67,7 @@ def test_each_source_flag_gives_its_request(tmp_path: Path) -> None:
         (["--crop", "tilted"], "invalid choice: 'tilted'"),
     ],
 )
-def test_bad_values_are_argparse_errors(
-    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_bad_values_are_argparse_errors(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         _parse(["--terrain", "t.asc", *argv])
     assert message in capsys.readouterr().err

@@ -51,9 +51,7 @@ def d2d1() -> Path:
 def tree_2d1(d2d1: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     # The paper's setting, so that the tree is walked (a validated eta may switch at the root).
     out = tmp_path_factory.mktemp("trees") / "t.npz"
-    assert (
-        main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--eta", "0.2", "--kappa", "none"]) == 0
-    )
+    assert main(["build-tree", "--gccd", str(d2d1), "--out", str(out), "--eta", "0.2", "--kappa", "none"]) == 0
     return out
 
 
@@ -152,9 +150,7 @@ def test_bench_writes_design_json(d2d1: Path, tmp_path: Path, capsys: pytest.Cap
         assert stats["relative"]["per_world"] == pytest.approx(expect), name
 
 
-def test_bench_markdown_and_policy_subset(
-    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_bench_markdown_and_policy_subset(d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     md = tmp_path / "table.md"
     out = tmp_path / "o.json"
     argv = ["bench", "--gccd", str(d2d1), "--max-worlds", "3", "--policies", "bisect,bisect_all"]
@@ -188,9 +184,7 @@ def test_build_tree_then_plan(d2d1: Path, tree_2d1: Path, capsys: pytest.Capture
 
 
 @pytest.mark.parametrize("policy", ["bisect", "bisect_all", "lazysp_set", "mvoi"])
-def test_plan_with_other_policies(
-    d2d1: Path, tree_2d1: Path, policy: str, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_plan_with_other_policies(d2d1: Path, tree_2d1: Path, policy: str, capsys: pytest.CaptureFixture[str]) -> None:
     world = int(load_gccd_folder(d2d1).require_worlds().test_ids[1])
     argv = ["plan", "--tree", str(tree_2d1), "--gccd", str(d2d1), "--world", str(world), "--policy", policy]
     rc = main(argv)
@@ -205,9 +199,7 @@ def test_plan_world_out_of_range(d2d1: Path, tree_2d1: Path, capsys: pytest.Capt
     assert "--world" in _one_error_line(capsys.readouterr().err)
 
 
-def test_bench_with_saved_tree(
-    d2d1: Path, tree_2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_bench_with_saved_tree(d2d1: Path, tree_2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "o.json"
     argv = ["bench", "--gccd", str(d2d1), "--prior", str(tree_2d1), "--max-worlds", "3", "--json", str(out)]
     assert main(argv) == 0
@@ -219,9 +211,7 @@ def test_bench_with_saved_tree(
 
 
 @pytest.mark.parametrize("command", ["plan", "bench"])
-def test_tree_for_another_dataset_is_refused(
-    tree_2d1: Path, command: str, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_tree_for_another_dataset_is_refused(tree_2d1: Path, command: str, capsys: pytest.CaptureFixture[str]) -> None:
     other = gccd_folder("dataset_2d_4")
     argv = [command, "--prior", str(tree_2d1), "--gccd", str(other)]
     argv += ["--world", "0"] if command == "plan" else ["--max-worlds", "1"]
@@ -233,16 +223,12 @@ def test_tree_for_another_dataset_is_refused(
     assert "verified" not in captured.out
 
 
-def test_prior_of_the_same_graph_plans_with_a_note(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_prior_of_the_same_graph_plans_with_a_note(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # dataset_2d_2 and dataset_2d_3 share their graph: a prior of one plans on the other's worlds (every
     # check is still made on that world), and says that the prior came from elsewhere.
     d2, d3 = gccd_folder("dataset_2d_2"), gccd_folder("dataset_2d_3")
     prior = tmp_path / "t2.npz"
-    assert (
-        main(["build-tree", "--gccd", str(d2), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]) == 0
-    )
+    assert main(["build-tree", "--gccd", str(d2), "--out", str(prior), "--eta", "0.2", "--kappa", "none"]) == 0
     capsys.readouterr()
     world = int(load_gccd_folder(d3).require_worlds().test_ids[0])
     assert main(["plan", "--tree", str(prior), "--gccd", str(d3), "--world", str(world)]) == 0
@@ -251,9 +237,7 @@ def test_prior_of_the_same_graph_plans_with_a_note(
     assert "query tree:dataset_2d_2" in out  # same start and goal: the precomputed tree serves it
 
 
-def test_prior_of_another_graph_is_refused(
-    d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_prior_of_another_graph_is_refused(d2d1: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     prior = tmp_path / "t2.npz"
     assert (
         main(
@@ -370,9 +354,7 @@ def test_module_entry_point_reports_errors() -> None:
 # --------------------------------------------------------------------------------------------------
 
 
-def _result(
-    name: str, checks: dict[str, list[int]], failures: dict[str, int], lb: list[float]
-) -> BenchmarkResult:
+def _result(name: str, checks: dict[str, list[int]], failures: dict[str, int], lb: list[float]) -> BenchmarkResult:
     stats = {p: PolicyStats(c, failures.get(p, 0), [0.1] * len(c), 0.0) for p, c in checks.items()}
     return BenchmarkResult(name, list(range(len(lb))), lb, stats)
 
@@ -554,21 +536,14 @@ def test_build_dataset_then_bench_and_plan_on_it(tmp_path: Path, capsys: pytest.
     assert doc["tree"]["nodes"] == load_tree_bundle(tree).tree.num_nodes
     assert doc["policies"]["bisect"]["relative"]["unfiltered"]["n"] == 4
     capsys.readouterr()
-    assert main(
-        ["plan", "--dataset", str(data), "--tree", str(tree), "--world", str(doc["test_ids"][0])]
-    ) in (0, 1)
+    assert main(["plan", "--dataset", str(data), "--tree", str(tree), "--world", str(doc["test_ids"][0])]) in (0, 1)
     assert "check   1:" in capsys.readouterr().out
     # A gccd tree does not fit a dataset of another domain.
-    assert (
-        main(["bench", "--gccd", str(gccd_folder("dataset_2d_1")), "--prior", str(tree), "--max-worlds", "1"])
-        == 2
-    )
+    assert main(["bench", "--gccd", str(gccd_folder("dataset_2d_1")), "--prior", str(tree), "--max-worlds", "1"]) == 2
     _one_error_line(capsys.readouterr().err)
 
 
-def test_build_tree_query_adds_trees_and_plan_uses_them(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_build_tree_query_adds_trees_and_plan_uses_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from drd_planner.planner import load_prior
 
     d1 = gccd_folder("dataset_2d_1")
@@ -588,12 +563,7 @@ def test_build_tree_query_adds_trees_and_plan_uses_them(
     assert main(["build-tree", "--prior", str(prior), "--query", "3,40", "--out", str(prior)]) == 2
     assert "already has a tree" in _one_error_line(capsys.readouterr().err)
     world = int(load_gccd_folder(d1).require_worlds().test_ids[0])
-    assert main(
-        ["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "7,60"]
-    ) in (0, 1)
+    assert main(["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "7,60"]) in (0, 1)
     assert "query tree:7-60" in capsys.readouterr().out
-    assert (
-        main(["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "5,5000"])
-        == 1
-    )
+    assert main(["plan", "--tree", str(prior), "--gccd", str(d1), "--world", str(world), "--query", "5,5000"]) == 1
     assert "refused" in capsys.readouterr().out

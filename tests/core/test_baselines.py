@@ -103,18 +103,13 @@ def test_mvoi_restricts_to_all_most_probable_paths() -> None:
 def test_random_stays_on_the_most_probable_path_and_seeds_differ() -> None:
     lib = PathLibrary.from_sequences([[0, 1, 2], [3, 4, 5, 6]], 7)
     world = np.ones(7, dtype=bool)
-    orders = {
-        tuple(checks_of(RandomEdge(lib, np.full(7, 0.5), name="random", seed=s), lib, world))
-        for s in range(30)
-    }
+    orders = {tuple(checks_of(RandomEdge(lib, np.full(7, 0.5), name="random", seed=s), lib, world)) for s in range(30)}
     assert all(sorted(o) == [0, 1, 2] for o in orders)
     assert len(orders) > 1  # a different seed changes the order
     assert checks_of(RandomEdge(lib, np.full(7, 0.5), name="r", seed=4), lib, world) == checks_of(
         RandomEdge(lib, np.full(7, 0.5), name="r", seed=4), lib, world
     )
-    firsts = {
-        RandomEdge(lib, np.full(7, 0.5), name="r", max_prob_region=False, seed=s).select() for s in range(60)
-    }
+    firsts = {RandomEdge(lib, np.full(7, 0.5), name="r", max_prob_region=False, seed=s).select() for s in range(60)}
     assert firsts == set(range(7))
 
 
@@ -179,10 +174,7 @@ def test_deterministic_baselines_reproduce_stored_costs(results_file, row, make,
     ts = load_bernoulli_test_set(folder / "test_set2.mat")
     stored = load_stored_costs(folder / "results" / results_file)[row]
     ours = np.array(
-        [
-            run_episode(ts.library, ts.costs, make(ts), TableOracle(x)).total_cost(ts.costs)
-            for x in ts.outcomes
-        ]
+        [run_episode(ts.library, ts.costs, make(ts), TableOracle(x)).total_cost(ts.costs) for x in ts.outcomes]
     )
     np.testing.assert_array_equal(ours, stored)
     assert ours.mean() == pytest.approx(mean)
@@ -196,9 +188,7 @@ def test_random_tie_baselines_match_stored_means(name: str, row: int, stored_mea
     """Random tie-breaks cannot be replayed; the means over 100 problems agree within 5%."""
     folder = gccd_folder("dataset_bern_test_1")
     ts = load_bernoulli_test_set(folder / "test_set2.mat")
-    assert load_stored_costs(folder / "results" / "test_set2_other.mat")[row].mean() == pytest.approx(
-        stored_mean
-    )
+    assert load_stored_costs(folder / "results" / "test_set2_other.mat")[row].mean() == pytest.approx(stored_mean)
     costs = []
     for k, x in enumerate(ts.outcomes):
         ctx = PolicyContext(ts.library, ts.costs, ts.theta, None, seed=k)

@@ -44,9 +44,7 @@ def test_closed_form_gain_matches_explicit_expectation(seed: int) -> None:
     rng = np.random.default_rng(seed)
     num_edges = int(rng.integers(3, 9))
     paths = [
-        sorted(
-            rng.choice(num_edges, size=int(rng.integers(1, min(5, num_edges + 1))), replace=False).tolist()
-        )
+        sorted(rng.choice(num_edges, size=int(rng.integers(1, min(5, num_edges + 1))), replace=False).tolist())
         for _ in range(int(rng.integers(1, 5)))
     ]
     theta = rng.uniform(0.1, 0.9, num_edges)

@@ -292,9 +292,7 @@ def instances(draw: st.DrawFn) -> Instance:
     num_edges = draw(st.integers(1, 6))
     m = draw(st.integers(1, 4))
     X = np.array(
-        draw(
-            st.lists(st.lists(st.booleans(), min_size=num_edges, max_size=num_edges), min_size=n, max_size=n)
-        ),
+        draw(st.lists(st.lists(st.booleans(), min_size=num_edges, max_size=num_edges), min_size=n, max_size=n)),
         dtype=bool,
     )
     if draw(st.booleans()):
@@ -307,9 +305,7 @@ def instances(draw: st.DrawFn) -> Instance:
         )
     active = np.array(sorted(draw(st.sets(st.integers(0, n - 1), min_size=1))), dtype=np.int64)
     prior = draw(
-        st.one_of(
-            st.none(), st.lists(st.sampled_from([0.25, 0.5, 1.0, 2.0, 3.0, 0.7, 1.3]), min_size=n, max_size=n)
-        )
+        st.one_of(st.none(), st.lists(st.sampled_from([0.25, 0.5, 1.0, 2.0, 3.0, 0.7, 1.3]), min_size=n, max_size=n))
     )
     costs = draw(st.lists(st.sampled_from([1.0, 2.0, 0.5, 1.5, 3.0]), min_size=num_edges, max_size=num_edges))
     candidates = draw(st.one_of(st.none(), st.lists(st.integers(0, num_edges - 1), min_size=1, max_size=8)))

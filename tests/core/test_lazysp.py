@@ -189,17 +189,15 @@ def test_weightsamp_batched_counts_equal_one_search_per_sample() -> None:
 def test_weightsamp_is_seeded_and_picks_the_most_sampled_edge() -> None:
     orders = []
     for seed in (3, 3, 4):
-        result = run(
-            LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=seed)), world(10)
-        )
+        result = run(LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=seed)), world(10))
         np.testing.assert_array_equal(result.path_edges, PATH_B)
         orders.append([c.edge for c in result.checks])
     assert orders[0] == orders[1]
     policy = LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=9))
     first = policy.select()
-    counts = LazySP(
-        grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=9)
-    ).shortest_path_counts()[PATH_A]
+    counts = LazySP(grid(), 0, 8, LazySPSettings(selector="weightsamp", nsamps=50, seed=9)).shortest_path_counts()[
+        PATH_A
+    ]
     assert first == PATH_A[len(PATH_A) - 1 - int(np.argmax(counts[::-1]))]  # ties go to the later edge
 
 

@@ -36,9 +36,7 @@ def test_every_returned_path_was_checked_free(name: str) -> None:
         for k, world in enumerate(worlds.test_ids[:limit]):
             x = worlds.X[world]
             ctx = PolicyContext(problem.library, problem.edge_costs, theta, tree, seed=k)
-            result = run_episode(
-                problem.library, problem.edge_costs, POLICIES[policy_name](ctx), TableOracle(x)
-            )
+            result = run_episode(problem.library, problem.edge_costs, POLICIES[policy_name](ctx), TableOracle(x))
             checked = {c.edge: c.free for c in result.checks}
             assert len(checked) == result.num_checks  # each edge checked once
             assert all(x[e] == free for e, free in checked.items())
@@ -123,7 +121,5 @@ def test_register_policy_adds_a_name_once() -> None:
 
 
 def test_core_policies_are_the_planners_own() -> None:
-    assert {"direct_bisect", "bisect", "direct_only", "lazysp", "lazysp_set", "max_tally"} <= set(
-        CORE_POLICIES
-    )
+    assert {"direct_bisect", "bisect", "direct_only", "lazysp", "lazysp_set", "max_tally"} <= set(CORE_POLICIES)
     assert not {"lazysp_posterior", "lazysp_posterior_delta", "lazysp_imitation"} & set(CORE_POLICIES)

@@ -48,9 +48,7 @@ def test_bias_is_the_shrunk_free_fraction_of_the_consistent_worlds() -> None:
 
 def test_alpha_mixes_toward_one_half_and_weights_count() -> None:
     weights = np.array([3.0, 1.0, 0.0, 0.0])
-    bias = ConsistentWorldsBias(
-        TrainingOutcomes(WORLDS, LIB, 6, weights=weights), pseudo_count=1.0, alpha=0.9
-    )
+    bias = ConsistentWorldsBias(TrainingOutcomes(WORLDS, LIB, 6, weights=weights), pseudo_count=1.0, alpha=0.9)
     # weights scaled to mean 1: 3, 1, 0, 0; edge 3 free in worlds 0 (w 3) and 2, 3 (w 0).
     marginal = 3.0 / 4.0
     assert bias.theta()[3] == pytest.approx(0.9 * (3.0 + 1.0 * marginal) / (4.0 + 1.0) + 0.05)
@@ -119,9 +117,7 @@ def test_posterior_leaf_bias_follows_the_consistent_worlds(planar) -> None:  # t
     lib = tree.library_edges
     kept = train[worlds.X[train, edge] == free]
     expected = (
-        0.99
-        * (worlds.X[np.ix_(kept, lib)].sum(0) + 4.0 * worlds.X[np.ix_(train, lib)].mean(0))
-        / (kept.size + 4.0)
+        0.99 * (worlds.X[np.ix_(kept, lib)].sum(0) + 4.0 * worlds.X[np.ix_(train, lib)].mean(0)) / (kept.size + 4.0)
         + 0.005
     )
     # The policy's BiSECt now ranks paths with the re-conditioned bias: compare with a fresh state.

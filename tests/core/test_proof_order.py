@@ -84,9 +84,7 @@ def test_best_path_is_the_argmax_of_the_scores_of_every_alive_path(seed: int) ->
             theta = rng.uniform(0.3, 0.99, library.num_edges)
             log_theta = np.log(theta)
             kept.set_theta(theta)
-        log_p = np.array(
-            [sum(log_theta[e] for e in p.tolist() if not checked[e]) for p in library.path_edges]
-        )
+        log_p = np.array([sum(log_theta[e] for e in p.tolist() if not checked[e]) for p in library.path_edges])
         left = np.array([not checked[p].all() for p in library.path_edges])
         paths = np.flatnonzero(alive & left)  # a proven path ends the episode before any selection
         if paths.size == 0:

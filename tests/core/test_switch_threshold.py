@@ -32,9 +32,7 @@ def test_choice_is_the_best_validated_candidate(problem) -> None:  # type: ignor
 def test_validation_means_are_recomputable(problem, kappa) -> None:  # type: ignore[no-untyped-def]
     import dataclasses
 
-    choice = select_switch_threshold(
-        problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(kappa,)), seed=5
-    )
+    choice = select_switch_threshold(problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(kappa,)), seed=5)
     assert (choice.eta, choice.pseudo_count) == (0.2, kappa)
     worlds = problem.worlds
     held = np.asarray(choice.validation_ids)
@@ -54,9 +52,7 @@ def test_validation_tree_is_built_with_the_final_trees_options(problem, options)
     choice = select_switch_threshold(
         problem, ValidationGrid(candidates=(0.05,), pseudo_counts=(None,), tree_options=options), seed=5
     )
-    default = select_switch_threshold(
-        problem, ValidationGrid(candidates=(0.05,), pseudo_counts=(None,)), seed=5
-    )
+    default = select_switch_threshold(problem, ValidationGrid(candidates=(0.05,), pseudo_counts=(None,)), seed=5)
     worlds = problem.worlds
     held = np.asarray(choice.validation_ids)
     fit = np.setdiff1d(worlds.train_ids, held)
@@ -67,9 +63,7 @@ def test_validation_tree_is_built_with_the_final_trees_options(problem, options)
         total = 0
         for w in held:
             policy = DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.05)
-            total += run_episode(
-                problem.library, problem.edge_costs, policy, TableOracle(worlds.X[w])
-            ).num_checks
+            total += run_episode(problem.library, problem.edge_costs, policy, TableOracle(worlds.X[w])).num_checks
         means[key] = total / held.size
     assert choice.mean_checks[(0.05, None)] == pytest.approx(means["given"])
     assert default.mean_checks[(0.05, None)] == pytest.approx(means["default"])
@@ -101,9 +95,7 @@ def test_bad_pseudo_counts_are_refused(problem, kappas) -> None:  # type: ignore
 
 
 def test_max_worlds_limits_the_validation_worlds(problem) -> None:  # type: ignore[no-untyped-def]
-    full = select_switch_threshold(
-        problem, ValidationGrid(candidates=(0.2, 1.0), pseudo_counts=(None,)), seed=1
-    )
+    full = select_switch_threshold(problem, ValidationGrid(candidates=(0.2, 1.0), pseudo_counts=(None,)), seed=1)
     quick = select_switch_threshold(
         problem, ValidationGrid(candidates=(0.2, 1.0), pseudo_counts=(None,)), seed=1, max_worlds=3
     )
@@ -113,17 +105,13 @@ def test_max_worlds_limits_the_validation_worlds(problem) -> None:  # type: igno
     assert quick.seconds > 0
     assert quick.as_json()["num_validation_worlds"] == 3
     with pytest.raises(ProblemError, match="max_worlds"):
-        select_switch_threshold(
-            problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(None,)), max_worlds=0
-        )
+        select_switch_threshold(problem, ValidationGrid(candidates=(0.2,), pseudo_counts=(None,)), max_worlds=0)
 
 
 def test_summary_is_a_few_short_lines() -> None:
     from drd_planner.core.switch_threshold import SwitchThresholdChoice
 
-    means = {
-        (e, k): 10.0 + e + (k or 0) for e in (0.05, 0.1, 0.2, 0.4, 0.6, 1.0) for k in (None, 5.0, 20.0, 50.0)
-    }
+    means = {(e, k): 10.0 + e + (k or 0) for e in (0.05, 0.1, 0.2, 0.4, 0.6, 1.0) for k in (None, 5.0, 20.0, 50.0)}
     choice = SwitchThresholdChoice(0.2, 5.0, means, tuple(range(90)), seconds=9.54)
     lines = choice.summary_lines()
     assert lines[0] == "eta 0.2, kappa 5: validated in 9.5 s on 90 held-out training worlds"
@@ -154,9 +142,7 @@ def test_k_fold_validation_uses_disjoint_folds_and_the_one_standard_error_rule(p
         assert choice.mean_checks[candidate] == pytest.approx(np.mean(means))
     best = min(choice.mean_checks.values())
     best_candidate = min(choice.mean_checks, key=lambda c: (choice.mean_checks[c], -c[0]))
-    within = {
-        c for c, v in choice.mean_checks.items() if v <= best + choice.standard_error(best_candidate) + 1e-12
-    }
+    within = {c for c, v in choice.mean_checks.items() if v <= best + choice.standard_error(best_candidate) + 1e-12}
     chosen = (choice.eta, choice.pseudo_count)
     assert chosen in within
     # The simplest of those within one standard error: no candidate there has a larger eta, and at the

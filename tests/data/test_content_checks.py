@@ -37,9 +37,7 @@ def test_undirected_walks_use_edges_in_either_orientation() -> None:
         ([[0, 1, 2]], 1, 3, 0),  # starts at the wrong vertex
     ],
 )
-def test_non_walks_are_refused_naming_the_path(
-    paths: list[list[int]], start: int, goal: int, bad: int
-) -> None:
+def test_non_walks_are_refused_naming_the_path(paths: list[list[int]], start: int, goal: int, bad: int) -> None:
     with pytest.raises(ProblemError, match=f"library path {bad} is not a walk"):
         check_walks(_graph(directed=False), _paths(*paths), start, goal)
 
@@ -91,6 +89,4 @@ def test_header_json_limits() -> None:
 def test_every_domain_default_spec_is_within_the_budgets(name: str) -> None:
     domain = domain_from_spec(name)
     graph = domain.graph
-    check_domain_spec(
-        name, domain.spec(), num_edges=graph.num_edges, mean_edge_length=float(graph.lengths.mean())
-    )
+    check_domain_spec(name, domain.spec(), num_edges=graph.num_edges, mean_edge_length=float(graph.lengths.mean()))

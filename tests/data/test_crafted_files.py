@@ -60,9 +60,7 @@ TREE_CASES: dict[str, Craft] = {
     "infinity": Craft(
         ("header is corrupt", "Infinity"), header=set_field(("eta",), "@X"), splice={"@X": ("Infinity",) * 2}
     ),
-    "nan": Craft(
-        ("header is corrupt", "NaN"), header=set_field(("alpha",), "@X"), splice={"@X": ("NaN",) * 2}
-    ),
+    "nan": Craft(("header is corrupt", "NaN"), header=set_field(("alpha",), "@X"), splice={"@X": ("NaN",) * 2}),
     "float_overflow": Craft(
         ("header is corrupt", "overflows"),
         header=set_field(("pseudo_count",), "@X"),
@@ -97,9 +95,7 @@ TREE_CASES: dict[str, Craft] = {
         ("inconsistent", "lattice states"),
         header=set_field(("problem_metadata", "domain_spec", "lattice", "xy_spacing"), 0.5),
     ),
-    "states_1e9_m": Craft(
-        ("inconsistent", "vertex states"), arrays=set_item("vertex_states", (slice(None), 0), 1e9)
-    ),
+    "states_1e9_m": Craft(("inconsistent", "vertex states"), arrays=set_item("vertex_states", (slice(None), 0), 1e9)),
     "cost_1e308": Craft(("inconsistent", "edge costs"), arrays=set_item("costs", 0, 1e308)),
     "nan_leaf_bias": Craft(("inconsistent", "leaf bias"), arrays=set_item("free_fraction", (0, 0), np.nan)),
     "infinite_active_fraction": Craft(
@@ -129,9 +125,7 @@ def base_tree(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any],
     return read_trusted(tree_file_of("heli_terrain", tmp_path_factory.mktemp("tree")))
 
 
-def test_the_base_tree_loads_when_rewritten_unchanged(
-    base_tree: tuple[dict[str, Any], Arrays], tmp_path: Path
-) -> None:
+def test_the_base_tree_loads_when_rewritten_unchanged(base_tree: tuple[dict[str, Any], Arrays], tmp_path: Path) -> None:
     """The crafting itself is faithful: with no edit the rewritten file loads."""
     path = Craft(()).write(base_tree, tmp_path / "same.npz")
     assert load_tree(path).problem.num_paths == base_tree[1]["path_offsets"].size - 1
@@ -161,9 +155,7 @@ def test_crafted_tree_files_are_refused_clearly(
 
 @pytest.mark.parametrize("loader", list(LOADERS))
 @pytest.mark.parametrize("case", list(ARM_CASES))
-def test_crafted_arm_specs_are_refused_before_the_roadmap_is_built(
-    tmp_path: Path, case: str, loader: str
-) -> None:
+def test_crafted_arm_specs_are_refused_before_the_roadmap_is_built(tmp_path: Path, case: str, loader: str) -> None:
     base = read_trusted(tree_file_of("arm_table_clutter", tmp_path))
     path = ARM_CASES[case].write(base, tmp_path / f"{case}.npz")
     load, error = LOADERS[loader]

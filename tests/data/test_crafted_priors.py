@@ -62,9 +62,7 @@ PRIOR_CASES: dict[str, Craft] = {
     "infinity": Craft(
         ("header is corrupt", "Infinity"), header=set_field(("eta",), "@X"), splice={"@X": ("Infinity",) * 2}
     ),
-    "encrypted_member": Craft(
-        ("worlds_bits.npy", "encrypted"), members=edit_member("worlds_bits.npy", flags=1)
-    ),
+    "encrypted_member": Craft(("worlds_bits.npy", "encrypted"), members=edit_member("worlds_bits.npy", flags=1)),
     "zip_bomb_200_mb": Craft(("bomb.npy", "unpacks to"), members=add_zeros_bomb, bounded=True),
     "single_edge_paths": Craft(("tree 0", "not a walk"), arrays=single_edge_paths("t0_")),
     "children_loop": Craft(("tree 0", "children"), arrays=set_item("t0_node_children", (0, 1), 0)),

@@ -204,9 +204,7 @@ def test_build_contents_follow_the_recipe(reference: Path) -> None:
     assert np.array_equal(ds.X, grid_x(domain, "uniform", seeds))
     library_seed, split_seed = derived_seed(7, 1), derived_seed(7, 2)
     # The chunked library equals the one-shot library builder on the full X.
-    expected = build_path_library(
-        domain.graph, ds.X, domain.start, domain.goal, k=5, max_paths=30, seed=library_seed
-    )
+    expected = build_path_library(domain.graph, ds.X, domain.start, domain.goal, k=5, max_paths=30, seed=library_seed)
     assert ds.library.num_paths == 30 < ds.provenance["union_size"]
     for got, want in zip(ds.library.path_edges, expected.path_edges, strict=True):
         assert np.array_equal(got, want)
@@ -253,9 +251,7 @@ def test_chunk_size_does_not_change_the_file(reference: Path, tmp_path: Path) ->
 
 def test_dask_local_cluster_gives_identical_bytes(reference: Path, tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         out = tmp_path / "grid.npz"
         report = build_grid(out, scheduler=cluster.scheduler_address)
         assert report.complete
@@ -341,9 +337,7 @@ def test_resume_after_killing_the_build_process(reference: Path, tmp_path: Path)
         "--max-paths", "30", "--workers", "2", "--out", str(out),
     ]  # fmt: skip
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(HERE), os.environ.get("PYTHONPATH", "")])}
-    proc = subprocess.Popen(
-        argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True
-    )
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
     parts = parts_dir(out)
     try:
         deadline = time.monotonic() + 60

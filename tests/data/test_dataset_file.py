@@ -154,9 +154,7 @@ def test_problem_view_matches_the_dataset(grid_file: Path) -> None:
     assert np.array_equal(worlds.train_ids, ds.train_ids)
     assert np.array_equal(worlds.test_ids, ds.test_ids)
     assert problem.library.num_paths == ds.library.num_paths
-    assert all(
-        np.array_equal(p, q) for p, q in zip(problem.library.path_edges, ds.library.path_edges, strict=True)
-    )
+    assert all(np.array_equal(p, q) for p, q in zip(problem.library.path_edges, ds.library.path_edges, strict=True))
     assert problem.metadata["domain"] == "grid_test"
     assert problem.metadata["file"] == "grid.npz"
     assert len(problem.metadata["sha256"]) == 64
@@ -230,11 +228,7 @@ def _rewrite(
     head, arrs = read_checked_npz(
         src, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, error=DatasetError, what="dataset file"
     )
-    fields = {
-        k: v
-        for k, v in head.items()
-        if k not in ("format", "format_version", "array_sha256", "payload_sha256")
-    }
+    fields = {k: v for k, v in head.items() if k not in ("format", "format_version", "array_sha256", "payload_sha256")}
     if arrays is not None:
         arrays(arrs)
     if header is not None:
@@ -276,9 +270,7 @@ def test_tampered_header_and_arrays_are_refused(grid_file: Path, tmp_path: Path)
         x_packed = archive["X_packed"].copy()
     header["world_model"] = "wall"
     bad = tmp_path / "header.npz"
-    _replace_member(
-        grid_file, bad, "header.npy", _npy_bytes(np.frombuffer(json.dumps(header).encode(), np.uint8))
-    )
+    _replace_member(grid_file, bad, "header.npy", _npy_bytes(np.frombuffer(json.dumps(header).encode(), np.uint8)))
     with pytest.raises(DatasetError, match="payload checksum mismatch"):
         load_dataset(bad)
     _replace_member(grid_file, bad, "header.npy", _npy_bytes(np.frombuffer(b"{not json", np.uint8)))

@@ -133,9 +133,7 @@ def test_the_recorded_command_and_two_workers_give_the_same_bytes(
 @pytest.mark.slow
 def test_a_dask_local_cluster_gives_the_same_bytes(built: Path, scenes: Path, tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         out = _build(scenes, tmp_path / "dask.npz", scheduler=cluster.scheduler_address)
     assert out.read_bytes() == built.read_bytes()
 
@@ -209,9 +207,7 @@ def test_a_folder_without_scenes_is_refused(tmp_path: Path, capsys: pytest.Captu
 
 
 @pytest.mark.slow
-def test_refusals_name_the_file_the_check_and_the_parameter(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_refusals_name_the_file_the_check_and_the_parameter(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = _copy_scenes(tmp_path / "scenes", ("0001", "0002"))
     out = ["--out", str(tmp_path / "x.npz")]
     err = _refusal(["--scenes", str(folder), "--worlds", "3", *out], capsys)
@@ -229,9 +225,7 @@ def test_refusals_name_the_file_the_check_and_the_parameter(
     assert not (tmp_path / "x.npz").exists()
 
 
-def test_argument_combinations_are_argparse_errors(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_argument_combinations_are_argparse_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     base = ["build-dataset", "--domain", "arm", "--seed", "0", "--out", str(tmp_path / "x.npz")]
     cases = [
         (["--scenes", "d", "--world-model", "clutter"], "--world-model: not allowed with --scenes"),

@@ -97,17 +97,13 @@ def test_flags_map_onto_terrain_spec_keys(grid: Path, tmp_path: Path) -> None:
     assert scaled_geo["metres_per_cell"] == [90.0, 90.0]
     assert scaled_geo["cell_aspect"] > 1.29
     assert "cell_aspect" not in keys  # a projected grid's cells are square
-    nowhere = read_esri_ascii(
-        write_grid(tmp_path / "nowhere.asc", cell=0.00083)
-    )  # y values 4.4e6: not degrees
+    nowhere = read_esri_ascii(write_grid(tmp_path / "nowhere.asc", cell=0.00083))  # y values 4.4e6: not degrees
     with pytest.raises(DatasetError, match=r"cell size 0.00083 \(degrees\?\) but its y values"):
         terrain_keys(TerrainFile(str(tmp_path / "nowhere.asc"), crop="as-is"), nowhere)
 
 
 def test_a_domain_without_a_terrain_model_is_refused(grid: Path) -> None:
-    with pytest.raises(
-        DatasetError, match="--terrain needs a domain with a 'terrain' world model; domain 'grid_test'"
-    ):
+    with pytest.raises(DatasetError, match="--terrain needs a domain with a 'terrain' world model; domain 'grid_test'"):
         resolve(TerrainFile(str(grid)), GridDomain(), {}, 3)
 
 
@@ -140,9 +136,7 @@ def test_a_terrain_build_draws_seeded_crops_of_the_users_grid(
     assert source["grid"]["rows"] == ROWS
     domain = domain_from_spec("helicopter", ds.domain_spec)
     edges = np.arange(domain.graph.num_edges)
-    expected = [
-        domain.checker(domain.make_world("terrain", int(s))).check_many(edges) for s in ds.world_seeds
-    ]
+    expected = [domain.checker(domain.make_world("terrain", int(s))).check_many(edges) for s in ds.world_seeds]
     assert np.array_equal(ds.X, np.array(expected))
     assert ds.world_model_params["path"] == str(grid)
     # The recorded command (with --terrain and its flags) recreates the same bytes.
@@ -160,9 +154,7 @@ def test_a_changed_grid_is_refused_by_the_worker(tmp_path: Path) -> None:
         TerrainWorlds("terrain", [record])
 
 
-def test_terrain_needs_a_number_of_worlds(
-    grid: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_terrain_needs_a_number_of_worlds(grid: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         main(
             [

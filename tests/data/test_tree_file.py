@@ -150,9 +150,7 @@ def test_saved_file_is_deterministic(tmp_path: Path, bundle: TreeBundle) -> None
     assert header["domain"] == "planar"
 
 
-def test_loaded_tree_plans_identically(
-    saved: Path, bundle: TreeBundle, planar: tuple[Problem, DecisionTree]
-) -> None:
+def test_loaded_tree_plans_identically(saved: Path, bundle: TreeBundle, planar: tuple[Problem, DecisionTree]) -> None:
     problem, tree = planar
     loaded = load_tree(saved, expected_domain="planar")
     worlds = problem.require_worlds()
@@ -328,9 +326,7 @@ def test_another_domain_is_refused(saved: Path) -> None:
         ("costs", lambda a: a.__setitem__(0, -1.0), ("inconsistent", "costs")),
     ],
 )
-def test_inconsistent_arrays_are_refused(
-    saved: Path, array: str, corrupt: Any, words: tuple[str, ...]
-) -> None:
+def test_inconsistent_arrays_are_refused(saved: Path, array: str, corrupt: Any, words: tuple[str, ...]) -> None:
     arrays = _read_npz(saved)
     arrays[array] = arrays[array].copy()
     corrupt(arrays[array])
@@ -453,9 +449,7 @@ def test_packed_training_worlds_of_wrong_shape_are_refused(saved: Path) -> None:
 
 
 def test_pseudo_count_without_training_worlds_is_refused(tmp_path: Path, bundle: TreeBundle) -> None:
-    bare = dataclasses.replace(
-        bundle, tree=dataclasses.replace(bundle.tree, world_free=None), pseudo_count=5.0
-    )
+    bare = dataclasses.replace(bundle, tree=dataclasses.replace(bundle.tree, world_free=None), pseudo_count=5.0)
     with pytest.raises(TreeFileError, match="training worlds"):
         save_tree(tmp_path / "bare.npz", bare)
 

@@ -111,9 +111,7 @@ def test_recipes_with_a_source_name_their_world_model_and_command() -> None:
         "--worlds",
         "7",
     ]
-    with pytest.raises(
-        DatasetError, match="--scenes takes its worlds from files: leave out --world-model clutter"
-    ):
+    with pytest.raises(DatasetError, match="--scenes takes its worlds from files: leave out --world-model clutter"):
         DatasetRecipe("arm", "clutter", 3, 0, source=SceneFolder("/s"))
     with pytest.raises(DatasetError, match="num_worlds must be a positive integer"):
         DatasetRecipe("arm", "clutter", ALL_WORLDS, 0)
@@ -137,7 +135,5 @@ def test_the_process_cache_opens_a_source_once(tmp_path: Path) -> None:
 
 
 def test_file_worlds_need_an_online_domain() -> None:
-    with pytest.raises(
-        DatasetError, match=r"--scenes needs a domain with scene checks .* domain 'grid_test'"
-    ):
+    with pytest.raises(DatasetError, match=r"--scenes needs a domain with scene checks .* domain 'grid_test'"):
         online_domain(GridDomain(), "--scenes")

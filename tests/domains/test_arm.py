@@ -47,9 +47,7 @@ def sample_grid(domain: ArmDomain, edge: int) -> np.ndarray:
     return states[u] + t[:, None] * (states[v] - states[u])
 
 
-def brute_force_free(
-    domain: ArmDomain, boxes: list[tuple[np.ndarray, np.ndarray]], margin: float
-) -> np.ndarray:
+def brute_force_free(domain: ArmDomain, boxes: list[tuple[np.ndarray, np.ndarray]], margin: float) -> np.ndarray:
     """Free flags from exact sphere / axis-aligned box distances at every sample (numpy only, no FCL)."""
     radii = domain.robot.spheres.radii + margin
     free = np.ones(domain.graph.num_edges, dtype=bool)
@@ -79,9 +77,7 @@ def test_roadmap_invariants(domain: ArmDomain) -> None:
         graph.lengths, np.linalg.norm(states[graph.edges[:, 1]] - states[graph.edges[:, 0]], axis=1)
     )
     assert statically_valid(domain.robot, states).all()
-    adjacency = coo_array(
-        (np.ones(graph.num_edges), (graph.edges[:, 0], graph.edges[:, 1])), shape=(len(states),) * 2
-    )
+    adjacency = coo_array((np.ones(graph.num_edges), (graph.edges[:, 0], graph.edges[:, 1])), shape=(len(states),) * 2)
     count, _ = connected_components(adjacency, directed=False)
     assert count == 1  # only the start's component is kept
     assert graph.num_edges > graph.num_vertices  # k-NN with k = 6 gives a well-connected graph
@@ -219,9 +215,7 @@ def test_check_arm_edge_from_urdf_strings(domain: ArmDomain) -> None:
     srdf = (PANDA / "panda.srdf").read_text()
     expected = domain.checker(world).check_many(np.arange(domain.graph.num_edges))
     for e in np.random.default_rng(1).choice(domain.graph.num_edges, size=12, replace=False).tolist():
-        got = check_arm_edge(
-            urdf=urdf, sphere_urdf=spheres, srdf=srdf, scene=scene, graph=domain.graph, edge=e
-        )
+        got = check_arm_edge(urdf=urdf, sphere_urdf=spheres, srdf=srdf, scene=scene, graph=domain.graph, edge=e)
         assert got == bool(expected[e])
     with pytest.raises(ProblemError, match="edge id"):
         check_arm_edge(urdf=spheres, scene=scene, graph=domain.graph, edge=-1)

@@ -40,9 +40,7 @@ def test_sphere_model_answers_groups_as_their_rows(domain: ArmDomain) -> None:
     model = SphereTest(domain.robot, world.to_scene())
     edges = list(range(12))
     q = np.concatenate([domain.samples.configurations(domain.graph, e) for e in edges])
-    owner = np.repeat(
-        np.arange(len(edges)), [len(domain.samples.configurations(domain.graph, e)) for e in edges]
-    )
+    owner = np.repeat(np.arange(len(edges)), [len(domain.samples.configurations(domain.graph, e)) for e in edges])
     per_row = model.groups_blocked(q, np.arange(len(q)), len(q))
     expected = [bool(per_row[owner == g].any()) for g in range(len(edges))]
     assert 0 < sum(expected) < len(edges)  # some of each
@@ -89,9 +87,7 @@ def test_explain_motion_names_what_blocks_the_first_blocked_sample(domain: ArmDo
     assert states is not None
     goal = np.asarray(domain.params.goal, dtype=np.float64)
     scene = Scene(margin=0.0)
-    scene.add(
-        Box([0.15, 0.15, 0.15]), Pose(domain.end_effector_positions(goal[None])[0].tolist()), name="can"
-    )
+    scene.add(Box([0.15, 0.15, 0.15]), Pose(domain.end_effector_positions(goal[None])[0].tolist()), name="can")
     checker = domain.scene_checker(scene)
     motion = np.linspace(np.asarray(domain.params.start, dtype=np.float64), goal, 21)
     assert not checker.check_motion(motion)

@@ -51,9 +51,7 @@ def test_thousands_of_links_are_refused_before_the_model_is_built(
     assert str(info.value) == (
         "robot_description has 8013 links, over the limit max_robot_links = 512 (parameter max_robot_links)"
     )
-    with pytest.raises(
-        ProblemError, match=r"over the limit max_message_bytes = 1000 \(parameter max_message_bytes\)"
-    ):
+    with pytest.raises(ProblemError, match=r"over the limit max_message_bytes = 1000 \(parameter max_message_bytes\)"):
         domain.robot_from_description(big, limits=MapLimits(max_message_bytes=1000))
     spheres = (PANDA / "panda_spherized.urdf").read_text()  # 59 collision spheres
     with pytest.raises(ProblemError, match="59 collision spheres, over the limit max_robot_spheres = 58"):
@@ -61,9 +59,7 @@ def test_thousands_of_links_are_refused_before_the_model_is_built(
 
 
 def test_a_few_hundred_extra_links_are_accepted(domain: ArmDomain) -> None:
-    robot = domain.robot_from_description(
-        _with_extra_links((PANDA / "panda_spherized.urdf").read_text(), 400)
-    )
+    robot = domain.robot_from_description(_with_extra_links((PANDA / "panda_spherized.urdf").read_text(), 400))
     assert len(robot.chain.link_names) == 413
 
 

@@ -31,12 +31,7 @@ def test_the_object_that_blocks_a_configuration_is_named_with_its_link(
     assert why.startswith("scene object 'can' (panda_")
     assert "far_away" not in why
     free = np.asarray(domain.params.start, dtype=np.float64)
-    assert (
-        explain_configuration(
-            domain.robot, Scene(margin=0.0), free, model_for=checker.model_for, floor_z=None
-        )
-        == ""
-    )
+    assert explain_configuration(domain.robot, Scene(margin=0.0), free, model_for=checker.model_for, floor_z=None) == ""
     assert scene.names == ("can", "far_away")  # explaining leaves the scene as it was
     assert [name for name, alone in objects_alone(scene) if alone.names == (name,)] == ["can", "far_away"]
 
@@ -70,8 +65,5 @@ def test_the_fixed_base_names_what_it_meets(small_arm: ArmDomain) -> None:
     scene = Scene(margin=0.0)
     scene.add(Box([0.3, 0.3, 0.3]), Pose([0.0, 0.0, 0.05]), name="pedestal")
     checker = small_arm.checker(scene)
-    assert (
-        explain_base(scene, model_for=checker.model_for)
-        == "the robot's fixed base meets scene object 'pedestal'"
-    )
+    assert explain_base(scene, model_for=checker.model_for) == "the robot's fixed base meets scene object 'pedestal'"
     assert explain_base(Scene(margin=0.0), model_for=checker.model_for) == ""

@@ -149,9 +149,7 @@ def min_distance(domain: ArmDomain, edge: int, obstacle: fcl.CollisionObject) ->
     best = np.inf
     for sample in placement.poses(edge_configurations(domain, edge)):
         for part, pose in enumerate(sample):
-            obj = fcl.CollisionObject(
-                placement.meshes.parts[part].geometry, fcl.Transform(pose[:3, :3], pose[:3, 3])
-            )
+            obj = fcl.CollisionObject(placement.meshes.parts[part].geometry, fcl.Transform(pose[:3, :3], pose[:3, 3]))
             best = min(best, pair_distance(obj, obstacle))
     return float(best)
 

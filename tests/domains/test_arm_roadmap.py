@@ -72,9 +72,7 @@ def extras_near(graph: ExplicitGraph, vertices: list[int], step: float = 0.01) -
     return (states[vertices] + step).tolist()
 
 
-def test_extra_states_are_vertices_two_on_joined_to_their_nearest(
-    robot: RobotModel, plain: ExplicitGraph
-) -> None:
+def test_extra_states_are_vertices_two_on_joined_to_their_nearest(robot: RobotModel, plain: ExplicitGraph) -> None:
     extras = extras_near(plain, [10, 40, 90, 120])
     assert statically_valid(robot, extras).all()
     graph = build_roadmap(robot, ArmParams(**SMALL, extra_states=extras))
@@ -82,9 +80,7 @@ def test_extra_states_are_vertices_two_on_joined_to_their_nearest(
     np.testing.assert_array_equal(states[0], DEFAULT_START)
     np.testing.assert_array_equal(states[1], DEFAULT_GOAL)
     np.testing.assert_array_equal(states[2:6], np.asarray(extras))
-    assert (
-        graph.num_vertices >= plain.num_vertices + len(extras) - 2
-    )  # the component may grow or shrink a bit
+    assert graph.num_vertices >= plain.num_vertices + len(extras) - 2  # the component may grow or shrink a bit
     # Connected to the start: every vertex is in one component, which includes vertices 2..5.
     adjacency = coo_array(
         (np.ones(graph.num_edges), (graph.edges[:, 0], graph.edges[:, 1])), shape=(graph.num_vertices,) * 2
@@ -106,9 +102,7 @@ def test_extra_states_are_vertices_two_on_joined_to_their_nearest(
     assert np.all(degree[2:6] <= k + np.sum(rank[:, 2:6] <= k, axis=0))
 
 
-def test_no_extra_states_gives_the_same_bytes_as_an_empty_list(
-    robot: RobotModel, plain: ExplicitGraph
-) -> None:
+def test_no_extra_states_gives_the_same_bytes_as_an_empty_list(robot: RobotModel, plain: ExplicitGraph) -> None:
     again = build_roadmap(robot, ArmParams(**SMALL, extra_states=[]))
     assert again.edges.tobytes() == plain.edges.tobytes()
     assert again.lengths.tobytes() == plain.lengths.tobytes()
@@ -143,9 +137,7 @@ def test_an_extra_state_apart_from_the_start_is_refused_with_what_to_raise(robot
     with pytest.raises(ProblemError) as info:
         build_roadmap(robot, params)
     text = str(info.value)
-    assert text.startswith(
-        "extra_states[0] is not connected to the start in the roadmap (num_samples=30, k=1"
-    )
+    assert text.startswith("extra_states[0] is not connected to the start in the roadmap (num_samples=30, k=1")
     assert "raise num_samples (e.g. to 60) or k (e.g. to 5)" in text
     # Raising k as the message says connects it, and it keeps vertex 2.
     graph = build_roadmap(robot, ArmParams(num_samples=30, k=5, goal=near_start, extra_states=[far]))

@@ -38,10 +38,7 @@ def test_valid_is_the_roadmaps_static_test(sampler: ArmStateSampler, small_arm: 
 def test_joint_values_beyond_the_limits_are_refused_with_limits_and_unit(sampler: ArmStateSampler) -> None:
     q = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 3.5])
     why = sampler.refusal(q, "goal")
-    assert (
-        why
-        == "goal joint values are beyond the joint limits: panda_joint7 = 3.500 not in [-2.967, 2.967] (rad)"
-    )
+    assert why == "goal joint values are beyond the joint limits: panda_joint7 = 3.500 not in [-2.967, 2.967] (rad)"
 
 
 def test_values_that_look_like_degrees_are_said_to(sampler: ArmStateSampler) -> None:

@@ -311,9 +311,7 @@ def test_both_ranges_give_the_same_curve() -> None:
 def test_wrap_angle_ranges() -> None:
     angles = np.array([-3 * math.pi, -math.pi, -0.5, 0.0, math.pi, 7.0])
     assert np.allclose(wrap_angle(angles), [-math.pi, -math.pi, -0.5, 0.0, -math.pi, 7.0 - TWO_PI])
-    assert np.allclose(
-        wrap_angle(angles, "unsigned"), [math.pi, math.pi, TWO_PI - 0.5, 0.0, math.pi, 7.0 - TWO_PI]
-    )
+    assert np.allclose(wrap_angle(angles, "unsigned"), [math.pi, math.pi, TWO_PI - 0.5, 0.0, math.pi, 7.0 - TWO_PI])
 
 
 def test_rejects_bad_input() -> None:

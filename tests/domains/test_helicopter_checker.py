@@ -210,10 +210,7 @@ def test_window_max_is_the_brute_force_window_maximum() -> None:
         got = window_max(values, half)
         want = np.array(
             [
-                [
-                    values[max(0, i - half) : i + half + 1, max(0, j - half) : j + half + 1].max()
-                    for j in range(11)
-                ]
+                [values[max(0, i - half) : i + half + 1, max(0, j - half) : j + half + 1].max() for j in range(11)]
                 for i in range(7)
             ]
         )

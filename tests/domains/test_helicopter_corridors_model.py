@@ -17,9 +17,7 @@ from drd_planner.exceptions import ProblemError
 
 #: Slopes (metres per metre east, north) of the synthetic planar DEM.
 SLOPE = (0.1, 0.05)
-FRAME = WorldFrame(
-    (0.0, 300.0), (-150.0, 150.0), 50.0, 25.0, ((0.0, 0.0, 65.0), (300.0, 0.0, 65.0)), 7.0, 40.0
-)
+FRAME = WorldFrame((0.0, 300.0), (-150.0, 150.0), 50.0, 25.0, ((0.0, 0.0, 65.0), (300.0, 0.0, 65.0)), 7.0, 40.0)
 
 
 @pytest.fixture(scope="module")
@@ -125,9 +123,7 @@ def test_presence_and_activity_follow_their_probabilities_independently(plane: P
     assert rate[1] == 0.0
     assert 0.38 < np.mean([a[1] for a in active]) < 0.62
     # the second line's draws do not depend on whether the first one is present
-    flipped = _params(
-        plane, lines=(KnownLine(**{**vars(lines[0]), "probability": 1.0}), lines[1]), zones=zones
-    )
+    flipped = _params(plane, lines=(KnownLine(**{**vars(lines[0]), "probability": 1.0}), lines[1]), zones=zones)
     a = model.draw(np.random.default_rng(7), params, FRAME).info["lines"][1]
     b = model.draw(np.random.default_rng(7), flipped, FRAME).info["lines"][1]
     assert a == b

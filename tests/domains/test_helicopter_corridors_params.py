@@ -38,9 +38,7 @@ def test_partial_dicts_fill_in_defaults() -> None:
 
 
 def test_known_zone_is_a_no_fly_zone_with_a_probability() -> None:
-    zone = KnownZone(
-        name="z", shape="prism", center=(5.0, 6.0), size=(10.0, 20.0), yaw_deg=30.0, probability=1
-    )
+    zone = KnownZone(name="z", shape="prism", center=(5.0, 6.0), size=(10.0, 20.0), yaw_deg=30.0, probability=1)
     column = zone.column()
     assert type(column) is NoFlyZone
     assert (column.shape, column.center, column.size, column.yaw_deg) == (

@@ -122,9 +122,7 @@ def test_quarter_turn_is_an_exact_arc_of_the_turning_radius(lattice: HelicopterL
         x, y, _z, h = states[u]
         centre = np.array([x - R * math.sin(h), y + R * math.cos(h)])  # left of the start heading
         traj = lattice.trajectory(e)
-        assert np.linalg.norm(traj[:, :2] - centre, axis=1) == pytest.approx(
-            np.full(traj.shape[0], R), abs=1e-6
-        )
+        assert np.linalg.norm(traj[:, :2] - centre, axis=1) == pytest.approx(np.full(traj.shape[0], R), abs=1e-6)
         assert lattice.graph.lengths[e] == pytest.approx(math.pi * R / 2, abs=1e-9)
 
 
@@ -150,9 +148,7 @@ def test_directed_and_pruned_to_start_goal_paths(lattice: HelicopterLattice) -> 
     assert not any((v, u) in lookup for u, v in lookup)
     adjacency = csr_array((np.ones(g.num_edges), (g.edges[:, 0], g.edges[:, 1])), shape=(g.num_vertices,) * 2)
     forward = breadth_first_order(adjacency, lattice.start, directed=True, return_predecessors=False)
-    backward = breadth_first_order(
-        adjacency.T.tocsr(), lattice.goal, directed=True, return_predecessors=False
-    )
+    backward = breadth_first_order(adjacency.T.tocsr(), lattice.goal, directed=True, return_predecessors=False)
     assert set(forward.tolist()) == set(range(g.num_vertices))
     assert set(backward.tolist()) == set(range(g.num_vertices))
 
@@ -165,9 +161,7 @@ def test_build_is_deterministic(lattice: HelicopterLattice) -> None:
 
 
 def test_custom_small_lattice() -> None:
-    small = build_lattice(
-        LatticeParams(x_range=(0.0, 300.0), goal=(300.0, 0.0), z_levels=(50.0,), climb="none")
-    )
+    small = build_lattice(LatticeParams(x_range=(0.0, 300.0), goal=(300.0, 0.0), z_levels=(50.0,), climb="none"))
     assert small.graph.num_edges > 0
     states = small.graph.vertex_states
     assert states is not None

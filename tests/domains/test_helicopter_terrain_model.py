@@ -18,9 +18,7 @@ def _grid(path: Path, value: float, size: int = 60) -> Path:
     yy, xx = np.mgrid[0:size, 0:size]
     heights = value + 20.0 * np.sin(xx / 5.0) * np.cos(yy / 7.0)
     rows = "\n".join(" ".join(f"{v:.3f}" for v in row) for row in heights)
-    path.write_text(
-        f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii"
-    )
+    path.write_text(f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii")
     return path
 
 
@@ -80,9 +78,7 @@ def test_cells_longer_north_south_stretch_the_crop_along_y(tmp_path: Path) -> No
     heights = np.repeat(2.0 * np.arange(size, dtype=np.float64)[:, None], size, axis=1)  # 2 m per row
     rows = "\n".join(" ".join(f"{v:.3f}" for v in row) for row in heights)
     path = tmp_path / "ramp.asc"
-    path.write_text(
-        f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii"
-    )
+    path.write_text(f"NCOLS {size}\nNROWS {size}\nXLLCORNER 0\nYLLCORNER 0\nCELLSIZE 30\n{rows}\n", encoding="ascii")
     frame = WorldFrame((0.0, 300.0), (-100.0, 100.0), 50.0, 25.0, ((0.0, 0.0, 65.0),), 6.0, 40.0)
     common = {"path": str(path), "metres_per_cell": (10.0, 10.0), "relief": None, "rotation_deg": (0.0, 0.0)}
     slopes = []

@@ -206,9 +206,7 @@ def test_terrain_model_errors(tmp_path: Path) -> None:
         HelicopterDomain(models={"terrain": {"path": str(broken)}}).make_world("terrain", 0)
 
 
-def test_default_terrain_path_follows_drd_shared_data(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
-) -> None:
+def test_default_terrain_path_follows_drd_shared_data(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setenv("DRD_SHARED_DATA", str(tmp_path))
     assert default_terrain_path() == tmp_path / "terrain" / "srtm_front_range_144.asc"
     with pytest.raises(ProblemError, match="DRD_SHARED_DATA"):

@@ -62,9 +62,7 @@ def test_the_helicopter_states_are_poses_with_a_periodic_heading() -> None:
     assert domain.margin == 2.0
     assert domain.joint_names == ()
     assert domain.robot_loader() is None
-    np.testing.assert_allclose(
-        domain.state_from_position([1.0, 2.0, 3.0], 4.0), [1.0, 2.0, 3.0, 4.0 - 2 * np.pi]
-    )
+    np.testing.assert_allclose(domain.state_from_position([1.0, 2.0, 3.0], 4.0), [1.0, 2.0, 3.0, 4.0 - 2 * np.pi])
     assert domain.world_model_params("wires") == domain.spec()["models"]["wires"]
 
     class Source:

@@ -28,9 +28,7 @@ def test_from_spec_fills_defaults_and_to_spec_writes_lists() -> None:
 
 
 def test_unknown_keys_name_the_valid_ones() -> None:
-    with pytest.raises(
-        ProblemError, match=r"^unknown toy spec keys: colour, weight; valid keys: size, corner$"
-    ):
+    with pytest.raises(ProblemError, match=r"^unknown toy spec keys: colour, weight; valid keys: size, corner$"):
         Toy.from_spec({"weight": 1, "colour": 2})
     with pytest.raises(ProblemError, match="toy spec must be a dict"):
         Toy.from_spec([1, 2])  # type: ignore[arg-type]

@@ -99,9 +99,7 @@ def test_segment_box_against_dense_sampling() -> None:
     def sampled(margin: np.ndarray) -> np.ndarray:
         m = margin[:, None, None]
         x, y = pts[..., 0][..., None], pts[..., 1][..., None]
-        inside = (
-            (x >= boxes[:, 0] - m) & (x <= boxes[:, 2] + m) & (y >= boxes[:, 1] - m) & (y <= boxes[:, 3] + m)
-        )
+        inside = (x >= boxes[:, 0] - m) & (x <= boxes[:, 2] + m) & (y >= boxes[:, 1] - m) & (y <= boxes[:, 3] + m)
         return np.asarray(inside.any(axis=1))
 
     plain = sampled(np.zeros(num_seg))
@@ -304,9 +302,7 @@ def free(p0: tuple[float, float], p1: tuple[float, float], boxes: np.ndarray) ->
     return not hit(p0, p1, boxes)
 
 
-def free_intervals_on_vertical(
-    boxes: np.ndarray, x: float, resolution: int = 20000
-) -> list[tuple[float, float]]:
+def free_intervals_on_vertical(boxes: np.ndarray, x: float, resolution: int = 20000) -> list[tuple[float, float]]:
     """Free y-intervals of the vertical line at ``x`` (sampled finely; for structure checks only)."""
     ys = (np.arange(resolution) + 0.5) / resolution
     on_line = boxes[(boxes[:, 0] <= x) & (boxes[:, 2] >= x)]

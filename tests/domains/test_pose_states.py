@@ -27,9 +27,7 @@ def test_wrap_angle_lands_in_minus_pi_to_pi(angle: float, wrapped: float) -> Non
 
 
 def test_state_from_pose_wraps_the_heading_and_refuses_bad_input() -> None:
-    np.testing.assert_allclose(
-        state_from_pose([1.0, 2.0, 3.0], 5 * math.pi / 2), [1.0, 2.0, 3.0, math.pi / 2]
-    )
+    np.testing.assert_allclose(state_from_pose([1.0, 2.0, 3.0], 5 * math.pi / 2), [1.0, 2.0, 3.0, math.pi / 2])
     with pytest.raises(PlanningError, match="three finite numbers"):
         state_from_pose([1.0, math.nan, 0.0], 0.0)
     with pytest.raises(PlanningError, match="finite angle"):

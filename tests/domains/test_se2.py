@@ -110,9 +110,7 @@ def test_lattice_equals_the_authors_graph_plus_one_boundary_arc(dom: Se2Domain) 
         if rel not in paths:
             h0, dx, dy, h1, count = rel
             end = (dx * 0.05, dy * 0.05, h1 * HEADING_STEP)
-            path = dubins_path(
-                (0.0, 0.0, h0 * HEADING_STEP), end, radius=dom.turning_radius, headings="unsigned"
-            )
+            path = dubins_path((0.0, 0.0, h0 * HEADING_STEP), end, radius=dom.turning_radius, headings="unsigned")
             paths[rel] = (path, path.sample(np.linspace(0.0, path.length, count)))
         path, ours_at = paths[rel]
         worst = max(worst, float(np.abs(ours_at[:, :2] + traj[0, :2] - traj[:, :2]).max()))
@@ -156,9 +154,7 @@ def test_points_in_closed_boxes() -> None:
     assert points_in_boxes(pts, boxes).tolist() == [True, True, False, True, False, True]
     assert points_in_boxes(pts, np.zeros((0, 4))).tolist() == [False] * 6
     many = np.random.default_rng(0).random((50000, 2))
-    expected = (
-        ((many[:, None, :] >= boxes[:, :2]) & (many[:, None, :] <= boxes[:, 2:])).all(axis=2).any(axis=1)
-    )
+    expected = ((many[:, None, :] >= boxes[:, :2]) & (many[:, None, :] <= boxes[:, 2:])).all(axis=2).any(axis=1)
     assert np.array_equal(points_in_boxes(many, boxes), expected)
 
 
@@ -203,9 +199,7 @@ def test_checker_matches_brute_force_over_trajectories(dom: Se2Domain, model: st
     edges = np.random.default_rng(3).choice(dom.graph.num_edges, size=400, replace=False)
     for seed in range(2):
         world = dom.make_world(model, seed)
-        inside = (
-            ((pts[:, None, :] >= world[:, :2]) & (pts[:, None, :] <= world[:, 2:])).all(axis=2).any(axis=1)
-        )
+        inside = ((pts[:, None, :] >= world[:, :2]) & (pts[:, None, :] <= world[:, 2:])).all(axis=2).any(axis=1)
         blocked = np.zeros(len(trajs), dtype=bool)
         np.logical_or.at(blocked, owner, inside)
         checker = dom.checker(world)

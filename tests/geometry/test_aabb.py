@@ -8,9 +8,7 @@ import pytest
 from drd_planner.geometry.aabb import spheres_overlap_aabbs
 
 
-def brute_force(
-    centres: np.ndarray, radii: np.ndarray, lo: np.ndarray, hi: np.ndarray
-) -> set[tuple[int, int]]:
+def brute_force(centres: np.ndarray, radii: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> set[tuple[int, int]]:
     pairs = set()
     for k, (c, r) in enumerate(zip(centres, radii, strict=True)):
         for n, (a, b) in enumerate(zip(lo, hi, strict=True)):

@@ -76,10 +76,7 @@ def test_pair_distance() -> None:
 def overlapping_boxes(count: int) -> fcl.DynamicAABBTreeCollisionManager:
     manager = fcl.DynamicAABBTreeCollisionManager()
     manager.registerObjects(
-        [
-            fcl.CollisionObject(fcl.Box(1.0, 1.0, 1.0), fcl.Transform(np.array([0.01 * k, 0, 0])))
-            for k in range(count)
-        ]
+        [fcl.CollisionObject(fcl.Box(1.0, 1.0, 1.0), fcl.Transform(np.array([0.01 * k, 0, 0]))) for k in range(count)]
     )
     manager.setup()
     return manager

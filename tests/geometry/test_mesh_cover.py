@@ -71,7 +71,8 @@ def test_panda_spheres_grown_by_the_growth_contain_every_mesh_vertex() -> None:
 
 def test_an_element_without_spheres_on_its_frame_cannot_be_covered() -> None:
     spheres = ONE_LINK.format(base='<sphere radius="0.1"/>', arm="<sphere radius='0.1'/>").replace(
-        '<link name="arm"><collision><origin xyz="0.3 0 0"/><geometry><sphere radius=\'0.1\'/></geometry></collision></link>',
+        '<link name="arm"><collision><origin xyz="0.3 0 0"/><geometry><sphere '
+        "radius='0.1'/></geometry></collision></link>",
         '<link name="arm"/>',
     )
     meshes = ONE_LINK.format(base='<box size="0.1 0.1 0.1"/>', arm='<box size="0.1 0.1 0.1"/>')

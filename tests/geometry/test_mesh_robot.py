@@ -18,7 +18,8 @@ PANDA = SHARED_DATA / "panda"
 BOX_ARM = """<robot name="boxy">
   <link name="base"><collision><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
   <link name="arm">
-    <collision><origin xyz="0.25 0 0" rpy="0 0 1.5707963267948966"/><geometry><box size="0.1 0.5 0.04"/></geometry></collision>
+    <collision><origin xyz="0.25 0 0" rpy="0 0 1.5707963267948966"/>
+      <geometry><box size="0.1 0.5 0.04"/></geometry></collision>
     <collision><origin xyz="0.5 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
     <collision><geometry><cylinder radius="0.03" length="0.2"/></geometry></collision>
   </link>
@@ -113,9 +114,7 @@ def test_placement_follows_forward_kinematics() -> None:
     # The sphere element sits 0.5 m out along the arm, 0.1 m up: along x at q = 0, along y at q = pi/2.
     np.testing.assert_allclose(poses[0, 2, :3, 3], [0.5, 0, 0.1], atol=1e-12)
     np.testing.assert_allclose(poses[1, 2, :3, 3], [0, 0.5, 0.1], atol=1e-12)
-    np.testing.assert_allclose(
-        poses, robot.link_poses(q)[:, [0, 1, 1, 1]] @ np.stack([p.origin for p in meshes.parts])
-    )
+    np.testing.assert_allclose(poses, robot.link_poses(q)[:, [0, 1, 1, 1]] @ np.stack([p.origin for p in meshes.parts]))
     lo, hi = placement.boxes(poses)
     # The box (0.1 x 0.5 x 0.04, turned by pi/2 in the link, the link by pi/2) lies along world y: exact box.
     np.testing.assert_allclose(lo[1, 1], [-0.05, 0.0, 0.08], atol=1e-12)

@@ -108,9 +108,7 @@ def test_sphere_groups_cover_their_spheres(panda: RobotModel) -> None:
     q = np.random.default_rng(5).uniform(panda.lower, panda.upper, size=(20, 7))
     frames = panda.fk.frames(q)
     spheres = panda.sphere_centres_from_frames(frames)
-    centres = ForwardKinematics.apply_point_map(
-        frames, panda.fk.point_map(groups.frame_index, groups.centres)
-    )
+    centres = ForwardKinematics.apply_point_map(frames, panda.fk.point_map(groups.frame_index, groups.centres))
     which, member = groups.expand(np.arange(groups.count))
     reach = np.linalg.norm(spheres[:, member] - centres[:, which], axis=2) + panda.spheres.radii[member]
     assert np.all(reach <= groups.radii[which] + 1e-12)
@@ -152,9 +150,7 @@ def test_srdf_naming_unknown_links_is_refused() -> None:
 # Self-collision
 
 
-def test_ready_pose_is_free_and_folded_pose_self_collides(
-    panda: RobotModel, panda_no_srdf: RobotModel
-) -> None:
+def test_ready_pose_is_free_and_folded_pose_self_collides(panda: RobotModel, panda_no_srdf: RobotModel) -> None:
     for robot in (panda, panda_no_srdf):
         assert robot.self_collision(np.stack([READY, FOLDED])).tolist() == [False, True]
     # the folded pose: the hand's spheres sink into link 1's
@@ -213,18 +209,13 @@ def test_pairs_of_many_links_equal_their_definition(srdf: bool) -> None:
     else:
         excluded = {(min(a, b), max(a, b)) for a, b in chain.parent_child}
     expected = [
-        (a, b)
-        for i, a in enumerate(names)
-        for b in names[i + 1 :]
-        if frame[a] != frame[b] and (a, b) not in excluded
+        (a, b) for i, a in enumerate(names) for b in names[i + 1 :] if frame[a] != frame[b] and (a, b) not in excluded
     ]
     assert list(robot.checked_link_pairs) == expected
     checked = {(chain.link_index(a), chain.link_index(b)) for a, b in expected}
     checked |= {(b, a) for a, b in checked}
     link = spheres.link_index.tolist()
-    brute = [
-        (i, j) for i in range(len(link)) for j in range(i + 1, len(link)) if (link[i], link[j]) in checked
-    ]
+    brute = [(i, j) for i in range(len(link)) for j in range(i + 1, len(link)) if (link[i], link[j]) in checked]
     assert robot.self_pairs.tolist() == [list(p) for p in brute]
     groups = robot._self_groups
     group_link = groups.link_index.tolist()
@@ -235,9 +226,7 @@ def test_pairs_of_many_links_equal_their_definition(srdf: bool) -> None:
         if (group_link[a], group_link[b]) in checked
     ]
     assert robot._group_pairs.tolist() == [list(p) for p in group_brute]
-    members = [
-        groups.members[groups.offsets[g] : groups.offsets[g + 1]].tolist() for g in range(groups.count)
-    ]
+    members = [groups.members[groups.offsets[g] : groups.offsets[g + 1]].tolist() for g in range(groups.count)]
     sphere_pairs = [(a, b) for ga, gb in group_brute for a in members[ga] for b in members[gb]]
     assert list(zip(robot._pair_a.tolist(), robot._pair_b.tolist(), strict=True)) == sphere_pairs
     assert robot._pair_offsets[-1] == len(sphere_pairs)

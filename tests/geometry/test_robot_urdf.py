@@ -154,8 +154,7 @@ def test_unknown_tip_link() -> None:
 
 def test_spheres_refuse_other_collision_geometry() -> None:
     urdf = (
-        "<robot name='x'><link name='a'><collision><geometry><box size='1 1 1'/></geometry></collision>"
-        "</link></robot>"
+        "<robot name='x'><link name='a'><collision><geometry><box size='1 1 1'/></geometry></collision></link></robot>"
     )
     with pytest.raises(GeometryError, match="link 'a' has a non-sphere collision element \\(box\\)"):
         parse_collision_spheres(urdf)
@@ -169,10 +168,7 @@ def test_malformed_srdf() -> None:
     with pytest.raises(GeometryError, match="lacks the attribute 'link2'"):
         parse_srdf("<robot name='x'><disable_collisions link1='a'/></robot>")
     with pytest.raises(GeometryError, match="not a number"):
-        parse_srdf(
-            "<robot name='x'><group_state group='g' name='s'><joint name='j' value='up'/>"
-            "</group_state></robot>"
-        )
+        parse_srdf("<robot name='x'><group_state group='g' name='s'><joint name='j' value='up'/></group_state></robot>")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -308,11 +308,7 @@ def test_prefiltered_answers_equal_brute_force() -> None:
     heights = 5.0 * rng.random((9, 9))
     scene = Scene(margin=0.2)
     scene.add_terrain(Heightfield((0.0, 0.0), 5.0, heights), tile_cells=3)
-    objects = [
-        fcl.CollisionObject(
-            make_fcl_geometry(Heightfield((0.0, 0.0), 5.0, heights).to_mesh()), fcl.Transform()
-        )
-    ]
+    objects = [fcl.CollisionObject(make_fcl_geometry(Heightfield((0.0, 0.0), 5.0, heights).to_mesh()), fcl.Transform())]
     shapes = [Box((4.0, 1.0, 2.0)), Cylinder(1.0, 6.0), Capsule(0.5, 5.0), Sphere(1.5)]
     for k in range(12):
         shape = shapes[k % 4]

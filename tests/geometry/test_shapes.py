@@ -26,9 +26,7 @@ from drd_planner.geometry.shapes import (
 EPS = 1e-3
 
 
-def probe_hits(
-    shape: Box | Sphere | Cylinder | Capsule | TriangleMesh, point: tuple[float, float, float]
-) -> bool:
+def probe_hits(shape: Box | Sphere | Cylinder | Capsule | TriangleMesh, point: tuple[float, float, float]) -> bool:
     """Whether a 1 mm sphere at ``point`` touches ``shape`` placed at the origin (plain FCL)."""
     body = fcl.CollisionObject(make_fcl_geometry(shape), Pose.identity().to_fcl())
     probe = fcl.CollisionObject(fcl.Sphere(1e-3), fcl.Transform(np.array(point, dtype=float)))
@@ -108,9 +106,7 @@ def sampled_aabb(mesh: trimesh.Trimesh, pose: Pose) -> tuple[np.ndarray, np.ndar
     return world.min(axis=0), world.max(axis=0)
 
 
-POSES = [
-    Pose((0.3, -0.2, 1.0), q) for q in [(0, 0, 0, 1), (0.3, 0.5, -0.2, 0.8), (1, 0, 0, 0), (0, 0.7, 0, 0.7)]
-]
+POSES = [Pose((0.3, -0.2, 1.0), q) for q in [(0, 0, 0, 1), (0.3, 0.5, -0.2, 0.8), (1, 0, 0, 0), (0, 0.7, 0, 0.7)]]
 
 
 @pytest.mark.parametrize("pose", POSES)

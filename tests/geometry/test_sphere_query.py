@@ -6,12 +6,8 @@ import numpy as np
 from drd_planner.geometry.sphere_query import PackedObstacles, SphereCache, sphere_hits
 
 
-def _box(
-    centre: tuple[float, float, float], half: float
-) -> tuple[fcl.CollisionObject, np.ndarray, np.ndarray]:
-    obj = fcl.CollisionObject(
-        fcl.Box(2 * half, 2 * half, 2 * half), fcl.Transform(np.array(centre, dtype=float))
-    )
+def _box(centre: tuple[float, float, float], half: float) -> tuple[fcl.CollisionObject, np.ndarray, np.ndarray]:
+    obj = fcl.CollisionObject(fcl.Box(2 * half, 2 * half, 2 * half), fcl.Transform(np.array(centre, dtype=float)))
     c = np.array(centre, dtype=float)
     return obj, c - half, c + half
 

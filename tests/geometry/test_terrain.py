@@ -47,9 +47,7 @@ def test_reader_with_corner_header_flips_rows_and_reads_nodata(tmp_path: Path) -
 
 def test_reader_with_center_header_any_case_and_layout(tmp_path: Path) -> None:
     values = " ".join(str(v) for v in range(20))
-    path = write(
-        tmp_path, f"NCOLS 5\nNROWS 4\nXLLCENTER -3.5\nYLLCenter 7\nCELLSIZE 0.5\n{values[:9]}\n{values[9:]}\n"
-    )
+    path = write(tmp_path, f"NCOLS 5\nNROWS 4\nXLLCENTER -3.5\nYLLCenter 7\nCELLSIZE 0.5\n{values[:9]}\n{values[9:]}\n")
     field = read_esri_ascii(path)
     np.testing.assert_array_equal(field.origin, [-3.5, 7.0])
     assert field.shape == (4, 5)

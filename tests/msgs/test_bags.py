@@ -66,9 +66,7 @@ def test_round_trip_gives_equal_messages_in_time_order(rb: RosbagsMessages, tmp_
     messages = [
         *_scenario(rb),
         _joints(rb, T0 + 3 * SEC, JOINTS, [0.1 * i for i in range(7)]),
-        BagMessage(
-            "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
-        ),
+        BagMessage("/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")),
     ]
     shuffled = [messages[i] for i in np.random.default_rng(0).permutation(len(messages))]
     path = write_bag(tmp_path / "s.mcap", shuffled)
@@ -162,9 +160,7 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
     contents = open_bag(bundled)
     assert bundled.stat().st_size < 2 * 1024 * 1024
     assert contents.topics["/obstacles"].qos[0].durability == QosDurability.TRANSIENT_LOCAL
-    assert [r.kind for r in bag_requests(contents.decoded())] == [
-        "goal_pose" if "heli" in name else "goal_joints"
-    ] * 4
+    assert [r.kind for r in bag_requests(contents.decoded())] == ["goal_pose" if "heli" in name else "goal_joints"] * 4
     only = name if name.startswith("heli") else "arm"
     run = subprocess.run(
         [
@@ -194,8 +190,7 @@ def test_bundled_bags_are_small_latched_and_reproducible(name: str, tmp_path: Pa
 def _same_messages(a: list[BagMessage], b: list[BagMessage]) -> bool:
     """Same topics, types, times and fields, floats equal to a relative 1e-12."""
     return len(a) == len(b) and all(
-        (x.topic, x.msgtype, x.time_ns) == (y.topic, y.msgtype, y.time_ns)
-        and _same_field(x.message, y.message)
+        (x.topic, x.msgtype, x.time_ns) == (y.topic, y.msgtype, y.time_ns) and _same_field(x.message, y.message)
         for x, y in zip(a, b, strict=True)
     )
 

@@ -124,13 +124,9 @@ def _summary(msgs: MessageFactory | None) -> Any:
 
 
 @pytest.mark.parametrize("count", [0, 1, 2, 9])
-def test_check_log_bytes_are_rosbags_bytes_and_decode_to_edge_checks_message(
-    typestore: Any, count: int
-) -> None:
+def test_check_log_bytes_are_rosbags_bytes_and_decode_to_edge_checks_message(typestore: Any, count: int) -> None:
     data = diagnostic_array_cdr(check_statuses(_checks(count), hardware_id="node"), stamp=(8, 9))
-    built = edge_checks_message(
-        _checks(count), stamp=(8, 9), hardware_id="node", msgs=RosbagsMessages(typestore)
-    )
+    built = edge_checks_message(_checks(count), stamp=(8, 9), hardware_id="node", msgs=RosbagsMessages(typestore))
     assert bytes(typestore.serialize_cdr(built, DIAGNOSTICS)) == data
     deserialize, msgs = _rclpy()
     from diagnostic_msgs.msg import DiagnosticArray

@@ -1,4 +1,4 @@
-"""The one-pass reader of serialized MarkerArrays: the fields rosbags and rclpy decode, and every malformed buffer refused."""
+"""The one-pass reader of serialized MarkerArrays: the fields rosbags and rclpy decode; malformed buffers refused."""
 
 from __future__ import annotations
 
@@ -45,9 +45,7 @@ def _marker(rb: RosbagsMessages, k: int, **fields: Any) -> Any:
         "uv_coordinates": [rb("visualization_msgs/msg/UVCoordinate", u=0.5, v=0.25)] * (k % 2),
         "text": "héllo"[: k % 6],
         "mesh_resource": "package://m"[: k % 7],
-        "mesh_file": rb(
-            "visualization_msgs/msg/MeshFile", filename="f" * (k % 3), data=np.ones(k % 3, np.uint8)
-        ),
+        "mesh_file": rb("visualization_msgs/msg/MeshFile", filename="f" * (k % 3), data=np.ones(k % 3, np.uint8)),
         "mesh_use_embedded_materials": bool(k % 2),
     }
     base.update(fields)
@@ -97,9 +95,7 @@ def test_rclpy_serialized_bytes_read_the_same(rb: RosbagsMessages) -> None:
 def test_content_is_the_shape_and_pose_only(rb: RosbagsMessages) -> None:
     base = _marker(rb, 3)
     restyled = _marker(rb, 3, text="other", color=rb("std_msgs/msg/ColorRGBA", g=1.0), ns="elsewhere")
-    moved = _marker(
-        rb, 3, pose=rb("geometry_msgs/msg/Pose", orientation=rb("geometry_msgs/msg/Quaternion", w=1.0))
-    )
+    moved = _marker(rb, 3, pose=rb("geometry_msgs/msg/Pose", orientation=rb("geometry_msgs/msg/Quaternion", w=1.0)))
     a, b, c = read_marker_array(_serialized(rb, [base, restyled, moved]))
     assert a.content == b.content
     assert a.content != c.content

@@ -74,9 +74,7 @@ def test_round_trip_gives_the_same_shapes(msgs: Any) -> None:
     assert box.kind == "CUBE"
     assert box.label == "marker 1 (box/1)"
     np.testing.assert_allclose(box.pose.position, (1, 2, 3))
-    np.testing.assert_allclose(
-        box.pose.quaternion_xyzw, (0, 0, math.sin(math.radians(15)), math.cos(math.radians(15)))
-    )
+    np.testing.assert_allclose(box.pose.quaternion_xyzw, (0, 0, math.sin(math.radians(15)), math.cos(math.radians(15))))
     assert obs["ball/2"].shape == SphereData(1.5)
     assert obs["nofly/3"].shape == CylinderData(50.0, 200.0)
     mesh = obs["mesh/4"].shape
@@ -96,18 +94,13 @@ def test_delete_and_delete_all_apply_in_order(msgs: Any) -> None:
     first = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
     header = msgs("std_msgs/msg/Header", frame_id=FRAME)
     delete = msgs("visualization_msgs/msg/Marker", header=header, ns="box", id=1, action=2)
-    after = obstacle_update(
-        msgs("visualization_msgs/msg/MarkerArray", markers=[delete]), frame_id=FRAME
-    ).apply(first)
+    after = obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[delete]), frame_id=FRAME).apply(first)
     assert "box/1" not in after
     assert "ball/2" in after
     assert "box/1" in first
     clear = msgs("visualization_msgs/msg/Marker", header=header, action=3)
     assert (
-        obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME).apply(
-            first
-        )
-        == {}
+        obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME).apply(first) == {}
     )
 
 
@@ -192,9 +185,7 @@ def test_not_a_marker_array_is_refused(msgs: Any) -> None:
 
 def test_a_lone_deleteall_in_a_foreign_frame_is_refused(msgs: Any) -> None:
     first = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
-    clear = msgs(
-        "visualization_msgs/msg/Marker", header=msgs("std_msgs/msg/Header", frame_id="odom"), action=3
-    )
+    clear = msgs("visualization_msgs/msg/Marker", header=msgs("std_msgs/msg/Header", frame_id="odom"), action=3)
     with pytest.raises(MessageError, match=r"marker 0 .* frame 'odom'; the planner works in 'map'"):
         obstacle_update(msgs("visualization_msgs/msg/MarkerArray", markers=[clear]), frame_id=FRAME)
     assert len(first) == 5
@@ -209,9 +200,7 @@ def _cubes(msgs: Any, count: int, *, ns: str = "box") -> Any:
     )
 
 
-def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
-    msgs: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(msgs: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     def no_shapes(*_: Any) -> None:
         raise AssertionError("a shape was built before the limits were checked")
 
@@ -219,10 +208,7 @@ def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
     small = MessageLimits(max_markers=4, max_line_points=4, max_mesh_triangles=3)
     with pytest.raises(MessageError) as info:
         obstacle_update(_cubes(msgs, 5), frame_id=FRAME, limits=small)
-    assert (
-        str(info.value)
-        == "the MarkerArray has 5 markers, over the limit max_markers = 4 (parameter max_markers)"
-    )
+    assert str(info.value) == "the MarkerArray has 5 markers, over the limit max_markers = 4 (parameter max_markers)"
     wire = markers_from_obstacles(
         [
             (
@@ -239,9 +225,7 @@ def test_arrays_over_a_limit_are_refused_before_any_shape_is_built(
     rng = np.random.default_rng(1)
     mesh = MeshData(rng.random((12, 3)), np.arange(12).reshape(4, 3))
     meshes = markers_from_obstacles([("mesh/0", mesh, PoseData())], frame_id=FRAME, msgs=msgs)
-    with pytest.raises(
-        MessageError, match="4 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 3"
-    ):
+    with pytest.raises(MessageError, match="4 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 3"):
         obstacle_update(meshes, frame_id=FRAME, limits=small)
 
 
@@ -249,23 +233,15 @@ def test_a_map_growing_over_a_limit_is_refused_and_kept(msgs: Any) -> None:
     limits = MessageLimits(max_markers=6, max_mesh_triangles=5)
     current = obstacle_update(_cubes(msgs, 4), frame_id=FRAME, limits=limits).apply({})
     more = obstacle_update(_cubes(msgs, 3, ns="more"), frame_id=FRAME, limits=limits)
-    with pytest.raises(
-        MessageError, match="the obstacle map would have 7 obstacles, over the limit max_markers = 6"
-    ):
+    with pytest.raises(MessageError, match="the obstacle map would have 7 obstacles, over the limit max_markers = 6"):
         more.apply(current)
     assert len(current) == 4
     assert len(obstacle_update(_cubes(msgs, 2, ns="more"), frame_id=FRAME, limits=limits).apply(current)) == 6
-    one = markers_from_obstacles(
-        [("mesh/0", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False
-    )
-    two = markers_from_obstacles(
-        [("mesh/1", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False
-    )
+    one = markers_from_obstacles([("mesh/0", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
+    two = markers_from_obstacles([("mesh/1", TET, PoseData())], frame_id=FRAME, msgs=msgs, delete_all_first=False)
     with_mesh = obstacle_update(one, frame_id=FRAME, limits=limits).apply({})
     assert with_mesh["mesh/0"].points == 12
-    with pytest.raises(
-        MessageError, match="8 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 5"
-    ):
+    with pytest.raises(MessageError, match="8 TRIANGLE_LIST triangles, over the limit max_mesh_triangles = 5"):
         obstacle_update(two, frame_id=FRAME, limits=limits).apply(with_mesh)
     replaced = obstacle_update(one, frame_id=FRAME, limits=limits).apply(with_mesh)  # same key: still 4
     assert set(replaced) == {"mesh/0"}
@@ -297,10 +273,7 @@ def test_a_marker_equal_to_the_held_obstacle_gives_the_held_object(msgs: Any) ->
     held = obstacle_update(_world(msgs), frame_id=FRAME).apply({})
     again = obstacle_update(_world(msgs), frame_id=FRAME, held=held).apply(held)
     assert all(again[key] is held[key] for key in held)
-    assert all(
-        same_obstacle(again[key], obstacle_update(_world(msgs), frame_id=FRAME).obstacles[key])
-        for key in held
-    )
+    assert all(same_obstacle(again[key], obstacle_update(_world(msgs), frame_id=FRAME).obstacles[key]) for key in held)
     bent = WIRE.copy()
     bent[2, 2] += 1e-9
     changed = markers_from_obstacles(

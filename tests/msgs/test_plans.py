@@ -19,9 +19,7 @@ def test_checked_edge_markers_keep_every_segment_in_its_colour(msgs: object) -> 
     rng = np.random.default_rng(0)
     segments = rng.normal(size=(7, 2, 3))
     outcome = np.array([1, 0, 1, -1, 0, 1, 1])
-    background = line_list_marker(
-        segments[:2], ns="library", rgba=EDGE_COLOURS[-1], frame_id="map", msgs=msgs
-    )  # type: ignore[arg-type]
+    background = line_list_marker(segments[:2], ns="library", rgba=EDGE_COLOURS[-1], frame_id="map", msgs=msgs)  # type: ignore[arg-type]
     array = checked_edges_markers(segments, outcome, frame_id="map", msgs=msgs, background=[background])  # type: ignore[arg-type]
     markers = list(array.markers)
     assert markers[0].action == 3

@@ -46,9 +46,7 @@ def _with(msgs: Any, **fields: Any) -> Any:
     values = {name: getattr(cloud, name) for name in ("header", "height", "width", "fields", "is_bigendian")}
     values |= {name: getattr(cloud, name) for name in ("point_step", "row_step", "data", "is_dense")}
     values["data"] = np.asarray(
-        bytearray(bytes(memoryview(values["data"])))
-        if not isinstance(values["data"], np.ndarray)
-        else values["data"],
+        bytearray(bytes(memoryview(values["data"]))) if not isinstance(values["data"], np.ndarray) else values["data"],
         dtype=np.uint8,
     )
     values.update(fields)
@@ -137,9 +135,7 @@ def test_a_cloud_over_the_cell_limit_is_refused_from_its_header(msgs: Any) -> No
     cloud = cloud_from_heightfield(_terrain(), frame_id=FRAME, msgs=msgs)  # 7 x 9 = 63 cells
     with pytest.raises(MessageError, match=r"63 cells .* max_terrain_cells = 62 "):
         heightfield_from_cloud(cloud, frame_id=FRAME, limits=MessageLimits(max_terrain_cells=62))
-    assert heightfield_from_cloud(
-        cloud, frame_id=FRAME, limits=MessageLimits(max_terrain_cells=63)
-    ).shape == (
+    assert heightfield_from_cloud(cloud, frame_id=FRAME, limits=MessageLimits(max_terrain_cells=63)).shape == (
         7,
         9,
     )
@@ -156,9 +152,7 @@ def test_a_cloud_over_the_byte_limit_is_refused_from_its_length(msgs: Any) -> No
 
 def test_tiny_cells_huge_coordinates_and_too_few_known_heights_are_refused(msgs: Any) -> None:
     tiny = _grid((0.0, 0.0), 1e-5, [[0.0, 1.0], [2.0, 3.0]])
-    with pytest.raises(
-        MessageError, match=r"cells are 1e-05 m, under the limit min_terrain_cell_size = 0.05 \("
-    ):
+    with pytest.raises(MessageError, match=r"cells are 1e-05 m, under the limit min_terrain_cell_size = 0.05 \("):
         heightfield_from_cloud(cloud_from_heightfield(tiny, frame_id=FRAME, msgs=msgs), frame_id=FRAME)
     far = _grid((0.0, 0.0), 1.0, [[0.0, 1.0], [2.0, 3e30]])
     with pytest.raises(MessageError, match=r"z values reach 3e\+30 m .* max_coordinate = 1000000.0"):

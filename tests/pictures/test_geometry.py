@@ -29,9 +29,7 @@ def test_convex_hull_is_counter_clockwise_from_the_lowest_vertex() -> None:
 
 def test_outlines_of_posed_shapes() -> None:
     yaw = math.radians(30.0)
-    box = shape_outline(
-        Box((4.0, 2.0, 10.0)), Pose((1.0, 2.0, 0.0), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2)))
-    )
+    box = shape_outline(Box((4.0, 2.0, 10.0)), Pose((1.0, 2.0, 0.0), (0, 0, math.sin(yaw / 2), math.cos(yaw / 2))))
     assert box.shape == (4, 2)
     area = 0.5 * abs(np.dot(box[:, 0], np.roll(box[:, 1], 1)) - np.dot(box[:, 1], np.roll(box[:, 0], 1)))
     assert area == pytest.approx(8.0)

@@ -129,17 +129,13 @@ def _labels_over_obstacles(drawing: PlanDrawing) -> list[str]:
     for panel in drawing.panels:
         ax = panel.ax
         boxes = [
-            (t.get_text(), t.get_bbox_patch().get_window_extent(renderer))
-            for t in panel.labels
-            if t.get_visible()
+            (t.get_text(), t.get_bbox_patch().get_window_extent(renderer)) for t in panel.labels if t.get_visible()
         ]
         for child in ax.get_children():
             gid = child.get_gid()
             if gid == "wires":
                 half = 0.5 * scale * max(child.get_linewidths())
-                pieces = [
-                    MplPath(child.get_transform().transform(np.asarray(p))) for p in child.get_segments()
-                ]
+                pieces = [MplPath(child.get_transform().transform(np.asarray(p))) for p in child.get_segments()]
                 found += [
                     f"{text} on a wire"
                     for text, box in boxes
@@ -153,9 +149,7 @@ def _labels_over_obstacles(drawing: PlanDrawing) -> list[str]:
                     and extent.height >= BACKGROUND_SHARE * ax.bbox.height
                 )
                 found += [
-                    f"{text} on a footprint"
-                    for text, box in boxes
-                    if path.intersects_bbox(box, filled=not background)
+                    f"{text} on a footprint" for text, box in boxes if path.intersects_bbox(box, filled=not background)
                 ]
             elif gid == "obstacle_dot":
                 (centre,) = child.get_transform().transform(child.get_xydata())
@@ -224,14 +218,11 @@ def test_labels_never_cover_obstacles_in_a_crowded_picture(heli: Case) -> None:
     session, snapshot = heli.session, heli.snapshot
     wires, _ = split_obstacles(snapshot)
     crossing = [
-        int(e)
-        for e in session.library_edges()
-        if profile_crossings(session.edge_states(int(e))[:, :3], wires)[0].size
+        int(e) for e in session.library_edges() if profile_crossings(session.edge_states(int(e))[:, :3], wires)[0].size
     ]
     assert len(crossing) >= 60
     checks = tuple(
-        SessionCheck(k + 1, edge, (0, 0), k % 3 != 0, "bisect", 0.1, 0.0, False)
-        for k, edge in enumerate(crossing[:60])
+        SessionCheck(k + 1, edge, (0, 0), k % 3 != 0, "bisect", 0.1, 0.0, False) for k, edge in enumerate(crossing[:60])
     )
     crowded = dataclasses.replace(heli.result, checks=checks)
     drawing = draw_plan_picture(session, snapshot, crowded)
@@ -245,9 +236,7 @@ def test_labels_never_cover_obstacles_in_a_crowded_picture(heli: Case) -> None:
     shown = [t for t in drawing.labels if t.get_visible()]
     assert len(shown) == 60 - drawing.counts["labels_hidden"]
     # Every other text on the top view (the terrain's contour labels) is drawn under every obstacle.
-    obstacles = [
-        c for c in drawing.top.get_children() if c.get_gid() in ("wires", "obstacle", "obstacle_dot")
-    ]
+    obstacles = [c for c in drawing.top.get_children() if c.get_gid() in ("wires", "obstacle", "obstacle_dot")]
     others = [t for t in drawing.top.texts if t not in drawing.labels]
     assert others
     assert max(t.get_zorder() for t in others) < min(c.get_zorder() for c in obstacles)
@@ -390,9 +379,7 @@ def test_helicopter_failed_request(heli: Case, tmp_path: Path) -> None:
     assert _png_size(path)[0] >= 1200
 
 
-def test_missing_matplotlib_is_a_clear_error(
-    heli: Case, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_missing_matplotlib_is_a_clear_error(heli: Case, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # what "not installed" looks like to import
     with pytest.raises(PictureError, match=r"drd_planner\[plots\]"):
         plan_picture(heli.session, heli.snapshot, heli.result, tmp_path / "x.png")
@@ -416,9 +403,7 @@ def test_arm_drawing_shows_end_effector_paths(arm_session: PlanningSession, tmp_
     # Each curve runs between the end-effector positions of its edge's vertices (the node's positions).
     for edge, segment in zip(free, _segments(drawing, "free"), strict=True):
         u, v = domain.graph.edges[edge]
-        ends = arm_session.positions(
-            np.stack([arm_session.vertex_state(int(u)), arm_session.vertex_state(int(v))])
-        )
+        ends = arm_session.positions(np.stack([arm_session.vertex_state(int(u)), arm_session.vertex_state(int(v))]))
         assert segment[[0, -1]] == pytest.approx(ends[:, :2])
         assert segment.shape[0] > 2  # a curve through the edge's samples, not a chord
     (plan,) = _segments(drawing, "path")

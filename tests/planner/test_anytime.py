@@ -103,9 +103,7 @@ def test_every_improvement_is_strictly_shorter_and_some_seed_goes_through_the_mi
         result = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=seed, improve_budget=20)
         costs = [r.cost for r in result.improvements]
         assert all(b < a for a, b in itertools.pairwise(costs)), costs
-        assert [r.checks_so_far for r in result.improvements] == sorted(
-            r.checks_so_far for r in result.improvements
-        )
+        assert [r.checks_so_far for r in result.improvements] == sorted(r.checks_so_far for r in result.improvements)
         _assert_every_path_was_checked_free(result)
         costs_seen.append(costs)
     assert [COST["L"], COST["M"], COST["S"]] in costs_seen  # two improvements in one plan
@@ -124,9 +122,7 @@ def test_a_blocked_edge_ends_a_proposal_and_the_next_draw_goes_elsewhere(routes:
 
 
 @pytest.mark.parametrize("checks", [1, 2, 3])
-def test_the_check_budget_is_respected_and_unaffordable_paths_are_not_started(
-    routes: WorldPrior, checks: int
-) -> None:
+def test_the_check_budget_is_respected_and_unaffordable_paths_are_not_started(routes: WorldPrior, checks: int) -> None:
     planner = Planner(routes)
     first = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=0)
     result = planner.plan(0, 7, TableOracle(_world(L, M, S)), seed=0, improve_budget=checks)
@@ -151,9 +147,7 @@ def test_the_plans_own_max_checks_caps_the_improvement(routes: WorldPrior) -> No
 
 
 def test_a_seconds_budget_alone_works(routes: WorldPrior) -> None:
-    result = Planner(routes).plan(
-        0, 7, TableOracle(_world(L, M, S)), improve_budget=ImproveBudget(seconds=5.0)
-    )
+    result = Planner(routes).plan(0, 7, TableOracle(_world(L, M, S)), improve_budget=ImproveBudget(seconds=5.0))
     assert result.cost == COST["S"]
     assert result.improve_stop == "optimal"
 
@@ -169,12 +163,8 @@ def test_a_spent_seconds_budget_stops_before_any_check(routes: WorldPrior) -> No
 
 
 def test_same_seed_same_result(routes: WorldPrior) -> None:
-    runs = [
-        Planner(routes).plan(0, 7, TableOracle(_world(L, M, S)), seed=4, improve_budget=20) for _ in range(2)
-    ]
-    assert [(c.edge, c.free, c.stage) for c in runs[0].checks] == [
-        (c.edge, c.free, c.stage) for c in runs[1].checks
-    ]
+    runs = [Planner(routes).plan(0, 7, TableOracle(_world(L, M, S)), seed=4, improve_budget=20) for _ in range(2)]
+    assert [(c.edge, c.free, c.stage) for c in runs[0].checks] == [(c.edge, c.free, c.stage) for c in runs[1].checks]
     assert [r.path_edges.tolist() for r in runs[0].improvements] == [
         r.path_edges.tolist() for r in runs[1].improvements
     ]
@@ -248,9 +238,7 @@ def test_the_samplers_probabilities_are_the_graph_stages_posterior(weighted: boo
         tail_probability=0.1,
         rng=np.random.default_rng(1),
     )
-    expected = posterior_free_probability(
-        worlds, weights, outcomes, num_edges=30, alpha=0.9, pseudo_count=5.0
-    )
+    expected = posterior_free_probability(worlds, weights, outcomes, num_edges=30, alpha=0.9, pseudo_count=5.0)
     np.testing.assert_allclose(sampler.free_probability(), expected)
     np.testing.assert_allclose(sampler.free_probability(np.array([12, 3, 7])), expected[[12, 3, 7]])
 

@@ -142,9 +142,7 @@ def test_imputed_free_probability_tracks_the_true_one(
         state = _off_graph_state(prior, rng, planner)
         for motion in connector.connect(state, prior.graph, outgoing=True):
             imputed.append(imputed_outcomes(index, prior.worlds, motion.states).mean())
-            truth.append(
-                np.mean([PlanarChecker(prior.graph, boxes[h]).check_motion(motion.states) for h in train])
-            )
+            truth.append(np.mean([PlanarChecker(prior.graph, boxes[h]).check_motion(motion.states) for h in train]))
     imputed_a, truth_a = np.array(imputed), np.array(truth)
     marginal = float(prior.worlds.mean())
     assert np.corrcoef(imputed_a, truth_a)[0, 1] > 0.6
@@ -181,9 +179,7 @@ def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
         np.array([[0.5, 1.0]]),
     ]
     columns = imputed_columns(index, worlds, motions)
-    expected = np.column_stack(
-        [imputed_outcomes(index, worlds, m) for m in motions]
-    )  # <= 8 samples: the same
+    expected = np.column_stack([imputed_outcomes(index, worlds, m) for m in motions])  # <= 8 samples: the same
     np.testing.assert_array_equal(columns, expected)
     np.testing.assert_array_equal(imputed_columns(index, WorldColumns(worlds), motions), expected)  # packed
     assert imputed_columns(index, worlds, []).shape == (3, 0)

@@ -70,9 +70,7 @@ def test_an_off_lattice_start_joins_vertices_ahead_by_flyable_motions(lattice_gr
         assert np.allclose(m.states[0], start)
         assert np.allclose(m.states[-1], end)
         assert np.linalg.norm(np.diff(m.states[:, :2], axis=0), axis=1).max() <= 5.0 + 1e-9
-        horizontal = dubins_path(
-            (start[0], start[1], start[3]), (end[0], end[1], end[3]), radius=RADIUS
-        ).length
+        horizontal = dubins_path((start[0], start[1], start[3]), (end[0], end[1], end[3]), radius=RADIUS).length
         assert abs(end[2] - start[2]) <= 0.5 * horizontal + 1e-9  # the climb limit
         assert m.length == pytest.approx(math.hypot(horizontal, end[2] - start[2]))
         assert end[0] > start[0]  # ahead of a state flying east-north-east
@@ -111,13 +109,9 @@ def test_states_outside_the_extent_are_refused_with_the_extent(lattice_graph: Ex
     connector = _connector(lattice_graph)
     with pytest.raises(QueryError, match=r"horizontal extent x \[0, 700\] m, y \[-250, 250\] m"):
         connector.connect(np.array([4000.0, 0.0, 65.0, 0.0]), lattice_graph, outgoing=True)
-    with pytest.raises(
-        QueryError, match=r"altitude 300.0 m is outside the lattice's altitude band \[40, 90\] m"
-    ):
+    with pytest.raises(QueryError, match=r"altitude 300.0 m is outside the lattice's altitude band \[40, 90\] m"):
         connector.connect(np.array([100.0, 0.0, 300.0, 0.0]), lattice_graph, outgoing=False)
-    inside = connector.connect(
-        np.array([-20.0, 0.0, 35.0, 0.0]), lattice_graph, outgoing=True
-    )  # within margins
+    inside = connector.connect(np.array([-20.0, 0.0, 35.0, 0.0]), lattice_graph, outgoing=True)  # within margins
     assert inside
 
 
@@ -147,9 +141,7 @@ def test_sketches_lie_on_the_motions_they_stand_for(
     connector = _connector(lattice_graph)
     vertices = connector.ranked(state, lattice_graph, outgoing=outgoing)[:40]
     fractions = np.linspace(0.0, 1.0, 5)
-    lengths, points = connector.sketches(
-        state, lattice_graph, vertices, outgoing=outgoing, fractions=fractions
-    )
+    lengths, points = connector.sketches(state, lattice_graph, vertices, outgoing=outgoing, fractions=fractions)
     motions = connector.motions_to(state, lattice_graph, vertices, outgoing=outgoing)
     assert points.shape == (vertices.size, 5, 3)
     assert len(motions) == vertices.size

@@ -97,15 +97,11 @@ def _libraries(
             if start != goal:
                 out.append([tuple(p.tolist()) for p in library_paths(search, start, goal, max_paths=500)])
             vertices = rng.choice(36, size=3, replace=False)
-            joins = Joins(
-                vertices, rng.uniform(0.2, 3.0, 3), np.arange(3) + 999, rng.random((x.shape[0], 3)) < 0.7
-            )
+            joins = Joins(vertices, rng.uniform(0.2, 3.0, 3), np.arange(3) + 999, rng.random((x.shape[0], 3)) < 0.7)
             out.append([tuple(p.tolist()) for p in library_paths(search, joins, goal, max_paths=500)])
         # An off-graph goal (searched anew each time), from a vertex and from an off-graph start.
         into = rng.choice(36, size=4, replace=False)
-        goal_joins = Joins(
-            into, rng.uniform(0.2, 3.0, 4), np.arange(4) + 2000, rng.random((x.shape[0], 4)) < 0.7
-        )
+        goal_joins = Joins(into, rng.uniform(0.2, 3.0, 4), np.arange(4) + 2000, rng.random((x.shape[0], 4)) < 0.7)
         for origin in (int(rng.integers(36)), joins):
             out.append([tuple(p.tolist()) for p in library_paths(search, origin, goal_joins, max_paths=500)])
     return out

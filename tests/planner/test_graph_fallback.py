@@ -17,9 +17,7 @@ def test_posterior_matches_a_brute_force_count() -> None:
     want = (worlds[keep].sum(axis=0) + 4.0 * worlds.mean(axis=0)) / (keep.sum() + 4.0)
     want[3], want[7] = 1.0, 0.0
     np.testing.assert_allclose(theta, want)
-    weighted = posterior_free_probability(
-        worlds, np.ones(60), outcomes, num_edges=20, alpha=1.0, pseudo_count=4.0
-    )
+    weighted = posterior_free_probability(worlds, np.ones(60), outcomes, num_edges=20, alpha=1.0, pseudo_count=4.0)
     np.testing.assert_allclose(weighted, theta)
     # No world agrees with the outcome: only the (pseudo-counted) marginal remains.
     far = posterior_free_probability(
@@ -34,6 +32,4 @@ def test_weights_are_finite_and_prefer_likely_free_edges() -> None:
     assert np.all(np.isfinite(weights))
     assert np.all(weights >= 0)
     assert weights[0] < weights[2]
-    assert (
-        posterior_free_probability(None, None, {0: True}, num_edges=3, alpha=0.99, pseudo_count=1.0)[1] == 0.5
-    )
+    assert posterior_free_probability(None, None, {0: True}, num_edges=3, alpha=0.99, pseudo_count=1.0)[1] == 0.5

@@ -49,9 +49,7 @@ def test_draw_states_keeps_valid_ones_with_their_parents() -> None:
     assert isinstance(sampler, StateSampler)
     states = np.array([[0.1, 0.1], [0.9, 0.9], [0.1, 0.9]])
     mix = SampleMix(200, 0.3, 0.3, 0.2, (0.02, 0.1))
-    drawn, parents = draw_states(
-        np.random.default_rng(0), sampler, states, (np.array([0]), np.array([1, 2])), mix
-    )
+    drawn, parents = draw_states(np.random.default_rng(0), sampler, states, (np.array([0]), np.array([1, 2])), mix)
     assert 0 < drawn.shape[0] <= 200
     assert parents.shape == (drawn.shape[0], 2)
     assert sampler.valid(drawn).all()
@@ -81,9 +79,7 @@ def test_joins_are_new_pairs_within_reach() -> None:
 def test_straight_motions_drop_statically_invalid_ones() -> None:
     states = np.array([[0.1, 0.5], [0.9, 0.5], [0.1, 0.1], [0.9, 0.1]])
     connector = StraightConnector(reach=2.0, resolution=0.05)
-    kept, motions = straight_motions(
-        states, np.array([[0, 1], [2, 3]]), connector=connector, sampler=DiskSampler()
-    )
+    kept, motions = straight_motions(states, np.array([[0, 1], [2, 3]]), connector=connector, sampler=DiskSampler())
     assert kept.tolist() == [[2, 3]]  # 0 -> 1 crosses the disk
     assert motions[0].shape[1] == 2
     assert np.allclose(motions[0][0], states[2])

@@ -75,9 +75,7 @@ def test_blocked_first_joins_grow_to_a_free_one(prior: WorldPrior) -> None:
     assert first in result.motions
     assert np.allclose(result.motions[first][0], START)
     assert wall.check_motion(result.motions[first])  # the join it flies is a free one
-    again = Planner(prior, snap_tolerance=1e-6).plan(
-        START, int(prior.trees[0].goal), JoinWall(prior, wall.blocked)
-    )
+    again = Planner(prior, snap_tolerance=1e-6).plan(START, int(prior.trees[0].goal), JoinWall(prior, wall.blocked))
     assert [(c.edge, c.free) for c in again.checks] == [(c.edge, c.free) for c in result.checks]
     without = Planner(prior, snap_tolerance=1e-6, growth=None).plan(START, int(prior.trees[0].goal), wall)
     assert without.status is PlanStatus.NO_PATH
@@ -164,9 +162,7 @@ def test_the_ranking_follows_the_lazy_weight_of_each_sketched_join(prior: WorldP
     ordered = prior_ranking(ranking, lengths, points, index, prior)
     assert sorted(ordered.tolist()) == sorted(ranking.tolist())
     assert not np.array_equal(ordered, ranking)
-    theta = np.average(
-        imputed_columns(index, prior.worlds, list(points)), axis=0, weights=prior.world_weights
-    )
+    theta = np.average(imputed_columns(index, prior.worlds, list(points)), axis=0, weights=prior.world_weights)
     weight = -np.log(np.clip(theta, 1e-3, 1.0)) + 0.0 * lengths
     position = {int(v): i for i, v in enumerate(ranking.tolist())}
     surprise = weight[[position[int(v)] for v in ordered.tolist()]]

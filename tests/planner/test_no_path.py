@@ -35,9 +35,7 @@ def shipped() -> tuple[WorldPrior, Any]:
 def _goal_in_a_can(prior: WorldPrior, domain: Any) -> tuple[np.ndarray, Scene]:
     goal = prior.graph.vertex_states[1] + NEAR_GOAL
     scene = Scene(margin=0.0)
-    scene.add(
-        Box([0.15, 0.15, 0.15]), Pose(domain.end_effector_positions(goal[None])[0].tolist()), name="can"
-    )
+    scene.add(Box([0.15, 0.15, 0.15]), Pose(domain.end_effector_positions(goal[None])[0].tolist()), name="can")
     return goal, scene
 
 
@@ -48,9 +46,7 @@ def test_a_blocked_goal_state_is_named_with_what_blocks_it(shipped: tuple[WorldP
     assert result.status is PlanStatus.NO_PATH
     reason = result.reason
     assert "from the start (vertex 0: [0.5, 0.7, 0.0, -1.6, 0.0, 2.4, 0.785])" in reason
-    assert (
-        "to the goal [-0.45, 0.75, 0.0, -1.6, 0.0, 2.4, 0.785]" in reason
-    )  # an off-graph state: no vertex id
+    assert "to the goal [-0.45, 0.75, 0.0, -1.6, 0.0, 2.4, 0.785]" in reason  # an off-graph state: no vertex id
     assert "all 4 edges joining the goal" in reason
     assert "were checked blocked" in reason
     assert "the goal state itself is blocked: scene object 'can' (panda_" in reason
@@ -83,9 +79,7 @@ def test_without_an_explainer_the_reason_still_names_the_states() -> None:
     log = [CheckRecord(0, 1, False, "graph", 0.0, 0.0)]
     oracle = TableOracle(np.array([True, False]))
     reason = no_path_reason(query, log, oracle, edge_states_of(_prior_of(graph), query, None))
-    assert reason.startswith(
-        "no free path from the start (vertex 0: [0.0, 0.0]) to the goal (vertex 2: [2.0, 0.0])"
-    )
+    assert reason.startswith("no free path from the start (vertex 0: [0.0, 0.0]) to the goal (vertex 2: [2.0, 0.0])")
     assert "1 blocked edges disconnect them (1 checks)" in reason
     assert blocked_end(query, log) is PlanCause.GOAL_BLOCKED  # its only edge is the blocked one
     empty = QueryGraph(

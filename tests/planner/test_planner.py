@@ -86,9 +86,7 @@ def test_the_precomputed_tree_serves_its_query(problem: Problem, prior: WorldPri
     assert other.query == "online"
 
 
-def test_a_repeated_online_query_says_its_model_came_from_the_cache(
-    problem: Problem, prior: WorldPrior
-) -> None:
+def test_a_repeated_online_query_says_its_model_came_from_the_cache(problem: Problem, prior: WorldPrior) -> None:
     planner = Planner(prior)
     row = problem.require_worlds().X[int(problem.require_worlds().test_ids[0])]
     first, again = (planner.plan(0, 5, TableOracle(row)) for _ in range(2))
@@ -146,9 +144,7 @@ def test_no_path_only_when_the_graph_is_cut(problem: Problem, prior: WorldPrior)
 
 
 @pytest.mark.parametrize("budget", [{"max_checks": 1}, {"time_budget_s": 1e-9}])
-def test_budgets_end_with_their_own_status(
-    problem: Problem, prior: WorldPrior, budget: dict[str, float]
-) -> None:
+def test_budgets_end_with_their_own_status(problem: Problem, prior: WorldPrior, budget: dict[str, float]) -> None:
     world = np.ones(problem.num_edges, dtype=bool)
     result = Planner(prior).plan(problem.start, problem.goal, TableOracle(world), **budget)  # type: ignore[arg-type]
     assert result.status is PlanStatus.BUDGET_EXHAUSTED
@@ -274,9 +270,7 @@ def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_prio
     # eta 1 everywhere: BiSECt from the first check.
     assert first_stage(Planner(bisect_prior), own.start, own.goal) == "bisect"
     # The tree's own eta 0.05 walks its tree; another query keeps the prior's eta 1.
-    with_leaf = dataclasses.replace(
-        bisect_prior, trees=(dataclasses.replace(own, leaf=LeafSetting(0.05, None)),)
-    )
+    with_leaf = dataclasses.replace(bisect_prior, trees=(dataclasses.replace(own, leaf=LeafSetting(0.05, None)),))
     planner = Planner(with_leaf)
     assert first_stage(planner, own.start, own.goal) == "tree"
     other = next((s, g) for s, g in _queries(problem, 50, seed=3) if (s, g) != (own.start, own.goal))
@@ -315,9 +309,7 @@ def test_new_queries_use_the_priors_region_rule(problem: Problem, prior: WorldPr
                 assert all(outcomes[int(e)] for e in result.edges)
 
 
-def test_forgotten_queries_are_new_again_and_the_query_graph_is_the_priors(
-    problem: Problem, prior: WorldPrior
-) -> None:
+def test_forgotten_queries_are_new_again_and_the_query_graph_is_the_priors(problem: Problem, prior: WorldPrior) -> None:
     planner = Planner(prior)
     assert problem.worlds is not None
     row = problem.worlds.X[int(problem.worlds.test_ids[0])]

@@ -56,9 +56,7 @@ def test_round_trip_keeps_everything(prior: WorldPrior, tmp_path: Path) -> None:
     for a, b in zip(back.trees, prior.trees, strict=True):
         np.testing.assert_array_equal(a.tree.edge, b.tree.edge)
         np.testing.assert_array_equal(a.tree.free_fraction, b.tree.free_fraction)
-        assert all(
-            np.array_equal(x, y) for x, y in zip(a.library.path_edges, b.library.path_edges, strict=True)
-        )
+        assert all(np.array_equal(x, y) for x, y in zip(a.library.path_edges, b.library.path_edges, strict=True))
         assert a.tree.world_free is not None
     # Saving twice gives the same bytes (reproducible files).
     assert save_prior(tmp_path / "q.npz", back).read_bytes() == path.read_bytes()
@@ -183,9 +181,7 @@ def test_the_shipped_files_fit_the_read_limits_with_room() -> None:
         assert len(infos) * 10 < safe_npz.MAX_MEMBERS
 
 
-def test_a_trees_own_leaf_setting_round_trips_and_version_1_files_still_load(
-    prior: WorldPrior, tmp_path: Path
-) -> None:
+def test_a_trees_own_leaf_setting_round_trips_and_version_1_files_still_load(prior: WorldPrior, tmp_path: Path) -> None:
     own = dataclasses.replace(prior.trees[0], leaf=LeafSetting(0.1, None))
     other = dataclasses.replace(prior.trees[1], leaf=LeafSetting(0.6, 20.0))
     path = save_prior(tmp_path / "p.npz", dataclasses.replace(prior, trees=(own, other)))

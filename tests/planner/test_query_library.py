@@ -88,12 +88,8 @@ def test_joined_start_and_goal_take_the_best_free_join(setup: tuple[object, np.n
     search = _search(problem, X)
     e, n = graph.num_edges, X.shape[0]
     # A start joined to vertices 2 and 5, a goal joined from 37 and 40; joins to 2 and into 37 never free.
-    start = Joins(
-        np.array([2, 5]), np.array([1.0, 9.0]), np.array([e, e + 1]), np.tile([False, True], (n, 1))
-    )
-    goal = Joins(
-        np.array([37, 40]), np.array([1.0, 1.0]), np.array([e + 2, e + 3]), np.tile([False, True], (n, 1))
-    )
+    start = Joins(np.array([2, 5]), np.array([1.0, 9.0]), np.array([e, e + 1]), np.tile([False, True], (n, 1)))
+    goal = Joins(np.array([37, 40]), np.array([1.0, 1.0]), np.array([e + 2, e + 3]), np.tile([False, True], (n, 1)))
     paths = library_paths(search, start, goal, max_paths=500)
     assert paths
     for p in paths:

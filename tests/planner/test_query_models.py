@@ -24,9 +24,7 @@ def prior() -> WorldPrior:
 
 
 def test_per_prior_work_is_done_once_and_models_are_cached(prior: WorldPrior) -> None:
-    models = QueryModels(
-        dataclasses.replace(prior, eta=1.0), straight_connector(prior), expand_threshold=0.01
-    )
+    models = QueryModels(dataclasses.replace(prior, eta=1.0), straight_connector(prior), expand_threshold=0.01)
     assert "edge_marginal" not in models.prior.__dict__
     models.warm_up()
     assert "edge_marginal" in models.prior.__dict__  # BiSECt's bias over the prior: no first query pays it

@@ -37,9 +37,7 @@ def test_growth_finds_a_path_where_the_roadmap_has_none(shipped: tuple[WorldPrio
     without = Planner(prior, growth=None).plan(0, 1, _checker(domain))
     assert without.status is PlanStatus.NO_PATH
     assert without.growth is None
-    assert (
-        "no free path from the start (vertex 0: [0.5, 0.7" in without.reason
-    )  # configurations, not ids only
+    assert "no free path from the start (vertex 0: [0.5, 0.7" in without.reason  # configurations, not ids only
     result = Planner(prior).plan(0, 1, _checker(domain))
     assert result.found
     assert result.stage is PlanStage.GROW
@@ -75,9 +73,7 @@ def test_same_seed_same_checks_same_path(shipped: tuple[WorldPrior, Any]) -> Non
     assert first.edges.tolist() == again.edges.tolist()
     assert first.growth is not None
     assert again.growth is not None
-    np.testing.assert_array_equal(
-        first.growth.query.graph.vertex_states, again.growth.query.graph.vertex_states
-    )
+    np.testing.assert_array_equal(first.growth.query.graph.vertex_states, again.growth.query.graph.vertex_states)
 
 
 def test_a_growth_budget_ends_with_no_path_and_says_what_was_tried(shipped: tuple[WorldPrior, Any]) -> None:
@@ -93,9 +89,7 @@ def test_a_growth_budget_ends_with_no_path_and_says_what_was_tried(shipped: tupl
     assert "vertex 1: [-0.5, 0.7" in result.reason
 
 
-@pytest.mark.parametrize(
-    ("budget", "ran_out"), [({"max_checks": 25}, "check budget"), ({"time_budget_s": 0.05}, "")]
-)
+@pytest.mark.parametrize(("budget", "ran_out"), [({"max_checks": 25}, "check budget"), ({"time_budget_s": 0.05}, "")])
 def test_the_plans_budgets_end_growth_with_their_own_status(
     shipped: tuple[WorldPrior, Any], budget: dict[str, Any], ran_out: str
 ) -> None:

@@ -80,9 +80,7 @@ def test_requests_plan_from_where_the_robot_is(session: QuerySession, messages: 
         np.testing.assert_allclose(plan.result.states[0][:3], np.asarray(plan.start)[:3], atol=1e-6)
     # Same bag, same seed: the same checks.
     again = plan_bag_request(QuerySession(load_prior(PRIOR), name="again"), messages, 2, frame="map")
-    assert [(c.edge, c.free) for c in again.result.checks] == [
-        (c.edge, c.free) for c in plans[2].result.checks
-    ]
+    assert [(c.edge, c.free) for c in again.result.checks] == [(c.edge, c.free) for c in plans[2].result.checks]
 
 
 def test_no_robot_state_is_an_error_unless_the_prior_start_is_asked_for(

@@ -34,9 +34,7 @@ FRAME = "map"
 
 def _world(msgs: Any) -> Any:
     yaw = math.radians(30)
-    tet = TriangleMesh(
-        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
-    )
+    tet = TriangleMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]])
     wire = Wire([0, 0, 30], [100, 0, 30], sag=4.0, diameter=0.05)
     return obstacle_markers(
         [

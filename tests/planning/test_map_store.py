@@ -83,9 +83,7 @@ def test_maps_at_each_request_are_what_the_node_applies(rb: RosbagsMessages, tmp
 
 
 def test_robot_description_goes_through_the_given_loader(rb: RosbagsMessages) -> None:
-    text = BagMessage(
-        "/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>")
-    )
+    text = BagMessage("/robot_description", "std_msgs/msg/String", T0, rb("std_msgs/msg/String", data="<robot/>"))
     messages = [text, obstacles_message(rb, T0), goal_message(rb, T0 + 1, (0.0, 0.0, 0.0))]
     plain, _ = maps_at_request(messages, 0, frame_id="map", margin=0.0)
     assert plain.robot_description == "<robot/>"
@@ -115,9 +113,7 @@ def test_unchanged_obstacles_keep_their_parts_and_a_refusal_keeps_the_map(rb: Ro
     second = store.apply_obstacles(update)
     assert second.obstacles["tower/0"] is first.obstacles["tower/0"]  # not rebuilt: the scene reuses it
     assert second.cache is first.cache  # one scene cache per store
-    more = obstacle_markers(
-        [("more/0", Sphere(1.0), Pose())], frame_id="map", msgs=rb, delete_all_first=False
-    )
+    more = obstacle_markers([("more/0", Sphere(1.0), Pose())], frame_id="map", msgs=rb, delete_all_first=False)
     with pytest.raises(MessageError, match="max_markers = 4"):
         store.apply_obstacles(more)
     assert store.snapshot is second
@@ -158,8 +154,7 @@ def test_a_terrain_no_loaded_prior_can_stand_on_is_refused_and_the_maps_are_kept
 def _grid_of_cubes(rb: RosbagsMessages, count: int, *, moved: float = 0.0, serialized: bool) -> Any:
     """DELETEALL then ``count`` 1 m cubes 3 m apart along x at z = 5 m, cube ``box/7`` ``moved`` metres along x."""
     cubes = [
-        (f"box/{k}", Box((1.0, 1.0, 1.0)), Pose((3.0 * k + (moved if k == 7 else 0.0), 0.0, 5.0)))
-        for k in range(count)
+        (f"box/{k}", Box((1.0, 1.0, 1.0)), Pose((3.0 * k + (moved if k == 7 else 0.0), 0.0, 5.0))) for k in range(count)
     ]
     msg = obstacle_markers(cubes, frame_id="map", msgs=rb)
     if serialized:  # as the node's raw subscription takes it

@@ -48,9 +48,7 @@ def request(
 
 
 def test_joint_goal_and_start_in_the_arm_order() -> None:
-    read = read_motion_request(
-        request([constraints({"j2": 2.0, "j1": 1.0})], {"j2": 0.5, "j1": -0.5}), JOINTS
-    )
+    read = read_motion_request(request([constraints({"j2": 2.0, "j1": 1.0})], {"j2": 0.5, "j1": -0.5}), JOINTS)
     assert isinstance(read, MotionRequest)
     assert read.goal.joints is not None
     assert read.goal.joints.tolist() == [1.0, 2.0]
@@ -102,15 +100,11 @@ def result(ok: bool, status: str = "path_found", message: str = "", cause: str =
     [
         (PlanOutcome(result=result(True)), "SUCCESS"),
         (
-            PlanOutcome(
-                result=result(False, "no_free_path", "the start state itself is blocked", "start_blocked")
-            ),
+            PlanOutcome(result=result(False, "no_free_path", "the start state itself is blocked", "start_blocked")),
             "START_STATE_IN_COLLISION",
         ),
         (
-            PlanOutcome(
-                result=result(False, "no_free_path", "the goal state itself is blocked", "goal_blocked")
-            ),
+            PlanOutcome(result=result(False, "no_free_path", "the goal state itself is blocked", "goal_blocked")),
             "GOAL_IN_COLLISION",
         ),
         (PlanOutcome(result=result(False, "max_checks", "10 checks")), "TIMED_OUT"),

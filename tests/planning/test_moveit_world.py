@@ -101,9 +101,7 @@ def test_unset_quaternion_is_no_rotation_and_empty_frame_is_the_planning_frame()
 def test_diffs_add_append_move_remove_and_a_full_scene_replaces() -> None:
     world = MoveItWorld(frame_id=FRAME)
     world.apply(scene(obj("a", primitives=[primitive(2, 0.1)]), obj("b", primitives=[primitive(2, 0.1)])))
-    appended = obj(
-        "a", op=APPEND, at=pose(9, 9, 9), primitives=[primitive(2, 0.2)], primitive_poses=[pose(0, 0, 1)]
-    )
+    appended = obj("a", op=APPEND, at=pose(9, 9, 9), primitives=[primitive(2, 0.2)], primitive_poses=[pose(0, 0, 1)])
     world.apply(scene(appended, diff=True))  # relative to the object's pose; the message's pose is not read
     assert len(world.objects["a"].shapes) == 2
     world.apply(scene(obj("a", op=MOVE, at=pose(5, 0, 0)), diff=True))

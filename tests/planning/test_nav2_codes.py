@@ -105,9 +105,7 @@ def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[B
     box = [("walls/7", Box((120.0, 120.0, 120.0)), Pose(position=tuple(float(v) for v in goal.position)))]
     service.take_map(
         "obstacles",
-        obstacle_markers(
-            box, frame_id="map", msgs=RosbagsMessages(jazzy_typestore()), delete_all_first=False
-        ),
+        obstacle_markers(box, frame_id="map", msgs=RosbagsMessages(jazzy_typestore()), delete_all_first=False),
     )
     error = nav2_error(service.serve_request(goal, None))
     assert error.name == "GOAL_OCCUPIED", error.text
@@ -119,9 +117,7 @@ def _failed(message: str, status: str = "no_free_path", cause: str = "") -> Plan
 
 
 def test_the_codes_come_from_the_cause_not_from_the_text() -> None:
-    walled = (
-        "no free path; all 12 edges joining the start [1.0, 2.0] to the graph (3-5 long) were checked blocked"
-    )
+    walled = "no free path; all 12 edges joining the start [1.0, 2.0] to the graph (3-5 long) were checked blocked"
     assert nav2_error(_failed(walled, cause="start_blocked")).name == "START_OCCUPIED"
     assert nav2_error(_failed(walled)).name == "NO_VALID_PATH"  # words alone name no cause
     assert nav2_error(_failed("x", cause="goal_blocked")).name == "GOAL_OCCUPIED"

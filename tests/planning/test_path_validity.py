@@ -17,9 +17,7 @@ from drd_planner.planning.world_messages import obstacle_markers
 
 def _box_at(service: Any, xyz: Any, key: str = "blocking/1") -> None:
     box = [(key, Box((30.0, 30.0, 30.0)), Pose(position=tuple(float(v) for v in xyz)))]
-    msg = obstacle_markers(
-        box, frame_id="map", msgs=RosbagsMessages(jazzy_typestore()), delete_all_first=False
-    )
+    msg = obstacle_markers(box, frame_id="map", msgs=RosbagsMessages(jazzy_typestore()), delete_all_first=False)
     service.take_map("obstacles", msg)
 
 

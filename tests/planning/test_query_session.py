@@ -58,9 +58,7 @@ def _heli_parts(session: QuerySession, seed: int) -> tuple[dict[str, Parts], Hei
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     world = domain.make_world("wires", seed)
-    return {
-        name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)
-    }, world.terrain
+    return {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}, world.terrain
 
 
 def _heli_snapshot(session: QuerySession, seed: int) -> MapSnapshot:
@@ -161,9 +159,7 @@ def test_same_seed_same_checks_and_the_snapshot_cache(
     fresh = QuerySession(session.prior, name="again")
     start = _heli_start(session)
     other = fresh.plan(snapshot, start, HELI_GOAL, seed=0)
-    assert [(c.edge, c.free, c.stage) for c in other.checks] == [
-        (c.edge, c.free, c.stage) for c in first.checks
-    ]
+    assert [(c.edge, c.free, c.stage) for c in other.checks] == [(c.edge, c.free, c.stage) for c in first.checks]
     assert other.path_edges == first.path_edges
     np.testing.assert_array_equal(other.states, first.states)
     # The same session on the same snapshot: the same motion ids, every answer from the cache.
@@ -314,15 +310,11 @@ def test_recheck_finds_a_box_on_a_motion_edge(
     motion = result.path_edges[0]
     states = session.edge_states(motion)
     middle = states[states.shape[0] // 2, :3]
-    far = snapshot.with_obstacles(
-        {**snapshot.obstacles, "probe/far": ((Box([5.0, 5.0, 5.0]), Pose([5000.0, 0, 0])),)}
-    )
+    far = snapshot.with_obstacles({**snapshot.obstacles, "probe/far": ((Box([5.0, 5.0, 5.0]), Pose([5000.0, 0, 0])),)})
     kept = recheck_plan(session, result.path_edges, snapshot, far)
     assert kept.kept
     assert kept.rechecked == ()
-    new = snapshot.with_obstacles(
-        {**snapshot.obstacles, "probe/mid": ((Box([3.0, 3.0, 3.0]), Pose(middle)),)}
-    )
+    new = snapshot.with_obstacles({**snapshot.obstacles, "probe/mid": ((Box([3.0, 3.0, 3.0]), Pose(middle)),)})
     assert motion in affected_edges(session, result.path_edges, snapshot, new)
     outcome = recheck_plan(session, result.path_edges, snapshot, new)
     assert not outcome.kept
@@ -346,9 +338,7 @@ def test_an_off_graph_goal_state_is_joined_too(
     heli_plan: tuple[QuerySession, MapSnapshot, QueryPlanResult],
 ) -> None:
     session, snapshot, _ = heli_plan
-    goal = session.goal_state_from_position(
-        session.vertex_state(HELI_GOAL)[:3] + np.array([20.0, 0.0, 0.0]), yaw=0.0
-    )
+    goal = session.goal_state_from_position(session.vertex_state(HELI_GOAL)[:3] + np.array([20.0, 0.0, 0.0]), yaw=0.0)
     result = session.plan(snapshot, 0, goal, seed=0)
     assert result.ok
     assert result.path_vertices[0] == 0
@@ -477,17 +467,13 @@ def test_arm_recheck_finds_a_box_on_a_motion_edge(arm: tuple[QuerySession, MapSn
     states = session.edge_states(motion)
     q_mid = states[states.shape[0] // 2]
     hand = domain.robot.fk.link_pose(q_mid, domain.robot.chain.tip_link)[0, :3, 3]
-    new = snapshot.with_obstacles(
-        {**snapshot.obstacles, "probe/hand": ((Box([0.05, 0.05, 0.05]), Pose(hand)),)}
-    )
+    new = snapshot.with_obstacles({**snapshot.obstacles, "probe/hand": ((Box([0.05, 0.05, 0.05]), Pose(hand)),)})
     assert not session.checker(new).check_motion(states)
     outcome = recheck_plan(session, result.path_edges, snapshot, new)
     assert motion in outcome.affected
     assert not outcome.kept
     assert outcome.blocked == (motion,)
-    far = snapshot.with_obstacles(
-        {**snapshot.obstacles, "probe/far": ((Box([0.1, 0.1, 0.1]), Pose([3.0, 3.0, 0.5])),)}
-    )
+    far = snapshot.with_obstacles({**snapshot.obstacles, "probe/far": ((Box([0.1, 0.1, 0.1]), Pose([3.0, 3.0, 0.5])),)})
     kept = recheck_plan(session, result.path_edges, snapshot, far)
     assert kept.kept
     assert kept.affected == ()
@@ -523,9 +509,7 @@ def test_a_plan_that_grew_the_roadmap_is_verified_with_session_ids_for_its_new_e
     edge = grown[len(grown) // 2]
     middle = session.edge_states(edge)[len(session.edge_states(edge)) // 2]
     tool = domain.end_effector_positions(middle[None])[0]
-    moved = MapSnapshot(
-        2, {**snapshot.obstacles, "new": ((Box([0.1, 0.1, 0.1]), Pose(tool.tolist())),)}, None, 0.0
-    )
+    moved = MapSnapshot(2, {**snapshot.obstacles, "new": ((Box([0.1, 0.1, 0.1]), Pose(tool.tolist())),)}, None, 0.0)
     assert edge in affected_edges(session, result.path_edges, snapshot, moved)
 
 

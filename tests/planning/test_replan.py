@@ -243,9 +243,7 @@ def test_heli_affected_edges_are_conservative(heli: tuple[PlanningSession, MapSn
     starts = np.array([session.edge_states(e)[0, :3] for e in range(graph.num_edges)])
     dist = np.min(np.linalg.norm(starts[:, None, :] - path_xyz[None, ::4], axis=2), axis=1)
     nearby = np.flatnonzero(dist < 40.0)
-    pool = np.unique(
-        np.concatenate([plan.path_edges, rng.choice(nearby, size=min(120, nearby.size), replace=False)])
-    )
+    pool = np.unique(np.concatenate([plan.path_edges, rng.choice(nearby, size=min(120, nearby.size), replace=False)]))
     pool = pool[session.checker(snapshot).check_many(pool)]
     assert pool.size > 50
     events = near_but_free = pruned = 0

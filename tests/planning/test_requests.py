@@ -82,9 +82,7 @@ def test_a_goal_yaw_is_honoured_and_a_goal_without_orientation_takes_any_heading
     strict = GoalTolerances(yaw_rad=0.01)
     assert isinstance(goal_endpoint(session, _goal(position, yaw=0.05), MapSnapshot(0), strict), np.ndarray)
     assert goal_endpoint(session, Goal(position=position, yaw=None), MapSnapshot(0)) == stored
-    off = goal_endpoint(
-        session, Goal(position=position + np.array([0.0, 37.0, 0.0]), yaw=None), MapSnapshot(0)
-    )
+    off = goal_endpoint(session, Goal(position=position + np.array([0.0, 37.0, 0.0]), yaw=None), MapSnapshot(0))
     assert isinstance(off, np.ndarray)
     assert np.isnan(off[3])
     assert np.allclose(off[:3], position + np.array([0.0, 37.0, 0.0]))

@@ -63,9 +63,7 @@ def test_a_request_that_needs_growth_is_planned_and_verified(prior: WorldPrior) 
     assert record["time_s"] > 0
 
 
-def test_the_command_writes_the_json(
-    prior: WorldPrior, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_the_command_writes_the_json(prior: WorldPrior, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "plan.json"
     scene, request = FAMILY / f"scene{SCENE}.yaml", FAMILY / f"request{SCENE}.yaml"
     argv = [
@@ -105,24 +103,18 @@ def test_a_goal_in_degrees_is_refused_with_the_limits(prior: WorldPrior, tmp_pat
     record = json.loads(out.read_text())
     assert record["status"] == "refused"
     assert record["checks"] == 0
-    assert record["reason"].startswith(
-        "goal joint values are beyond the joint limits: panda_joint2 = -45.000 not in"
-    )
+    assert record["reason"].startswith("goal joint values are beyond the joint limits: panda_joint2 = -45.000 not in")
     assert "(rad); the values look like degrees" in record["reason"]
 
 
-def test_errors_are_one_line_and_exit_2(
-    prior: WorldPrior, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_errors_are_one_line_and_exit_2(prior: WorldPrior, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     scene = str(FAMILY / "scene0001.yaml")
     assert main(["plan", "--prior", str(PRIOR), "--scene", scene]) == 2
     assert (
         capsys.readouterr().err.strip()
         == "drd: error: --scene needs --request REQUEST.yaml (the MoveIt MotionPlanRequest to plan)"
     )
-    assert (
-        main(["plan", "--prior", str(PRIOR), "--scene", scene, "--request", str(tmp_path / "none.yaml")]) == 2
-    )
+    assert main(["plan", "--prior", str(PRIOR), "--scene", scene, "--request", str(tmp_path / "none.yaml")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("drd: error: cannot read motion plan request")
     assert "\n" not in err

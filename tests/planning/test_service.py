@@ -219,13 +219,9 @@ def test_a_terrain_above_every_vertex_is_refused_and_the_next_plan_says_so(
     terrain = service.snapshot.terrain
     assert terrain is not None
     raised = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1600.0)
-    cloud = cloud_from_heightfield(
-        raised, frame_id="map", stamp=(1, 0), msgs=RosbagsMessages(jazzy_typestore())
-    )
+    cloud = cloud_from_heightfield(raised, frame_id="map", stamp=(1, 0), msgs=RosbagsMessages(jazzy_typestore()))
     used = service.snapshot.version
-    with pytest.raises(
-        DrdError, match="not the prior's terrain: every lattice vertex over the terrain lies below"
-    ):
+    with pytest.raises(DrdError, match="not the prior's terrain: every lattice vertex over the terrain lies below"):
         service.take_map("terrain", cloud)
     service.plan_now(goal, None)
     record = out.records[-1]

@@ -35,10 +35,7 @@ def bundle(tmp_path_factory: pytest.TempPathFactory) -> TreeBundle:
     argv = ["build-dataset", "--domain", "helicopter", "--world-model", "wires", "--worlds", "40"]
     argv += ["--seed", "3", "--out", str(dataset), "--workers", "1", "--domain-spec", SPEC]
     assert main(argv) == 0
-    assert (
-        main(["build-tree", "--dataset", str(dataset), "--out", str(tree), "--eta", "0.2", "--kappa", "10"])
-        == 0
-    )
+    assert main(["build-tree", "--dataset", str(dataset), "--out", str(tree), "--eta", "0.2", "--kappa", "10"]) == 0
     return load_tree_bundle(tree, expected_domain="helicopter")
 
 
@@ -63,9 +60,7 @@ def test_plan_is_verified_and_matches_the_offline_episode(bundle: TreeBundle) ->
             POLICIES["direct_bisect"](ctx),
             session.checker(snapshot),
         )
-        assert [(c.edge, c.free, c.stage) for c in offline.checks] == [
-            (c.edge, c.free, c.stage) for c in result.checks
-        ]
+        assert [(c.edge, c.free, c.stage) for c in offline.checks] == [(c.edge, c.free, c.stage) for c in result.checks]
         checked = {c.edge: c.free for c in result.checks}
         if seed in BLOCKED_SEEDS:  # every library path is blocked in these worlds
             assert not result.ok, result.message
@@ -161,9 +156,7 @@ def test_snapshots_with_the_same_terrain_share_its_collider_and_answer_alike() -
     second = first.with_obstacles({})
     assert first.scene is not second.scene
     assert first.scene.terrain is second.scene.terrain
-    assert first.cache.terrain_collider(world.terrain) is second.cache.terrain_collider(
-        world.terrain
-    )  # built once
+    assert first.cache.terrain_collider(world.terrain) is second.cache.terrain_collider(world.terrain)  # built once
     lone = Scene(margin=session.margin)
     lone.add_terrain(world.terrain)  # its own collider
     a, b = session.checker(second), session.domain.checker(lone)

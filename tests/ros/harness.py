@@ -77,9 +77,7 @@ class Peer:
             for status in array.status:
                 if status.name == name and status.values:
                     values = {kv.key: kv.value for kv in status.values}
-                    values["level"] = str(
-                        ord(status.level) if isinstance(status.level, bytes) else status.level
-                    )
+                    values["level"] = str(ord(status.level) if isinstance(status.level, bytes) else status.level)
                     values["message"] = status.message
                     out.append(values)
         return out

@@ -99,9 +99,7 @@ def helicopter_bases(domain: Any, *, seed: int, frame_id: str = "map") -> tuple[
     """(MarkerArray, PointCloud2): the "wires" world of a helicopter domain drawn with ``seed``."""
     world = domain.make_world("wires", seed)
     segments = int(domain.spec().get("wire_segments", 8))
-    markers, cloud = helicopter_world_messages(
-        world, wire_segments=segments, frame_id=frame_id, msgs=RclpyMessages()
-    )
+    markers, cloud = helicopter_world_messages(world, wire_segments=segments, frame_id=frame_id, msgs=RclpyMessages())
     return markers, cloud
 
 
@@ -574,9 +572,7 @@ def goal_cases(rng: Rng, goal: Any, *, count: int, tolerance: float, valid_share
         msg = _copy(goal)
         if rng.random() < valid_share:
             axis = _pick(rng, "xyz")
-            setattr(
-                msg.pose.position, axis, getattr(msg.pose.position, axis) + rng.uniform(-0.5, 0.5) * tolerance
-            )
+            setattr(msg.pose.position, axis, getattr(msg.pose.position, axis) + rng.uniform(-0.5, 0.5) * tolerance)
             cases.append(Case("goal_pose", "goal/within_tolerance", msg, False, ()))
             continue
         kind = _pick(rng, kinds)

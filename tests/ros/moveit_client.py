@@ -59,9 +59,7 @@ def request(scenario: dict[str, Any], *, position_goal: bool = False) -> GetMoti
         goal.position_constraints = [PositionConstraint(link_name="panda_hand")]
     else:
         goal.joint_constraints = [
-            JointConstraint(
-                joint_name=n, position=float(q), tolerance_above=1e-3, tolerance_below=1e-3, weight=1.0
-            )
+            JointConstraint(joint_name=n, position=float(q), tolerance_above=1e-3, tolerance_below=1e-3, weight=1.0)
             for n, q in zip(scenario["joints"], scenario["goal"], strict=True)
         ]
     plan.goal_constraints = [goal]

@@ -36,17 +36,13 @@ def _constants() -> dict[str, str]:
 
 def _calls(name: str) -> list[ast.Call]:
     return [
-        n
-        for n in ast.walk(_tree())
-        if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == name
+        n for n in ast.walk(_tree()) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == name
     ]
 
 
 def test_launch_file_compiles() -> None:
     compile(LAUNCH.read_text(), str(LAUNCH), "exec")
-    assert any(
-        isinstance(n, ast.FunctionDef) and n.name == "generate_launch_description" for n in _tree().body
-    )
+    assert any(isinstance(n, ast.FunctionDef) and n.name == "generate_launch_description" for n in _tree().body)
 
 
 def test_launch_file_names_the_package_executable_node_and_config_that_exist() -> None:
@@ -58,9 +54,7 @@ def test_launch_file_names_the_package_executable_node_and_config_that_exist() -
     (node,) = _calls("LifecycleNode")
     keywords = {k.arg: k.value for k in node.keywords}
     assert {"package", "executable", "name", "namespace", "parameters"} <= set(keywords)
-    declared = {
-        c.args[0].value for c in _calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)
-    }
+    declared = {c.args[0].value for c in _calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)}
     assert {"config", "namespace", "autostart"} <= declared
     # Both automatic transitions are emitted: configure, then activate once inactive.
     source = LAUNCH.read_text()
@@ -87,9 +81,7 @@ def _load() -> ModuleType:
 
 def test_generate_launch_description_builds_the_lifecycle_node_and_its_transitions() -> None:
     # launch_ros first: an unrelated "launch" package exists on PyPI, launch_ros does not.
-    launch_ros = pytest.importorskip(
-        "launch_ros", reason="ROS 2 launch_ros not installed (needs a ROS install)"
-    )
+    launch_ros = pytest.importorskip("launch_ros", reason="ROS 2 launch_ros not installed (needs a ROS install)")
     launch = pytest.importorskip("launch", reason="ROS 2 launch not installed (needs a ROS install)")
     from launch.actions import DeclareLaunchArgument, EmitEvent, RegisterEventHandler
 

@@ -29,9 +29,7 @@ import numpy as np
 import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
-pytest.importorskip(
-    "moveit_msgs.srv", reason="moveit_msgs not importable (scripts/tools/build_moveit_msgs.sh)"
-)
+pytest.importorskip("moveit_msgs.srv", reason="moveit_msgs not importable (scripts/tools/build_moveit_msgs.sh)")
 
 from harness import Peer, active_planner, private_context, spin_until  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
@@ -98,9 +96,7 @@ def _lines(process: subprocess.Popen[str]) -> queue.Queue[str]:
     return lines
 
 
-def _next(
-    executor: Any, lines: queue.Queue[str], process: subprocess.Popen[str], timeout: float = 180.0
-) -> Any:
+def _next(executor: Any, lines: queue.Queue[str], process: subprocess.Popen[str], timeout: float = 180.0) -> Any:
     """Spin until the client's next JSON line."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
@@ -184,9 +180,7 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
             assert "inverse kinematics" in position["message"]
 
             assert _next(executor, lines, process) == {"step": "octomap"}
-            assert spin_until(
-                executor, lambda: any("octomaps are not supported" in e for e in node.errors), 60
-            )
+            assert spin_until(executor, lambda: any("octomaps are not supported" in e for e in node.errors), 60)
             assert node.snapshot.version == version  # the maps unchanged
             _say(process, "refused")
 
@@ -196,9 +190,7 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
             )
             _say(process, "applied")
             blocked = _next(executor, lines, process)
-            assert (blocked["code"], blocked["points"]) == (-12, 0), (
-                blocked
-            )  # GOAL_IN_COLLISION, no trajectory
+            assert (blocked["code"], blocked["points"]) == (-12, 0), blocked  # GOAL_IN_COLLISION, no trajectory
             assert _next(executor, lines, process) == {"step": "imports", "drd": []}
             assert process.wait(timeout=30) == 0
         finally:
@@ -207,9 +199,7 @@ def test_a_moveit_client_sends_a_scene_and_gets_a_trajectory_checked_free_on_it(
         assert not [e for e in node.errors if "internal error" in e], node.errors
 
 
-def test_without_moveit_msgs_the_node_runs_without_the_interface(
-    context: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_without_moveit_msgs_the_node_runs_without_the_interface(context: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     from drd_planner.ros import moveit_host
 
     def missing() -> tuple[Any, Any]:

@@ -87,9 +87,7 @@ def _lines(process: subprocess.Popen[str]) -> queue.Queue[str]:
     return lines
 
 
-def _next(
-    executor: Any, lines: queue.Queue[str], process: subprocess.Popen[str], timeout: float = 90.0
-) -> Any:
+def _next(executor: Any, lines: queue.Queue[str], process: subprocess.Popen[str], timeout: float = 90.0) -> Any:
     """Spin until the client's next JSON line (its steps need the node's maps and plans)."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
@@ -166,9 +164,7 @@ def test_a_nav2_client_plans_fails_with_codes_asks_validity_and_cancels(
             block = _next(executor, lines, process)
             version = node.snapshot.version
             box = [("blocking/1", Box((30.0, 30.0, 30.0)), Pose(position=tuple(block["at"])))]
-            peer.obstacles.publish(
-                obstacle_markers(box, frame_id="map", msgs=RclpyMessages(), delete_all_first=False)
-            )
+            peer.obstacles.publish(obstacle_markers(box, frame_id="map", msgs=RclpyMessages(), delete_all_first=False))
             assert spin_until(executor, lambda: node.snapshot.version > version)
             slow.set()
             assert process.stdin is not None

@@ -324,9 +324,7 @@ def test_a_burst_of_topic_requests_is_answered_or_coalesced(context: Any) -> Non
         summaries = [s for s in peer.summaries() if s["request"] == "goal_pose"]
         assert served() == sent  # every request answered or counted as superseded, none twice
         assert summaries[-1]["request_stamp"] == f"{sent}.000000000"  # the newest one is always served
-        assert len(peer.checks) == len(
-            summaries
-        )  # one check log per served request (plan is latched, depth 1)
+        assert len(peer.checks) == len(summaries)  # one check log per served request (plan is latched, depth 1)
         assert peer.plans
 
 
@@ -369,9 +367,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
     beside = Path(sys.executable).parent / "planner_node"  # the venv's scripts, even when not on PATH
     exe = str(beside) if beside.is_file() else shutil.which("planner_node")
     if exe is None:
-        pytest.skip(
-            "the planner_node console script is not installed (pip install -e ros2_ws/src/drd_planner)"
-        )
+        pytest.skip("the planner_node console script is not installed (pip install -e ros2_ws/src/drd_planner)")
     args = ["--ros-args", "-p", "prior_paths:=[heli_wires]", "-p", "autostart:=true"]
     args += ["-p", "start_without_robot_state:=prior_start"]
     process = subprocess.Popen([exe, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -460,9 +456,7 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         assert first.ok
         # Far from every plan edge: nothing to re-check, the plan stays, no new plan is published.
         far = Pose(position=(-5000.0, -5000.0, 0.0))
-        update = obstacle_markers(
-            [("extra/1", Sphere(5.0), far)], frame_id="map", msgs=msgs, delete_all_first=False
-        )
+        update = obstacle_markers([("extra/1", Sphere(5.0), far)], frame_id="map", msgs=msgs, delete_all_first=False)
         peer.obstacles.publish(update)
         assert spin_until(executor, lambda: bool(peer.summaries("drd_planner: map update")))
         kept = peer.summaries("drd_planner: map update")[-1]
@@ -484,9 +478,7 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         def replans() -> list[dict[str, str]]:
             return [s for s in peer.summaries() if s["request"] == "map_update"]
 
-        assert spin_until(
-            executor, lambda: len(peer.plans) >= 2 and bool(replans()) and len(peer.checks) >= 2
-        )
+        assert spin_until(executor, lambda: len(peer.plans) >= 2 and bool(replans()) and len(peer.checks) >= 2)
         replanned = replans()[-1]
         assert f"plan edge {edge} blocked" in replanned["replan_reason"]
         second = node.published

@@ -79,9 +79,7 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         peer.obstacles.publish(markers)
         assert spin_until(executor, lambda: node.snapshot.version >= 1)
         peer.joint_goals.publish(_joint_goal(session))
-        assert spin_until(
-            executor, lambda: bool(peer.trajectories) and bool(peer.plans) and bool(peer.checks)
-        )
+        assert spin_until(executor, lambda: bool(peer.trajectories) and bool(peer.plans) and bool(peer.checks))
         trajectory, path, log = peer.trajectories[-1], peer.plans[-1], peer.checks[-1]
         assert list(trajectory.joint_names) == list(session.joint_names)
         q = np.array([p.positions for p in trajectory.points])
@@ -105,9 +103,7 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         # An end-effector goal position on goal_pose reaches the same tree.
         goal = PoseStamped()
         goal.header.frame_id = FRAME
-        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
-            float(v) for v in session.goal_position
-        )
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (float(v) for v in session.goal_position)
         count = len(peer.trajectories)
         peer.goals.publish(goal)
         assert spin_until(executor, lambda: len(peer.trajectories) > count)
@@ -159,9 +155,7 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
 def _pose_goal(session: PlanningSession) -> PoseStamped:
     goal = PoseStamped()
     goal.header.frame_id = FRAME
-    goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
-        float(v) for v in session.goal_position
-    )
+    goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (float(v) for v in session.goal_position)
     return goal
 
 

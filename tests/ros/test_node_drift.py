@@ -75,9 +75,7 @@ def test_odometry_drifting_off_the_lattice_replans_every_request(context: Any) -
         domain = session.domain
         assert isinstance(domain, HelicopterDomain)
         world = domain.make_world("wires", WORLD_SEED)
-        markers, cloud = helicopter_world_messages(
-            world, wire_segments=8, frame_id="map", msgs=RclpyMessages()
-        )
+        markers, cloud = helicopter_world_messages(world, wire_segments=8, frame_id="map", msgs=RclpyMessages())
         peer.terrain.publish(cloud)
         peer.obstacles.publish(markers)
         assert spin_until(executor, lambda: node.snapshot.version >= 2)

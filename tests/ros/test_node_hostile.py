@@ -85,15 +85,11 @@ def _plans_again(executor: Any, node: PlannerNode, peer: Peer) -> None:
 
 def _tiny_cell_cloud() -> PointCloud2:
     """A 2 x 2 organized terrain cloud with 1e-5 m cells (valid; it once made the checker allocate 14 TiB)."""
-    xyz = np.array(
-        [[[0.0, 0.0, 10.0], [1e-5, 0.0, 10.0]], [[0.0, 1e-5, 10.0], [1e-5, 1e-5, 10.0]]], dtype="<f4"
-    )
+    xyz = np.array([[[0.0, 0.0, 10.0], [1e-5, 0.0, 10.0]], [[0.0, 1e-5, 10.0], [1e-5, 1e-5, 10.0]]], dtype="<f4")
     cloud = PointCloud2()
     cloud.header.frame_id = "map"
     cloud.height, cloud.width = 2, 2
-    cloud.fields = [
-        PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1) for k, n in enumerate("xyz")
-    ]
+    cloud.fields = [PointField(name=n, offset=4 * k, datatype=PointField.FLOAT32, count=1) for k, n in enumerate("xyz")]
     cloud.point_step, cloud.row_step = 12, 24
     cloud.data = xyz.tobytes()
     return cloud

@@ -87,9 +87,7 @@ def test_a_latched_map_published_before_the_node_started_reaches_the_default_nod
 
 @pytest.mark.slow
 def test_a_default_qos_publisher_reaches_the_node_with_volatile_map_subscriptions(context: Any) -> None:
-    assert not _maps_reach_the_node(
-        context, transient_local=True, publisher_qos=10, before=False
-    )  # DDS refuses
+    assert not _maps_reach_the_node(context, transient_local=True, publisher_qos=10, before=False)  # DDS refuses
     assert _maps_reach_the_node(context, transient_local=False, publisher_qos=10, before=False)
     assert _maps_reach_the_node(context, transient_local=False, publisher_qos=LATCHED, before=False)
 

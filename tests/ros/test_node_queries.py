@@ -49,10 +49,7 @@ def prior_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "3",
     ]
     assert drd([*argv, "--out", str(dataset), "--workers", "1", "--domain-spec", SPEC]) == 0
-    assert (
-        drd(["build-tree", "--dataset", str(dataset), "--out", str(prior), "--eta", "0.2", "--kappa", "10"])
-        == 0
-    )
+    assert drd(["build-tree", "--dataset", str(dataset), "--out", str(prior), "--eta", "0.2", "--kappa", "10"]) == 0
     return prior
 
 
@@ -91,12 +88,8 @@ def _checked_free(peer: Peer) -> set[int]:
     return {int(s.name.split("/")[1]) for s in peer.checks[-1].status if s.level == b"\x00"}
 
 
-def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(
-    context: Any, prior_file: Path
-) -> None:
-    node = PlannerNode(
-        context=context, parameter_overrides=[Parameter("prior_paths", value=[str(prior_file)])]
-    )
+def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(context: Any, prior_file: Path) -> None:
+    node = PlannerNode(context=context, parameter_overrides=[Parameter("prior_paths", value=[str(prior_file)])])
     peer = Peer(context)
     odom = peer.node.create_publisher(Odometry, "odom", 10)
     get_plan = peer.node.create_client(GetPlan, "get_plan")

@@ -72,18 +72,14 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         assert int(maps[-1]["obstacles"]) > 0
         goal = PoseStamped()
         goal.header.frame_id = "map"
-        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
-            float(v) for v in session.goal_state[:3]
-        )
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (float(v) for v in session.goal_state[:3])
         peer.goals.publish(goal)
         assert spin_until(executor, lambda: bool(peer.summaries("heli_planner: plan")))
         plan = peer.summaries("heli_planner: plan")[-1]
         assert float(plan["planning_time"]) > 0
         assert int(plan["checks"]) == int(plan["free"]) + int(plan["blocked"])
         count = len(peer.summaries("heli_planner: heartbeat"))
-        assert spin_until(
-            executor, lambda: len(peer.summaries("heli_planner: heartbeat")) >= count + 2, timeout=3.5
-        )
+        assert spin_until(executor, lambda: len(peer.summaries("heli_planner: heartbeat")) >= count + 2, timeout=3.5)
         beat = peer.summaries("heli_planner: heartbeat")[-1]
         assert beat["maps_known"] == "True"
         assert beat["plan_published"] == "True"
@@ -114,9 +110,7 @@ def test_outputs_are_silent_until_activate(context: Any) -> None:
         assert node.trigger_deactivate().name == "SUCCESS"
         goal = PoseStamped()
         goal.header.frame_id = "map"
-        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (
-            float(v) for v in session.goal_state[:3]
-        )
+        goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (float(v) for v in session.goal_state[:3])
         node.plan_for(goal)
         # planned ...
         assert node.history

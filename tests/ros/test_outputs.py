@@ -117,9 +117,7 @@ def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
     outputs = PlannerOutputs(node)
     checks = (_check(1, True, "tree"), _check(2, False, "bisect"))
     outputs.checks(SimpleNamespace(checks=checks), (4, 5))  # type: ignore[arg-type]
-    records = [
-        CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached) for c in checks
-    ]
+    records = [CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached) for c in checks]
     assert node.sent[-1][0] == "edge_checks"
     expected = edge_checks_message(records, stamp=(4, 5), msgs=msgs)
     assert deserialize_message(node.sent[-1][1], DiagnosticArray) == expected
@@ -190,9 +188,7 @@ def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:
         improvements=2,
         improve_stop="optimal",
     )
-    values = plan_summary_values(
-        improved, {"request": "goal_pose"}, wait_s=0.0, plan_messaging_s=0.0, messaging_s=0.0
-    )
+    values = plan_summary_values(improved, {"request": "goal_pose"}, wait_s=0.0, plan_messaging_s=0.0, messaging_s=0.0)
     assert (values["improvements"], values["improve_stop"], values["improve_checks"]) == (2, "optimal", 2)
     assert (values["first_cost"], values["cost"]) == ("751.100000", "700.000000")
     assert list(values)[-1] == "request"  # the request's own values stay last

@@ -87,9 +87,7 @@ def _response(recorded: list[BagMessage], after_ns: int, before_ns: int) -> BagM
     return hits[0]
 
 
-def _check_requests(
-    summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str
-) -> list[QueryPlanResult]:
+def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str) -> list[QueryPlanResult]:
     """The assertions of the module docstring for every request; the offline results."""
     messages = read_bag(bag)
     requests = bag_requests(messages)
@@ -200,9 +198,7 @@ def test_arm_bag_replays_into_the_node_and_matches_drd_plan(context: Any, tmp_pa
         node.destroy_node()
 
 
-def test_a_stepped_replay_waits_until_the_node_took_each_message_and_answered(
-    context: Any, tmp_path: Path
-) -> None:
+def test_a_stepped_replay_waits_until_the_node_took_each_message_and_answered(context: Any, tmp_path: Path) -> None:
     """Issue 31 (3): at 50x speed every request still follows its maps and the previous answer."""
     bag = BAGS / "heli_wires.mcap"
     if not bag.is_file():

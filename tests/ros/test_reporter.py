@@ -70,9 +70,7 @@ def _result(ok: bool) -> Any:
 
 def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
     outputs, logger, errors = _Outputs(active=True), _Logger(), []
-    reporter = NodeReporter(
-        logger, outputs, lambda text, topic: errors.append((text, topic)), lambda text, exc: None
-    )  # type: ignore[arg-type]
+    reporter = NodeReporter(logger, outputs, lambda text, topic: errors.append((text, topic)), lambda text, exc: None)  # type: ignore[arg-type]
     session = SimpleNamespace(name="t")
     record = PlanRecord(session, _result(True), MapSnapshot(1), {"request": "goal_pose"})  # type: ignore[arg-type]
 

@@ -8,9 +8,7 @@ from setuptools import find_packages, setup
 PACKAGE = "drd_planner"
 # The shipped trees and bags live at the repository root (../../../ from here); a source checkout or the
 # Docker image has them there, an sdist does not (then the node takes tree file paths instead of names).
-SHIPPED = {
-    kind: sorted(glob(f"../../../{kind}/*.{ext}")) for kind, ext in (("trees", "npz"), ("bags", "mcap"))
-}
+SHIPPED = {kind: sorted(glob(f"../../../{kind}/*.{ext}")) for kind, ext in (("trees", "npz"), ("bags", "mcap"))}
 # The repository's LICENSE (BSD-3-Clause, as package.xml says), installed with package.xml where present.
 LICENSE = [relpath(f) for f in glob("../../../LICENSE")]
 
@@ -24,11 +22,7 @@ setup(
         (f"share/{PACKAGE}", ["package.xml", *LICENSE]),
         (f"share/{PACKAGE}/launch", glob("launch/*.py")),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
-        *(
-            (f"share/{PACKAGE}/{kind}", [relpath(f) for f in files])
-            for kind, files in SHIPPED.items()
-            if files
-        ),
+        *((f"share/{PACKAGE}/{kind}", [relpath(f) for f in files]) for kind, files in SHIPPED.items() if files),
     ],
     python_requires=">=3.10",
     install_requires=[

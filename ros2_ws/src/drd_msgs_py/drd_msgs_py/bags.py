@@ -227,9 +227,7 @@ def write_raw_bag(
             for m in ordered:
                 if m.topic not in connections:
                     if m.msgtype not in store.types:
-                        raise BagError(
-                            f"topic {m.topic}: message type {m.msgtype} is unknown to the typestore"
-                        )
+                        raise BagError(f"topic {m.topic}: message type {m.msgtype} is unknown to the typestore")
                     profile = offered.get(m.topic, default_qos(m.topic))
                     connections[m.topic] = writer.add_connection(
                         m.topic, m.msgtype, typestore=store, offered_qos_profiles=[profile]
@@ -268,9 +266,7 @@ def write_bag(
         try:
             data = bytes(store.serialize_cdr(m.message, m.msgtype))
         except Exception as exc:  # rosbags raises assorted errors on mismatched dataclasses
-            raise BagError(
-                f"message on {m.topic} at {m.time_ns} ns is not a valid {m.msgtype}: {exc}"
-            ) from exc
+            raise BagError(f"message on {m.topic} at {m.time_ns} ns is not a valid {m.msgtype}: {exc}") from exc
         raw.append(RawMessage(m.topic, m.msgtype, m.time_ns, data))
     return write_raw_bag(path, raw, qos=qos, typestore=store, overwrite=overwrite)
 
@@ -295,9 +291,7 @@ def open_bag(path: str | Path) -> BagContents:
                 profiles = tuple(getattr(conn.ext, "offered_qos_profiles", ()) or ())
                 known = topics.get(conn.topic)
                 if known is not None and known.msgtype != conn.msgtype:
-                    raise BagError(
-                        f"bag {where}: topic {conn.topic} has two types {known.msgtype}, {conn.msgtype}"
-                    )
+                    raise BagError(f"bag {where}: topic {conn.topic} has two types {known.msgtype}, {conn.msgtype}")
                 topics[conn.topic] = BagTopic(
                     conn.topic,
                     conn.msgtype,
@@ -308,9 +302,7 @@ def open_bag(path: str | Path) -> BagContents:
     except BagError:
         raise
     except Exception as exc:  # rosbags ReaderError, struct/zstd/yaml errors on corrupt files, OSError
-        raise BagError(
-            f"bag {where} is not a readable rosbag2 MCAP bag: {type(exc).__name__}: {exc}"
-        ) from exc
+        raise BagError(f"bag {where} is not a readable rosbag2 MCAP bag: {type(exc).__name__}: {exc}") from exc
     raw.sort(key=lambda m: m.time_ns)
     return BagContents(where, topics, tuple(raw))
 

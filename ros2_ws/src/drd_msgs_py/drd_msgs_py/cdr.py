@@ -77,7 +77,7 @@ class _Writer:
     def records(
         self, prefix: bytes, body: npt.NDArray[np.float64], suffix: npt.NDArray[np.uint8] | None = None
     ) -> None:
-        """K records of ``prefix``, zeros to an 8-byte boundary, a (K, W) ``body`` row as float64, a (K, S) ``suffix`` row.
+        """K records: ``prefix``, zeros to 8-byte alignment, a (K, W) ``body`` row as float64, a (K, S) ``suffix`` row.
 
         ``prefix`` must hold only values aligned to at most 4 bytes and S be a multiple of 4, and the
         records start 4-aligned. Every record then ends S bytes past a multiple of 8, so the second

@@ -54,9 +54,7 @@ class MessageLimits:
 
     min_terrain_cell_size: float = field(
         default=0.05,
-        metadata=_doc(
-            "metres: smallest terrain grid spacing (query cost grows with (vehicle reach / cell)^2)"
-        ),
+        metadata=_doc("metres: smallest terrain grid spacing (query cost grows with (vehicle reach / cell)^2)"),
     )
     """Metres: the smallest terrain grid spacing; a query's cost grows with (vehicle reach / cell size)^2."""
 
@@ -74,9 +72,7 @@ class MessageLimits:
 
     max_line_points: int = field(
         default=100_000,
-        metadata=_doc(
-            "points: most LINE_STRIP points (one capsule per segment) in one MarkerArray and in the map"
-        ),
+        metadata=_doc("points: most LINE_STRIP points (one capsule per segment) in one MarkerArray and in the map"),
     )
     """Points: the most LINE_STRIP points (one capsule per segment) in one MarkerArray and in the whole map."""
 

@@ -75,7 +75,8 @@ class CdrMarker(NamedTuple):
         frame_id: its header's frame.
         values: pose position (x, y, z) metres, quaternion (x, y, z, w), scale (x, y, z) metres: 10 floats.
         points: (K, 3) float64 points (marker frame, metres), read-only.
-        content: the byte order, then the serialized ``type``, ``pose``, ``scale`` and ``points`` (equal: equal obstacle).
+        content: the byte order, then the serialized ``type``, ``pose``, ``scale`` and ``points`` (equal: equal
+        obstacle).
         text, mesh_resource: its strings of those names (counted against ``max_message_bytes``).
     """
 
@@ -101,9 +102,7 @@ class _Reader:
         self._3i = struct.Struct(endian + "3i").unpack_from
         self._10d = struct.Struct(endian + "10d").unpack_from
         self.point_dtype = np.dtype(endian + "f8")
-        self.tag = (
-            endian.encode()
-        )  # starts every content: equal bytes in another byte order are other numbers
+        self.tag = endian.encode()  # starts every content: equal bytes in another byte order are other numbers
 
     def _fail(self, pos: int, what: str) -> MessageError:
         return MessageError(f"serialized MarkerArray ends inside {what} (byte {pos} of {len(self.data)})")
@@ -190,9 +189,7 @@ def _open(data: bytes, limits: MessageLimits) -> tuple[_Reader, int]:
     return reader, count
 
 
-def read_marker_array(
-    data: bytes | bytearray | memoryview, limits: MessageLimits = DEFAULT_LIMITS
-) -> list[CdrMarker]:
+def read_marker_array(data: bytes | bytearray | memoryview, limits: MessageLimits = DEFAULT_LIMITS) -> list[CdrMarker]:
     """The markers of a serialized ``visualization_msgs/MarkerArray`` (see the module docstring).
 
     The marker count is checked against ``limits.max_markers`` before any marker is read.
@@ -224,9 +221,7 @@ class MarkerArrayReader:
         self._starts = np.zeros(0, dtype=np.int64)
         self._ends = np.zeros(0, dtype=np.int64)
 
-    def read(
-        self, data: bytes | bytearray | memoryview, limits: MessageLimits = DEFAULT_LIMITS
-    ) -> list[CdrMarker]:
+    def read(self, data: bytes | bytearray | memoryview, limits: MessageLimits = DEFAULT_LIMITS) -> list[CdrMarker]:
         """The markers of ``data`` (equal to :func:`read_marker_array`'s; raises as it does, keeping the last array)."""
         data = bytes(data)
         reader, count = _open(data, limits)

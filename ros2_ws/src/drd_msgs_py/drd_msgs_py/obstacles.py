@@ -113,16 +113,12 @@ def same_obstacle(a: Obstacle, b: Obstacle) -> bool:
     """
     if a is b or (a.content and a.content == b.content and a.key == b.key):
         return True
-    if (a.key, a.kind, a.points, a.pose) != (b.key, b.kind, b.points, b.pose) or type(a.shape) is not type(
-        b.shape
-    ):
+    if (a.key, a.kind, a.points, a.pose) != (b.key, b.kind, b.points, b.pose) or type(a.shape) is not type(b.shape):
         return False
     if isinstance(a.shape, LineStripData) and isinstance(b.shape, LineStripData):
         return a.shape.diameter == b.shape.diameter and np.array_equal(a.shape.points, b.shape.points)
     if isinstance(a.shape, MeshData) and isinstance(b.shape, MeshData):
-        return np.array_equal(a.shape.vertices, b.shape.vertices) and np.array_equal(
-            a.shape.faces, b.shape.faces
-        )
+        return np.array_equal(a.shape.vertices, b.shape.vertices) and np.array_equal(a.shape.faces, b.shape.faces)
     return a.shape == b.shape
 
 
@@ -381,9 +377,7 @@ def _pose_msg(msgs: MessageFactory, pose: PoseData) -> Any:
     return msgs(
         "geometry_msgs/msg/Pose",
         position=msgs("geometry_msgs/msg/Point", x=float(p[0]), y=float(p[1]), z=float(p[2])),
-        orientation=msgs(
-            "geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])
-        ),
+        orientation=msgs("geometry_msgs/msg/Quaternion", x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])),
     )
 
 

@@ -79,9 +79,7 @@ def path_poses(states: npt.ArrayLike) -> npt.NDArray[np.float64]:
     return poses
 
 
-def path_message(
-    states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
-) -> Any:
+def path_message(states: npt.ArrayLike, *, frame_id: str, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory) -> Any:
     """``nav_msgs/Path`` through (K, >= 3) states; column 3 (if present) is the heading in radians.
 
     Every pose shares the Path's header (frame and stamp). The node publishes the same message as
@@ -177,9 +175,7 @@ class StatusFields:
     values: tuple[tuple[str, str], ...] = ()
 
     @classmethod
-    def of(
-        cls, level: int, name: str, message: str, hardware_id: str, values: Mapping[str, Any]
-    ) -> StatusFields:
+    def of(cls, level: int, name: str, message: str, hardware_id: str, values: Mapping[str, Any]) -> StatusFields:
         """The status with ``values`` as text (``str`` of each key and value)."""
         return cls(level, name, message, hardware_id, tuple((str(k), str(v)) for k, v in values.items()))
 
@@ -197,7 +193,7 @@ def status_message(fields: StatusFields, *, msgs: MessageFactory) -> Any:
 
 
 def check_statuses(checks: Sequence[CheckRecord], *, hardware_id: str = "drd_planner") -> list[StatusFields]:
-    """One status per check, in order: OK ``free`` or ERROR ``in collision``, with step, stage, check_ms, cached, u, v."""
+    """One status per check in order: OK ``free`` or ERROR ``in collision``; step, stage, check_ms, cached, u, v."""
     return [
         StatusFields.of(
             OK if c.free else ERROR,
@@ -239,9 +235,7 @@ def summary_fields(
     level: int | None = None,
 ) -> StatusFields:
     """The status summarising a request (OK, or ERROR with the reason in ``message``; ``level`` overrides)."""
-    return StatusFields.of(
-        (OK if ok else ERROR) if level is None else level, name, message, hardware_id, values
-    )
+    return StatusFields.of((OK if ok else ERROR) if level is None else level, name, message, hardware_id, values)
 
 
 def summary_status(
@@ -255,15 +249,11 @@ def summary_status(
     msgs: MessageFactory,
 ) -> Any:
     """One ``DiagnosticStatus`` summarising a request (:func:`summary_fields`)."""
-    fields = summary_fields(
-        ok=ok, message=message, values=values, name=name, hardware_id=hardware_id, level=level
-    )
+    fields = summary_fields(ok=ok, message=message, values=values, name=name, hardware_id=hardware_id, level=level)
     return status_message(fields, msgs=msgs)
 
 
-def diagnostics_message(
-    statuses: Sequence[Any], *, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory
-) -> Any:
+def diagnostics_message(statuses: Sequence[Any], *, stamp: tuple[int, int] = (0, 0), msgs: MessageFactory) -> Any:
     """``diagnostic_msgs/DiagnosticArray`` of ``statuses``."""
     return msgs("diagnostic_msgs/msg/DiagnosticArray", header=header(msgs, "", stamp), status=list(statuses))
 

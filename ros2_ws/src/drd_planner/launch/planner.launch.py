@@ -56,9 +56,7 @@ def generate_launch_description() -> LaunchDescription:
         output="screen",
     )
     configure = EmitEvent(
-        event=ChangeState(
-            lifecycle_node_matcher=matches_action(node), transition_id=Transition.TRANSITION_CONFIGURE
-        ),
+        event=ChangeState(lifecycle_node_matcher=matches_action(node), transition_id=Transition.TRANSITION_CONFIGURE),
         condition=IfCondition(autostart),
     )
     activate_when_inactive = RegisterEventHandler(

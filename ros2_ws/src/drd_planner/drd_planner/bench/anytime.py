@@ -120,9 +120,7 @@ def run_anytime_benchmark(
     worlds = problem.require_worlds()
     graph, start, goal = problem.graph, problem.start, problem.goal
     if graph is None or start is None or goal is None or worlds.test_ids.size == 0:
-        raise DrdError(
-            f"{problem.name}: the anytime benchmark needs a graph, a start and goal, and test worlds"
-        )
+        raise DrdError(f"{problem.name}: the anytime benchmark needs a graph, a start and goal, and test worlds")
     if not factors or any(not (np.isfinite(f) and f > 0) for f in factors):
         raise DrdError(f"budget factors must be positive numbers, got {list(factors)}")
     truth = ShortestPaths(GraphArcs(graph), graph.lengths)

@@ -63,17 +63,14 @@ def checks_vs_cost(
     run = dataclasses.replace(  # the run's test worlds only (``--max-worlds``)
         problem, worlds=worlds.subset(worlds.train_ids, np.asarray(result.test_ids, dtype=np.int64))
     )
-    doc = run_anytime_benchmark(
-        run, Planner(anytime_prior(run, seed=seed)), factors=factors, seed=seed, progress=False
-    )
+    doc = run_anytime_benchmark(run, Planner(anytime_prior(run, seed=seed)), factors=factors, seed=seed, progress=False)
     entries = list(doc["factors"].values())
     if not entries or not entries[0]["episodes"]:
         raise DrdError(f"{problem.name}: no test world with a free path and a first plan to draw")
     first = entries[0]
     curve = [(float(first["mean_first_checks"]), float(first["first_cost_ratio"]))]
     curve += [
-        (float(e["mean_first_checks"]) + float(e["mean_extra_checks"]), float(e["after_cost_ratio"]))
-        for e in entries
+        (float(e["mean_first_checks"]) + float(e["mean_extra_checks"]), float(e["after_cost_ratio"])) for e in entries
     ]
     points = _graph_policy_points(problem, result, seed=seed, settings=settings)
     return {"anytime": curve, "policies": points, "worlds": int(first["episodes"])}
@@ -101,9 +98,7 @@ def _graph_policy_points(
                 theta=theta,
                 tree=None,
                 seed=seed + k,
-                settings=dataclasses.replace(
-                    settings or DEFAULT_SETTINGS, imitation_model=result.imitation_model
-                ),
+                settings=dataclasses.replace(settings or DEFAULT_SETTINGS, imitation_model=result.imitation_model),
             )
             if episode.path_edges is None:
                 continue

@@ -58,9 +58,7 @@ def parse_check_costs(text: str) -> tuple[float, ...]:
         except ValueError:
             raise DrdError(f"--check-cost-ms: {word!r} is not a number; expected {CHECK_COST_FORM}") from None
         if not (math.isfinite(value) and value >= 0.0):
-            raise DrdError(
-                f"--check-cost-ms: {word!r} is not a non-negative number; expected {CHECK_COST_FORM}"
-            )
+            raise DrdError(f"--check-cost-ms: {word!r} is not a non-negative number; expected {CHECK_COST_FORM}")
         if value not in values:
             values.append(value)
     return tuple(values)

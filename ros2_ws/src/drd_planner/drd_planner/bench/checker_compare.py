@@ -112,9 +112,7 @@ def _sphere_clearance(domain: ArmDomain, q: FloatArray, obstacle: fcl.CollisionO
     return float(best)
 
 
-def _explain(
-    domain: ArmDomain, checker: ArmEdgeChecker, recipe: WorldRecipe, names: Sequence[str], edge: int
-) -> Miss:
+def _explain(domain: ArmDomain, checker: ArmEdgeChecker, recipe: WorldRecipe, names: Sequence[str], edge: int) -> Miss:
     """Where the mesh checker blocks ``edge`` (see :class:`Miss`)."""
     model = _mesh_model(checker)
     states = checker.graph.vertex_states
@@ -135,9 +133,7 @@ def _explain(
     obstacle = names[contact.obstacle] if 0 <= contact.obstacle < len(names) else ""
     clearance = float("nan")
     if 0 <= contact.obstacle < len(model.obstacles.objects):
-        clearance = _sphere_clearance(
-            domain, q[0 if base else contact.row], model.obstacles.objects[contact.obstacle]
-        )
+        clearance = _sphere_clearance(domain, q[0 if base else contact.row], model.obstacles.objects[contact.obstacle])
     return Miss(
         recipe.label,
         edge,
@@ -179,9 +175,7 @@ def compare_world(
         free[0, i], ms[0, i] = _timed_check(by_spheres, e)
         free[1, i], ms[1, i] = _timed_check(by_meshes, e)
     names = [o.name for o in world.obstacles]
-    misses = [
-        _explain(meshes, by_meshes, recipe, names, int(ids[i])) for i in np.nonzero(free[0] & ~free[1])[0]
-    ]
+    misses = [_explain(meshes, by_meshes, recipe, names, int(ids[i])) for i in np.nonzero(free[0] & ~free[1])[0]]
     return WorldComparison(recipe, free[0], free[1], ms[0], ms[1], misses)
 
 

@@ -83,9 +83,7 @@ def run_cost_episodes(
             if name not in GRAPH_POLICIES:
                 plan_episode(planner, first, 0, oracle_of(first.world), 0.0, name, seed)
         lazysp_episode(planner, first, 0, oracle_of(first.world), 0.0)
-    bar = Progress(
-        len(queries) * len(costs) * len(policies), "check-cost episodes", unit="episode", enabled=progress
-    )
+    bar = Progress(len(queries) * len(costs) * len(policies), "check-cost episodes", unit="episode", enabled=progress)
     for i, query in enumerate(queries):
         for cost in costs:
             for name in policies:
@@ -151,9 +149,7 @@ def _ms(value: float | None) -> str:
     return "-" if value is None else (f"{value:.1f}" if value >= 10 else f"{value:.2f}")
 
 
-def cost_markdown(
-    summary: dict[str, Any], costs: Sequence[float], *, title: str, notes: Sequence[str] = ()
-) -> str:
+def cost_markdown(summary: dict[str, Any], costs: Sequence[float], *, title: str, notes: Sequence[str] = ()) -> str:
     """A markdown table of a :func:`summarize_costs` summary.
 
     Per query kind and C, each policy's median CPU ms (n = queries compared) and the ratio
@@ -186,9 +182,7 @@ def cost_markdown(
         for n in names:
             s = summary[n]
             cells.append(
-                f"{s['checks'][kind]:g} ({s['verified'][kind]}/{s['queries'][kind]})"
-                if kind in s["checks"]
-                else "-"
+                f"{s['checks'][kind]:g} ({s['verified'][kind]}/{s['queries'][kind]})" if kind in s["checks"] else "-"
             )
         lines.append(f"| {kind} | " + " | ".join(cells) + " |")
     lines += [""] + [f"note: {note}" for note in notes] + ([""] if notes else [])

@@ -137,9 +137,7 @@ def _target(query: QueryGraph, costly: EdgeOracle) -> EdgeOracle:
     return MotionDispatch(costly, query.motions)  # type: ignore[arg-type]
 
 
-def lazysp_episode(
-    planner: Planner, query: CostQuery, index: int, oracle: EdgeOracle, cost_ms: float
-) -> EpisodeTime:
+def lazysp_episode(planner: Planner, query: CostQuery, index: int, oracle: EdgeOracle, cost_ms: float) -> EpisodeTime:
     """LazySP (forward selector, no check cap) on the query's graph (joins made in the timed call)."""
     costly = with_check_cost(oracle, cost_ms)
 
@@ -171,9 +169,7 @@ def check_all_episode(
         target = _target(graph_query, costly)
         extra = [bool(target.check(e)) for e in range(num_edges, graph.num_edges)]
         outcomes = np.concatenate([row.outcomes, np.array(extra, dtype=bool)])
-        path = ShortestPaths(GraphArcs(graph), graph.lengths).path(
-            graph_query.start, graph_query.goal, outcomes
-        )
+        path = ShortestPaths(GraphArcs(graph), graph.lengths).path(graph_query.start, graph_query.goal, outcomes)
         return path is not None
 
     found, spent = timed(run)

@@ -5,7 +5,8 @@ two policies is within the noise. Cross-validation uses the whole database inste
 (those with a valid library path, as the test protocol requires) are dealt at random (seeded) into
 ``folds`` folds; for each fold the tree, the switch threshold (validated on held-out *training* worlds
 of that fold, as ``drd build-tree --eta auto`` does, with the region rule when several are given) and the
-training bias are learnt from every other world, and each policy runs on the fold's worlds with :func:`drd_planner.bench.runner.run_benchmark`.
+training bias are learnt from every other world, and each policy runs on the fold's worlds with
+:func:`drd_planner.bench.runner.run_benchmark`.
 The result pairs the policies world by world, so differences come with a bootstrap confidence interval.
 """
 

@@ -37,6 +37,4 @@ def require_extra(extra: str, what: str) -> None:
     try:
         importlib.import_module(module)
     except ImportError as exc:
-        raise MissingExtraError(
-            f"{what} needs the '{extra}' extra ({module}): {install_hint(extra)}"
-        ) from exc
+        raise MissingExtraError(f"{what} needs the '{extra}' extra ({module}): {install_hint(extra)}") from exc

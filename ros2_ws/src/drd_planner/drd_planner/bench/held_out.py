@@ -61,9 +61,7 @@ def held_out_worlds(
     seed = first_seed
     while len(worlds) < count:
         if seed > first_seed + 40 * count:
-            raise SystemExit(
-                f"{prior.name}: fewer than {count} of {40 * count} worlds have a free stored query"
-            )
+            raise SystemExit(f"{prior.name}: fewer than {count} of {40 * count} worlds have a free stored query")
         world = domain.make_world(model, seed)
         row = full_row(domain.checker(world), prior.graph.num_edges)
         if paths.path(stored.start, stored.goal, row.outcomes) is not None:

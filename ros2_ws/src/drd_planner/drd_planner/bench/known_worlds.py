@@ -114,9 +114,7 @@ class _Solver:
         valid = self.valid[worlds]  # (n, r)
         rows = np.flatnonzero(valid.any(axis=0))
         valid, rem = valid[:, rows], remaining[rows]
-        lower = float(
-            np.where(valid, rem[None, :], np.inf).min(axis=1).mean()
-        )  # mean oracle given the checks
+        lower = float(np.where(valid, rem[None, :], np.inf).min(axis=1).mean())  # mean oracle given the checks
         common = valid.all(axis=0)
         finish = float(rem[common].min()) if common.any() else math.inf
         if len(worlds) == 1 or finish <= lower + _EPS:

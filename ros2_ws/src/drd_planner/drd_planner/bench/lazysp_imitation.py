@@ -161,9 +161,7 @@ class ImitationLazySP(PosteriorLazySP):
             return None
         edges, lengths = path[open_pos], self._lengths
         posterior, delta = self.blocked_probability()[edges], self.delta_lengths(edges)
-        feats = candidate_features(
-            posterior, self._marginal[edges], delta, lengths[edges], open_pos, lengths[path]
-        )
+        feats = candidate_features(posterior, self._marginal[edges], delta, lengths[edges], open_pos, lengths[path])
         return open_pos, feats
 
     def _position(self, path: IntArray, checked: BoolArray) -> int:
@@ -464,9 +462,7 @@ def _next_connected(
     return -1, cursor
 
 
-def train_for_problem(
-    problem: Problem, *, seed: int, settings: DaggerSettings | None = None
-) -> ImitationModel:
+def train_for_problem(problem: Problem, *, seed: int, settings: DaggerSettings | None = None) -> ImitationModel:
     """:func:`train_imitation_selector` on a problem's graph, query and training worlds.
 
     Raises:

@@ -89,9 +89,7 @@ def training_size_curve(
     if chosen.size == 0:
         raise DrdError("training-size curve needs at least one size")
     if chosen[0] < 1 or chosen[-1] > train.size:
-        raise DrdError(
-            f"training sizes must lie in [1, {train.size}] for {problem.name}, got {chosen.tolist()}"
-        )
+        raise DrdError(f"training sizes must lie in [1, {train.size}] for {problem.name}, got {chosen.tolist()}")
     order = np.random.default_rng(seed).permutation(train)
     opts = dict(tree_options or {})
     checks: dict[str, list[float]] = {p: [] for p in CURVE_POLICIES}

@@ -217,6 +217,4 @@ def default_maps(harness: Harness, *, world_seed: int, bag: Path | None) -> tupl
     domain: Any = harness.node.sessions[0].domain
     world = domain.make_world("wires", world_seed)
     segments = int(domain.spec().get("wire_segments", 8))
-    return helicopter_world_messages(
-        world, wire_segments=segments, frame_id=harness.frame_id, msgs=RclpyMessages()
-    )
+    return helicopter_world_messages(world, wire_segments=segments, frame_id=harness.frame_id, msgs=RclpyMessages())

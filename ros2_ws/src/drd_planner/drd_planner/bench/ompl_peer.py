@@ -206,9 +206,7 @@ def verify_path(
     if len(vertices) < 2:
         return PathCheck(False, empty, "the path has fewer than two vertices")
     if vertices[0] != start or vertices[-1] != goal:
-        return PathCheck(
-            False, empty, f"the path runs {vertices[0]} -> {vertices[-1]}, not {start} -> {goal}"
-        )
+        return PathCheck(False, empty, f"the path runs {vertices[0]} -> {vertices[-1]}, not {start} -> {goal}")
     try:
         edges = graph.vertex_path_to_edges(vertices)
     except ProblemError as exc:
@@ -219,9 +217,7 @@ def verify_path(
     return PathCheck(True, edges, "")
 
 
-def read_worker_results(
-    result_file: Path, expected: int, returncode: int, stderr: str
-) -> list[dict[str, Any]]:
+def read_worker_results(result_file: Path, expected: int, returncode: int, stderr: str) -> list[dict[str, Any]]:
     """Parse the worker's JSON-lines result file.
 
     Returns:
@@ -246,8 +242,7 @@ def read_worker_results(
         records.append(item)
     if not done or len(records) != expected:
         raise OmplPeerError(
-            f"OMPL worker crashed (exit code {returncode}) after {len(records)} of {expected} worlds: "
-            f"{_tail(stderr)}"
+            f"OMPL worker crashed (exit code {returncode}) after {len(records)} of {expected} worlds: {_tail(stderr)}"
         )
     return records
 
@@ -255,9 +250,7 @@ def read_worker_results(
 def _check_problem(problem: Problem, test_ids: Sequence[int]) -> tuple[ExplicitGraph, int, int, IntArray]:
     graph, start, goal = problem.graph, problem.start, problem.goal
     if graph is None or start is None or goal is None:
-        raise OmplPeerError(
-            f"{PEER_NAME} needs a graph with start and goal; problem {problem.name!r} has none"
-        )
+        raise OmplPeerError(f"{PEER_NAME} needs a graph with start and goal; problem {problem.name!r} has none")
     worlds = problem.require_worlds()
     ids = np.asarray(test_ids, dtype=np.int64).ravel()
     if ids.size and (ids.min() < 0 or ids.max() >= worlds.num_worlds):
@@ -307,14 +300,10 @@ def _run_worker(
         return records, proc.returncode
 
 
-def _world_block(
-    record: dict[str, Any], graph: ExplicitGraph, row: BoolArray, start: int, goal: int
-) -> dict[str, Any]:
+def _world_block(record: dict[str, Any], graph: ExplicitGraph, row: BoolArray, start: int, goal: int) -> dict[str, Any]:
     check = verify_path(graph, row, start, goal, record["path_vertices"]) if record["solved"] else None
     success = check is not None and check.ok
-    reason = (
-        "" if success else (f"OMPL found no path ({record['status']})" if check is None else check.reason)
-    )
+    reason = "" if success else (f"OMPL found no path ({record['status']})" if check is None else check.reason)
     vertices_added = record["milestones_after"] - record["milestones_before"]
     edges_added = record["edges_after"] - (record["edges_before"] - record["edges_removed"])
     return {
@@ -479,9 +468,7 @@ def run_ompl_lazyprm_live(
     blocks = []
     for record, (recipe, _) in zip(records, solves, strict=True):
         row = np.zeros(graph.num_edges, dtype=bool)
-        row[np.asarray(record["checked_edges"], dtype=np.int64)] = np.asarray(
-            record["checked_free"], dtype=bool
-        )
+        row[np.asarray(record["checked_edges"], dtype=np.int64)] = np.asarray(record["checked_free"], dtype=bool)
         block = _world_block(record, graph, row, int(start), int(goal))
         extra = {"check_cost_ms": record.get("check_cost_ms", 0.0), "cpu_s": record.get("cpu_s")}
         blocks.append({"label": recipe.label, **extra, **block})

@@ -196,9 +196,7 @@ def _row_answer(row: npt.NDArray[np.bool_]) -> EdgeAnswer:
     return answer
 
 
-def _live_answers(
-    graph: ExplicitGraph, live: dict[str, Any]
-) -> Iterator[tuple[int, Callable[[], EdgeAnswer]]]:
+def _live_answers(graph: ExplicitGraph, live: dict[str, Any]) -> Iterator[tuple[int, Callable[[], EdgeAnswer]]]:
     """``(world index, answer maker)`` per world recipe: each answer a new edge checker of the domain there."""
     from drd_planner.bench.world_recipes import WorldRecipe
     from drd_planner.domains.base import domain_from_spec
@@ -206,9 +204,7 @@ def _live_answers(
     domain = domain_from_spec(str(live["domain"]), live.get("spec") or {})
     own = domain.graph
     if own.num_edges != graph.num_edges or not np.array_equal(own.edges, graph.edges):
-        raise RuntimeError(
-            f"the live domain's graph ({own.num_edges} edges) is not the request's ({graph.num_edges})"
-        )
+        raise RuntimeError(f"the live domain's graph ({own.num_edges} edges) is not the request's ({graph.num_edges})")
     worlds = [WorldRecipe.from_json(recipe).make(domain) for recipe in live["worlds"]]
     if worlds and graph.num_edges:  # first use in this process (imports, caches): not in any world's time
         domain.checker(worlds[0]).check(0)
@@ -222,9 +218,7 @@ def _checker_answer(domain: Any, world: Any) -> EdgeAnswer:
     return answer
 
 
-def _space_information(
-    ob: Any, space: Any, book: _Bookkeeper, vertex: Callable[[Any], int]
-) -> tuple[Any, Any]:
+def _space_information(ob: Any, space: Any, book: _Bookkeeper, vertex: Callable[[Any], int]) -> tuple[Any, Any]:
     """``(space information, motion validator)``: every state valid, motions answered by ``book``.
 
     The caller keeps the validator (a Python object OMPL calls back) alive while OMPL runs.

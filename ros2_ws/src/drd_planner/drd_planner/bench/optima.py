@@ -160,8 +160,7 @@ def exact_drd_optimum(
         raise ProblemError("exact_drd_optimum needs at least one world")
     if n > MAX_DRD_WORLDS:
         raise ProblemError(
-            f"exact_drd_optimum is exponential in the number of worlds: {n} > {MAX_DRD_WORLDS}; "
-            "sub-sample the database"
+            f"exact_drd_optimum is exponential in the number of worlds: {n} > {MAX_DRD_WORLDS}; sub-sample the database"
         )
     costs = check_costs(edge_costs, x.shape[1])
     weights = check_prior(prior, n)
@@ -178,9 +177,7 @@ def exact_drd_optimum(
 class _EpisodeSolver:
     """Memoised V(A, H') of :func:`exact_episode_optimum` (checked local edges A, version space H')."""
 
-    def __init__(
-        self, x: BoolArray, path_masks: list[int], local_costs: list[float], weights: FloatArray
-    ) -> None:
+    def __init__(self, x: BoolArray, path_masks: list[int], local_costs: list[float], weights: FloatArray) -> None:
         """(n, K) outcomes of the K library edges, per path its local edge mask, (K,) costs, (n,) weights."""
         self.path_masks = path_masks
         self.local_costs = local_costs
@@ -275,9 +272,7 @@ def exact_episode_optimum(
     if n == 0:
         raise ProblemError("exact_episode_optimum needs at least one world")
     if n > MAX_EPISODE_WORLDS:
-        raise ProblemError(
-            f"exact_episode_optimum is exponential in the number of worlds: {n} > {MAX_EPISODE_WORLDS}"
-        )
+        raise ProblemError(f"exact_episode_optimum is exponential in the number of worlds: {n} > {MAX_EPISODE_WORLDS}")
     costs = check_costs(edge_costs, num_edges)
     weights = check_prior(prior, n)
     library = check_library(paths, num_edges)

@@ -116,9 +116,7 @@ def check_library(paths: PathsLike, num_edges: int) -> PathLibrary:
     library = path_library(paths, num_edges)
     k = library.library_edges.size
     if k > MAX_LIBRARY_EDGES:
-        raise ProblemError(
-            f"the library uses {k} distinct edges; exact evaluation is limited to {MAX_LIBRARY_EDGES}"
-        )
+        raise ProblemError(f"the library uses {k} distinct edges; exact evaluation is limited to {MAX_LIBRARY_EDGES}")
     return library
 
 

@@ -204,9 +204,7 @@ def _model_block(chosen: list[PlanRun], every: list[PlanRun]) -> dict[str, Any]:
     }
 
 
-def summarize_plans(
-    runs: Sequence[PlanRun], models: tuple[str, str] = ("spheres", "meshes")
-) -> dict[str, Any]:
+def summarize_plans(runs: Sequence[PlanRun], models: tuple[str, str] = ("spheres", "meshes")) -> dict[str, Any]:
     """Per method: per model the verified plans, mean and median time and checks, and the time ratios.
 
     Repeats are merged first (:func:`merge_repeats`). Times and checks are taken over the worlds where **both**

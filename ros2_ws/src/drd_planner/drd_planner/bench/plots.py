@@ -108,9 +108,7 @@ def edge_segments(problem: Problem, edges: npt.ArrayLike) -> FloatArray:
     return np.stack([xy[ends[:, 0]], xy[ends[:, 1]]], axis=1)
 
 
-def draw_checked_edges(
-    ax: Axes, problem: Problem, result: EpisodeResult, *, title: str
-) -> dict[str, LineCollection]:
+def draw_checked_edges(ax: Axes, problem: Problem, result: EpisodeResult, *, title: str) -> dict[str, LineCollection]:
     """Draw one episode: unchecked library edges grey, free green, blocked red, the path thick blue.
 
     Start and goal are marked (black circle, black star). Returns the line collection of each layer
@@ -235,9 +233,7 @@ def plot_normalised_costs(
     for k, (ax, (name, table)) in enumerate(zip(axes, tables.items(), strict=False)):
         n = table.num_kept if filtered else table.kept.size
         fails = None if failures is None else failures.get(name)
-        draw_normalised_costs(
-            ax, table, baselines, filtered=filtered, title=f"{name} (n={n})", failures=fails
-        )
+        draw_normalised_costs(ax, table, baselines, filtered=filtered, title=f"{name} (n={n})", failures=fails)
         if k % cols:
             ax.set_ylabel("")
     for ax in axes[len(tables) :]:

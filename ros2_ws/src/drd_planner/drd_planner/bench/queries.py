@@ -13,7 +13,8 @@ Policies:
 - ``check_all``: check every edge, then Dijkstra (its checks are E in every episode).
 
 Per episode the fewest checks any planner needs knowing the world (:func:`certificate_size`); their mean is
-``certificate_lower_bound``. Per policy: checks in episode order, failures (no verified path although the world has a free one,
+``certificate_lower_bound``. Per policy: checks in episode order, failures (no verified path although the world has a
+free one,
 or a budget ran out), ``false_no_path`` ("no path" although the world's graph has a free path: a
 correctness error), mean overhead (library + selection) per episode, and the path cost over the
 cheapest free graph path of that world. Every returned path is re-verified against the episode's own
@@ -97,9 +98,7 @@ def certificate_size(graph: ExplicitGraph, outcomes: BoolArray, start: int, goal
     return int(maximum_flow(network, start, goal).flow_value)
 
 
-def check_all_episode(
-    graph: ExplicitGraph, outcomes: BoolArray, start: int, goal: int
-) -> tuple[int, IntArray | None]:
+def check_all_episode(graph: ExplicitGraph, outcomes: BoolArray, start: int, goal: int) -> tuple[int, IntArray | None]:
     """``check_all``: every edge checked, then the shortest free path (None when there is none)."""
     return graph.num_edges, ShortestPaths(GraphArcs(graph), graph.lengths).path(start, goal, outcomes)
 
@@ -118,9 +117,7 @@ def run_query_benchmark(
     known = set(PLAN_POLICIES) | set(GRAPH_BASELINES) | set(QUERY_ONLY_POLICIES)
     unknown = [p for p in policies if p not in known]
     if unknown:
-        raise DrdError(
-            f"unknown policies for --queries: {', '.join(unknown)}; known: {', '.join(sorted(known))}"
-        )
+        raise DrdError(f"unknown policies for --queries: {', '.join(unknown)}; known: {', '.join(sorted(known))}")
     graph = problem.graph
     worlds = problem.require_worlds()
     if graph is None or worlds.test_ids.size == 0:
@@ -199,9 +196,7 @@ def _episode(
         selector = SELECTORS[GRAPH_BASELINES.index(name)]
         policy = LazySP(graph, start, goal, LazySPSettings(selector=selector, seed=seed))
         t0 = time.perf_counter()
-        result = run_episode(
-            None, planner.prior.edge_costs, policy, TableOracle(outcomes), max_checks=max_checks
-        )
+        result = run_episode(None, planner.prior.edge_costs, policy, TableOracle(outcomes), max_checks=max_checks)
         spent = (time.perf_counter() - t0) * 1e3 - sum(c.check_ms for c in result.checks)
         status = {EpisodeStatus.PATH_FOUND: "found", EpisodeStatus.NO_FREE_PATH: "no_path"}.get(
             result.status, "budget_exhausted"

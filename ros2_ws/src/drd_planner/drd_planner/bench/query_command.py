@@ -77,9 +77,7 @@ def benchmark_prior(problem: Problem, options: QueryBenchOptions) -> tuple[World
             f"prior {options.prior} (eta {prior.eta:g}, kappa {prior.pseudo_count}, region rule {prior.region_rule})"
         )
     setting = options.leaf.prior_leaf(problem)
-    tree = build_tree(
-        problem, progress=False, **{**options.tree.kwargs(), "region_rule": setting.region_rule}
-    )
+    tree = build_tree(problem, progress=False, **{**options.tree.kwargs(), "region_rule": setting.region_rule})
     assert problem.start is not None and problem.goal is not None
     own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree)
     prior = prior_from_problem(
@@ -118,9 +116,7 @@ def run_query_bench(options: QueryBenchOptions) -> int:
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     if costs:
-        report += time_at_check_costs(
-            problem, prior, queries, doc, costs, policies=policies, seed=options.seed
-        )
+        report += time_at_check_costs(problem, prior, queries, doc, costs, policies=policies, seed=options.seed)
     print(report, end="")
     print(f"eta, kappa and region rule: {note}")
     write_bench_files(doc, report, json_path=options.json, markdown_path=options.markdown)
@@ -157,16 +153,13 @@ def time_at_check_costs(
     test = worlds.test_ids
     own = problem.start is not None and problem.goal is not None
     timed_queries = [
-        CostQuery("stored" if i == 0 and own else "new", s, g, i % test.size)
-        for i, (s, g) in enumerate(queries)
+        CostQuery("stored" if i == 0 and own else "new", s, g, i % test.size) for i, (s, g) in enumerate(queries)
     ]
 
     def oracle_of(world: int) -> TableOracle:
         return TableOracle(worlds.X[int(test[world])])
 
-    episodes = run_cost_episodes(
-        Planner(prior), timed_queries, oracle_of, costs, policies=policies, seed=seed
-    )
+    episodes = run_cost_episodes(Planner(prior), timed_queries, oracle_of, costs, policies=policies, seed=seed)
     summary = summarize_costs(episodes, costs)
     for name, block in summary.items():
         entry = doc["policies"].setdefault(name, {})
@@ -179,6 +172,4 @@ def time_at_check_costs(
         "compared": "per kind, the queries every policy verified at every cost",
         "off_graph": OFF_GRAPH_NOTE,
     }
-    return cost_markdown(
-        summary, costs, title=f"{problem.name}: time to a verified plan", notes=(OFF_GRAPH_NOTE,)
-    )
+    return cost_markdown(summary, costs, title=f"{problem.name}: time to a verified plan", notes=(OFF_GRAPH_NOTE,))

@@ -55,9 +55,7 @@ def table1_markdown(
     rows = [head, rule]
     for res, table in zip(results, tables, strict=True):
         if table is None:
-            rows.append(
-                f"| {res.dataset} | {len(res.test_ids)} | " + " | ".join(_DASH for _ in baselines) + " |"
-            )
+            rows.append(f"| {res.dataset} | {len(res.test_ids)} | " + " | ".join(_DASH for _ in baselines) + " |")
             continue
         cells = []
         for name in baselines:

@@ -70,9 +70,7 @@ def _worker_env() -> dict[str, str]:
     return env
 
 
-def verify_waypoints(
-    domain: OnlineDomain[Any], scene_file: Path, waypoints: Sequence[Sequence[float]]
-) -> bool:
+def verify_waypoints(domain: OnlineDomain[Any], scene_file: Path, waypoints: Sequence[Sequence[float]]) -> bool:
     """Whether the straight motions between consecutive (K, D) waypoints are free for a fresh checker of the scene.
 
     Each motion is sampled at the domain's check resolution (no joint moves more than it between samples)
@@ -138,9 +136,7 @@ def run_rrt_connect(
         timeout = 300.0 + len(tasks) * (time_limit_s + 30.0)
         t0 = time.perf_counter()
         try:
-            proc = subprocess.run(
-                cmd, capture_output=True, text=True, timeout=timeout, env=_worker_env(), check=False
-            )
+            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_worker_env(), check=False)
         except subprocess.TimeoutExpired:
             raise OmplPeerError(f"RRT-Connect worker did not finish within {timeout:.0f} s") from None
         records = read_worker_results(result, len(tasks), proc.returncode, proc.stderr)

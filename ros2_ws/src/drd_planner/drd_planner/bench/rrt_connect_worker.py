@@ -1,4 +1,4 @@
-"""Child process that runs OMPL's RRT-Connect on MoveIt requests with our checker; started by :mod:`~drd_planner.bench.rrt_connect`.
+"""Child process running OMPL's RRT-Connect on MoveIt requests with our checker (:mod:`~drd_planner.bench.rrt_connect`).
 
 OMPL 1.7.0's Python bindings can crash while the interpreter tears down, so everything OMPL touches lives in
 this process (as :mod:`drd_planner.bench.ompl_worker`). It reads ``config.json`` (the domain's registry name and
@@ -68,9 +68,7 @@ def _task_checker(domain: Any, scene_path: str) -> Any:
     return domain.scene_checker(scene)
 
 
-def _solve(
-    ob: Any, og: Any, space: Any, counter: _Counter, task: dict[str, Any], limit: float
-) -> dict[str, Any]:
+def _solve(ob: Any, og: Any, space: Any, counter: _Counter, task: dict[str, Any], limit: float) -> dict[str, Any]:
     """One RRT-Connect solve: the JSON record of the task."""
     si = ob.SpaceInformation(space)
 
@@ -121,9 +119,7 @@ def _run(config_path: Path, out: IO[str]) -> None:
     domain = domain_from_spec(str(config["domain"]), config.get("spec") or {})
     robot = domain.robot
     if robot is None:
-        raise RuntimeError(
-            f"domain {config['domain']!r} has no arm: RRT-Connect here plans joint-space requests"
-        )
+        raise RuntimeError(f"domain {config['domain']!r} has no arm: RRT-Connect here plans joint-space requests")
     ou.setLogLevel(ou.LOG_ERROR)
     dim = robot.dof
     space = ob.RealVectorStateSpace(dim)

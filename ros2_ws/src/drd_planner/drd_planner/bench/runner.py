@@ -308,9 +308,7 @@ def run_benchmark(
     path_costs = problem.library.path_costs(problem.edge_costs)
     lower = oracle_lower_bound(worlds.R[test_ids], path_costs)
     results: dict[str, PolicyStats] = {}
-    bar = Progress(
-        len(policies) * len(test_ids), f"{problem.name} episodes", unit="episode", enabled=progress
-    )
+    bar = Progress(len(policies) * len(test_ids), f"{problem.name} episodes", unit="episode", enabled=progress)
     with bar:
         for name in policies:
             bar.set_postfix_str(name)
@@ -469,9 +467,7 @@ def json_safe(value: Any) -> Any:
     return value
 
 
-def write_bench_files(
-    doc: dict[str, Any], report: str, *, json_path: str | None, markdown_path: str | None
-) -> None:
+def write_bench_files(doc: dict[str, Any], report: str, *, json_path: str | None, markdown_path: str | None) -> None:
     """Write a benchmark's JSON document and markdown report where asked (folders made), saying so on stdout.
 
     Raises:

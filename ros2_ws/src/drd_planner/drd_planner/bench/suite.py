@@ -139,9 +139,7 @@ def discover_datasets(root: str | Path) -> tuple[list[Path], list[tuple[str, str
         missing = [f for f in REQUIRED_FILES if not (folder / f).is_file()]
         if missing:
             more = f" and {len(missing) - 1} more required files" if len(missing) > 1 else ""
-            skipped.append(
-                (folder.name, f"not an authors'-format graph dataset (missing {missing[0]}{more})")
-            )
+            skipped.append((folder.name, f"not an authors'-format graph dataset (missing {missing[0]}{more})"))
         else:
             runnable.append(folder)
     if not runnable:
@@ -361,8 +359,7 @@ def costs_figure(runs: Sequence[DatasetRun], options: SuiteOptions) -> list[Path
         return []
     baselines = [p for p in options.policies if p != options.reference]
     failures = {
-        run.result.dataset: {name: stats.failures for name, stats in run.result.policies.items()}
-        for run in runs
+        run.result.dataset: {name: stats.failures for name, stats in run.result.policies.items()} for run in runs
     }
     return plot_normalised_costs(tables, baselines, options.figures / "normalised_costs", failures=failures)
 

@@ -75,9 +75,9 @@ def told_checks(
     return np.array(
         [
             [
-                run_world(
-                    sub, "direct_bisect", k + j, theta=theta, tree=tree, seed=j, settings=st
-                ).total_cost(problem.edge_costs)
+                run_world(sub, "direct_bisect", k + j, theta=theta, tree=tree, seed=j, settings=st).total_cost(
+                    problem.edge_costs
+                )
                 for j in range(k)
             ]
             for st in settings

@@ -145,9 +145,7 @@ class DeprecatedAlias(argparse.Action):
         option_string: str | None = None,
     ) -> None:
         """Warn that ``option_string`` is deprecated, then store ``values``."""
-        print(
-            f"{parser.prog}: warning: {option_string} is deprecated; use {self.replacement}", file=sys.stderr
-        )
+        print(f"{parser.prog}: warning: {option_string} is deprecated; use {self.replacement}", file=sys.stderr)
         setattr(namespace, self.dest, values)
 
 

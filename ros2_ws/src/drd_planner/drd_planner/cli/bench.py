@@ -106,15 +106,11 @@ def add_bench_parser(sub: Any) -> argparse.ArgumentParser:
     where.add_argument("--gccd", metavar="DIR", help="authors'-format dataset folder")
     where.add_argument("--dataset", metavar="FILE", help="dataset file written by drd build-dataset")
     where.add_argument("--all", metavar="DIR", help="run every authors'-format dataset folder under DIR")
-    p.add_argument(
-        "--policies", type=name_list, default=None, help="comma-separated (default: the Table-1 set)"
-    )
+    p.add_argument("--policies", type=name_list, default=None, help="comma-separated (default: the Table-1 set)")
     p.add_argument("--json", help="write the results JSON here")
     p.add_argument("--markdown", help="write the markdown report (Table 1 and absolute numbers) here")
     p.add_argument("--figures", metavar="DIR", help="write the figures (PNG + SVG) into DIR")
-    add_prior_option(
-        p, help="use this prior or tree file instead of building one (not with --all; --tree: deprecated)"
-    )
+    add_prior_option(p, help="use this prior or tree file instead of building one (not with --all; --tree: deprecated)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument(
         "--eta",
@@ -140,9 +136,7 @@ def add_bench_parser(sub: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--max-checks", type=int, default=None, help="cap on checks per episode (failure)")
     p.add_argument("--reference", default="direct_bisect", help="policy the relative costs are over")
-    p.add_argument(
-        "--tie-subset", type=name_list, default=None, help="tie-filter policies (default: Table-1 subset)"
-    )
+    p.add_argument("--tie-subset", type=name_list, default=None, help="tie-filter policies (default: Table-1 subset)")
     p.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples of the mean's CI")
     p.add_argument(
         "--training-sizes",
@@ -166,7 +160,8 @@ def add_bench_parser(sub: Any) -> argparse.ArgumentParser:
         metavar="C[,C...]",
         help="with --queries: also time every policy to a verified plan with C ms of CPU added to each check "
         "(per kind: the stored query and new ones; off-graph queries need live worlds: "
-        "scripts/experiments/bench_check_cost.py; median and mean CPU and wall ms per C in the JSON's policies.NAME.time_ms.C)",
+        "scripts/experiments/bench_check_cost.py; median and mean CPU and wall ms per C in the JSON's "
+        "policies.NAME.time_ms.C)",
     )
     add_tree_options(p)
     p.set_defaults(func=cmd_bench)

@@ -155,9 +155,7 @@ def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
         ),
     )
     p.add_argument("--domain", required=True, help=f"domain name ({', '.join(sorted(DOMAIN_CLASSES))})")
-    p.add_argument(
-        "--world-model", help="the domain's world model to sample (required without a file source)"
-    )
+    p.add_argument("--world-model", help="the domain's world model to sample (required without a file source)")
     p.add_argument(
         "--worlds",
         type=_positive_int,
@@ -165,9 +163,7 @@ def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=_non_negative_int, help="base seed (non-negative; required)")
     p.add_argument("--out", help="dataset file to write (.npz; required)")
-    p.add_argument(
-        "--workers", type=_positive_int, default=None, help="local worker processes (default: all CPUs)"
-    )
+    p.add_argument("--workers", type=_positive_int, default=None, help="local worker processes (default: all CPUs)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask scheduler (tcp://host:port)")
     p.add_argument("--chunk-size", type=_positive_int, default=16, help="worlds per task (default 16)")
     p.add_argument("--max-paths", type=_positive_int, default=500, help="library size cap m (default 500)")

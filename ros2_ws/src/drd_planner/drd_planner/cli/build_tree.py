@@ -34,8 +34,7 @@ def add_build_tree_parser(sub: Any) -> argparse.ArgumentParser:
         action="append",
         default=None,
         metavar="START,GOAL",
-        help="also precompute a tree for this query: vertex ids, or states as space-separated numbers "
-        "(repeatable)",
+        help="also precompute a tree for this query: vertex ids, or states as space-separated numbers (repeatable)",
     )
     p.add_argument(
         "--eta",

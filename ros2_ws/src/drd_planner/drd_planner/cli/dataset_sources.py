@@ -92,9 +92,7 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
     exclusive.add_argument(
         "--bags", metavar="FILE", nargs="+", help="one world per map snapshot of these rosbag2 MCAP bags"
     )
-    exclusive.add_argument(
-        "--terrain", metavar="FILE", help="the terrain world model on this ESRI ASCII grid"
-    )
+    exclusive.add_argument("--terrain", metavar="FILE", help="the terrain world model on this ESRI ASCII grid")
     group.add_argument(
         "--no-requests", action="store_true", help="--scenes: do not add the request*.yaml states as vertices"
     )
@@ -118,9 +116,7 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
         help="--terrain: random rotation/mirror/scale/relief (default), or as-is: north up at the grid's "
         "cell size and its own heights",
     )
-    group.add_argument(
-        "--crop-scale", metavar="M|LO,HI", type=_scale, help="--terrain: metres per source cell"
-    )
+    group.add_argument("--crop-scale", metavar="M|LO,HI", type=_scale, help="--terrain: metres per source cell")
     parser.add_argument(
         "--print-spec",
         action="store_true",
@@ -142,18 +138,12 @@ def check_required(args: argparse.Namespace, error: ErrorFn) -> None:
     missing = [flag for flag, attr in (("--seed", "seed"), ("--out", "out")) if getattr(args, attr) is None]
     if kind is None:
         missing = [
-            f
-            for f, a in (("--world-model", "world_model"), ("--worlds", "worlds"))
-            if getattr(args, a) is None
+            f for f, a in (("--world-model", "world_model"), ("--worlds", "worlds")) if getattr(args, a) is None
         ] + missing
     elif kind == "terrain" and args.worlds is None:
         missing = ["--worlds", *missing]
     if missing:
-        hint = (
-            ""
-            if kind is not None or args.world_model
-            else " (or worlds from files: --scenes, --bags or --terrain)"
-        )
+        hint = "" if kind is not None or args.world_model else " (or worlds from files: --scenes, --bags or --terrain)"
         error(f"the following arguments are required: {', '.join(missing)}{hint}")
 
 

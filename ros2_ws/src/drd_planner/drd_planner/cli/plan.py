@@ -87,9 +87,7 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         help="plan this query (vertex ids or states) instead of the dataset's own (--gccd / --dataset)",
     )
     p.add_argument("--max-checks", type=int, default=None, help="end the plan after this many checks")
-    p.add_argument(
-        "--policy", default="direct_bisect", choices=PLAN_POLICIES, help="the library stage's policy"
-    )
+    p.add_argument("--policy", default="direct_bisect", choices=PLAN_POLICIES, help="the library stage's policy")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_plan)
     return p

@@ -26,9 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="heli_lines",
         help="prior file or shipped tree name (default heli_lines; --tree: deprecated)",
     )
-    parser.add_argument(
-        "--bag", default="heli_lines", help="bag file or bundled bag name (default heli_lines)"
-    )
+    parser.add_argument("--bag", default="heli_lines", help="bag file or bundled bag name (default heli_lines)")
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder (default ./out)")
     parser.add_argument("--rate", type=float, default=2.0, help="playback speed factor (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="policy seed (default 0)")

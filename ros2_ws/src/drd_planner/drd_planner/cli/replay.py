@@ -27,12 +27,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--record", metavar="OUT.mcap", help="write the planner's outputs to this MCAP file")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --record file")
     parser.add_argument("--rate", type=_positive, default=1.0, help="playback speed factor (default 1)")
-    parser.add_argument(
-        "--settle", type=_seconds, default=2.0, help="seconds to keep listening after the last message"
-    )
-    parser.add_argument(
-        "--wait", type=_seconds, default=5.0, help="seconds to wait for the node's subscriptions first"
-    )
+    parser.add_argument("--settle", type=_seconds, default=2.0, help="seconds to keep listening after the last message")
+    parser.add_argument("--wait", type=_seconds, default=5.0, help="seconds to wait for the node's subscriptions first")
     parser.add_argument("--namespace", default=None, help="the planner node's namespace")
     return parser
 

@@ -49,9 +49,7 @@ def add_tree_options(parser: argparse.ArgumentParser) -> None:
         help="tests DiRECt considers at a node (default: edges of the best-supported path)",
     )
     parser.add_argument("--top-regions", type=int, default=None, help="IncDRD: DiRECt on k regions only")
-    parser.add_argument(
-        "--colouring", action="store_true", help="group never-overlapping regions into one ECD"
-    )
+    parser.add_argument("--colouring", action="store_true", help="group never-overlapping regions into one ECD")
     parser.add_argument(
         "--region-rule",
         choices=(*REGION_RULES, AUTO),
@@ -97,9 +95,7 @@ def kappas(args: argparse.Namespace) -> tuple[float | None, ...]:
 
 def leaf_choice(args: argparse.Namespace) -> LeafChoice:
     """How eta, kappa and the region rule are chosen, from ``--eta``, ``--kappa``, ``--seed``, ``--region-rule``."""
-    return LeafChoice(
-        eta=args.eta, pseudo_counts=kappas(args), seed=args.seed, region_rules=region_rules(args)
-    )
+    return LeafChoice(eta=args.eta, pseudo_counts=kappas(args), seed=args.seed, region_rules=region_rules(args))
 
 
 def problem_source(args: argparse.Namespace) -> ProblemSource:

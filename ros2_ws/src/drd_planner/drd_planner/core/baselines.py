@@ -193,9 +193,7 @@ class MVoI(BernoulliBaseline):
     blocked times the best path probability that survives it. First maximum in increasing edge id.
     """
 
-    def __init__(
-        self, library: PathLibrary, theta: npt.ArrayLike, *, name: str = "mvoi", seed: int = 0
-    ) -> None:
+    def __init__(self, library: PathLibrary, theta: npt.ArrayLike, *, name: str = "mvoi", seed: int = 0) -> None:
         super().__init__(library, theta, name=name, max_prob_region=True, seed=seed)
 
     def choose(self) -> int:
@@ -244,9 +242,7 @@ class LazySPSet(BernoulliBaseline):
         name: str | None = None,
         seed: int = 0,
     ) -> None:
-        super().__init__(
-            library, theta, name=name or ("lazysp_set" if weighted else "lazysp_set_random"), seed=seed
-        )
+        super().__init__(library, theta, name=name or ("lazysp_set" if weighted else "lazysp_set_random"), seed=seed)
         lengths = np.asarray(path_lengths, dtype=np.float64).ravel()
         if lengths.shape != (library.num_paths,):
             raise ProblemError(f"path lengths must have shape ({library.num_paths},), got {lengths.shape}")

@@ -23,9 +23,7 @@ from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 _ROWS_PER_BLOCK = 64
 
 
-def bias_from_worlds(
-    X: npt.ArrayLike, weights: npt.ArrayLike | None = None, *, alpha: float = 0.99
-) -> FloatArray:
+def bias_from_worlds(X: npt.ArrayLike, weights: npt.ArrayLike | None = None, *, alpha: float = 0.99) -> FloatArray:
     """theta_e = alpha * (weighted) mean_h X[h, e] + (1 - alpha) * 0.5; 0.5 where no world is given.
 
     Args:

@@ -220,17 +220,13 @@ class DirectSelector:
         total = float(mass.sum())
         groups = self._groups(members, null_ecd)
         w_now, w0_now = self._weights_now(mass, groups)
-        if np.any(self._is_zero(w_now, total)) or (
-            groups.null_count and self._is_zero(np.array([w0_now]), total)[0]
-        ):
+        if np.any(self._is_zero(w_now, total)) or (groups.null_count and self._is_zero(np.array([w0_now]), total)[0]):
             return None
         x_act, split_cols, informative = self._informative(act, candidates)
         if informative.size == 0:
             return None
         xi = x_act[:, split_cols].astype(self._dtype)
-        onehot = sp.csr_array(
-            (weights.astype(self._dtype), (local, np.arange(act.size))), shape=(num_atoms, act.size)
-        )
+        onehot = sp.csr_array((weights.astype(self._dtype), (local, np.arange(act.size))), shape=(num_atoms, act.size))
         c1 = np.asarray(onehot @ xi)  # (S, Ti) mass of atom s with x_t = 1
         c0 = mass.astype(self._dtype)[:, None] - c1
         (t0, l0), (t1, l1) = (self._log_remaining(cx, groups, w_now, w0_now) for cx in (c0, c1))

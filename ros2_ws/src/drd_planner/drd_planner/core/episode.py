@@ -307,9 +307,7 @@ class _Episode:
         free = bool(self.oracle.check(edge))
         t2 = time.perf_counter()
         self.outcome[edge] = free
-        self.log.append(
-            CheckRecord(len(self.log), edge, free, self.policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3)
-        )
+        self.log.append(CheckRecord(len(self.log), edge, free, self.policy.stage, (t1 - t0) * 1e3, (t2 - t1) * 1e3))
         self.policy.observe(edge, free)
         progress = self.progress
         if progress is None:

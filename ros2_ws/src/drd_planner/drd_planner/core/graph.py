@@ -45,9 +45,7 @@ class ExplicitGraph:
         if self.vertex_states is not None:
             states = np.asarray(self.vertex_states, dtype=np.float64)
             if states.ndim != 2 or states.shape[0] != self.num_vertices:
-                raise ProblemError(
-                    f"vertex states must have shape ({self.num_vertices}, d), got {states.shape}"
-                )
+                raise ProblemError(f"vertex states must have shape ({self.num_vertices}, d), got {states.shape}")
             object.__setattr__(self, "vertex_states", states)
         object.__setattr__(self, "edges", edges)
         object.__setattr__(self, "lengths", lengths)

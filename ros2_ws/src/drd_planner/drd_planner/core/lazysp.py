@@ -129,15 +129,11 @@ class GraphArcs:
             The length without deletions and the (m,) lengths with ``edges[j]`` deleted; inf where
             the goal is unreachable.
         """
-        dist, _ = self.deletion_search(
-            start, edge_weights, np.concatenate([[-1], np.asarray(edges, np.int64)])
-        )
+        dist, _ = self.deletion_search(start, edge_weights, np.concatenate([[-1], np.asarray(edges, np.int64)]))
         at_goal = dist[np.arange(dist.size // self.num_vertices) * self.num_vertices + goal]
         return float(at_goal[0]), np.asarray(at_goal[1:], dtype=np.float64)
 
-    def deletion_paths(
-        self, start: int, goal: int, edge_weights: FloatArray, edges: IntArray
-    ) -> list[IntArray | None]:
+    def deletion_paths(self, start: int, goal: int, edge_weights: FloatArray, edges: IntArray) -> list[IntArray | None]:
         """Per entry of ``edges`` the shortest start-goal path (edge ids) with that edge deleted.
 
         Same batched Dijkstra as :meth:`deletion_lengths`; an entry of -1 deletes nothing. None where
@@ -366,9 +362,7 @@ class LazySP:
         free = self._outcome[arcs.edge] == _FREE
         adjacency = sp.csr_array((np.ones(int(free.sum())), (arcs.u[free], arcs.v[free])), shape=(n, n))
         ahead = breadth_first_order(adjacency, self._start, directed=True, return_predecessors=False)
-        behind = breadth_first_order(
-            adjacency.T.tocsr(), self._goal, directed=True, return_predecessors=False
-        )
+        behind = breadth_first_order(adjacency.T.tocsr(), self._goal, directed=True, return_predecessors=False)
         return int(ahead.size), int(behind.size)
 
     def shortest_path_counts(self) -> IntArray:

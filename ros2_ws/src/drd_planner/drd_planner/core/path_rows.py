@@ -36,9 +36,7 @@ class PathRows:
         by_path: (m, L) int64, the same table path by path (row i: path i's edges), contiguous.
     """
 
-    def __init__(
-        self, indptr: npt.NDArray[np.integer], indices: npt.NDArray[np.integer], num_edges: int
-    ) -> None:
+    def __init__(self, indptr: npt.NDArray[np.integer], indices: npt.NDArray[np.integer], num_edges: int) -> None:
         ptr = np.asarray(indptr, dtype=np.int64)
         edge = np.asarray(indices, dtype=np.int64)
         lengths = np.diff(ptr)

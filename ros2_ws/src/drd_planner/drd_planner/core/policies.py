@@ -52,9 +52,7 @@ class BisectPolicy:
         region_rule: str = DEFAULT_REGION_RULE,
     ) -> None:
         self._name = name or ("bisect" if max_prob_region else "bisect_all")
-        self._bisect = Bisect(
-            library, theta, edge_costs, max_prob_region=max_prob_region, region_rule=region_rule
-        )
+        self._bisect = Bisect(library, theta, edge_costs, max_prob_region=max_prob_region, region_rule=region_rule)
 
     @property
     def name(self) -> str:
@@ -207,9 +205,7 @@ class DirectBisectPolicy:
                 self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)
             return
         if edge != self._walker.edge():
-            raise PolicyError(
-                f"{self._name}: observed edge {edge}, but the tree asked for {self._walker.edge()}"
-            )
+            raise PolicyError(f"{self._name}: observed edge {edge}, but the tree asked for {self._walker.edge()}")
         node = self._walker.node
         if not self._walker.advance(free):
             self._switch(node)
@@ -353,9 +349,7 @@ def need_graph(ctx: PolicyContext) -> ExplicitGraph:
     if ctx.graph is None:
         raise ProblemError("this policy needs the graph (PolicyContext.graph)")
     if ctx.graph.num_edges != ctx.library.num_edges:
-        raise ProblemError(
-            f"graph has {ctx.graph.num_edges} edges but the library indexes {ctx.library.num_edges}"
-        )
+        raise ProblemError(f"graph has {ctx.graph.num_edges} edges but the library indexes {ctx.library.num_edges}")
     return ctx.graph
 
 
@@ -409,9 +403,7 @@ _REGISTRY: dict[str, PolicyFactory] = {
     ),
     "mvoi": lambda c: MVoI(c.library, c.train_theta, seed=c.seed),
     "random": lambda c: RandomEdge(c.library, c.train_theta, name="random", seed=c.seed),
-    "random_all": lambda c: RandomEdge(
-        c.library, c.train_theta, name="random_all", max_prob_region=False, seed=c.seed
-    ),
+    "random_all": lambda c: RandomEdge(c.library, c.train_theta, name="random_all", max_prob_region=False, seed=c.seed),
     "lazysp_set": _lazysp_set(weighted=True),
     "lazysp_set_random": _lazysp_set(weighted=False),
     **{lazysp_name(s): _lazysp(s) for s in SELECTORS},
@@ -459,9 +451,7 @@ def register_policy(name: str, factory: PolicyFactory, *, needs_graph: bool = Fa
         PolicyError: ``name`` is already registered.
     """
     if name in _REGISTRY:
-        raise PolicyError(
-            f"policy {name!r} is already registered; registered: {', '.join(sorted(_REGISTRY))}"
-        )
+        raise PolicyError(f"policy {name!r} is already registered; registered: {', '.join(sorted(_REGISTRY))}")
     _REGISTRY[name] = factory
     if needs_graph:
         _GRAPH_POLICIES.append(name)

@@ -1,9 +1,10 @@
 """BiSECt's bias re-conditioned on every outcome: the authors' ``update_posterior`` option.
 
 The paper's benchmark keeps BiSECt's bias fixed after the switch from the tree (docs/algorithms.md,
-"The decision tree and the switch to BiSECt"; ``update_posterior=false``): theta is the free fraction of the training worlds consistent with the
-tree node, and later outcomes only clamp their own edge. With the posterior update every outcome
-also removes the training worlds it contradicts, and theta is recomputed from those that remain.
+"The decision tree and the switch to BiSECt"; ``update_posterior=false``): theta is the free fraction of the
+training worlds consistent with the tree node, and later outcomes only clamp their own edge. With the posterior
+update every outcome also removes the training worlds it contradicts, and theta is recomputed from those that
+remain.
 
 Once few worlds remain their free fractions are noisy (and 0 or 1 on most edges), so the data term
 is shrunk toward the global training marginal with a Beta-style pseudo-count kappa::
@@ -67,9 +68,7 @@ class TrainingOutcomes:
         self.column[lib] = np.arange(lib.size)
         self.total_mass = float(self.weights.sum())
         self.free_mass: FloatArray = self.free_mass_of(np.arange(x.shape[0]))
-        self.marginal: FloatArray = (
-            self.free_mass / self.total_mass if self.total_mass > 0 else np.full(lib.size, 0.5)
-        )
+        self.marginal: FloatArray = self.free_mass / self.total_mass if self.total_mass > 0 else np.full(lib.size, 0.5)
         self._episodes = 0
         self._columns: WorldColumns | None = None
 
@@ -212,9 +211,7 @@ class ConsistentWorldsBias:
             mass = max(self._mass, 0.0)
             free = np.maximum(self._free_mass, 0.0)
             data = (free + self._kappa_marginal) / (mass + self._kappa)
-            self._library_theta = (
-                self._alpha * np.minimum(np.maximum(data, 0.0), 1.0) + (1.0 - self._alpha) * 0.5
-            )
+            self._library_theta = self._alpha * np.minimum(np.maximum(data, 0.0), 1.0) + (1.0 - self._alpha) * 0.5
         return self._library_theta
 
     def theta(self) -> FloatArray:

@@ -50,13 +50,10 @@ class Problem:
             raise ProblemError(f"graph has {self.graph.num_edges} edges but the library indexes {num_edges}")
         if self.worlds is not None:
             if self.worlds.X.shape[1] != num_edges:
-                raise ProblemError(
-                    f"world database has {self.worlds.X.shape[1]} edge columns, problem has {num_edges}"
-                )
+                raise ProblemError(f"world database has {self.worlds.X.shape[1]} edge columns, problem has {num_edges}")
             if self.worlds.R.shape[1] != self.library.num_paths:
                 raise ProblemError(
-                    f"world database has {self.worlds.R.shape[1]} path columns, library has "
-                    f"{self.library.num_paths}"
+                    f"world database has {self.worlds.R.shape[1]} path columns, library has {self.library.num_paths}"
                 )
 
     @property

@@ -154,9 +154,7 @@ class NodeRegionInputs:
     library: PathLibrary
     edge_costs: FloatArray
 
-    def path(
-        self, support: FloatArray, active: IntArray, weights: FloatArray, checked: BoolArray
-    ) -> int | None:
+    def path(self, support: FloatArray, active: IntArray, weights: FloatArray, checked: BoolArray) -> int | None:
         """The node's path by ``rule`` (:func:`node_region_path`); ``checked``: (E,) edges checked above it."""
         lib = self.library.library_edges
         w = weights[active]

@@ -265,18 +265,14 @@ def select_switch_threshold(
     num_folds = max(1, min(int(folds), (feasible.size - 1) // k))
     rng = np.random.default_rng(seed)
     drawn = rng.choice(feasible, size=k * num_folds, replace=False)
-    options = {
-        key: v for key, v in (grid.tree_options or {}).items() if key not in ("expand_threshold", "progress")
-    }
+    options = {key: v for key, v in (grid.tree_options or {}).items() if key not in ("expand_threshold", "progress")}
     per_fold: list[dict[tuple[float, float | None], float]] = []
     for fold in range(num_folds):
         held_out = np.sort(drawn[fold * k : (fold + 1) * k])
         fit = np.setdiff1d(train, held_out)
         sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held_out))
         tree = build_tree(sub, expand_threshold=grid.expand_threshold, progress=False, **options)
-        per_fold.append(
-            _mean_checks(problem, tree, (cands, kappas), held_out, alpha=grid.alpha, progress=progress)
-        )
+        per_fold.append(_mean_checks(problem, tree, (cands, kappas), held_out, alpha=grid.alpha, progress=progress))
     means = {c: float(np.mean([f[c] for f in per_fold])) for c in per_fold[0]}
     fold_means = {c: tuple(f[c] for f in per_fold) for c in per_fold[0]} if num_folds > 1 else {}
     best = min(means, key=lambda c: (means[c], -_order_key(c)[0]))
@@ -338,9 +334,7 @@ def _checked_candidates(grid: ValidationGrid) -> tuple[list[float], list[float |
         {None if k is None else float(k) for k in grid.pseudo_counts}, key=lambda k: -1.0 if k is None else k
     )
     if not kappas or any(k is not None and not (k > 0 and np.isfinite(k)) for k in kappas):
-        raise ProblemError(
-            f"pseudo-counts must be non-empty, each None or > 0; got {list(grid.pseudo_counts)}"
-        )
+        raise ProblemError(f"pseudo-counts must be non-empty, each None or > 0; got {list(grid.pseudo_counts)}")
     return cands, kappas
 
 
@@ -359,16 +353,12 @@ def _mean_checks(
     cands, kappas = grid
     means: dict[tuple[float, float | None], float] = {}
     total_episodes = len(cands) * len(kappas) * held_out.size
-    with Progress(
-        total_episodes, "validating eta x kappa", unit="episode", enabled=progress, announce=True
-    ) as bar:
+    with Progress(total_episodes, "validating eta x kappa", unit="episode", enabled=progress, announce=True) as bar:
         for eta in cands:
             for kappa in kappas:
                 total = 0
                 for world in held_out:
-                    policy = DirectBisectPolicy(
-                        tree, problem.library, costs, eta=eta, alpha=alpha, pseudo_count=kappa
-                    )
+                    policy = DirectBisectPolicy(tree, problem.library, costs, eta=eta, alpha=alpha, pseudo_count=kappa)
                     result = run_episode(problem.library, costs, policy, TableOracle(worlds.X[world]))
                     total += result.num_checks
                     bar.update(1)

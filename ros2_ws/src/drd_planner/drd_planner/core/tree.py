@@ -2,7 +2,8 @@
 
 Built breadth-first from the root (all training worlds active). Each expanded node stores the
 DiRECt edge to check; both children are created, and a child is expanded further only while its
-consistent-world fraction is at least ``expand_threshold`` (:data:`DEFAULT_EXPAND_THRESHOLD`). For every node the tree keeps
+consistent-world fraction is at least ``expand_threshold`` (:data:`DEFAULT_EXPAND_THRESHOLD`). For every node the tree
+keeps
 what the online side needs without the database: the consistent-world count and fraction, the
 fraction of consistent worlds in which each library edge is free (BiSECt's leaf bias), and the
 library path with the most consistent worlds (DiRECt-only's final guess).
@@ -76,9 +77,7 @@ class DecisionTree:
         """The training worlds prepared for the posterior leaf (computed once), or None without them."""
         if self.world_free is None:
             return None
-        return TrainingOutcomes(
-            self.world_free, self.library_edges, self.num_edges, weights=self.world_weights
-        )
+        return TrainingOutcomes(self.world_free, self.library_edges, self.num_edges, weights=self.world_weights)
 
     @property
     def num_nodes(self) -> int:
@@ -258,9 +257,7 @@ class _TreeBuilder:
         self.prior = None if worlds.prior is None else worlds.prior[train]
         self.weights = np.ones(train.size) if self.prior is None else self.prior
         self.total = float(self.weights.sum())
-        self.selector = DirectSelector(
-            self.X, self.R, problem.edge_costs, prior=self.prior, colouring=colouring
-        )
+        self.selector = DirectSelector(self.X, self.R, problem.edge_costs, prior=self.prior, colouring=colouring)
         self.r_float = self.R.astype(np.float64)
         self.region = (
             None
@@ -342,9 +339,7 @@ class _TreeBuilder:
         queue: deque[int] = deque()
         queue.append(self.add_node(np.arange(self.X.shape[0], dtype=np.int64), -1, None, -1))
         expanded = 0
-        with tqdm(
-            desc="DiRECt tree", unit="node", disable=progress is False if progress is not None else None
-        ) as bar:
+        with tqdm(desc="DiRECt tree", unit="node", disable=progress is False if progress is not None else None) as bar:
             while queue:
                 node = queue.popleft()
                 edge = self.choose(node)

@@ -63,7 +63,5 @@ class WorldColumns:
         """(E,) int64: in how many of the (n,) ``rows`` worlds each edge is free."""
         mask = pack_rows(rows)
         if mask.size != self.bits.shape[1]:
-            raise ProblemError(
-                f"a row mask of {self.num_worlds} worlds expected, got {np.asarray(rows).size}"
-            )
+            raise ProblemError(f"a row mask of {self.num_worlds} worlds expected, got {np.asarray(rows).size}")
         return np.asarray(np.bitwise_count(self.bits & mask).sum(axis=1, dtype=np.int64), dtype=np.int64)

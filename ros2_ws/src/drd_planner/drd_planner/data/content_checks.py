@@ -202,9 +202,7 @@ def check_walks(
     if vertex_paths is not None:
         expected = np.insert(before, last + 1, goal)
         given = [np.asarray(v, dtype=np.int64) for v in vertex_paths]
-        if len(given) != len(path_edges) or any(
-            v.size != s + 1 for v, s in zip(given, sizes.tolist(), strict=True)
-        ):
+        if len(given) != len(path_edges) or any(v.size != s + 1 for v, s in zip(given, sizes.tolist(), strict=True)):
             raise _fail("the library's vertex paths do not match its edge paths")
         if not np.array_equal(np.concatenate(given), expected):
             raise _fail("the library's vertex paths do not follow its edge paths")

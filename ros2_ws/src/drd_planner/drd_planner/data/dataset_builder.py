@@ -181,8 +181,7 @@ def _with_source(recipe: DatasetRecipe, probe: Domain) -> tuple[Domain, Resolved
 def _check_domain(dom: Domain, world_model: str | None) -> None:
     if world_model is not None and world_model not in dom.world_models:
         raise DatasetError(
-            f"unknown world model {world_model!r} for domain {dom.name!r}; "
-            f"choose one of: {', '.join(dom.world_models)}"
+            f"unknown world model {world_model!r} for domain {dom.name!r}; choose one of: {', '.join(dom.world_models)}"
         )
     if int(dom.start) == int(dom.goal):
         raise DatasetError(f"domain {dom.name!r} has start == goal ({dom.start})")
@@ -268,9 +267,7 @@ def _evaluate(
     if not pending:
         return
     parts.mkdir(parents=True, exist_ok=True)
-    stream = run_tasks(
-        pending, workers=options.workers, scheduler=options.scheduler, method=options.start_method
-    )
+    stream = run_tasks(pending, workers=options.workers, scheduler=options.scheduler, method=options.start_method)
     # Counted in worlds, announced at once: a chunk of arm worlds takes tens of seconds, and a build that said
     # nothing until its first chunk finished looked stuck (206 s of silence on 1000 arm worlds).
     total = sum(len(task.seeds) for task in plan.tasks)
@@ -283,9 +280,7 @@ def _evaluate(
                     f"a worker rebuilt domain {plan.domain.name!r} with another graph from the same spec: the "
                     "domain is not reproducible from its spec (or the worker runs other software)"
                 )
-            save_chunk(
-                parts, result, build_key=plan.build_key, num_worlds=len(plan.tasks[result.index].seeds)
-            )
+            save_chunk(parts, result, build_key=plan.build_key, num_worlds=len(plan.tasks[result.index].seeds))
             results[result.index] = result
             bar.update(len(plan.tasks[result.index].seeds))
 

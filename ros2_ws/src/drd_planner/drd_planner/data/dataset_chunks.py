@@ -155,9 +155,7 @@ def save_chunk(parts: Path, result: ChunkResult, *, build_key: str, num_worlds: 
     _FORMAT.write(chunk_path(parts, result.index), header, arrays)
 
 
-def load_chunk(
-    path: Path, *, index: int, build_key: str, num_worlds: int, num_edges: int
-) -> ChunkResult | None:
+def load_chunk(path: Path, *, index: int, build_key: str, num_worlds: int, num_edges: int) -> ChunkResult | None:
     """A finished chunk, or None when the file is damaged (it is then evaluated again).
 
     Raises:

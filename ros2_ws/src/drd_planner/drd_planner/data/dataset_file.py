@@ -376,16 +376,12 @@ def _dataset_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Dat
     path_edges = unpack_ragged(c["path_edges"], c["path_offsets"], m, "library path", DatasetError)
     vertex_paths = None
     if "vertex_paths" in c:
-        vertex_paths = unpack_ragged(
-            c["vertex_paths"], c["vertex_offsets"], m, "library vertex path", DatasetError
-        )
+        vertex_paths = unpack_ragged(c["vertex_paths"], c["vertex_offsets"], m, "library vertex path", DatasetError)
     trajectories = None
     if "traj_states" in c:
         if c["traj_states"].ndim != 2:
             raise DatasetError(f"traj_states must be (K, D), got shape {c['traj_states'].shape}")
-        trajectories = unpack_ragged(
-            c["traj_states"], c["traj_offsets"], num_edges, "edge trajectory", DatasetError
-        )
+        trajectories = unpack_ragged(c["traj_states"], c["traj_offsets"], num_edges, "edge trajectory", DatasetError)
     return Dataset(
         graph=graph,
         start=_int(header, "start"),

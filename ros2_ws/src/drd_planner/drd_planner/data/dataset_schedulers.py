@@ -30,9 +30,7 @@ DASK_CONNECT_TIMEOUT_S = 10.0
 ResultStream = Generator[ChunkResult, None, None]
 
 
-def run_tasks(
-    tasks: Sequence[ChunkTask], *, workers: int, scheduler: str | None, method: str | None
-) -> ResultStream:
+def run_tasks(tasks: Sequence[ChunkTask], *, workers: int, scheduler: str | None, method: str | None) -> ResultStream:
     """Run ``tasks`` on the Dask ``scheduler`` when given, else on ``workers`` local processes.
 
     One local worker (or a single task) runs in this process; ``method`` is the start method of a
@@ -64,9 +62,7 @@ def choose_start_method(requested: str | None = None) -> str:
     methods = multiprocessing.get_all_start_methods()
     if requested is not None:
         if requested not in methods:
-            raise DatasetError(
-                f"start method {requested!r} is not available here; choose one of: {', '.join(methods)}"
-            )
+            raise DatasetError(f"start method {requested!r} is not available here; choose one of: {', '.join(methods)}")
         return requested
     return "fork" if "fork" in methods and threading.active_count() == 1 else "spawn"
 
@@ -110,8 +106,7 @@ def _run_dask(tasks: Sequence[ChunkTask], address: str) -> ResultStream:
     try:
         run = uuid.uuid4().hex[:12]
         futures = [
-            client.submit(evaluate_chunk, task, key=f"drd-chunk-{run}-{task.index}", pure=False)
-            for task in tasks
+            client.submit(evaluate_chunk, task, key=f"drd-chunk-{run}-{task.index}", pure=False) for task in tasks
         ]
         for future in dask_as_completed(futures, loop=client.loop):  # type: ignore[no-untyped-call]
             try:

@@ -5,7 +5,8 @@ building process itself. It rebuilds the domain from the task's ``(name, spec, f
 process (:data:`PROCESS_DOMAINS` keeps it), regenerates each world from its seed (or, with a world source
 from files, opens the source once per process and takes each world from its files, checked against their
 SHA-256: :mod:`drd_planner.data.world_sources`), runs ``checker(world).check_many(all edges)`` and then,
-on the chunk's rows of X, Yen's k shortest loopless start-goal paths of every world (:func:`~drd_planner.data.library_builder.k_shortest_paths_union`).
+on the chunk's rows of X, Yen's k shortest loopless start-goal paths of every world
+(:func:`~drd_planner.data.library_builder.k_shortest_paths_union`).
 """
 
 from __future__ import annotations

@@ -77,9 +77,7 @@ def read_graph_txt(path: Path) -> RawGraph:
     fields = [ln.split() for ln in rows]
     bad = next((i for i, f in enumerate(fields) if len(f) != 4), None)
     if bad is not None:
-        raise DatasetError(
-            f"{path}: line {body_start + bad + 1} must be 'id parent child length' (4 numbers)"
-        )
+        raise DatasetError(f"{path}: line {body_start + bad + 1} must be 'id parent child length' (4 numbers)")
     try:
         table = np.array(fields, dtype=np.float64).reshape(-1, 4)
     except ValueError:
@@ -91,9 +89,7 @@ def read_graph_txt(path: Path) -> RawGraph:
         raise DatasetError(f"{path}: vertex ids must lie in 1..{nv}")
     loops = np.flatnonzero(parents == children)
     if loops.size:
-        raise DatasetError(
-            f"{path}: line {body_start + int(loops[0]) + 1} is a self-loop, which is not an edge"
-        )
+        raise DatasetError(f"{path}: line {body_start + int(loops[0]) + 1} is a self-loop, which is not an edge")
     if not np.all(np.isfinite(table[:, 3])) or np.any(table[:, 3] < 0):
         raise DatasetError(f"{path}: edge lengths must be finite and non-negative")
     return RawGraph(nv, parents, children, table[:, 3].copy())
@@ -147,9 +143,7 @@ def _read_vertex_states(folder: Path, num_vertices: int) -> npt.NDArray[np.float
     except ValueError as exc:
         raise DatasetError(f"cannot read vertex coordinates in {folder}: {exc}") from exc
     if states.shape[0] != num_vertices:
-        raise DatasetError(
-            f"{folder}: vertex coordinates list {states.shape[0]} vertices, graph has {num_vertices}"
-        )
+        raise DatasetError(f"{folder}: vertex coordinates list {states.shape[0]} vertices, graph has {num_vertices}")
     return np.asarray(states, dtype=np.float64)
 
 

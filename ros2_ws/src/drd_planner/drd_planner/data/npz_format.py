@@ -3,7 +3,8 @@
 The layout follows the tree file (:mod:`drd_planner.data.tree_file`): a zip of ``.npy`` members, one of
 them ``header``, a uint8 array of UTF-8 JSON holding the format name and version, free header fields, a
 SHA-256 per array (``array_sha256``) and a SHA-256 over all array digests and header fields
-(``payload_sha256``). Reading goes through :mod:`drd_planner.data.safe_npz` (never a pickle, every size checked before it
+(``payload_sha256``). Reading goes through :mod:`drd_planner.data.safe_npz` (never a pickle, every size checked before
+it
 is allocated), so a crafted file is refused with one clear error and never executes code.
 
 Two extras over ``numpy.savez_compressed``: members carry a fixed timestamp and are written in sorted
@@ -227,9 +228,7 @@ class NpzFormat:
     what: str
     readable: tuple[int, ...] = ()
 
-    def write(
-        self, path: str | Path, header: Mapping[str, Any], arrays: Mapping[str, npt.NDArray[Any]]
-    ) -> Path:
+    def write(self, path: str | Path, header: Mapping[str, Any], arrays: Mapping[str, npt.NDArray[Any]]) -> Path:
         """:func:`write_checked_npz` in this format; returns the path written."""
         return write_checked_npz(
             path,

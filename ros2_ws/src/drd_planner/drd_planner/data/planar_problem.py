@@ -68,9 +68,7 @@ def make_planar_problem(
     except DatasetError as exc:
         raise ProblemError(str(exc)) from exc
     if model not in domain.world_models:
-        raise ProblemError(
-            f"unknown planar world model {model!r}; choose one of {', '.join(domain.world_models)}"
-        )
+        raise ProblemError(f"unknown planar world model {model!r}; choose one of {', '.join(domain.world_models)}")
     graph, start, goal = domain.graph, domain.start, domain.goal
     seeds = world_seeds(seed, num_worlds)
     x = check_all_edges(domain, model, tuple(int(s) for s in seeds))
@@ -116,9 +114,7 @@ def planar_problem_worlds(problem: Problem) -> list[FloatArray]:
     recipe = planar_recipe(problem)
     domain = recipe.domain
     assert isinstance(domain, PlanarDomain)
-    return [
-        domain.make_world(recipe.world_model, int(s)) for s in world_seeds(recipe.seed, recipe.num_worlds)
-    ]
+    return [domain.make_world(recipe.world_model, int(s)) for s in world_seeds(recipe.seed, recipe.num_worlds)]
 
 
 def planar_recipe(problem: Problem) -> DatasetRecipe:

@@ -146,9 +146,7 @@ def refusing(error: type[DrdError], src: Path, what: str) -> Iterator[None]:
     except DrdError as exc:
         raise error(f"{src} is inconsistent: {short(exc, 400)}") from exc
     except MemoryError as exc:
-        raise error(
-            f"{src} is not a readable {what}: reading it needs more memory than is available"
-        ) from exc
+        raise error(f"{src} is not a readable {what}: reading it needs more memory than is available") from exc
     except RecursionError as exc:
         raise error(f"{src} is not a readable {what}: its contents are nested too deeply") from exc
     except Exception as exc:
@@ -185,9 +183,7 @@ def _describe(head: bytes, size: int) -> str:
     return f"starts with the bytes {head[:8].hex(' ')}"
 
 
-def check_source(
-    path: str | Path, *, error: type[DrdError], what: str, limits: NpzLimits = DEFAULT_LIMITS
-) -> Path:
+def check_source(path: str | Path, *, error: type[DrdError], what: str, limits: NpzLimits = DEFAULT_LIMITS) -> Path:
     """``path`` as a :class:`Path` once it is known to be a regular zip file within the size limit.
 
     Raises:
@@ -232,9 +228,7 @@ def _check_end_record(src: Path, error: type[DrdError], what: str, limits: NpzLi
         return  # zipfile refuses it as "not a zip file"
     _, _, _, _, entries, directory_bytes, _, _ = _END_RECORD.unpack_from(tail, pos)
     if pos >= 20 and tail[pos - 20 : pos - 16] == _ZIP64_LOCATOR:
-        raise error(
-            f"{src} is not a readable {what}: it has a ZIP64 end record, which no file within the limits needs"
-        )
+        raise error(f"{src} is not a readable {what}: it has a ZIP64 end record, which no file within the limits needs")
     if entries > limits.members or directory_bytes > limits.central_directory_bytes:
         raise error(
             f"{src} is not a readable {what}: its zip directory lists {entries} members in {directory_bytes} "
@@ -255,9 +249,7 @@ def _member_infos(
         name = info.filename
         key = name[:-4] if name.endswith(".npy") else ""
         if not _NAME.fullmatch(key):
-            raise error(
-                f"{src} is not a readable {what}: member {short(name, 60)!r} is not a plainly named .npy array"
-            )
+            raise error(f"{src} is not a readable {what}: member {short(name, 60)!r} is not a plainly named .npy array")
         if key in out:
             raise error(f"{src} is not a readable {what}: member {name!r} appears twice")
         if info.flag_bits & 0x1:
@@ -287,9 +279,7 @@ def _member_infos(
             )
         total += info.file_size
         if total > limits.total_bytes:
-            raise error(
-                f"{src} is not a readable {what}: its members unpack to more than {limits.total_bytes} bytes"
-            )
+            raise error(f"{src} is not a readable {what}: its members unpack to more than {limits.total_bytes} bytes")
         out[key] = info
     return out
 
@@ -313,12 +303,7 @@ def _read_member(
         preamble = length_field + fh.read(header_bytes)
         read_header = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
         shape, fortran, dtype = read_header(io.BytesIO(preamble))
-        if (
-            dtype.hasobject
-            or dtype.fields is not None
-            or dtype.subdtype is not None
-            or dtype.kind not in _PLAIN_KINDS
-        ):
+        if dtype.hasobject or dtype.fields is not None or dtype.subdtype is not None or dtype.kind not in _PLAIN_KINDS:
             raise error(
                 f"{src} is not a readable {what}: array {key!r} has dtype {short(dtype, 60)} "
                 "(only plain boolean and numeric arrays are read; Python objects never are)"

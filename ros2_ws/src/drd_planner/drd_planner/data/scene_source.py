@@ -88,9 +88,7 @@ def request_files(folder: Path, used: Sequence[Path], scenes: Sequence[Path]) ->
     used_keys = {_key(p, SCENE_PREFIX) for p in used}
     all_keys = {_key(p, SCENE_PREFIX) for p in scenes}
     found = sorted((p for p in folder.glob(f"{REQUEST_PREFIX}*.yaml") if p.is_file()), key=lambda p: p.name)
-    return [
-        p for p in found if _key(p, REQUEST_PREFIX) in used_keys or _key(p, REQUEST_PREFIX) not in all_keys
-    ]
+    return [p for p in found if _key(p, REQUEST_PREFIX) in used_keys or _key(p, REQUEST_PREFIX) not in all_keys]
 
 
 def scene_primitives(path: str, data: bytes) -> tuple[ScenePrimitive, ...]:
@@ -137,9 +135,7 @@ def _request_states(files: Sequence[FileRecord], joint_names: Sequence[str]) -> 
             request = parse_motion_plan_request(record.read().decode("utf-8"), source=record.path)
             if request.start is not None:
                 where = f"{record.path}: start_state.joint_state"
-                start = tuple(
-                    joint_vector(request.start, joint_names, where=where, allow_extra=True).tolist()
-                )
+                start = tuple(joint_vector(request.start, joint_names, where=where, allow_extra=True).tolist())
                 found.states.append(start)
                 found.first_start = found.first_start or (start, name)
             for k, goal in enumerate(request.goals):
@@ -224,8 +220,7 @@ def resolve(
     spec: dict[str, Any] | None = None
     taken: dict[str, Any] = {}
     requests = [
-        FileRecord.of(p, what="request file", max_bytes=MAX_YAML_BYTES)
-        for p in request_files(folder, used, scenes)
+        FileRecord.of(p, what="request file", max_bytes=MAX_YAML_BYTES) for p in request_files(folder, used, scenes)
     ]
     if request.requests and requests:
         if not online.joint_names:

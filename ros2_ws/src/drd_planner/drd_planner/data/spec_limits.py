@@ -81,9 +81,7 @@ def _numbers(value: Any, path: str) -> Iterator[tuple[str, float]]:
 def _checked(value: Any, name: str) -> float:
     """``value`` as a float within +-MAX_COORDINATE_M (JSON numbers are finite already)."""
     if type(value) not in (int, float) or not abs(value) <= MAX_COORDINATE_M:
-        raise ProblemError(
-            f"domain spec {name} must be a number within +-{MAX_COORDINATE_M:g}, got {value!r:.60}"
-        )
+        raise ProblemError(f"domain spec {name} must be a number within +-{MAX_COORDINATE_M:g}, got {value!r:.60}")
     return float(value)
 
 
@@ -144,14 +142,10 @@ def _helicopter(spec: Mapping[str, Any], graph: _Stored) -> None:
         if not isinstance(value, list) or not all(
             isinstance(p, list) and len(p) == 3 and all(type(v) is int for v in p) for p in value
         ):
-            raise ProblemError(
-                f"domain spec lattice.{key} must be a list of [dx, dy, dheading] integer triples"
-            )
+            raise ProblemError(f"domain spec lattice.{key} must be a list of [dx, dy, dheading] integer triples")
         prims.append(value)
     climbs = 1 if lattice.get("climb", "straight") == "none" else 3
-    _budget(
-        states * max(len(p) for p in prims) * climbs, MAX_LATTICE_CANDIDATE_EDGES, "lattice candidate edges"
-    )
+    _budget(states * max(len(p) for p in prims) * climbs, MAX_LATTICE_CANDIDATE_EDGES, "lattice candidate edges")
     # Per edge, a loose bound: a Dubins primitive without a loop is at most its straight distance plus a
     # few turning circles. Over all stored edges, the typical length: about its straight distance.
     straight = max(math.hypot(p[0], p[1]) * spacing for p in prims[0] + prims[1])
@@ -285,9 +279,7 @@ def check_domain_spec(domain: str, spec: Any, *, num_edges: int, mean_edge_lengt
         raise ProblemError(f"the domain spec must be an object, got {type(spec).__name__}")
     for path, value in _numbers(spec, ""):
         if not abs(value) <= MAX_COORDINATE_M:
-            raise ProblemError(
-                f"domain spec {path} is {value!r}; numbers must lie within +-{MAX_COORDINATE_M:g}"
-            )
+            raise ProblemError(f"domain spec {path} is {value!r}; numbers must lie within +-{MAX_COORDINATE_M:g}")
     check = _CHECKS.get(domain)
     if check is not None:
         check(spec, _Stored(num_edges, mean_edge_length))

@@ -112,9 +112,7 @@ def terrain_keys(request: TerrainFile, grid: Heightfield) -> dict[str, Any]:
         keys["cell_aspect"] = geographic[1]
     if request.crop == "as-is":
         cell = float(grid.cell_size) if geographic is None else geographic[0]
-        keys.update(
-            {"rotation_deg": [0.0, 0.0], "mirror": 0.0, "metres_per_cell": [cell, cell], "relief": None}
-        )
+        keys.update({"rotation_deg": [0.0, 0.0], "mirror": 0.0, "metres_per_cell": [cell, cell], "relief": None})
     if request.crop_scale is not None:
         keys["metres_per_cell"] = [float(request.crop_scale[0]), float(request.crop_scale[1])]
     return keys

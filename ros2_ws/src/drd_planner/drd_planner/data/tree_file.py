@@ -199,13 +199,8 @@ def check_bundle_fits(bundle: TreeBundle, problem: Problem) -> None:
     same = (
         theirs.num_edges == ours.num_edges
         and theirs.num_paths == ours.num_paths
-        and all(
-            np.array_equal(a, b)
-            for a, b in zip(theirs.library.path_edges, ours.library.path_edges, strict=True)
-        )
-        and (
-            theirs.graph is None or ours.graph is None or np.array_equal(theirs.graph.edges, ours.graph.edges)
-        )
+        and all(np.array_equal(a, b) for a, b in zip(theirs.library.path_edges, ours.library.path_edges, strict=True))
+        and (theirs.graph is None or ours.graph is None or np.array_equal(theirs.graph.edges, ours.graph.edges))
     )
     if not same:
         raise TreeFileError(
@@ -229,9 +224,7 @@ def checked_graph(header: dict[str, Any], c: dict[str, npt.NDArray[Any]], domain
     domain = header_text(header, "domain")
     edges, lengths, states = c["edges"], c["lengths"], c.get("vertex_states")
     check_graph_arrays(edges, lengths, c["costs"], states, num_vertices)
-    check_domain_spec(
-        domain, domain_spec, num_edges=int(edges.shape[0]), mean_edge_length=float(lengths.mean())
-    )
+    check_domain_spec(domain, domain_spec, num_edges=int(edges.shape[0]), mean_edge_length=float(lengths.mean()))
     return ExplicitGraph(edges, lengths, num_vertices, directed, states)
 
 
@@ -276,9 +269,7 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
     path_edges = unpack_ragged(c["path_edges"], c["path_offsets"], None, "path", TreeFileError)
     vertex_paths = None
     if "vertex_paths" in c:
-        vertex_paths = unpack_ragged(
-            c["vertex_paths"], c["vertex_offsets"], None, "vertex path", TreeFileError
-        )
+        vertex_paths = unpack_ragged(c["vertex_paths"], c["vertex_offsets"], None, "vertex path", TreeFileError)
     library = PathLibrary(path_edges, graph.num_edges, vertex_paths)
     start = header_int(header, "start", low=0, high=num_vertices - 1)
     goal = header_int(header, "goal", low=0, high=num_vertices - 1)
@@ -293,9 +284,7 @@ def _bundle_from(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> Tree
         metadata=dict(metadata),
     )
     check_tree_arrays(c, graph.num_edges, library.num_paths, library.library_edges)
-    tree = decision_tree(
-        c, library, header_dict(header, "tree_info"), _world_free(c, header), c.get("world_weights")
-    )
+    tree = decision_tree(c, library, header_dict(header, "tree_info"), _world_free(c, header), c.get("world_weights"))
     kappa = header_number(header, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True)
     if kappa is not None and tree.world_free is None:
         raise ValueError("pseudo_count is set but the file has no training worlds")
@@ -321,8 +310,6 @@ def _world_free(c: dict[str, npt.NDArray[Any]], header: dict[str, Any]) -> npt.N
     n = header_int(header, "num_train_worlds", low=1, high=MAX_WORLD_OUTCOMES)
     check_bits(bits, n, k, "world_free_bits")
     weights = c.get("world_weights")
-    if weights is not None and (
-        weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights < 0)
-    ):
+    if weights is not None and (weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights < 0)):
         raise ValueError("world_weights must be n finite non-negative values")
     return np.unpackbits(bits, axis=1, count=k).view(np.bool_)

@@ -111,9 +111,7 @@ class FileRecord:
     sha256: str
 
     @classmethod
-    def of(
-        cls, path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_SOURCE_BYTES
-    ) -> FileRecord:
+    def of(cls, path: str | os.PathLike[str], *, what: str = "file", max_bytes: int = MAX_SOURCE_BYTES) -> FileRecord:
         """The record of ``path`` as it is now.
 
         Raises:

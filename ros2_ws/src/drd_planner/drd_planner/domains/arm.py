@@ -243,9 +243,7 @@ class ArmDomain(OnlineDefaults):
                 raise ProblemError(f"robot_description: {exc}") from exc
         want, got = self._robot.chain.joint_names, robot.chain.joint_names
         if got != want:
-            raise ProblemError(
-                f"robot_description has chain joints {list(got)}; the tree was built for {list(want)}"
-            )
+            raise ProblemError(f"robot_description has chain joints {list(got)}; the tree was built for {list(want)}")
         check_robot_coordinates(robot, limits)
         return robot
 
@@ -356,9 +354,7 @@ class ArmDomain(OnlineDefaults):
         """``robot`` when it is another model than the domain's own, else None."""
         return robot if robot is not self._robot else None
 
-    def sweep_spheres(
-        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
-    ) -> SweepSpheres:
+    def sweep_spheres(self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None) -> SweepSpheres:
         """Per edge every robot sphere at every checked configuration, grown by half a sample step.
 
         Under the mesh model (``collision_model: meshes``) every sphere also grows by

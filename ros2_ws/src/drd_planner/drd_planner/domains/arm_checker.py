@@ -88,9 +88,7 @@ class SphereTest:
             else:
                 zero = np.zeros((1, self.robot.dof))
                 centres = self.robot.sphere_centres(zero)[0, self._fixed]
-                self._base_free = not self.scene.spheres_collide(
-                    centres, self.robot.spheres.radii[self._fixed]
-                )
+                self._base_free = not self.scene.spheres_collide(centres, self.robot.spheres.radii[self._fixed])
         return self._base_free
 
     def _candidates(self, q: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
@@ -270,15 +268,11 @@ class ArmEdgeChecker:
         if not self.model.base_free():
             return explain_base(self.scene, model_for=self.model_for) or "the robot's fixed base is blocked"
         rows = np.arange(q.shape[0], dtype=np.int64)
-        blocked = ~statically_valid(self.robot, q, floor_z=self.floor_z) | self.model.groups_blocked(
-            q, rows, len(q)
-        )
+        blocked = ~statically_valid(self.robot, q, floor_z=self.floor_z) | self.model.groups_blocked(q, rows, len(q))
         if not blocked.any():
             return ""
         first = q[int(np.argmax(blocked))]
-        why = explain_configuration(
-            self.robot, self.scene, first, model_for=self.model_for, floor_z=self.floor_z
-        )
+        why = explain_configuration(self.robot, self.scene, first, model_for=self.model_for, floor_z=self.floor_z)
         why = why or "the collision model"
         if q.shape[0] == 1:
             return why
@@ -291,9 +285,7 @@ class ArmEdgeChecker:
         if self._edge_state[e] == 0:
             u, v = self.graph.edges[e]
             free = (
-                self.model.base_free()
-                and bool(self._vertices_free(np.array([u, v])).all())
-                and self._interior_free(e)
+                self.model.base_free() and bool(self._vertices_free(np.array([u, v])).all()) and self._interior_free(e)
             )
             self._edge_state[e] = 1 if free else -1
         return bool(self._edge_state[e] > 0)
@@ -374,7 +366,5 @@ def check_arm_edge(
     )
     if edge_graph.num_edges != 1:
         raise ProblemError(f"edge id {edge} is not in [0, {graph.num_edges})")
-    checker = ArmEdgeChecker(
-        robot=robot, graph=edge_graph, scene=scene, resolution=resolution, self_collision=True
-    )
+    checker = ArmEdgeChecker(robot=robot, graph=edge_graph, scene=scene, resolution=resolution, self_collision=True)
     return checker.check(0)

@@ -42,9 +42,7 @@ def check_description_size(urdf: str, limits: MapLimits) -> None:
     if links > limits.max_robot_links:
         raise ProblemError(limits.refusal("max_robot_links", f"robot_description has {links} links"))
     if spheres > limits.max_robot_spheres:
-        raise ProblemError(
-            limits.refusal("max_robot_spheres", f"robot_description has {spheres} collision spheres")
-        )
+        raise ProblemError(limits.refusal("max_robot_spheres", f"robot_description has {spheres} collision spheres"))
 
 
 def check_robot_coordinates(robot: RobotModel, limits: MapLimits) -> None:

@@ -42,9 +42,7 @@ def _path(value: Any) -> str | None:
 def _extra_states(value: Any) -> list[list[float]]:
     """``extra_states`` as a list of lists of finite floats (ValueError naming the bad index)."""
     if isinstance(value, str | bytes) or not isinstance(value, Sequence):
-        raise ValueError(
-            f"extra_states must be a list of joint-value lists (rad), got {type(value).__name__}"
-        )
+        raise ValueError(f"extra_states must be a list of joint-value lists (rad), got {type(value).__name__}")
     out: list[list[float]] = []
     for i, state in enumerate(value):
         try:
@@ -52,9 +50,7 @@ def _extra_states(value: Any) -> list[list[float]]:
                 raise TypeError(type(state).__name__)
             row = [float(x) for x in state]
         except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"extra_states[{i}] must be a list of joint values (rad), got {state!r}"
-            ) from exc
+            raise ValueError(f"extra_states[{i}] must be a list of joint values (rad), got {state!r}") from exc
         if not all(math.isfinite(x) for x in row):
             raise ValueError(f"extra_states[{i}] must be finite joint values (rad), got {row}")
         out.append(row)

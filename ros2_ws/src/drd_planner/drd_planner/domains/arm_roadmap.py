@@ -144,8 +144,7 @@ def build_roadmap(robot: RobotModel, params: ArmParams) -> ExplicitGraph:
     """
     if params.num_samples < 1 or params.k < 1:
         raise ProblemError(
-            f"roadmap needs num_samples >= 1 and k >= 1, got {params.num_samples}, {params.k}: "
-            f"change them {WHERE}"
+            f"roadmap needs num_samples >= 1 and k >= 1, got {params.num_samples}, {params.k}: change them {WHERE}"
         )
     anchors = anchor_states(robot, params)
     unit = qmc.Halton(d=robot.dof, scramble=True, seed=params.seed).random(params.num_samples)
@@ -188,9 +187,7 @@ def anchor_states(robot: RobotModel, params: ArmParams) -> FloatArray:
                 f"; floor_z = {floor_accepting(float(bottoms.min())):g} passes the floor test of all "
                 f"{np.count_nonzero(bottoms < params.floor_z)} states below the floor"
             )
-        also = (
-            f" (also not statically valid: {_listed([names[i] for i in invalid[1:]])})" if invalid[1:] else ""
-        )
+        also = f" (also not statically valid: {_listed([names[i] for i in invalid[1:]])})" if invalid[1:] else ""
         raise ProblemError(f"{names[first]} configuration is not statically valid: {why}{also}")
     _refuse_repeats(anchors, names)
     return anchors

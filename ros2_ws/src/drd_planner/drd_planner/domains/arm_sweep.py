@@ -80,9 +80,7 @@ class ArmSweep:
             raise PlanningError("the arm graph has no vertex states")
         u, v = (int(x) for x in self._graph.edges[edge])
         interior = self._samples.configurations(self._graph, edge)
-        step = np.abs(states[v] - states[u]) / (
-            interior.shape[0] + 1
-        )  # fractions are k / n, n = interior + 1
+        step = np.abs(states[v] - states[u]) / (interior.shape[0] + 1)  # fractions are k / n, n = interior + 1
         reach = np.tile(radii + 0.5 * (step @ rates) + BOX_SLACK, interior.shape[0] + 2)
         return np.concatenate([states[[u, v]], interior]), reach
 

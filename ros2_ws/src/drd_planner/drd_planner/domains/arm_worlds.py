@@ -160,9 +160,7 @@ def _clutter(rng: np.random.Generator, keep_clear: KeepClear) -> list[ScenePrimi
             centre = [_uniform(rng, axis) for axis in CLUTTER_REGION]
             quat = Rotation.random(random_state=rng).as_quat()
             if is_box:
-                return ScenePrimitive(
-                    f"box_{i}", Box(rng.uniform(*CLUTTER_BOX_EDGE, size=3)), Pose(centre, quat)
-                )
+                return ScenePrimitive(f"box_{i}", Box(rng.uniform(*CLUTTER_BOX_EDGE, size=3)), Pose(centre, quat))
             shape = Cylinder(_uniform(rng, CLUTTER_CYLINDER_RADIUS), _uniform(rng, CLUTTER_CYLINDER_LENGTH))
             return ScenePrimitive(f"cylinder_{i}", shape, Pose(centre, quat))
 
@@ -179,9 +177,7 @@ def _table(rng: np.random.Generator) -> tuple[list[ScenePrimitive], Pose, FloatA
     top_z = _uniform(rng, TABLE_TOP_HEIGHT)
     yaw = azimuth + _uniform(rng, TABLE_TURN)
     distance = near + depth / 2.0
-    centre = np.array(
-        [distance * math.cos(azimuth), distance * math.sin(azimuth), top_z - TABLE_THICKNESS / 2]
-    )
+    centre = np.array([distance * math.cos(azimuth), distance * math.sin(azimuth), top_z - TABLE_THICKNESS / 2])
     size = np.array([depth, width, TABLE_THICKNESS])
     top_pose = Pose(centre, _yaw(yaw))
     parts = [ScenePrimitive("table_top", Box(size), top_pose)]

@@ -84,9 +84,7 @@ class DubinsPath:
     @property
     def turning(self) -> float:
         """Total absolute heading change along the path, radians."""
-        return float(
-            sum(seg / self.radius for kind, seg in zip(self.word, self.segments, strict=True) if kind != "S")
-        )
+        return float(sum(seg / self.radius for kind, seg in zip(self.word, self.segments, strict=True) if kind != "S"))
 
     def sample(self, s: npt.ArrayLike) -> FloatArray:
         """Poses at arc lengths ``s`` (n,) in [0, length]: (n, 3) as x, y, heading (wrapped, see ``headings``)."""
@@ -300,9 +298,7 @@ def _word_segments(a: FloatArray, b: FloatArray, d: FloatArray) -> FloatArray:
         words = [(p2 >= -_EPS, _mod2pi_array(-a + tmp), np.sqrt(np.maximum(p2, 0.0)), _mod2pi_array(b - tmp))]
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)  # RSR
         tmp = np.arctan2(ca - cb, d - sa + sb)
-        words.append(
-            (p2 >= -_EPS, _mod2pi_array(a - tmp), np.sqrt(np.maximum(p2, 0.0)), _mod2pi_array(-b + tmp))
-        )
+        words.append((p2 >= -_EPS, _mod2pi_array(a - tmp), np.sqrt(np.maximum(p2, 0.0)), _mod2pi_array(-b + tmp)))
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)  # LSR
         p = np.sqrt(np.maximum(p2, 0.0))
         tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, p)
@@ -366,9 +362,7 @@ def dubins_lengths(starts: npt.ArrayLike, ends: npt.ArrayLike, *, radius: float)
     return np.asarray(_word_lengths(a, b, d).min(axis=0) * radius, dtype=np.float64)
 
 
-def _turn_to_point(
-    starts: FloatArray, point: FloatArray, radius: float, sign: float
-) -> tuple[FloatArray, FloatArray]:
+def _turn_to_point(starts: FloatArray, point: FloatArray, radius: float, sign: float) -> tuple[FloatArray, FloatArray]:
     """Arc (rad) and straight length of the turn-then-straight path (left: sign 1) from each pose to a point.
 
     NaN where the point lies inside the turning circle (no such path).

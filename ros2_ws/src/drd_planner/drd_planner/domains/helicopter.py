@@ -101,9 +101,7 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
         self._lattice = build_lattice(params.lattice)
         states = self._lattice.graph.vertex_states
         assert states is not None
-        keep = tuple(
-            (float(states[i, 0]), float(states[i, 1]), float(states[i, 2])) for i in (self.start, self.goal)
-        )
+        keep = tuple((float(states[i, 0]), float(states[i, 1]), float(states[i, 2])) for i in (self.start, self.goal))
         lattice = self._lattice.params
         self._frame = WorldFrame(
             x_range=lattice.x_range,
@@ -197,12 +195,8 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
         elif isinstance(world, Scene):
             scene = world
         else:
-            raise ProblemError(
-                f"helicopter checker needs a HelicopterWorld or a Scene, got {type(world).__name__}"
-            )
-        return HelicopterChecker(
-            scene, self._lattice.points, self._lattice.offsets, radius=self._radius, boxes=boxes
-        )
+            raise ProblemError(f"helicopter checker needs a HelicopterWorld or a Scene, got {type(world).__name__}")
+        return HelicopterChecker(scene, self._lattice.points, self._lattice.offsets, radius=self._radius, boxes=boxes)
 
     def edge_trajectories(self) -> list[FloatArray]:
         """Per edge (graph order) its (K_e, 4) samples: x, y, z (m), heading (rad)."""
@@ -215,7 +209,9 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
         inner = np.ones(steps.size, dtype=bool)
         inner[self._lattice.offsets[1:-1] - 1] = False  # steps across edge boundaries
         return {
-            "method": "sphere at every trajectory sample (bisection order) vs FCL scene; centre under terrain = blocked",
+            "method": (
+                "sphere at every trajectory sample (bisection order) vs FCL scene; centre under terrain = blocked"
+            ),
             "vehicle_shape": "sphere",
             "vehicle_radius_m": self._radius,
             "margin_m": self._margin,
@@ -299,9 +295,7 @@ class HelicopterDomain(LatticeMembers[HelicopterLattice], OnlineDefaults):
         """The edge checker of a ready scene (``robot`` is ignored: no arm)."""
         return self.checker(scene)
 
-    def sweep_spheres(
-        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
-    ) -> SweepSpheres:
+    def sweep_spheres(self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None) -> SweepSpheres:
         """Per edge: the (K, 3) trajectory samples and (K,) reach = vehicle radius + half a sample step.
 
         The samples are spaced by at most ``lattice.params.sample_spacing`` metres of arc length (the

@@ -65,9 +65,7 @@ def draw_canyon(rng: np.random.Generator, p: CanyonParams, frame: WorldFrame) ->
         reach = half + slope + 30.0
         low = min(draw_uniform(rng, p.rim_wire_low), wall - 1.0)
         skew = rng.uniform(-30.0, 30.0)
-        wires.append(
-            Wire((wx - skew, wy - reach, wall), (wx + skew, wy + reach, wall), wall - low, p.wire_diameter)
-        )
+        wires.append(Wire((wx - skew, wy - reach, wall), (wx + skew, wy + reach, wall), wall - low, p.wire_diameter))
     info = {
         "meander_coefficients": coeffs.tolist(),
         "floor": floor,

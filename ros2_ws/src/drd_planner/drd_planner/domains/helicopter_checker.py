@@ -142,13 +142,7 @@ class HelicopterChecker:
         offs = np.asarray(offsets, dtype=np.int64)
         if pts.ndim != 2 or pts.shape[1] < 3 or not np.all(np.isfinite(pts[:, :3])):
             raise ProblemError(f"trajectory points must be a finite (P, >= 3) array, got shape {pts.shape}")
-        if (
-            offs.ndim != 1
-            or offs.size < 1
-            or offs[0] != 0
-            or offs[-1] != pts.shape[0]
-            or np.any(np.diff(offs) < 1)
-        ):
+        if offs.ndim != 1 or offs.size < 1 or offs[0] != 0 or offs[-1] != pts.shape[0] or np.any(np.diff(offs) < 1):
             raise ProblemError("trajectory offsets must start at 0, end at P and give every edge >= 1 sample")
         if not (math.isfinite(radius) and radius > 0.0):
             raise ProblemError(f"vehicle radius must be finite and > 0, got {radius}")
@@ -160,9 +154,7 @@ class HelicopterChecker:
         rank = np.empty(pts.shape[0], dtype=np.int64)
         for n in np.unique(counts).tolist():
             edges = np.flatnonzero(counts == n)
-            rank[(offs[edges][:, None] + np.arange(n)[None, :]).ravel()] = np.tile(
-                bisection_rank(n), edges.size
-            )
+            rank[(offs[edges][:, None] + np.arange(n)[None, :]).ravel()] = np.tile(bisection_rank(n), edges.size)
         self._rank = rank
         self._filter = _NearFilter(scene.terrain, boxes, self._radius + scene.margin, self._xyz)
         self._version = scene.version
@@ -206,7 +198,8 @@ class HelicopterChecker:
 
         The first blocked sample's cause as a user would fix it: the terrain (below it, or within the clearance
         of it, with the ground height there), or the obstacles whose clearance it enters (each tested alone, by
-        its map name); for K > 1 also where along the motion; then the sample's position. Slow by design (a test per obstacle):
+        its map name); for K > 1 also where along the motion; then the sample's position. Slow by design (a test per
+        obstacle):
         the planner asks only after a plan failed.
         """
         xyz = np.asarray(states, dtype=np.float64)[:, :3]
@@ -254,9 +247,7 @@ class HelicopterChecker:
             below = terrain.below(centres, interpolation="triangles")
             free[np.unique(local_edge[below])] = False
         if self._scene.version != self._version:  # the scene changed: the boxes may be stale, drop them
-            self._filter = _NearFilter(
-                self._scene.terrain, None, self._radius + self._scene.margin, self._xyz
-            )
+            self._filter = _NearFilter(self._scene.terrain, None, self._radius + self._scene.margin, self._xyz)
             self._version = self._scene.version
         near = self._filter.near(centres)
         rank = self._rank[point_ids]

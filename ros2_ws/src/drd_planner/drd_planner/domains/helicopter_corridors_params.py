@@ -102,20 +102,14 @@ class KnownLine:
         if not isinstance(self.name, str) or not self.name:
             raise ProblemError(f"known line name must be a non-empty string, got {self.name!r}")
         if not isinstance(self.requires, str) or self.requires == self.name:
-            raise ProblemError(
-                f"known line {self.name!r} requires must name another line, got {self.requires!r}"
-            )
+            raise ProblemError(f"known line {self.name!r} requires must name another line, got {self.requires!r}")
         label = f"known line {self.name!r}"
         object.__setattr__(self, "route", _finite_pairs(self.route, f"{label} route", minimum=2))
         object.__setattr__(self, "probability", _probability(self.probability, f"{label} probability"))
         object.__setattr__(self, "span", check_range(self.span, f"{label} span", low=1.0))
-        object.__setattr__(
-            self, "tower_height", check_range(self.tower_height, f"{label} tower_height", low=0.0)
-        )
+        object.__setattr__(self, "tower_height", check_range(self.tower_height, f"{label} tower_height", low=0.0))
         object.__setattr__(self, "sag", check_range(self.sag, f"{label} sag", low=0.0))
-        object.__setattr__(
-            self, "conductors", check_range(self.conductors, f"{label} conductors", low=1, integer=True)
-        )
+        object.__setattr__(self, "conductors", check_range(self.conductors, f"{label} conductors", low=1, integer=True))
 
 
 @dataclass(frozen=True)
@@ -143,9 +137,7 @@ class KnownZone(NoFlyZone):
         super().__post_init__()
         if not isinstance(self.name, str) or not self.name:
             raise ProblemError(f"known zone name must be a non-empty string, got {self.name!r}")
-        object.__setattr__(
-            self, "probability", _probability(self.probability, f"known zone {self.name!r} probability")
-        )
+        object.__setattr__(self, "probability", _probability(self.probability, f"known zone {self.name!r} probability"))
         if not isinstance(self.group, str):
             raise ProblemError(f"known zone {self.name!r} group must be a string, got {self.group!r}")
 
@@ -205,9 +197,7 @@ DEFAULT_ZONES: tuple[KnownZone, ...] = (
         z_range=(90.0, 3000.0),
         probability=0.5,
     ),
-    KnownZone(
-        name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.6, group="exercise"
-    ),
+    KnownZone(name="valley_reserve", center=(1000.0, -950.0), radius=220.0, probability=0.6, group="exercise"),
     KnownZone(
         name="bridge_works",
         shape="prism",
@@ -289,9 +279,7 @@ class CorridorsParams(NoFlyParams):
             raise ProblemError(f"corridors grid_units must be one of {GRID_UNITS}, got {self.grid_units!r}")
         origin = _finite_pairs([self.site_origin], "corridors site_origin", minimum=1)[0]
         object.__setattr__(self, "site_origin", origin)
-        object.__setattr__(
-            self, "site_heading_deg", _finite(self.site_heading_deg, "corridors site_heading_deg")
-        )
+        object.__setattr__(self, "site_heading_deg", _finite(self.site_heading_deg, "corridors site_heading_deg"))
         if self.datum is not None:
             object.__setattr__(self, "datum", _finite(self.datum, "corridors datum"))
         for name in ("shift_sigma", "bias_sigma", "ground_gap", "tower_jitter"):

@@ -158,8 +158,7 @@ class _StateGrid:
         self.level_gap = float(np.min(np.diff(self.zs))) if self.nz > 1 else math.inf
         # (ix, iy, iz) of every (position, level), ix slowest
         self.cells = tuple(
-            a.ravel()
-            for a in np.meshgrid(np.arange(self.nx), np.arange(self.ny), np.arange(self.nz), indexing="ij")
+            a.ravel() for a in np.meshgrid(np.arange(self.nx), np.arange(self.ny), np.arange(self.nz), indexing="ij")
         )
 
     @property
@@ -250,24 +249,18 @@ def _on_start_goal_paths(groups: list[_Group], num_states: int, start: int, goal
         raise ProblemError("lattice start and goal are the same state")
     src_all = np.concatenate([g.src for g in groups])
     dst_all = np.concatenate([g.dst for g in groups])
-    adjacency = csr_array(
-        (np.ones(src_all.size), (src_all, dst_all)), shape=(num_states, num_states), dtype=np.float64
-    )
+    adjacency = csr_array((np.ones(src_all.size), (src_all, dst_all)), shape=(num_states, num_states), dtype=np.float64)
     forward = np.zeros(num_states, dtype=bool)
     forward[breadth_first_order(adjacency, start, directed=True, return_predecessors=False)] = True
     backward = np.zeros(num_states, dtype=bool)
     backward[breadth_first_order(adjacency.T.tocsr(), goal, directed=True, return_predecessors=False)] = True
     keep = forward & backward
     if not keep[goal]:
-        raise ProblemError(
-            "the lattice goal is not reachable from the start; widen the ranges or add primitives"
-        )
+        raise ProblemError("the lattice goal is not reachable from the start; widen the ranges or add primitives")
     return np.asarray(keep)
 
 
-def _kept_edges(
-    groups: list[_Group], keep_state: BoolArray, new_id: IntArray
-) -> tuple[IntArray, IntArray, IntArray]:
+def _kept_edges(groups: list[_Group], keep_state: BoolArray, new_id: IntArray) -> tuple[IntArray, IntArray, IntArray]:
     """(E,) new source ids, target ids and group index of the surviving edges, sorted by (source, target)."""
     edge_src: list[IntArray] = []
     edge_dst: list[IntArray] = []
@@ -298,9 +291,7 @@ def _template(path: DubinsPath, dz: float, spacing: float) -> tuple[FloatArray, 
     return out, length
 
 
-def _group_template(
-    g: _Group, path: DubinsPath, level_gap: float, spacing: float
-) -> tuple[FloatArray, float]:
+def _group_template(g: _Group, path: DubinsPath, level_gap: float, spacing: float) -> tuple[FloatArray, float]:
     """The (n, 4) samples of a group's edges from the origin, rotated by its quarter turns, and their length."""
     tpl, length = _template(path, g.climb * level_gap if g.climb else 0.0, spacing)
     c, s = math.cos(g.quarter * math.pi / 2), math.sin(g.quarter * math.pi / 2)

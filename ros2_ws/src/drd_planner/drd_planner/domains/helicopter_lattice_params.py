@@ -157,9 +157,7 @@ class LatticeParams:
         for name in ("start_level", "goal_level"):
             object.__setattr__(self, name, _level(getattr(self, name), name, len(levels)))
         object.__setattr__(self, "axis_primitives", _as_primitives(self.axis_primitives, "axis_primitives"))
-        object.__setattr__(
-            self, "diagonal_primitives", _as_primitives(self.diagonal_primitives, "diagonal_primitives")
-        )
+        object.__setattr__(self, "diagonal_primitives", _as_primitives(self.diagonal_primitives, "diagonal_primitives"))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict (lists for tuples) that :meth:`from_dict` turns back into equal parameters."""

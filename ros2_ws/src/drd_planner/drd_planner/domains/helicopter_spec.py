@@ -42,16 +42,12 @@ def _number(key: str, value: Any) -> float:
     except (TypeError, ValueError):
         raise ProblemError(f"helicopter spec {key!r} must be a number, got {value!r}") from None
     if not (math.isfinite(number) and (number > low if strict else number >= low)):
-        raise ProblemError(
-            f"helicopter spec {key!r} must be finite and {'>' if strict else '>='} {low}, got {value!r}"
-        )
+        raise ProblemError(f"helicopter spec {key!r} must be finite and {'>' if strict else '>='} {low}, got {value!r}")
     return number
 
 
 def _wire_segments(value: Any) -> int | None:
-    if value is not None and (
-        isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1
-    ):
+    if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1):
         raise ProblemError(f"helicopter spec 'wire_segments' must be an integer >= 1 or null, got {value!r}")
     return None if value is None else int(value)
 
@@ -138,9 +134,7 @@ class HelicopterParams(SpecParams):
         """The parameter record of world model ``name``."""
         record = self.models.get(name)
         if record is None:
-            raise ProblemError(
-                f"unknown helicopter world model {name!r}; choose one of {', '.join(WORLD_MODELS)}"
-            )
+            raise ProblemError(f"unknown helicopter world model {name!r}; choose one of {', '.join(WORLD_MODELS)}")
         return record  # type: ignore[return-value]
 
     def to_spec(self) -> dict[str, Any]:

@@ -85,8 +85,7 @@ def _bilinear_index(grid: FloatArray, fi: FloatArray, fj: FloatArray) -> FloatAr
     j = np.clip(np.floor(fj).astype(np.int64), 0, cols - 2)
     v, u = fi - i, fj - j
     return np.asarray(
-        (1 - v) * ((1 - u) * grid[i, j] + u * grid[i, j + 1])
-        + v * ((1 - u) * grid[i + 1, j] + u * grid[i + 1, j + 1])
+        (1 - v) * ((1 - u) * grid[i, j] + u * grid[i, j + 1]) + v * ((1 - u) * grid[i + 1, j] + u * grid[i + 1, j + 1])
     )
 
 
@@ -123,9 +122,7 @@ class _Window:
         self.centre = (0.5 * (xs[0] + xs[-1]), 0.5 * (ys[0] + ys[-1]))
         self.half_diag = 0.5 * math.hypot(xs[-1] - xs[0], ys[-1] - ys[0])
         self.keep = np.asarray(frame.keep_clear, dtype=np.float64).reshape(-1, 3)
-        self.target = (
-            float(self.keep[:, 2].min()) if self.keep.size else frame.lowest_level
-        ) - frame.clearance
+        self.target = (float(self.keep[:, 2].min()) if self.keep.size else frame.lowest_level) - frame.clearance
 
 
 def _sample_crop(
@@ -213,6 +210,5 @@ class TerrainModel:
         raise ProblemError(
             f"terrain grid {path} ({rows} x {cols} cells) has no NaN-free window for a "
             f"{2 * window.half_diag:.0f} m corridor at {p.metres_per_cell} m per cell after {p.max_tries} tries; "
-            "lower metres_per_cell"
-            + ("" if p.site is None else " or move the site away from the grid's border")
+            "lower metres_per_cell" + ("" if p.site is None else " or move the site away from the grid's border")
         )

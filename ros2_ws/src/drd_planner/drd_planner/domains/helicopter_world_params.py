@@ -135,9 +135,7 @@ class NoFlyZone:
         if self.shape == "cylinder":
             return Cylinder(self.radius, z1 - z0), Pose(centre)
         half = math.radians(self.yaw_deg) / 2.0
-        return Box((self.size[0], self.size[1], z1 - z0)), Pose(
-            centre, (0.0, 0.0, math.sin(half), math.cos(half))
-        )
+        return Box((self.size[0], self.size[1], z1 - z0)), Pose(centre, (0.0, 0.0, math.sin(half), math.cos(half)))
 
     def contains_xy(self, xy: npt.ArrayLike) -> npt.NDArray[np.bool_]:
         """(K,) whether each (K, 2) point lies inside the footprint (metres)."""
@@ -195,12 +193,8 @@ class NoFlyParams:
         try:
             rx, ry = self.nofly_region
         except (TypeError, ValueError):
-            raise ProblemError(
-                f"nofly_region must be [[x0, x1], [y0, y1]], got {self.nofly_region!r}"
-            ) from None
-        object.__setattr__(
-            self, "nofly_region", (check_range(rx, "nofly_region x"), check_range(ry, "nofly_region y"))
-        )
+            raise ProblemError(f"nofly_region must be [[x0, x1], [y0, y1]], got {self.nofly_region!r}") from None
+        object.__setattr__(self, "nofly_region", (check_range(rx, "nofly_region x"), check_range(ry, "nofly_region y")))
 
 
 @dataclass(frozen=True)
@@ -248,9 +242,7 @@ class WiresParams(NoFlyParams):
         if self.line_sites is not None:
             sites = tuple(float(v) for v in self.line_sites)
             if not sites or not all(math.isfinite(v) for v in sites):
-                raise ProblemError(
-                    f"wires line_sites must be a non-empty list of finite x, got {self.line_sites!r}"
-                )
+                raise ProblemError(f"wires line_sites must be a non-empty list of finite x, got {self.line_sites!r}")
             object.__setattr__(self, "line_sites", sites)
         _ranges(self, ("bumps", "lines", "conductors"), low=0, integer=True)
         _ranges(self, ("bump_height", "line_x", "line_angle_deg", "tower_height"))
@@ -356,9 +348,7 @@ class TerrainParams(NoFlyParams):
             try:
                 row, col = (float(v) for v in self.site)
             except (TypeError, ValueError):
-                raise ProblemError(
-                    f"terrain site must be [row, col] fractions or null, got {self.site!r}"
-                ) from None
+                raise ProblemError(f"terrain site must be [row, col] fractions or null, got {self.site!r}") from None
             if not (0.0 <= row <= 1.0 and 0.0 <= col <= 1.0):
                 raise ProblemError(f"terrain site fractions must lie in [0, 1], got {self.site!r}")
             object.__setattr__(self, "site", (row, col))

@@ -95,9 +95,7 @@ def _world_model(model: str) -> _WorldModel:
     """The model called ``model``, or a ProblemError listing the known ones."""
     found = _MODELS.get(model)
     if found is None:
-        raise ProblemError(
-            f"unknown helicopter world model {model!r}; choose one of {', '.join(WORLD_MODELS)}"
-        )
+        raise ProblemError(f"unknown helicopter world model {model!r}; choose one of {', '.join(WORLD_MODELS)}")
     return found
 
 
@@ -151,9 +149,7 @@ def generate_world(model: str, seed: int, params: ModelParams, frame: WorldFrame
     """
     found = _world_model(model)
     if not isinstance(params, found.params):
-        raise ProblemError(
-            f"world model {model!r} needs {found.params.__name__}, got {type(params).__name__}"
-        )
+        raise ProblemError(f"world model {model!r} needs {found.params.__name__}, got {type(params).__name__}")
     rng = world_rng(model, seed)
     drawn = found.draw(rng, params, frame)
     zones = drawn.nofly + _nofly_zones(rng, params, frame)
@@ -194,8 +190,7 @@ def world_parts(world: HelicopterWorld, *, wire_segments: int | None = None) -> 
     parts: list[tuple[str, Shape, Pose]] = []
     for i, wire in enumerate(world.wires):
         parts.extend(
-            (f"wire_{i}_{k}", shape, pose)
-            for k, (shape, pose) in enumerate(wire.capsule_chain(wire_segments))
+            (f"wire_{i}_{k}", shape, pose) for k, (shape, pose) in enumerate(wire.capsule_chain(wire_segments))
         )
     parts.extend(world.solids)
     return parts

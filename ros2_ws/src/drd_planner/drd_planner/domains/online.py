@@ -183,9 +183,7 @@ class OnlineDomain(Domain[W], Protocol[W]):
         """The arm model a sweep must use for a snapshot's ``robot`` (None: the domain's own)."""
         ...
 
-    def sweep_spheres(
-        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
-    ) -> SweepSpheres:
+    def sweep_spheres(self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None) -> SweepSpheres:
         """Per edge the spheres its check places, each grown by half a sample step (no margin).
 
         Raises:
@@ -304,9 +302,7 @@ class OnlineDefaults(ABC):
         """None: no arm."""
         return None
 
-    def sweep_spheres(
-        self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None
-    ) -> SweepSpheres:
+    def sweep_spheres(self, source: EdgeSource, edges: Sequence[int], robot: RobotModel | None) -> SweepSpheres:
         """Refused: no sweep model.
 
         Raises:

@@ -46,8 +46,7 @@ class SpecParams:
         unknown = sorted(set(spec) - set(known))
         if unknown:
             raise ProblemError(
-                f"unknown {cls.SPEC_LABEL} spec keys: {', '.join(map(str, unknown))}; "
-                f"valid keys: {', '.join(known)}"
+                f"unknown {cls.SPEC_LABEL} spec keys: {', '.join(map(str, unknown))}; valid keys: {', '.join(known)}"
             )
 
     @classmethod

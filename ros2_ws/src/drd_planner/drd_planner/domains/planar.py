@@ -73,9 +73,7 @@ def rgg_radius(num_vertices: int, *, eta: float = 1.0) -> float:
     return 2.0 * eta * math.sqrt(1.5) * math.sqrt(1.0 / math.pi) * math.sqrt(math.log(n) / n)
 
 
-def random_geometric_graph(
-    num_vertices: int, *, seed: int, eta: float = 1.0
-) -> tuple[ExplicitGraph, int, int]:
+def random_geometric_graph(num_vertices: int, *, seed: int, eta: float = 1.0) -> tuple[ExplicitGraph, int, int]:
     """A random geometric graph on N uniform points in the unit square.
 
     Args:
@@ -103,9 +101,7 @@ def random_geometric_graph(
     goal = int(np.argmin(np.linalg.norm(points - 1.0, axis=1)))
     if start == goal:
         raise ProblemError("start and goal are the same vertex; use more vertices")
-    adjacency = coo_array(
-        (np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(num_vertices, num_vertices)
-    )
+    adjacency = coo_array((np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(num_vertices, num_vertices))
     _, labels = connected_components(adjacency, directed=False)
     if labels[start] != labels[goal]:
         raise ProblemError(
@@ -189,9 +185,7 @@ def edge_free_matrix(graph: ExplicitGraph, boxes_per_world: Sequence[npt.ArrayLi
 # World models (defined in planar_worlds)
 
 
-def sample_worlds(
-    model: str, n: int, *, seed: int, keep_clear: npt.ArrayLike | None = None
-) -> list[FloatArray]:
+def sample_worlds(model: str, n: int, *, seed: int, keep_clear: npt.ArrayLike | None = None) -> list[FloatArray]:
     """Sample n planar box worlds from a world model.
 
     World i is drawn from the i-th child of ``numpy.random.SeedSequence(seed)``; the slot-pattern lists of the
@@ -215,10 +209,7 @@ def sample_worlds(
     if n < 0:
         raise ProblemError(f"number of worlds must be non-negative, got {n}")
     children = np.random.SeedSequence(seed).spawn(n)
-    return [
-        world_from_rng(model, np.random.default_rng(c), pattern_seed=seed, keep_clear=keep_clear)
-        for c in children
-    ]
+    return [world_from_rng(model, np.random.default_rng(c), pattern_seed=seed, keep_clear=keep_clear) for c in children]
 
 
 # --------------------------------------------------------------------------------------------------

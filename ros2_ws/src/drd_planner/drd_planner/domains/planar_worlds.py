@@ -266,9 +266,7 @@ def wall_patterns(*, seed: int, walls: int, max_patterns: int, min_open: int = M
         slot 0 is the lowest.
     """
     if walls < 1 or max_patterns < 1 or not 0 <= min_open <= WALL_SLOTS:
-        raise ProblemError(
-            f"bad pattern request: walls={walls}, max_patterns={max_patterns}, min_open={min_open}"
-        )
+        raise ProblemError(f"bad pattern request: walls={walls}, max_patterns={max_patterns}, min_open={min_open}")
     rng = np.random.default_rng(seed)
     while True:
         draws = rng.integers(0, 2, size=(max_patterns, WALL_SLOTS * walls), dtype=np.int64)
@@ -331,9 +329,7 @@ def _two_wall(rng: np.random.Generator, ctx: _Context) -> FloatArray:
     rects: list[Rect] = []
     for w, x in enumerate(TWO_WALL_XS):
         rects += _slotted_wall(x, TWO_WALL_WIDTH, pattern[w * WALL_SLOTS : (w + 1) * WALL_SLOTS])
-    squares = _draw_squares(
-        rng, int(rng.poisson(TWO_WALL_SQUARE_RATE)), _uniform_in(UNIT_BOX), ctx.keep_clear
-    )
+    squares = _draw_squares(rng, int(rng.poisson(TWO_WALL_SQUARE_RATE)), _uniform_in(UNIT_BOX), ctx.keep_clear)
     return np.concatenate([_boxes(rects), squares], axis=0)
 
 

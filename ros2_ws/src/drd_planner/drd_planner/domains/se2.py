@@ -199,9 +199,7 @@ def build_lattice(
     for what, s in (("start", s0), ("goal", g0)):
         if not (0 <= s[0] <= nx and 0 <= s[1] <= ny):
             raise ProblemError(f"SE(2) {what} lies outside the bounds {bounds}")
-    prims = lattice_primitives(
-        spacing=spacing, turning_radius=turning_radius, waypoint_spacing=waypoint_spacing
-    )
+    prims = lattice_primitives(spacing=spacing, turning_radius=turning_radius, waypoint_spacing=waypoint_spacing)
     index: dict[GridState, int] = {s0: 0}
     order: list[GridState] = [s0]
     edges: list[tuple[int, int, int]] = []
@@ -356,9 +354,7 @@ class Se2Domain(SpecParams, LatticeMembers[Se2Lattice], OnlineDefaults):
         try:
             bounds = tuple(_number_field("bounds", b) for b in self.bounds)
         except TypeError:
-            raise ProblemError(
-                f"SE(2) domain: bounds must be [xmin, ymin, xmax, ymax], got {self.bounds!r}"
-            ) from None
+            raise ProblemError(f"SE(2) domain: bounds must be [xmin, ymin, xmax, ymax], got {self.bounds!r}") from None
         if len(bounds) != 4:
             raise ProblemError(f"SE(2) domain: bounds must have 4 numbers, got {self.bounds!r}")
         object.__setattr__(self, "bounds", bounds)
@@ -402,9 +398,7 @@ class Se2Domain(SpecParams, LatticeMembers[Se2Lattice], OnlineDefaults):
     def make_world(self, model: str, seed: int) -> FloatArray:
         """The (k, 4) boxes of ``model`` drawn with ``seed`` (SE(2) variant of the models)."""
         clear = np.array([self.start_state[:2], self.goal_state[:2]]) if self.keep_clear else None
-        return generate_world(
-            model, seed=seed, variant=SE2_VARIANT, pattern_seed=self.pattern_seed, keep_clear=clear
-        )
+        return generate_world(model, seed=seed, variant=SE2_VARIANT, pattern_seed=self.pattern_seed, keep_clear=clear)
 
     def checker(self, world: npt.ArrayLike) -> Se2Checker:
         """A waypoint checker of the lattice edges against the (k, 4) boxes ``world``."""

@@ -1,7 +1,8 @@
 """Every spec key of every registered domain with its default, unit and meaning, read from the docstrings.
 
 The single source is the parameter dataclasses themselves: each documents its fields in the ``Attributes:``
-section of its docstring (inherited entries are found along the class's MRO), one entry per field, for example ``resolution: max joint step between edge samples (rad), finite and > 0.``
+section of its docstring (inherited entries are found along the class's MRO), one entry per field, for example
+``resolution: max joint step between edge samples (rad), finite and > 0.``
 
 The *unit* of an entry is the first parenthesised group whose whole text is a unit of :data:`UNITS`
 (``(rad)`` above; a group such as ``(D,)`` or ``(100, 150 or 200)`` is not a unit and is skipped); the
@@ -188,9 +189,7 @@ def _walk(record: Any, spec: Mapping[str, Any], prefix: str) -> Iterator[SpecEnt
             for name, item in value.items():
                 yield from _walk(item, default[name], f"{path}.{name}.")
         elif isinstance(value, Sequence) and value and all(_is_record(v) for v in value):
-            yield _Group(
-                f"{path}[]", f"{meaning} (default: {len(value)} items; the first one's values shown)"
-            )
+            yield _Group(f"{path}[]", f"{meaning} (default: {len(value)} items; the first one's values shown)")
             yield from _walk(value[0], default[0], f"{path}[].")
         else:
             yield SpecEntry(path, default, unit, meaning)
@@ -234,7 +233,5 @@ def spec_help(name: str) -> str:
             lines.append(f"{item.key}: {item.meaning}")
             continue
         unit = f"[{item.unit}]" if item.unit else "[?]"
-        lines.append(
-            f"  {item.key:<{width}} = {json.dumps(item.default)}  {unit}  {item.meaning or '(undocumented)'}"
-        )
+        lines.append(f"  {item.key:<{width}} = {json.dumps(item.default)}  {unit}  {item.meaning or '(undocumented)'}")
     return "\n".join(lines) + "\n"

@@ -23,17 +23,13 @@ def pair_collides(first: fcl.CollisionObject, second: fcl.CollisionObject) -> bo
     return contacts > 0
 
 
-def pair_contacts(
-    first: fcl.CollisionObject, second: fcl.CollisionObject, max_contacts: int
-) -> list[fcl.Contact]:
+def pair_contacts(first: fcl.CollisionObject, second: fcl.CollisionObject, max_contacts: int) -> list[fcl.Contact]:
     """Up to ``max_contacts`` FCL contacts (position, normal, penetration depth in metres) of two objects.
 
     A fresh request (contacts enabled) and result for every call; an empty list when they do not intersect.
     """
     result = fcl.CollisionResult()  # fresh per call, see the module docstring
-    fcl.collide(
-        first, second, fcl.CollisionRequest(num_max_contacts=max_contacts, enable_contact=True), result
-    )
+    fcl.collide(first, second, fcl.CollisionRequest(num_max_contacts=max_contacts, enable_contact=True), result)
     return list(result.contacts)
 
 

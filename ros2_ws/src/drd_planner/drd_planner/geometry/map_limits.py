@@ -53,17 +53,13 @@ class MapLimits(MessageLimits):
 
     max_robot_links: int = field(
         default=512,
-        metadata=_doc(
-            "links: most <link> elements of a robot_description (self-collision pairs grow with links^2)"
-        ),
+        metadata=_doc("links: most <link> elements of a robot_description (self-collision pairs grow with links^2)"),
     )
     """Links: the most ``<link>`` elements of a robot description (self-collision pairs grow with links^2)."""
 
     max_robot_spheres: int = field(
         default=1024,
-        metadata=_doc(
-            "spheres: most collision <sphere> elements of a robot_description (pairs grow with spheres^2)"
-        ),
+        metadata=_doc("spheres: most collision <sphere> elements of a robot_description (pairs grow with spheres^2)"),
     )
     """Spheres: the most collision ``<sphere>`` elements of a robot description (pairs grow with spheres^2)."""
 
@@ -107,11 +103,7 @@ class MapLimits(MessageLimits):
             raise ParameterError(f"{name!r} is not a map limit; limits: {', '.join(kinds)}")
         if name == "unknown_terrain":
             ok = value in UNKNOWN_TERRAIN_CHOICES
-            return (
-                None
-                if ok
-                else f"must be one of {', '.join(map(repr, UNKNOWN_TERRAIN_CHOICES))}, got {value!r}"
-            )
+            return None if ok else f"must be one of {', '.join(map(repr, UNKNOWN_TERRAIN_CHOICES))}, got {value!r}"
         if kinds[name] == "int":
             ok = bool(not isinstance(value, bool) and isinstance(value, int | np.integer) and value > 0)
             return None if ok else f"must be an integer > 0, got {value!r}"

@@ -183,9 +183,7 @@ class MeshCollider:
 
     # ----------------------------------------------------------------------------------------------
 
-    def _candidates(
-        self, q: FloatArray, parts: IntArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
+    def _candidates(self, q: FloatArray, parts: IntArray) -> tuple[FloatArray, FloatArray, FloatArray, BoolArray]:
         """Poses (N, P', 4, 4), boxes (N, P', 3) x 2 and the (N, P') elements level 1 cannot clear."""
         poses = self.placement.poses(q, parts)
         lo, hi = self.placement.boxes(poses, parts)
@@ -283,9 +281,7 @@ class MeshCollider:
                 return MeshContact(int(r), part, element.link, obstacle, reason, depth, point)
         return None
 
-    def _deepest(
-        self, obj: fcl.CollisionObject, lo: FloatArray, hi: FloatArray
-    ) -> tuple[int, float, FloatArray]:
+    def _deepest(self, obj: fcl.CollisionObject, lo: FloatArray, hi: FloatArray) -> tuple[int, float, FloatArray]:
         """``(obstacle, depth, point)``: what ``obj`` meets with the deepest FCL contact, how deep (m), where."""
         best, depth, where = -1, -1.0, np.full(3, np.nan)
         for k in boxes_overlap_box(lo, hi, self.obstacles.lo, self.obstacles.hi).tolist():

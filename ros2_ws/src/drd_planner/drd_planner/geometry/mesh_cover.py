@@ -86,9 +86,7 @@ def _surface(vertices: FloatArray, faces: IntArray, spacing: float) -> tuple[Flo
         big = tris[longest > spacing]
         a, b, c = big[:, 0], big[:, 1], big[:, 2]
         ab, bc, ca = (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0
-        tris = np.concatenate(
-            [np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
-        )
+        tris = np.concatenate([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     kept = np.concatenate(done)
     return kept, float(np.linalg.norm(kept - np.roll(kept, 1, axis=1), axis=2).max())
 

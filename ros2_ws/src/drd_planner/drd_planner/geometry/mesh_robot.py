@@ -192,9 +192,7 @@ def _mesh_part(link: str, origin: FloatArray, element: ET.Element, folder: Path)
     faces = np.ascontiguousarray(mesh.faces, dtype=np.int64)
     solid = mesh if mesh.is_watertight and mesh.is_volume else None
     bounds = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
-    return LinkMesh(
-        link, origin, vertices, faces, bounds, bvh_model(vertices, faces), solid, "mesh", str(path)
-    )
+    return LinkMesh(link, origin, vertices, faces, bounds, bvh_model(vertices, faces), solid, "mesh", str(path))
 
 
 def _primitive_part(link: str, origin: FloatArray, kind: str, element: ET.Element) -> LinkMesh:

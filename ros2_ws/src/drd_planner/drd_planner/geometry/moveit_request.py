@@ -71,9 +71,7 @@ def _start_state(doc: Mapping[str, Any], source: str) -> NamedState | None:
     if not names and not positions:
         return None
     if len(names) != len(positions):
-        raise GeometryError(
-            f"{source}: start_state.joint_state has {len(names)} names but {len(positions)} positions"
-        )
+        raise GeometryError(f"{source}: start_state.joint_state has {len(names)} names but {len(positions)} positions")
     where = f"{source}: start_state.joint_state"
     out: dict[str, float] = {}
     for name, position in zip(names, positions, strict=True):
@@ -99,9 +97,7 @@ def _goal(constraints: Any, k: int, source: str) -> NamedState:
     out: dict[str, float] = {}
     for item in joints:
         if not isinstance(item, Mapping) or "joint_name" not in item or "position" not in item:
-            raise GeometryError(
-                f"{where}: each joint constraint needs joint_name and position, got {quoted(item)}"
-            )
+            raise GeometryError(f"{where}: each joint constraint needs joint_name and position, got {quoted(item)}")
         name = str(item["joint_name"])
         if name in out:
             raise GeometryError(f"{where} constrains joint {quoted(name)} twice")
@@ -122,9 +118,7 @@ def parse_motion_plan_request(text: str, *, source: str = "<string>") -> Request
     goals = doc.get("goal_constraints") or []
     if not isinstance(goals, list) or not goals:
         raise GeometryError(f"{source}: no goal_constraints")
-    return RequestStates(
-        source, _start_state(doc, source), tuple(_goal(g, k, source) for k, g in enumerate(goals))
-    )
+    return RequestStates(source, _start_state(doc, source), tuple(_goal(g, k, source) for k, g in enumerate(goals)))
 
 
 def read_motion_plan_request(path: str | Path) -> RequestStates:
@@ -136,9 +130,7 @@ def read_motion_plan_request(path: str | Path) -> RequestStates:
     return parse_motion_plan_request(read_yaml_text(path, "motion plan request"), source=str(path))
 
 
-def joint_vector(
-    state: NamedState, joint_names: Sequence[str], *, where: str, allow_extra: bool = False
-) -> FloatArray:
+def joint_vector(state: NamedState, joint_names: Sequence[str], *, where: str, allow_extra: bool = False) -> FloatArray:
     """(D,) the positions of ``state`` in the order of ``joint_names`` (D joints).
 
     Args:

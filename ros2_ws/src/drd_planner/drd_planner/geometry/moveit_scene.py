@@ -1,7 +1,8 @@
 """MoveIt PlanningScene YAML (as written by MotionBenchMaker) -> box, cylinder and sphere primitives.
 
 Reads ``world.collision_objects`` of a ``moveit_msgs/PlanningScene`` (or ``collision_objects`` of a
-``PlanningSceneWorld``) with the bounded safe loader of :mod:`~drd_planner.geometry.moveit_yaml`. Each object's primitives become
+``PlanningSceneWorld``) with the bounded safe loader of :mod:`~drd_planner.geometry.moveit_yaml`. Each object's
+primitives become
 :class:`ScenePrimitive` values whose pose is the object pose (``pose``, identity when absent, as in
 older MoveIt messages) composed with the primitive pose; an all-zero (unset) quaternion means no rotation,
 as in MoveIt. Poses may be written as lists
@@ -104,9 +105,7 @@ def _shape(primitive: Any, where: str) -> Box | Cylinder | Sphere:
     if isinstance(kind, int) and not isinstance(kind, bool):
         kind = PRIMITIVE_TYPES.get(kind, f"type {kind}")
     if kind not in ("box", "sphere", "cylinder"):
-        raise GeometryError(
-            f"{where}: primitive type {quoted(kind)} is not supported (box, sphere, cylinder)"
-        )
+        raise GeometryError(f"{where}: primitive type {quoted(kind)} is not supported (box, sphere, cylinder)")
     if "dimensions" not in primitive:
         raise GeometryError(f"{where}: {kind} has no dimensions")
     dims = primitive["dimensions"]
@@ -174,9 +173,7 @@ def _check_robot_state(scene: Mapping[str, Any]) -> None:
         rotation = _vector(t.get("rotation"), "xyzw", "virtual joint rotation", "robot_state")
         q = np.array(rotation) / max(float(np.linalg.norm(rotation)), 1e-300)
         if np.linalg.norm(translation) > 1e-9 or abs(abs(q[3]) - 1.0) > 1e-9:
-            raise GeometryError(
-                "planning scene places the robot's virtual joint away from the origin; not supported"
-            )
+            raise GeometryError("planning scene places the robot's virtual joint away from the origin; not supported")
 
 
 def parse_planning_scene(

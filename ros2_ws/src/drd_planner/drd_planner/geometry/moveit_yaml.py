@@ -104,8 +104,7 @@ def read_yaml_text(path: str | Path, what: str, *, max_bytes: int = MAX_YAML_BYT
             raise GeometryError(f"cannot read {what} {p}: not a regular file")
         if info.st_size > max_bytes:
             raise GeometryError(
-                f"{what} {p} has {info.st_size} bytes; at most {max_bytes} are read (a MoveIt YAML file is "
-                "a few KiB)"
+                f"{what} {p} has {info.st_size} bytes; at most {max_bytes} are read (a MoveIt YAML file is a few KiB)"
             )
         with p.open("rb") as handle:
             data = handle.read(max_bytes + 1)

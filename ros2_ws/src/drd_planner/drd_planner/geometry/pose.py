@@ -158,10 +158,7 @@ class Pose:
 
 def _quaternion_of(rotation: FloatArray) -> FloatArray:
     """(4,) (x, y, z, w) quaternion of a (3, 3) proper rotation matrix; GeometryError otherwise."""
-    if (
-        not np.allclose(rotation @ rotation.T, np.eye(3), atol=_ORTHONORMAL_TOL)
-        or np.linalg.det(rotation) <= 0
-    ):
+    if not np.allclose(rotation @ rotation.T, np.eye(3), atol=_ORTHONORMAL_TOL) or np.linalg.det(rotation) <= 0:
         raise GeometryError("rotation block must be orthonormal with determinant +1")
     quat: FloatArray = Rotation.from_matrix(rotation).as_quat()
     return quat

@@ -189,9 +189,7 @@ class Scene:
             self.remove(self._terrain_name)
         key = self._claim(name, "terrain", replace=False)
         tile_lo, tile_hi = collider.tile_boxes
-        parts = [
-            _Part(obj, lo, hi, lo) for obj, lo, hi in zip(collider.objects, tile_lo, tile_hi, strict=True)
-        ]
+        parts = [_Part(obj, lo, hi, lo) for obj, lo, hi in zip(collider.objects, tile_lo, tile_hi, strict=True)]
         self._insert(key, _Entry("terrain", parts))
         self._terrain = collider
         self._terrain_name = key
@@ -338,16 +336,12 @@ class Scene:
             raise GeometryError(f"sweep radius must broadcast to {array.shape[:-1]}: {exc}") from exc
         centres = as_points(array.reshape(-1, 3), what="sweep points")
         rank = (bisection_rank(steps)[:, None] * per_step + np.arange(per_step)).reshape(-1)
-        return not bool(
-            self._sphere_hits(centres, self._radii(radii, centres.shape[0]), rank, first=True).any()
-        )
+        return not bool(self._sphere_hits(centres, self._radii(radii, centres.shape[0]), rank, first=True).any())
 
     # ------------------------------------------------------------------------------------------------
     # Internals
 
-    def _sphere_hits(
-        self, centres: FloatArray, radii: FloatArray, rank: IntArray | None, *, first: bool
-    ) -> BoolArray:
+    def _sphere_hits(self, centres: FloatArray, radii: FloatArray, rank: IntArray | None, *, first: bool) -> BoolArray:
         """(K,) bool hits of spheres with margin-inflated (K,) ``radii``; with ``first``, stops at one hit.
 
         Pairs are decided in increasing ``rank`` of their sphere (index order when None).

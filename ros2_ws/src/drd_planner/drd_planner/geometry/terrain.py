@@ -96,9 +96,7 @@ class Heightfield:
         if not math.isfinite(size) or size <= 0.0:
             raise GeometryError(f"heightfield cell size must be finite and > 0, got {cell_size!r}")
         if grid.ndim != 2 or grid.shape[0] < 2 or grid.shape[1] < 2:
-            raise GeometryError(
-                f"heightfield heights must have shape (rows >= 2, cols >= 2), got {grid.shape}"
-            )
+            raise GeometryError(f"heightfield heights must have shape (rows >= 2, cols >= 2), got {grid.shape}")
         if np.any(np.isinf(grid)):
             raise GeometryError("heightfield heights must be finite or NaN (unknown), not infinite")
         grid.flags.writeable = False
@@ -149,9 +147,7 @@ class Heightfield:
             origin: (2,) new position of grid point [0, 0] in metres; default (0, 0), since an origin given in
                 degrees means nothing in a metric frame.
         """
-        return Heightfield(
-            (0.0, 0.0) if origin is None else origin, cell_size, self.heights, unknown=self.unknown
-        )
+        return Heightfield((0.0, 0.0) if origin is None else origin, cell_size, self.heights, unknown=self.unknown)
 
     def height_at(self, xy: npt.ArrayLike, *, interpolation: Interpolation = "bilinear") -> FloatArray:
         """(K,) terrain heights in metres at (K, 2) points ``xy`` (metres); NaN outside the grid or unknown.
@@ -186,9 +182,7 @@ class Heightfield:
             out = (1 - v) * ((1 - u) * h00 + u * h10) + v * ((1 - u) * h01 + u * h11)
         elif interpolation == "triangles":
             lower = u >= v  # triangle (0,0)-(1,0)-(1,1) versus (0,0)-(0,1)-(1,1)
-            out = np.where(
-                lower, h00 + u * (h10 - h00) + v * (h11 - h10), h00 + v * (h01 - h00) + u * (h11 - h01)
-            )
+            out = np.where(lower, h00 + u * (h10 - h00) + v * (h11 - h10), h00 + v * (h01 - h00) + u * (h11 - h01))
         else:
             raise GeometryError(f"interpolation must be 'bilinear' or 'triangles', got {interpolation!r}")
         result: FloatArray = np.where(inside, out, np.nan)
@@ -222,9 +216,7 @@ class Heightfield:
         jj = np.nonzero((xs >= x_range[0] - tol) & (xs <= x_range[1] + tol))[0]
         ii = np.nonzero((ys >= y_range[0] - tol) & (ys <= y_range[1] + tol))[0]
         if jj.size < 2 or ii.size < 2:
-            raise GeometryError(
-                f"crop x {x_range}, y {y_range} keeps fewer than 2 x 2 grid points of {self!r}"
-            )
+            raise GeometryError(f"crop x {x_range}, y {y_range} keeps fewer than 2 x 2 grid points of {self!r}")
         sub = self.heights[ii[0] : ii[-1] + 1, jj[0] : jj[-1] + 1]
         return Heightfield((xs[jj[0]], ys[ii[0]]), self.cell_size, sub, unknown=self.unknown)
 
@@ -341,9 +333,7 @@ def read_esri_ascii(path: str | Path) -> Heightfield:
     origin = _esri_origin(file, header)
     rows, cols = int(header["nrows"]), int(header["ncols"])
     if rows != header["nrows"] or cols != header["ncols"] or rows < 2 or cols < 2:
-        raise GeometryError(
-            f"{file}: nrows and ncols must be integers >= 2, got {header['nrows']}, {header['ncols']}"
-        )
+        raise GeometryError(f"{file}: nrows and ncols must be integers >= 2, got {header['nrows']}, {header['ncols']}")
     try:
         values = np.array(" ".join(lines[first_data:]).split(), dtype=np.float64)
     except ValueError as exc:
@@ -379,9 +369,7 @@ def _read_esri_header(file: Path, lines: list[str]) -> tuple[dict[str, float], i
         try:
             header[key] = float(tokens[1])
         except ValueError as exc:
-            raise GeometryError(
-                f"{file}:{number + 1}: header value is not a number: {line.strip()!r}"
-            ) from exc
+            raise GeometryError(f"{file}:{number + 1}: header value is not a number: {line.strip()!r}") from exc
     for required in ("ncols", "nrows", "cellsize"):
         if required not in header:
             raise GeometryError(f"{file}: ESRI ASCII header lacks {required}")
@@ -398,9 +386,7 @@ def _esri_origin(file: Path, header: dict[str, float]) -> list[float]:
     for axis in ("x", "y"):
         corner, centre = header.get(f"{axis}llcorner"), header.get(f"{axis}llcenter")
         if (corner is None) == (centre is None):
-            raise GeometryError(
-                f"{file}: ESRI ASCII header needs exactly one of {axis}llcorner, {axis}llcenter"
-            )
+            raise GeometryError(f"{file}: ESRI ASCII header needs exactly one of {axis}llcorner, {axis}llcenter")
         origin.append(corner + header["cellsize"] / 2.0 if corner is not None else float(centre or 0.0))
     return origin
 

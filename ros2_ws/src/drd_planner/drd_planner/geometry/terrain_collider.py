@@ -1,7 +1,8 @@
 """Terrain in the scene: FCL mesh tiles, a grid prefilter for spheres, and the below-terrain test.
 
 The surface is the heightfield's collision surface (:attr:`Heightfield.surface_heights`: unknown heights filled as
-its ``unknown`` option says, so by default a cell with an unknown corner is a wall). It is cut into square tiles of ``tile_cells`` x ``tile_cells`` cells, each its own FCL ``BVHModel``,
+its ``unknown`` option says, so by default a cell with an unknown corner is a wall). It is cut into square tiles of
+``tile_cells`` x ``tile_cells`` cells, each its own FCL ``BVHModel``,
 so a query only meets the few tiles under it. Spheres are sorted into three cases with numpy alone:
 
 - *clear*: the sphere's bottom is above the highest grid point of every cell its footprint touches (the

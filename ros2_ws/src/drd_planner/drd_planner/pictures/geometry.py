@@ -123,9 +123,7 @@ def shape_outline(shape: Shape, pose: Pose, *, plane: npt.ArrayLike = TOP) -> Fl
     return convex_hull(shape_points(shape, pose, matrix) @ matrix)
 
 
-def edge_points(
-    session: AnySession, edges: Sequence[int], snapshot: MapSnapshot | None = None
-) -> list[FloatArray]:
+def edge_points(session: AnySession, edges: Sequence[int], snapshot: MapSnapshot | None = None) -> list[FloatArray]:
     """One (K, 3) polyline (metres, planning frame) per edge, in the order of ``edges``.
 
     The positions (:meth:`PlanningSession.positions`, as the node publishes them) of each edge's

@@ -107,9 +107,7 @@ def altitude_colours(points: FloatArray) -> ScalarMappable:
     lo, hi = float(np.min(z)), float(np.max(z))
     middle, half = 0.5 * (lo + hi), max(0.5 * (hi - lo), 5.0)
     shades = colormaps[ALTITUDE_CMAP](np.linspace(*ALTITUDE_CMAP_RANGE, 256))
-    return ScalarMappable(
-        norm=Normalize(middle - half, middle + half), cmap=ListedColormap(shades, "altitude")
-    )
+    return ScalarMappable(norm=Normalize(middle - half, middle + half), cmap=ListedColormap(shades, "altitude"))
 
 
 def edge_lift(points: FloatArray, xlim: tuple[float, float]) -> tuple[float, float]:
@@ -152,9 +150,7 @@ def helicopter_top(
     bar.set_label("edge altitude (m)")
     view.ax.set_xlabel("x (m)")
     view.ax.set_ylabel("y (m)")
-    view.ax.set_title(
-        "top view: edges coloured by altitude; checked edges in a green / red casing", fontsize=10
-    )
+    view.ax.set_title("top view: edges coloured by altitude; checked edges in a green / red casing", fontsize=10)
     return wires
 
 
@@ -225,9 +221,7 @@ def helicopter_side(
                 heights.extend(line[:, 2].tolist())
     cross_s, cross_z = profile_crossings(reference, wires)
     if cross_s.size:
-        ax.plot(
-            cross_s, cross_z, "X", color=EXTRA_COLOURS["wire"], markersize=8, zorder=6, label="wire crossing"
-        )
+        ax.plot(cross_s, cross_z, "X", color=EXTRA_COLOURS["wire"], markersize=8, zorder=6, label="wire crossing")
         heights.extend(cross_z.tolist())
     low, high = min(heights), max(heights)
     ax.set_xlim(float(s[0]), float(s[-1]))

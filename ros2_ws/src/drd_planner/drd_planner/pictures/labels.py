@@ -13,7 +13,8 @@ table seen from above: a number may sit on it, never across its outline). It tri
 Within each ring, a spot clear of every obstacle that also keeps clear of the numbers already placed
 and of the start and goal markers wins, then such a spot on a background surface; when no ring has one,
 the nearest spot clear of obstacles (over another number); a number that finds no spot clear of
-obstacles in any ring is left out (thinned, counted in ``hidden``). Everything is computed in display pixels of the drawn figure (its layout fixed first), so
+obstacles in any ring is left out (thinned, counted in ``hidden``). Everything is computed in display pixels of the
+drawn figure (its layout fixed first), so
 what is tested is what the PNG shows. matplotlib is imported only here and in the drawing modules.
 """
 
@@ -121,9 +122,7 @@ def boxes_overlap(boxes: FloatArray, others: FloatArray) -> BoolArray:
     if others.shape[0] == 0 or boxes.shape[0] == 0:
         return np.zeros(boxes.shape[0], dtype=bool)
     b, o = boxes[:, None, :], others[None, :, :]
-    inter = (
-        (b[..., 0] < o[..., 2]) & (o[..., 0] < b[..., 2]) & (b[..., 1] < o[..., 3]) & (o[..., 1] < b[..., 3])
-    )
+    inter = (b[..., 0] < o[..., 2]) & (o[..., 0] < b[..., 2]) & (b[..., 1] < o[..., 3]) & (o[..., 1] < b[..., 3])
     hit: BoolArray = np.any(inter, axis=1)
     return hit
 
@@ -330,9 +329,7 @@ class LabelPlacer:
     def _inside(self, boxes: FloatArray) -> BoolArray:
         """(C,) bool: which boxes lie inside the panel (a number is never clipped)."""
         x0, y0, x1, y1 = self.frame
-        inside: BoolArray = (
-            (boxes[:, 0] >= x0) & (boxes[:, 1] >= y0) & (boxes[:, 2] <= x1) & (boxes[:, 3] <= y1)
-        )
+        inside: BoolArray = (boxes[:, 0] >= x0) & (boxes[:, 1] >= y0) & (boxes[:, 2] <= x1) & (boxes[:, 3] <= y1)
         return inside
 
     def _taken(self) -> FloatArray:

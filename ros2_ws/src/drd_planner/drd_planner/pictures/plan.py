@@ -223,9 +223,7 @@ def plan_picture(
             metadata: dict[str, Any] = {"Date": None, "Creator": None} if svg else {"Software": None}
             try:
                 target.parent.mkdir(parents=True, exist_ok=True)
-                drawing.figure.savefig(
-                    target, dpi=DPI, metadata=metadata, bbox_inches="tight", pad_inches=0.1
-                )
+                drawing.figure.savefig(target, dpi=DPI, metadata=metadata, bbox_inches="tight", pad_inches=0.1)
             except OSError as exc:
                 raise PictureError(f"cannot write the plan picture {target}: {exc}") from exc
             written.append(target)

@@ -106,9 +106,7 @@ def require_matplotlib() -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError as exc:
-        raise PictureError(
-            f"plan pictures need the 'plots' extra (matplotlib): {PLOTS_INSTALL_HINT}"
-        ) from exc
+        raise PictureError(f"plan pictures need the 'plots' extra (matplotlib): {PLOTS_INSTALL_HINT}") from exc
 
 
 def legend_entries(view: PanelView, *more: Axes) -> tuple[list[Any], list[str]]:
@@ -165,9 +163,7 @@ class PanelView:
         out[:, 1] += per_metre * (points[:, 2] - base)
         return out
 
-    def edges(
-        self, geometry: PlanGeometry, result: PlanResult, heights: ScalarMappable | None = None
-    ) -> None:
+    def edges(self, geometry: PlanGeometry, result: PlanResult, heights: ScalarMappable | None = None) -> None:
         """Draw the edge layers and keep each check's number (1 = first) to write on its edge.
 
         Args:
@@ -183,9 +179,7 @@ class PanelView:
                 lines = [geometry.plan] if geometry.plan.shape[0] else []
             else:
                 lines = [geometry.polylines[e] for e in ids]
-            coll = self._edge_layer(
-                key, lines, {**style, "label": style["label"] if lines else None}, heights
-            )
+            coll = self._edge_layer(key, lines, {**style, "label": style["label"] if lines else None}, heights)
             if self.record is not None:
                 self.record.layers[key] = coll
                 self.record.counts[key] = len(ids)
@@ -282,9 +276,7 @@ class PanelView:
             self.obstacles.append(patch)
             if float(np.max(np.ptp(outline, axis=0))) < min_size:
                 x, y = (float(v) for v in outline.mean(axis=0))
-                (dot,) = self.ax.plot(
-                    x, y, "o", color=EXTRA_COLOURS["solid"], markersize=3, zorder=OBSTACLE_ZORDER
-                )
+                (dot,) = self.ax.plot(x, y, "o", color=EXTRA_COLOURS["solid"], markersize=3, zorder=OBSTACLE_ZORDER)
                 dot.set_gid("obstacle_dot")
                 self.obstacles.append(dot)
             drawn += 1

@@ -92,9 +92,7 @@ class ImproveBudget:
         if self.checks is not None and (not _is_int(self.checks) or self.checks < 1):
             raise ProblemError(f"improve budget checks must be an int >= 1 or None, got {self.checks!r}")
         if self.seconds is not None and not (_is_real(self.seconds) and 0 < self.seconds < np.inf):
-            raise ProblemError(
-                f"improve budget seconds must be a positive finite number or None, got {self.seconds!r}"
-            )
+            raise ProblemError(f"improve budget seconds must be a positive finite number or None, got {self.seconds!r}")
         if not _is_int(self.patience) or self.patience < 1:
             raise ProblemError(f"improve budget patience must be an int >= 1, got {self.patience!r}")
         if not (_is_real(self.tail_probability) and 0.0 <= self.tail_probability <= 1.0):
@@ -137,9 +135,7 @@ def _is_int(value: object) -> bool:
 
 
 def _is_real(value: object) -> bool:
-    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-        value, bool | np.bool_
-    )
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool | np.bool_)
 
 
 class WorldSampler:
@@ -204,9 +200,7 @@ class WorldSampler:
         else:
             rows = np.flatnonzero(self._consistent)
             mass = float(self._w[rows].sum())
-            data = (self._free_mass(rows, cols) + self._kappa * self._marginal_of(cols)) / (
-                mass + self._kappa
-            )
+            data = (self._free_mass(rows, cols) + self._kappa * self._marginal_of(cols)) / (mass + self._kappa)
             theta = self._alpha * data + (1.0 - self._alpha) * 0.5
         theta = np.asarray(np.where(state == 1, 1.0, np.where(state == 0, 0.0, theta)), dtype=np.float64)
         if edges is None:
@@ -403,8 +397,7 @@ class _Improvement:
         improved = len(self.found) > 1
         timings = dataclasses.replace(
             first.timings,
-            selection_s=first.timings.selection_s
-            + sum(c.select_ms for c in self.checks[len(first.checks) :]) / 1e3,
+            selection_s=first.timings.selection_s + sum(c.select_ms for c in self.checks[len(first.checks) :]) / 1e3,
             checks_s=first.timings.checks_s + sum(c.check_ms for c in self.checks[len(first.checks) :]) / 1e3,
             total_s=first.timings.total_s + time.perf_counter() - self.t0,
         )

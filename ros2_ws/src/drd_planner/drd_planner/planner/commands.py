@@ -98,9 +98,7 @@ def endpoint_value(text: str) -> int | np.ndarray:
 def resolve_query(prior: WorldPrior, query: QueryText) -> tuple[int, int]:
     """Vertex ids of a ``--query`` on the prior's graph (states snap to their nearest vertex)."""
     resolver = EndpointResolver(prior.graph)
-    return resolver.resolve(endpoint_value(query[0]), "start"), resolver.resolve(
-        endpoint_value(query[1]), "goal"
-    )
+    return resolver.resolve(endpoint_value(query[0]), "start"), resolver.resolve(endpoint_value(query[1]), "goal")
 
 
 def query_tree(
@@ -123,13 +121,9 @@ def query_tree(
     from drd_planner.planner.goal_trees import SearchWorlds
 
     search = SearchWorlds(GraphArcs(prior.graph), prior.graph.lengths, prior.worlds, seed=prior.library_seed)
-    library = query_library(
-        search, prior.graph.edges, start, goal, start_vertex=start, max_paths=prior.max_paths
-    )
+    library = query_library(search, prior.graph.edges, start, goal, start_vertex=start, max_paths=prior.max_paths)
     if library is None:
-        raise DrdError(
-            f"no training world has a free path from {start} to {goal}: nothing to build a tree on"
-        )
+        raise DrdError(f"no training world has a free path from {start} to {goal}: nothing to build a tree on")
     n = prior.num_worlds
     problem = Problem(
         name=name or f"{start}-{goal}",
@@ -169,9 +163,7 @@ def build_prior(options: BuildTreeOptions) -> tuple[WorldPrior, list[str]]:
         lines += setting.note.splitlines()
         t0 = time.perf_counter()
         own_tree = (
-            TreeLeaf(None, setting.region_rule, "")
-            if tree_leaf is None
-            else tree_leaf.tree_leaf(problem, options.tree)
+            TreeLeaf(None, setting.region_rule, "") if tree_leaf is None else tree_leaf.tree_leaf(problem, options.tree)
         )
         tree = build_tree(problem, **{**options.tree.kwargs(), "region_rule": own_tree.region_rule})
         assert problem.start is not None and problem.goal is not None
@@ -179,9 +171,7 @@ def build_prior(options: BuildTreeOptions) -> tuple[WorldPrior, list[str]]:
             f"tree {problem.name} ({problem.start} -> {problem.goal}): {tree.num_nodes} nodes, depth "
             f"{tree.depth()}, built in {time.perf_counter() - t0:.2f} s"
         )
-        own = QueryTree(
-            problem.name, int(problem.start), int(problem.goal), problem.library, tree, own_tree.leaf
-        )
+        own = QueryTree(problem.name, int(problem.start), int(problem.goal), problem.library, tree, own_tree.leaf)
         lines += ["  " + line for line in own_tree.note.splitlines()]
         prior = prior_from_problem(
             problem,

@@ -69,7 +69,8 @@ class MotionExplainer(Protocol):
     - when every edge joining the start (or goal) was checked blocked, it asks whether that state itself is
       blocked: ``explain_motion`` of the (1, D) state ("" means free, anything else is quoted as the cause);
       without this protocol, ``check_motion`` of it;
-    - with this protocol it also explains the (up to 8 shortest) blocked motions joining that end (up to 8 other blocked edges
+    - with this protocol it also explains the (up to 8 shortest) blocked motions joining that end (up to 8 other
+      blocked edges
       around the smaller known-reachable side when neither end is walled in), counted per cause, with the
       ``" at sample ..."`` suffix dropped: so a cause should read the same for every motion it blocks.
 
@@ -192,9 +193,7 @@ def imputed_outcomes(index: EdgeSampleIndex, worlds: BoolArray, states: FloatArr
     return np.asarray(worlds[:, nearest].mean(axis=1) >= 0.5, dtype=bool)
 
 
-def imputed_columns(
-    index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, motions: list[FloatArray]
-) -> BoolArray:
+def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, motions: list[FloatArray]) -> BoolArray:
     """(n, M) imputed outcomes of M motions in the n training worlds, all motions' samples matched at once.
 
     The sample-weighted majority vote of :func:`imputed_outcomes` over at most
@@ -205,10 +204,7 @@ def imputed_columns(
     if not motions:
         n = worlds.num_worlds if isinstance(worlds, WorldColumns) else worlds.shape[0]
         return np.zeros((n, 0), dtype=bool)
-    points = [
-        m[np.unique(np.linspace(0, m.shape[0] - 1, POINTS_PER_EDGE).round().astype(np.int64))]
-        for m in motions
-    ]
+    points = [m[np.unique(np.linspace(0, m.shape[0] - 1, POINTS_PER_EDGE).round().astype(np.int64))] for m in motions]
     counts = np.array([m.shape[0] for m in points])
     nearest = index.nearest_edges(np.concatenate(points))
     # Per motion, the number of its samples whose nearest edge is free in each world: a sparse (M, U) count

@@ -175,9 +175,7 @@ class DubinsConnector:
         Raises:
             QueryError: the state is outside the extent, or a start has no heading.
         """
-        return self.motions_to(
-            state, graph, self.ranked(state, graph, outgoing=outgoing)[: self._k], outgoing=outgoing
-        )
+        return self.motions_to(state, graph, self.ranked(state, graph, outgoing=outgoing)[: self._k], outgoing=outgoing)
 
     def motions_to(
         self, state: FloatArray, graph: ExplicitGraph, vertices: IntArray, *, outgoing: bool
@@ -286,9 +284,7 @@ class DubinsConnector:
         pose = path.sample(s)
         climb = dz * s / horizontal if horizontal > 0 else np.zeros(n)
         samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + climb, pose[:, 2]])
-        if math.hypot(samples[-1, 0] - head[0], samples[-1, 1] - head[1]) > END_TOLERANCE * max(
-            1.0, self._radius
-        ):
+        if math.hypot(samples[-1, 0] - head[0], samples[-1, 1] - head[1]) > END_TOLERANCE * max(1.0, self._radius):
             return None
         samples[0, :3] = tail[:3]
         samples[-1, :3] = head[:3]

@@ -80,9 +80,7 @@ def distinct_rows(x: npt.ArrayLike) -> IntArray:
     words = np.zeros((n, width), dtype=np.uint8)
     words[:, : packed.shape[1]] = packed
     as_words = words.view(np.uint64)
-    multipliers = (
-        np.random.default_rng(0x5EED).integers(1, 2**63, size=as_words.shape[1], dtype=np.uint64) | 1
-    )
+    multipliers = np.random.default_rng(0x5EED).integers(1, 2**63, size=as_words.shape[1], dtype=np.uint64) | 1
     with np.errstate(over="ignore"):
         digest = (as_words * multipliers).sum(axis=1, dtype=np.uint64)
     order = np.lexsort((np.arange(n), digest))
@@ -151,16 +149,10 @@ class GoalTree:
         whole = np.isinf(self.radius)
         if not isinstance(start, JoinMotions):
             vertex = int(start)
-            cut = (
-                np.zeros_like(whole)
-                if self.parts is None
-                else self.parts[:, vertex] != self.parts[:, self.goal]
-            )
+            cut = np.zeros_like(whole) if self.parts is None else self.parts[:, vertex] != self.parts[:, self.goal]
             return np.asarray(whole | cut | np.isfinite(self.dist[:, vertex]), dtype=bool)
         reached = np.isfinite(self.dist[:, start.vertices])  # (W, k)
-        best = np.min(
-            np.where(start.free & reached, start.lengths[None, :] + self.dist[:, start.vertices], np.inf), 1
-        )
+        best = np.min(np.where(start.free & reached, start.lengths[None, :] + self.dist[:, start.vertices], np.inf), 1)
         open_ = start.free & ~reached
         if self.parts is not None:
             open_ &= self.parts[:, start.vertices] == self.parts[:, self.goal][:, None]
@@ -346,9 +338,7 @@ class SearchWorlds:
             self._widen(tree, ~tree.covers(start), graph)
         return tree
 
-    def _first_radius(
-        self, goal: int, start: int | JoinMotions | None, joins: JoinMotions | None = None
-    ) -> float:
+    def _first_radius(self, goal: int, start: int | JoinMotions | None, joins: JoinMotions | None = None) -> float:
         """How far a new goal's first search goes for ``start``: inf for the whole graph."""
         if start is None:
             return np.inf
@@ -376,9 +366,7 @@ class SearchWorlds:
         tree.hop[again] = full.hop
         tree.radius[again] = np.inf
 
-    def _search(
-        self, goal: int, graph: sp.csr_array, *, limit: float, worlds: IntArray | None = None
-    ) -> GoalTree:
+    def _search(self, goal: int, graph: sp.csr_array, *, limit: float, worlds: IntArray | None = None) -> GoalTree:
         """Dijkstra from ``goal`` in each of ``worlds`` (all when None) as far as ``limit``.
 
         Returns the rows of those worlds only, in their order.
@@ -406,6 +394,4 @@ def _csr32(data: FloatArray, rows: npt.ArrayLike, cols: npt.ArrayLike, size: int
     """A (size, size) CSR graph with int32 indices (what csgraph runs on: no conversion per search)."""
     graph = sp.csr_array((data, (rows, cols)), shape=(size, size))
     graph.sort_indices()
-    return sp.csr_array(
-        (graph.data, graph.indices.astype(np.int32), graph.indptr.astype(np.int32)), shape=(size, size)
-    )
+    return sp.csr_array((graph.data, graph.indices.astype(np.int32), graph.indptr.astype(np.int32)), shape=(size, size))

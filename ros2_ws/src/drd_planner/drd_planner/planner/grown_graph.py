@@ -91,9 +91,7 @@ class GrownGraph:
         """Let these vertices (checked free) be joined to others."""
         self.usable[vertices] = True
 
-    def add_edges(
-        self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None
-    ) -> IntArray:
+    def add_edges(self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None) -> IntArray:
         """Add (M, 2) edges with their (K, D) motions (tail ``pairs[:, 0]`` first); their edge ids.
 
         ``lengths``: (M,) the motions' lengths in the graph's unit; None: the straight distance between the
@@ -102,18 +100,14 @@ class GrownGraph:
         self.edges_added += pairs.shape[0]
         return self._add_edges(pairs, motions, lengths)
 
-    def _add_edges(
-        self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None
-    ) -> IntArray:
+    def _add_edges(self, pairs: IntArray, motions: list[FloatArray], lengths: FloatArray | None = None) -> IntArray:
         first = self.edges.shape[0]
         ids = np.arange(first, first + pairs.shape[0], dtype=np.int64)
         self.edges = np.vstack([self.edges, pairs.reshape(-1, 2)])
         if lengths is None:  # a self-loop (vertex edge) has no length, even with a NaN heading
             loops = pairs[:, 0] == pairs[:, 1]
             lengths = np.zeros(pairs.shape[0])
-            lengths[~loops] = np.linalg.norm(
-                self.states[pairs[~loops, 1]] - self.states[pairs[~loops, 0]], axis=1
-            )
+            lengths[~loops] = np.linalg.norm(self.states[pairs[~loops, 1]] - self.states[pairs[~loops, 0]], axis=1)
         self.lengths = np.concatenate([self.lengths, np.asarray(lengths, dtype=np.float64)])
         self.costs = np.concatenate([self.costs, np.full(pairs.shape[0], self._cost)])
         if self.worlds is not None and self.prior_worlds is not None:
@@ -123,9 +117,7 @@ class GrownGraph:
 
     def query(self) -> QueryGraph:
         """The grown graph as a query (the base query's start, goal and new states kept)."""
-        graph = ExplicitGraph(
-            self.edges, self.lengths, self.num_vertices, self.base.graph.directed, self.states
-        )
+        graph = ExplicitGraph(self.edges, self.lengths, self.num_vertices, self.base.graph.directed, self.states)
         return dataclasses.replace(
             self.base, graph=graph, worlds=self.worlds, edge_costs=self.costs, motions=dict(self.motions)
         )

@@ -86,9 +86,7 @@ class SampleMix:
 def known_reachable(num_vertices: int, edges: IntArray, free: BoolArray, source: int) -> IntArray:
     """Vertex ids reached from ``source`` over the (E,) edges marked ``free`` (undirected), ``source`` first."""
     pairs = edges[free]
-    graph = coo_array(
-        (np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(num_vertices, num_vertices)
-    ).tocsr()
+    graph = coo_array((np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(num_vertices, num_vertices)).tocsr()
     order = breadth_first_order(graph, source, directed=False, return_predecessors=False)
     return np.asarray(order, dtype=np.int64)
 
@@ -185,9 +183,7 @@ def parent_pairs(new: IntArray, parents: IntArray, states: FloatArray, *, reach:
     return np.sort(pairs[(near <= reach) & (near > SAME_STATE)], axis=1).astype(np.int64)
 
 
-def nearest_pairs(
-    states: FloatArray, new: IntArray, usable: BoolArray, *, neighbours: int, reach: float
-) -> IntArray:
+def nearest_pairs(states: FloatArray, new: IntArray, usable: BoolArray, *, neighbours: int, reach: float) -> IntArray:
     """(M, 2) pairs u < v joining each vertex of ``new`` to its nearest usable vertices, each pair once.
 
     Each is joined to its ``neighbours`` nearest other vertices marked ``usable`` ((V,) flags of the (V, D)
@@ -205,9 +201,7 @@ def nearest_pairs(
     return np.unique(np.sort(pairs[keep], axis=1), axis=0).astype(np.int64)
 
 
-def bridge_pairs(
-    states: FloatArray, side_a: IntArray, side_b: IntArray, *, count: int, reach: float
-) -> IntArray:
+def bridge_pairs(states: FloatArray, side_a: IntArray, side_b: IntArray, *, count: int, reach: float) -> IntArray:
     """(M, 2) pairs u < v: the ``count`` shortest joins between two sets of vertices, shortest first.
 
     Each vertex of ``side_a`` (ids into the (V, D) ``states``) is matched to its three nearest vertices of

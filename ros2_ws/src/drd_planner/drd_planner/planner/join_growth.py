@@ -228,9 +228,7 @@ class JoinGrowth(GraphGrowth):
                 reverse=outgoing,
             )
             fresh = np.array([v for v in ranking.tolist() if useful[v] and v not in joined], dtype=np.int64)
-            batch = (
-                fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
-            )
+            batch = fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
             take = fresh[: min(batch, room)]
             if take.size == 0:
                 continue
@@ -238,9 +236,7 @@ class JoinGrowth(GraphGrowth):
             joined.update(int(v) for v in take.tolist())
             if not motions:
                 continue
-            pairs = np.array(
-                [(vertex, m.vertex) if outgoing else (m.vertex, vertex) for m in motions], dtype=np.int64
-            )
+            pairs = np.array([(vertex, m.vertex) if outgoing else (m.vertex, vertex) for m in motions], dtype=np.int64)
             lengths = np.array([m.length for m in motions], dtype=np.float64)
             grown.add_edges(pairs, [m.states for m in motions], lengths)
             added = True

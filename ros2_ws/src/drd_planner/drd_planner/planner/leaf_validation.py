@@ -105,9 +105,7 @@ def validate_query_leaf(
     if not etas or not pseudo_counts or not region_rules:
         raise ProblemError("give at least one eta, one kappa and one region rule candidate")
     rng = np.random.default_rng(seed)
-    held = np.sort(
-        rng.choice(train, size=min(train.size - 1, max(1, round(0.1 * train.size))), replace=False)
-    )
+    held = np.sort(rng.choice(train, size=min(train.size - 1, max(1, round(0.1 * train.size))), replace=False))
     fit = np.setdiff1d(train, held)
     sub = dataclasses.replace(problem, worlds=worlds.subset(fit, held))
     from drd_planner.data.problem_source import problem_domain
@@ -138,9 +136,7 @@ def validate_query_leaf(
         eta, kappa = _winner(checks)
         runs[rule] = checks[(eta, kappa)]
         means = {k: float(v.mean()) for k, v in checks.items()}
-        return SwitchThresholdChoice(
-            eta, kappa, means, tuple(int(h) for h in held), basis=basis, region_rule=rule
-        )
+        return SwitchThresholdChoice(eta, kappa, means, tuple(int(h) for h in held), basis=basis, region_rule=rule)
 
     rules = list(dict.fromkeys(region_rules))
     with Progress(
@@ -247,9 +243,7 @@ def tree_leaf_from_options(
     try:
         choice = select_region_rule(rules, validate)
     except ProblemError as exc:  # e.g. fewer than two training worlds with a free path for this query
-        return TreeLeaf(
-            None, rules[0], f"its own eta and kappa: the prior's (not validated on this query: {exc})"
-        )
+        return TreeLeaf(None, rules[0], f"its own eta and kappa: the prior's (not validated on this query: {exc})")
     assert choice is not None
     lines = choice.summary_lines()
     lines[0] = f"its own {lines[0]} (its own query)"

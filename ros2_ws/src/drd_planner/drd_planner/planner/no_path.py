@@ -42,9 +42,7 @@ EdgeStates = Callable[[int], FloatArray | None]
 MAX_EXPLAINED = 8
 
 
-def edge_states_of(
-    prior: WorldPrior, query: QueryGraph, segment: Callable[..., FloatArray] | None
-) -> EdgeStates:
+def edge_states_of(prior: WorldPrior, query: QueryGraph, segment: Callable[..., FloatArray] | None) -> EdgeStates:
     """The states along an edge: a motion's own, a stored trajectory, or ``segment(tail, head)`` (straight)."""
     trajectories = prior.edge_trajectories
     states = query.graph.vertex_states
@@ -68,9 +66,7 @@ def _state_text(query: QueryGraph, vertex: int, label: str) -> str:
     if states is None:
         return f"the {label} (vertex {vertex})"
     values = [round(float(x), 3) for x in states[vertex]]
-    return (
-        f"the {label} {values}" if vertex in query.new_states else f"the {label} (vertex {vertex}: {values})"
-    )
+    return f"the {label} {values}" if vertex in query.new_states else f"the {label} (vertex {vertex}: {values})"
 
 
 def _causes(explainer: MotionExplainer, motions: list[FloatArray]) -> str:
@@ -120,11 +116,7 @@ def _endpoint_text(
     states = query.graph.vertex_states
     explainer = oracle if isinstance(oracle, MotionExplainer) else None
     if any(outcome.get(int(e)) is False for e in loops.tolist()):
-        why = (
-            ""
-            if explainer is None or states is None
-            else f": {explainer.explain_motion(states[vertex][None])}"
-        )
+        why = "" if explainer is None or states is None else f": {explainer.explain_motion(states[vertex][None])}"
         return f"the {label} state itself is blocked (checked){why}"
     if incident.size == 0 or not all(outcome.get(int(e)) is False for e in incident.tolist()):
         return ""

@@ -107,9 +107,7 @@ class Planner:
         self._connector = (connector or connector_for(prior)) if connect_states else None
         free = getattr(self._connector, "free_goal_dims", ())
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
-        self._models = QueryModels(
-            prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold
-        )
+        self._models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
 
@@ -276,9 +274,7 @@ class Planner:
         try:
             resolved = self._resolve(start, goal, oracle)
         except QueryError as exc:
-            return PlanResult(
-                PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin), cause=exc.cause
-            )
+            return PlanResult(PlanStatus.REFUSED, str(exc), timings=plan_timings((), 0.0, t_begin), cause=exc.cause)
         if isinstance(resolved, int):
             return trivial_result(resolved, t_begin)
         model = resolved
@@ -371,9 +367,7 @@ class Planner:
         if graph_episode.status is EpisodeStatus.PATH_FOUND and graph_episode.path_edges is not None:
             return found_result(model, graph_episode.path_edges, checks, PlanStage.GRAPH, times)
         if graph_episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-            return exhausted_result(
-                model, graph_episode.status is EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin
-            )
+            return exhausted_result(model, graph_episode.status is EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin)
         raw, report = _unwrapped(oracle), None
         growth = self._growth(model)
         if growth is not None and isinstance(raw, MotionOracle):

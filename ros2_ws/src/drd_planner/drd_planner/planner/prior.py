@@ -168,9 +168,7 @@ class WorldPrior:
                 if not 0 <= v < self.graph.num_vertices:
                     raise ProblemError(f"tree {qt.name!r}: {label} vertex {v} outside the graph")
             if qt.library.num_edges != num_edges or qt.tree.num_edges != num_edges:
-                raise ProblemError(
-                    f"tree {qt.name!r} was built for another graph ({qt.tree.num_edges} edges)"
-                )
+                raise ProblemError(f"tree {qt.name!r} was built for another graph ({qt.tree.num_edges} edges)")
             if qt.tree.num_paths != qt.library.num_paths:
                 raise ProblemError(f"tree {qt.name!r} does not fit its library")
 

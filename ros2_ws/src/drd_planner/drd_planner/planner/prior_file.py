@@ -1,6 +1,7 @@
 """The world-prior file: one graph, its training worlds over every edge, and zero or more trees.
 
-Format ``drd_planner.prior`` version 2 (version 1 still loads): a checksummed ``.npz`` (:mod:`drd_planner.data.npz_format`;
+Format ``drd_planner.prior`` version 2 (version 1 still loads): a checksummed ``.npz``
+(:mod:`drd_planner.data.npz_format`;
 read by :mod:`drd_planner.data.safe_npz`, so loading never executes code and checks every size before
 it allocates) with a JSON header (name, domain
 and its spec, check metadata, switch threshold eta, alpha, kappa, the region rule of online trees
@@ -115,9 +116,7 @@ def save_prior(path: str | Path, prior: WorldPrior) -> Path:
         PriorFileError: the prior has no training worlds over every edge (a tree file's prior).
     """
     if prior.worlds is None:
-        raise PriorFileError(
-            "a prior without training worlds over every edge cannot be saved as a prior file"
-        )
+        raise PriorFileError("a prior without training worlds over every edge cannot be saved as a prior file")
     graph = prior.graph
     arrays: dict[str, npt.NDArray[Any]] = {
         "edges": graph.edges.astype(np.int64),
@@ -325,9 +324,7 @@ def _tree_from(
 def _region_rule(value: Any, what: str) -> str:
     """A region rule from a header (PriorFileError naming the known ones when it is not one)."""
     if not isinstance(value, str) or value not in REGION_RULES:
-        raise PriorFileError(
-            f"{what}'s region rule must be one of {', '.join(REGION_RULES)}, got {short(value, 40)}"
-        )
+        raise PriorFileError(f"{what}'s region rule must be one of {', '.join(REGION_RULES)}, got {short(value, 40)}")
     return value
 
 
@@ -336,9 +333,7 @@ def _leaf_from(entry: Any) -> LeafSetting | None:
     if entry is None:
         return None
     if not isinstance(entry, dict):
-        raise PriorFileError(
-            f"its 'leaf' must be an object with eta and pseudo_count, got {short(entry, 40)}"
-        )
+        raise PriorFileError(f"its 'leaf' must be an object with eta and pseudo_count, got {short(entry, 40)}")
     return LeafSetting(
         header_fraction(entry, "eta"),
         header_number(entry, "pseudo_count", low=0.0, high=MAX_PSEUDO_COUNT, optional=True),

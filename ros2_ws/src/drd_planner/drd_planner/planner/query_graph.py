@@ -118,9 +118,7 @@ def connected_query(
     num_edges = graph.num_edges
     edges = np.vstack([graph.edges, np.array(new_edges, dtype=np.int64).reshape(-1, 2)])
     lengths = np.concatenate([graph.lengths, [m.length for m in motions]])
-    extra = np.array([new_states[v] for v in sorted(new_states)], dtype=np.float64).reshape(
-        -1, states.shape[1]
-    )
+    extra = np.array([new_states[v] for v in sorted(new_states)], dtype=np.float64).reshape(-1, states.shape[1])
     query_graph = ExplicitGraph(edges, lengths, next_vertex, graph.directed, np.vstack([states, extra]))
     worlds: QueryWorlds | None = None
     imputed: BoolArray | None = None

@@ -1,7 +1,8 @@
 """The path library of any query, built online from the prior's training worlds.
 
 The authors' library (docs/algorithms.md, "Worlds, the path library and the split") is the union over
-worlds of each world's k shortest free paths, subsampled to m. Yen's k shortest paths over a thousand worlds take seconds; a planner
+worlds of each world's k shortest free paths, subsampled to m. Yen's k shortest paths over a thousand worlds take
+seconds; a planner
 asked for a new goal has milliseconds. The online library keeps the idea with k = 1:
 
 1. a seeded sample of W distinct training worlds (:data:`~drd_planner.planner.goal_trees.SEARCH_WORLDS`,
@@ -49,9 +50,7 @@ class ShortestPaths:
         # One CSR structure for every call; a blocked arc gets weight inf, which Dijkstra never relaxes.
         self._csr = sp.csr_array((self._arc_length.copy(), arcs.v, arcs.indptr), shape=(n, n))
 
-    def path(
-        self, start: int, goal: int, free: BoolArray | None, *, limit: float = np.inf
-    ) -> IntArray | None:
+    def path(self, start: int, goal: int, free: BoolArray | None, *, limit: float = np.inf) -> IntArray | None:
         """Edge ids (start to goal) of a shortest path over the edges ``free`` (all when None).
 
         Returns None when the goal is unreachable within ``limit``.
@@ -67,9 +66,7 @@ class ShortestPaths:
         return arcs.walk_back(pred, start, goal)
 
 
-def library_paths(
-    search: SearchWorlds, start: int | Joins, goal: int | Joins, *, max_paths: int
-) -> list[IntArray]:
+def library_paths(search: SearchWorlds, start: int | Joins, goal: int | Joins, *, max_paths: int) -> list[IntArray]:
     """The first ``max_paths`` distinct shortest free paths of the search worlds, from ``start`` to ``goal``.
 
     Args:
@@ -125,9 +122,7 @@ def _motions(search: SearchWorlds, start: int | Joins) -> int | JoinMotions:
     return JoinMotions(start.vertices, start.lengths, start.free[search.worlds])
 
 
-def _goal_tree(
-    search: SearchWorlds, origin: int | JoinMotions, goal: int | Joins
-) -> tuple[GoalTree, dict[int, int]]:
+def _goal_tree(search: SearchWorlds, origin: int | JoinMotions, goal: int | Joins) -> tuple[GoalTree, dict[int, int]]:
     """The goal's reverse trees (covering ``origin``) and, for a joined goal, its join edge per graph vertex."""
     if not isinstance(goal, Joins):
         return search.tree(goal, origin), {}
@@ -168,6 +163,4 @@ def query_library(
     paths = library_paths(search, start, goal, max_paths=max_paths)
     if not paths:
         return None
-    return PathLibrary(
-        tuple(paths), int(edges.shape[0]), tuple(vertex_sequence(edges, start_vertex, p) for p in paths)
-    )
+    return PathLibrary(tuple(paths), int(edges.shape[0]), tuple(vertex_sequence(edges, start_vertex, p) for p in paths))

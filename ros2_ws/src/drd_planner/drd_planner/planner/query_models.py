@@ -175,9 +175,7 @@ class QueryModels:
         if qt is not None:
             theta = prior.edge_marginal if prior.worlds is not None else qt.tree.bias(0, alpha=prior.alpha)
             query = prior_query(prior, qt.start, qt.goal, self.columns)
-            return QueryModel(
-                query, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0, qt
-            )
+            return QueryModel(query, qt.library, qt.tree, theta, f"tree:{qt.name}", time.perf_counter() - t0, qt)
         if prior.worlds is None:
             served = ", ".join(f"{q.start} -> {q.goal}" for q in prior.trees)
             raise QueryError(

@@ -34,9 +34,7 @@ def reachable_fraction(graph: ExplicitGraph, worlds: BoolArray, start: int) -> n
     return counts / max(len(worlds), 1)
 
 
-def draw_queries(
-    problem: Problem, count: int, *, seed: int, min_fraction: float = 0.5
-) -> list[tuple[int, int]]:
+def draw_queries(problem: Problem, count: int, *, seed: int, min_fraction: float = 0.5) -> list[tuple[int, int]]:
     """``count`` (start, goal) pairs: the problem's own query first, then seeded random connected pairs."""
     graph = problem.graph
     worlds = problem.require_worlds()
@@ -52,9 +50,7 @@ def draw_queries(
     while len(queries) < count:
         attempts += 1
         if attempts > 50 * count:
-            raise DrdError(
-                f"{problem.name}: could not draw {count} queries connected in most training worlds"
-            )
+            raise DrdError(f"{problem.name}: could not draw {count} queries connected in most training worlds")
         start = int(rng.integers(graph.num_vertices))
         fraction = reachable_fraction(graph, sample, start)
         fraction[start] = 0.0

@@ -101,7 +101,7 @@ class GrowthReport:
     state_checks: int = 0
 
     def summary(self) -> str:
-        """``3 growth round(s) added 150 vertices and 900 edges (420 checks, 152 of them of one state; stopped: path)``."""
+        """E.g. ``3 growth round(s) added 150 vertices and 900 edges (420 checks, 152 of one state; stopped: path)``."""
         return (
             f"{self.rounds} growth round(s) added {self.vertices_added} vertices and {self.edges_added} edges "
             f"({self.checks} checks, {self.state_checks} of them of one state; stopped: {self.stop})"
@@ -211,9 +211,7 @@ def library_stage(checks: list[CheckRecord]) -> PlanStage:
     return PlanStage.LIBRARY
 
 
-def plan_timings(
-    checks: list[CheckRecord] | tuple[CheckRecord, ...], library_s: float, t_begin: float
-) -> PlanTimings:
+def plan_timings(checks: list[CheckRecord] | tuple[CheckRecord, ...], library_s: float, t_begin: float) -> PlanTimings:
     """The timings of a plan from its checks, the library time and its start (``time.perf_counter``)."""
     return PlanTimings(
         library_s=library_s,

@@ -131,9 +131,7 @@ class GrowthSettings:
             or (self.join_batch is not None and self.join_batch < 1)
             or (self.max_checks is not None and self.max_checks < 1)
         ):
-            raise ProblemError(
-                f"growth counts must be at least 1, got {counts} and max_checks {self.max_checks}"
-            )
+            raise ProblemError(f"growth counts must be at least 1, got {counts} and max_checks {self.max_checks}")
         if self.seconds is not None and not (math.isfinite(self.seconds) and self.seconds > 0):
             raise ProblemError(f"growth seconds must be positive, got {self.seconds}")
         if min(shares) < 0 or sum(shares) > 1 + 1e-9:
@@ -198,9 +196,7 @@ def lazy_search(
         stage=stage,
         name="graph_fallback",
     )
-    return run_episode(
-        None, query.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known
-    )
+    return run_episode(None, query.edge_costs, search, oracle, max_checks=budget, deadline=deadline, known=known)
 
 
 @dataclass(frozen=True)
@@ -299,9 +295,7 @@ class GraphGrowth(ABC):
             checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
             if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
-                return GrowthOutcome(
-                    EpisodeStatus.PATH_FOUND, episode.path_edges, self._report("path", checks)
-                )
+                return GrowthOutcome(EpisodeStatus.PATH_FOUND, episode.path_edges, self._report("path", checks))
             if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
                 stop = self._budget_stop(checks, max_checks, deadline, own_deadline) or "checks"
         status = {"plan_checks": EpisodeStatus.MAX_CHECKS, "plan_time": EpisodeStatus.TIME_BUDGET}
@@ -343,15 +337,11 @@ class GraphGrowth(ABC):
                 return f"{label}_blocked"
         return ""
 
-    def _logged_check(
-        self, edge: int, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]
-    ) -> bool:
+    def _logged_check(self, edge: int, oracle: MotionOracle, known: dict[int, bool], checks: list[CheckRecord]) -> bool:
         """Check the vertex edge ``edge`` (its one state) through the oracle, logged as a growth check."""
         t0 = time.perf_counter()
         free = bool(oracle.check_motion(self.grown.motions[edge]))
-        checks.append(
-            CheckRecord(len(checks), edge, free, GROWTH_STAGE, 0.0, (time.perf_counter() - t0) * 1e3)
-        )
+        checks.append(CheckRecord(len(checks), edge, free, GROWTH_STAGE, 0.0, (time.perf_counter() - t0) * 1e3))
         known[edge] = free
         self.state_checks += 1
         return free
@@ -436,9 +426,7 @@ class RoadmapGrowth(GraphGrowth):
         candidates = np.vstack(
             [
                 parent_pairs(new, parents[checked], grown.states, reach=self.reach),
-                nearest_pairs(
-                    grown.states, new, grown.usable, neighbours=self.settings.neighbours, reach=self.reach
-                ),
+                nearest_pairs(grown.states, new, grown.usable, neighbours=self.settings.neighbours, reach=self.reach),
                 bridge_pairs(grown.states, small, large, count=self.settings.bridges, reach=self.reach),
             ]
         )

@@ -40,7 +40,7 @@ class StateSampler(Protocol):
         ...
 
     def refusal(self, state: npt.ArrayLike, label: str) -> str | None:
-        """Why the (D,) query state ``label`` (``start`` / ``goal``) cannot be served, in one sentence; None if it can."""
+        """Why the (D,) query state ``label`` (``start`` / ``goal``) cannot be served, one sentence; None if it can."""
         ...
 
 

@@ -96,7 +96,8 @@ def plan_bag(options: BagPlanOptions) -> int:
     terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
     robot = "" if plan.maps.robot_description is None else ", robot_description"
     print(
-        f"bag {options.bag}: request {request.index} ({request.kind} at +{(request.time_ns - messages[0].time_ns) / 1e9:.2f} s); "
+        f"bag {options.bag}: request {request.index} ({request.kind} at "
+        f"+{(request.time_ns - messages[0].time_ns) / 1e9:.2f} s); "
         f"maps in {frame!r}: version {snapshot.version}, {len(snapshot.obstacles)} obstacles, terrain {terrain}{robot}"
     )
     for line in (*plan.maps.refused, *plan.notes):
@@ -123,9 +124,7 @@ def plan_bag(options: BagPlanOptions) -> int:
         if vertex < num_vertices:
             state = session.vertex_state(vertex)
         else:  # where the path's motions meet it (a goal's heading is the one it arrives with)
-            state = (
-                session.edge_states(edges[k])[0] if k < len(edges) else session.edge_states(edges[k - 1])[-1]
-            )
+            state = session.edge_states(edges[k])[0] if k < len(edges) else session.edge_states(edges[k - 1])[-1]
         label = f"{vertex:5d}" if vertex < num_vertices else "state"
         print(f"    {label}: " + " ".join(f"{v:9.3f}" for v in state))
     return 0

@@ -103,12 +103,11 @@ def maps_until(
         margin: collision margin of the snapshot (metres; the session's ``margin``).
         robot_loader: turns a ``robot_description`` URDF into the snapshot's robot (a session's
             ``robot_loader``); None keeps only the text.
-        terrain_fit: refuses a terrain that cannot be the prior's (:func:`~drd_planner.planning.map_store.terrain_fit_of`).
+        terrain_fit: refuses a terrain that cannot be the prior's
+        (:func:`~drd_planner.planning.map_store.terrain_fit_of`).
     """
     upto = [m for m in messages if m.time_ns <= time_ns]
-    return _apply_maps(
-        upto, frame_id=frame_id, margin=margin, robot_loader=robot_loader, terrain_fit=terrain_fit
-    )
+    return _apply_maps(upto, frame_id=frame_id, margin=margin, robot_loader=robot_loader, terrain_fit=terrain_fit)
 
 
 def maps_at_request(

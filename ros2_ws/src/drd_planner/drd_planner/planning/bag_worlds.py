@@ -131,9 +131,7 @@ def _frame(request: MapBags, first: FileRecord) -> str:
         raise DatasetError(str(exc)) from exc
 
 
-def resolve(
-    request: MapBags, domain: Domain, user_spec: Mapping[str, Any], num_worlds: int | None
-) -> ResolvedSource:
+def resolve(request: MapBags, domain: Domain, user_spec: Mapping[str, Any], num_worlds: int | None) -> ResolvedSource:
     """Read every bag's snapshots with ``domain`` (margin, robot loader) and list them as worlds.
 
     Raises:

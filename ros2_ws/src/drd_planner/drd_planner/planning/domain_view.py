@@ -43,9 +43,7 @@ def domain_from_stored_spec(
     except DrdError as exc:
         raise error(f"{label}: its domain spec cannot be rebuilt: {exc}") from exc
     except Exception as exc:
-        raise error(
-            f"{label}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})"
-        ) from exc
+        raise error(f"{label}: its domain spec cannot be rebuilt ({type(exc).__name__}: {str(exc)[:200]})") from exc
 
 
 def state_positions(

@@ -101,9 +101,7 @@ class SceneCache:
         """The scene of ``snapshot``, built on first use from a kept scene of the same margin (the donor)."""
         with self._lock:
             found = _cached(self._scenes, snapshot)
-            donor = next(
-                (pair for pair in reversed(self._scenes.values()) if pair[0].margin == snapshot.margin), None
-            )
+            donor = next((pair for pair in reversed(self._scenes.values()) if pair[0].margin == snapshot.margin), None)
             if found is None:
                 _make_room(self._scenes, SCENE_CACHE_SIZE)  # the newest scene stays (it is the donor)
         if found is not None:
@@ -124,9 +122,7 @@ class SceneCache:
         if snapshot.terrain is not None and (donor is None or snapshot.terrain is not donor[0].terrain):
             scene.add_terrain(snapshot.terrain, collider=self.terrain_collider(snapshot.terrain))
         new = snapshot.obstacles
-        changed = [
-            key for key in new if key not in old or (new[key] is not old[key] and new[key] != old[key])
-        ]
+        changed = [key for key in new if key not in old or (new[key] is not old[key] and new[key] != old[key])]
         for key in [key for key in old if key not in new] + [key for key in changed if key in old]:
             for k in range(len(old[key])):
                 scene.remove(f"{key}#{k}")
@@ -170,9 +166,7 @@ class MapSnapshot:
 
     def with_obstacles(self, obstacles: Mapping[str, Parts]) -> MapSnapshot:
         """The next version with ``obstacles`` replacing the obstacle map."""
-        return dataclasses.replace(
-            self, version=self.version + 1, obstacles=dict(obstacles), obstacle_map=True
-        )
+        return dataclasses.replace(self, version=self.version + 1, obstacles=dict(obstacles), obstacle_map=True)
 
     def with_terrain(self, terrain: Heightfield) -> MapSnapshot:
         """The next version with ``terrain``."""

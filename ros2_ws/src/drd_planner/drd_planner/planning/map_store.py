@@ -12,7 +12,8 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   bytes changed since the last array (:class:`~drd_msgs_py.marker_cdr.MarkerArrayReader`), and a marker
   whose content equals that of the held obstacle is not validated again;
 - ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
-  unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in the planning frame, or
+  unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in
+  the planning frame, or
   above every vertex: heights in another datum);
 - ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
   (an arm prior), else the text is only kept;
@@ -61,11 +62,7 @@ def terrain_fit_of(domains: Sequence[OnlineDomain[Any]]) -> TerrainFit:
         reasons = [domain.terrain_mismatch(terrain) for domain in domains]
         if not reasons or any(reason is None for reason in reasons):
             return None
-        return (
-            "; ".join(f"prior {i}: {reason}" for i, reason in enumerate(reasons))
-            if len(reasons) > 1
-            else reasons[0]
-        )
+        return "; ".join(f"prior {i}: {reason}" for i, reason in enumerate(reasons)) if len(reasons) > 1 else reasons[0]
 
     return fit
 
@@ -157,9 +154,7 @@ class MapStore:
         )
         obstacles = update.apply(self._obstacles)  # refuses a map that grows beyond a limit
         held = self._obstacles
-        parts = {
-            key: self._parts[key] if o is held.get(key) else obstacle_parts(o) for key, o in obstacles.items()
-        }
+        parts = {key: self._parts[key] if o is held.get(key) else obstacle_parts(o) for key, o in obstacles.items()}
         self._parts = parts
         self._obstacles = obstacles
         self._snapshot = self._snapshot.with_obstacles({**self._parts, **self._moveit_parts()})

@@ -79,9 +79,7 @@ def _primitive(msg: Any, what: str) -> Shape:
     expected = {BOX: 3, SPHERE: 1, CYLINDER: 2}
     if kind not in expected:
         name = _PRIMITIVE_NAMES.get(kind, f"type {kind}")
-        raise GeometryError(
-            f"{what} is a {name}; only BOX, SPHERE, CYLINDER primitives and meshes are supported"
-        )
+        raise GeometryError(f"{what} is a {name}; only BOX, SPHERE, CYLINDER primitives and meshes are supported")
     if len(dims) != expected[kind]:
         layout = {BOX: "(x, y, z)", SPHERE: "(radius)", CYLINDER: "(height, radius)"}[kind]
         raise GeometryError(f"{what}: {_PRIMITIVE_NAMES[kind]} needs dimensions {layout}, got {dims}")
@@ -142,9 +140,7 @@ def _shapes(msg: Any, where: str, limits: MapLimits) -> tuple[tuple[Shape, Pose]
     _paired(msg.meshes, msg.mesh_poses, "meshes", where)
     shapes: list[tuple[Shape, Pose]] = []
     for k, (primitive, pose) in enumerate(zip(msg.primitives, msg.primitive_poses, strict=True)):
-        shapes.append(
-            (_primitive(primitive, f"{where} primitive {k}"), pose_of_msg(pose, f"{where} primitive {k}"))
-        )
+        shapes.append((_primitive(primitive, f"{where} primitive {k}"), pose_of_msg(pose, f"{where} primitive {k}")))
     for k, (mesh, pose) in enumerate(zip(msg.meshes, msg.mesh_poses, strict=True)):
         shapes.append((_mesh(mesh, f"{where} mesh {k}", limits), pose_of_msg(pose, f"{where} mesh {k}")))
     return tuple(shapes)

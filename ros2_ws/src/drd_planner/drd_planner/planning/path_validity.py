@@ -106,10 +106,7 @@ class ServedPaths:
 
     def _match(self, xyz: FloatArray) -> _Served | None:
         for served in reversed(self._paths):
-            if (
-                served.positions.shape == xyz.shape
-                and np.max(np.abs(served.positions - xyz)) <= MATCH_TOLERANCE_M
-            ):
+            if served.positions.shape == xyz.shape and np.max(np.abs(served.positions - xyz)) <= MATCH_TOLERANCE_M:
                 return served
         return None
 

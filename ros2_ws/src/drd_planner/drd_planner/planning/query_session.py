@@ -294,9 +294,7 @@ class QuerySession(DomainSession):
             )
         return self.vertex_state(vertex)
 
-    def nearest_vertex_to_position(
-        self, xyz: npt.ArrayLike, snapshot: MapSnapshot | None = None
-    ) -> tuple[int, float]:
+    def nearest_vertex_to_position(self, xyz: npt.ArrayLike, snapshot: MapSnapshot | None = None) -> tuple[int, float]:
         """(vertex, distance in m) of the vertex whose position (:meth:`positions`) is nearest to ``xyz``."""
         robot = snapshot.robot if snapshot is not None and self._domain.needs_robot_description else None
         cached = self._tool_positions
@@ -407,9 +405,7 @@ class QuerySession(DomainSession):
         if result.growth is not None:  # the plan grew the query's graph: grown edges are its motions too
             return result.growth.query.graph.edges, dict(result.growth.query.motions)
         # The planner's cached model of this query (the same snapping, so the same cache key).
-        model = self._planner.query_model(
-            self._endpoints.snap(start, "start"), self._endpoints.snap(goal, "goal")
-        )
+        model = self._planner.query_model(self._endpoints.snap(start, "start"), self._endpoints.snap(goal, "goal"))
         if (model.start, model.goal) != (result.start, result.goal):
             raise UnverifiedPathError(f"{self._name}: the query's model does not match the plan's endpoints")
         return model.query.graph.edges, dict(model.query.motions)
@@ -429,9 +425,7 @@ class QuerySession(DomainSession):
         ids = [self._session_id(c.edge, motions) for c in result.checks]
         checked_motions = [sid for sid in ids if sid >= self._num_edges]
         if checked_motions != oracle.motion_calls:  # what the log names is what was checked
-            raise UnverifiedPathError(
-                f"{self._name}: the plan's motion checks do not match the motions checked"
-            )
+            raise UnverifiedPathError(f"{self._name}: the plan's motion checks do not match the motions checked")
         return tuple(
             SessionCheck(
                 step=c.step + 1,  # the runner counts from 0
@@ -459,9 +453,7 @@ class QuerySession(DomainSession):
         for k, e in enumerate(int(x) for x in result.edges):
             sid = self._session_id(e, motions)
             if sid not in checked_free or self._cache.get(sid) is not True:
-                raise UnverifiedPathError(
-                    f"{self._name}: path edge {sid} was not checked free on this snapshot"
-                )
+                raise UnverifiedPathError(f"{self._name}: path edge {sid} was not checked free on this snapshot")
             u, v = int(edges[e, 0]), int(edges[e, 1])
             states = self.edge_states(sid)
             if (u, v) == (vertices[k], vertices[k + 1]):
@@ -469,9 +461,7 @@ class QuerySession(DomainSession):
             elif not directed and (v, u) == (vertices[k], vertices[k + 1]):
                 pieces.append(states[::-1])
             else:
-                raise UnverifiedPathError(
-                    f"{self._name}: path edge {sid} does not join vertices {vertices[k : k + 2]}"
-                )
+                raise UnverifiedPathError(f"{self._name}: path edge {sid} does not join vertices {vertices[k : k + 2]}")
             path.append(sid)
         if not pieces:  # start and goal are one vertex
             return (), self._endpoint_state(vertices[0], result)[None, :]

@@ -43,9 +43,7 @@ def yaw_from_quaternion(xyzw: npt.ArrayLike) -> float:
     """
     q = np.asarray(xyzw, dtype=np.float64).ravel()
     if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.any(q):
-        raise PlanningError(
-            f"an orientation must be a finite non-zero (x, y, z, w) quaternion, got {q.tolist()}"
-        )
+        raise PlanningError(f"an orientation must be a finite non-zero (x, y, z, w) quaternion, got {q.tolist()}")
     x, y, z, w = q / np.linalg.norm(q)
     return wrap_angle(math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
 

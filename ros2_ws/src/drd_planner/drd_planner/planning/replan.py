@@ -40,7 +40,8 @@ several updates in between, the difference between the plan's snapshot and the n
 The growth by half a sample step (every point of the continuous motion between two samples lies within
 half the path length between them of one of the two) makes the affected set conservative for the swept
 volume of the continuous motion too, not only for the sampled check. Boxes are cached per session in its
-:class:`SweepBoxCache` (without the margin, which is added per query) and computed only for the edges asked; the spheres are
+:class:`SweepBoxCache` (without the margin, which is added per query) and computed only for the edges asked; the
+spheres are
 recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
 ones) count every plan edge as affected.
 
@@ -207,9 +208,7 @@ def _edge_ids(session: ReplanSession, edges: Iterable[int]) -> list[int]:
     out = [int(e) for e in ids.tolist()]
     bad = [e for e in out if not (0 <= e < count or (e >= count and _motion_states(session, e) is not None))]
     if bad:
-        raise PlanningError(
-            f"{session.name}: edge ids {bad[:5]} are not in [0, {count}) nor motions the session knows"
-        )
+        raise PlanningError(f"{session.name}: edge ids {bad[:5]} are not in [0, {count}) nor motions the session knows")
     return out
 
 
@@ -297,11 +296,7 @@ def differing_parts(old: MapSnapshot, new: MapSnapshot) -> list[tuple[Shape, Pos
     parts = changed_parts(old, new)
     if not parts:
         return parts
-    keys = [
-        key
-        for key in set(old.obstacles) | set(new.obstacles)
-        if old.obstacles.get(key) != new.obstacles.get(key)
-    ]
+    keys = [key for key in set(old.obstacles) | set(new.obstacles) if old.obstacles.get(key) != new.obstacles.get(key)]
     before = Counter(_part_key(s, p) for key in keys for s, p in old.obstacles.get(key, ()))
     after = Counter(_part_key(s, p) for key in keys for s, p in new.obstacles.get(key, ()))
     gone, came = before - after, after - before

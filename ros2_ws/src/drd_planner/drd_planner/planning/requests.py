@@ -117,9 +117,7 @@ def goal_from_pose(msg: Any, frame: str, what: str = "goal") -> Goal:
             raise MessageError(f"{what} position must be finite, got {position.tolist()}")
         return Goal(position=position, yaw=None)
     pose = pose_of(pose_from_msg(msg.pose, what))
-    return Goal(
-        position=np.array(pose.position, dtype=np.float64), yaw=yaw_from_quaternion(pose.quaternion_xyzw)
-    )
+    return Goal(position=np.array(pose.position, dtype=np.float64), yaw=yaw_from_quaternion(pose.quaternion_xyzw))
 
 
 def start_from_odometry(msg: Any, frame: str) -> FloatArray:
@@ -183,9 +181,7 @@ def read_robot_state(
     """
     if topic_base(topic) == "joint_states":
         joint = next((s for s in sessions if s.domain.robot_state_topic == "joint_states"), None)
-        return (
-            None if joint is None else ("joint_states", joint_vector(msg, joint.joint_names, "joint_states"))
-        )
+        return None if joint is None else ("joint_states", joint_vector(msg, joint.joint_names, "joint_states"))
     return "odom", start_from_odometry(msg, frame)
 
 
@@ -222,22 +218,16 @@ def goal_endpoint(
     domain = session.domain
     stored = int(domain.goal)
     if goal.joints is not None:
-        return _nearest_within(
-            session, goal.joints, stored, tolerances.joint_rad, lambda s: np.abs(s - goal.joints)
-        )
+        return _nearest_within(session, goal.joints, stored, tolerances.joint_rad, lambda s: np.abs(s - goal.joints))
     assert goal.position is not None
     if domain.position_goals == "vertex":  # the vertex whose position (an arm's end effector) is nearest
-        state = session.goal_state_from_position(
-            goal.position, snapshot=snapshot, tolerance=tolerances.position_m
-        )
+        state = session.goal_state_from_position(goal.position, snapshot=snapshot, tolerance=tolerances.position_m)
         return stored if np.array_equal(state, session.vertex_state(stored)) else state
     return _helicopter_goal(session, goal.position, goal.yaw, stored, tolerances)
 
 
-def _nearest_within(
-    session: QuerySession, want: FloatArray, stored: int, tolerance: float, gap: Any
-) -> Endpoint:
-    """The stored goal if within ``tolerance`` (max per coordinate), else the nearest vertex within it, else ``want``."""
+def _nearest_within(session: QuerySession, want: FloatArray, stored: int, tolerance: float, gap: Any) -> Endpoint:
+    """The stored goal if within ``tolerance`` (max per coordinate), else the nearest vertex within it, or ``want``."""
     states = session.prior.graph.vertex_states
     if states is None:
         return want

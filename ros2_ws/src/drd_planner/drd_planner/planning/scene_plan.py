@@ -117,9 +117,7 @@ class ScenePlan:
 def _states(request: Path, joint_names: tuple[str, ...]) -> tuple[FloatArray, FloatArray]:
     """(start, first goal) of a request file in the robot's joint order (DrdError naming what is wrong)."""
     if not joint_names:
-        raise DrdError(
-            "--scene/--request plan joint-space MoveIt requests; this prior's domain has no joints"
-        )
+        raise DrdError("--scene/--request plan joint-space MoveIt requests; this prior's domain has no joints")
     try:
         states = read_motion_plan_request(request)
         if states.start is None:

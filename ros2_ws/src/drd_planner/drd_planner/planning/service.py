@@ -131,9 +131,7 @@ class PlannerService:
         self._out = outputs
         self.frame_id = frame_id
         self._tolerances = tolerances
-        self._refused: tuple[int, str] | None = (
-            None  # (current map version then, why) of the last refused map
-        )
+        self._refused: tuple[int, str] | None = None  # (current map version then, why) of the last refused map
         self._live = live
         self._wake = wake
         margin = self._sessions[0].margin if self._sessions else 0.0
@@ -295,7 +293,7 @@ class PlannerService:
                     raise
 
     def plan_now(self, goal: Goal, start: Goal | None, source: str = "get_plan") -> Any | None:
-        """:meth:`serve_request`'s published plan as :meth:`ServiceOutputs.plan` gave it, or None (the reason reported)."""
+        """:meth:`serve_request`'s plan as :meth:`ServiceOutputs.plan` gave it, or None (the reason reported)."""
         return self.serve_request(goal, start, source).sent
 
     def serve_request(
@@ -304,7 +302,8 @@ class PlannerService:
         """Serve one request now (a service call or action goal) and say what it came to.
 
         ``start``: a pose start (helicopter) or joint angles (arm); None: the robot's state. ``cancel`` stops
-        the plan between two checks (:class:`~drd_planner.planning.cancel.PlanCancelled` is raised; nothing is published).
+        the plan between two checks (:class:`~drd_planner.planning.cancel.PlanCancelled` is raised; nothing is
+        published).
         """
         session = pick_session(self._sessions, goal)
         if session is None:

@@ -75,7 +75,7 @@ class ServiceOutputs(Protocol):
     def plan(
         self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> tuple[Any, bool]:
-        """Publish a found plan: what was sent (the node: its Path on demand), and whether it is out there (False while inactive)."""
+        """Publish a found plan: what was sent (the node: its Path on demand), whether it is out (False: inactive)."""
 
     def kept(self, session: QuerySession, outcome: RecheckResult, snapshot: MapSnapshot) -> None:
         """Report that the published plan stays free on ``snapshot`` after a map update."""

@@ -165,9 +165,7 @@ class PlanningSession(DomainSession):
         meta = bundle.problem.metadata
         if "domain_spec" not in meta or "domain" not in meta:
             raise TreeFileError(f"{name}: the tree file has no domain spec (built from an authors' dataset?)")
-        domain = domain_from_stored_spec(
-            str(meta["domain"]), meta["domain_spec"], label=name, error=TreeFileError
-        )
+        domain = domain_from_stored_spec(str(meta["domain"]), meta["domain_spec"], label=name, error=TreeFileError)
         graph = bundle.problem.graph
         if (
             graph is None
@@ -292,9 +290,7 @@ class PlanningSession(DomainSession):
         context = dataclasses.replace(self._context, seed=seed)
         policy = POLICIES["direct_bisect"](context)
         problem = self._bundle.problem
-        episode = run_episode(
-            problem.library, problem.edge_costs, policy, oracle, max_checks=self._max_checks
-        )
+        episode = run_episode(problem.library, problem.edge_costs, policy, oracle, max_checks=self._max_checks)
         episode_s = time.perf_counter() - t_episode
         edges = self._domain.graph.edges
         checks = tuple(
@@ -335,9 +331,7 @@ class PlanningSession(DomainSession):
         path = tuple(int(e) for e in episode.path_edges)
         checked_free = {c.edge for c in checks if c.free}
         if not set(path) <= checked_free:  # the safety invariant, independent of the runner
-            raise UnverifiedPathError(
-                f"{self._name}: path edges {sorted(set(path) - checked_free)} not checked free"
-            )
+            raise UnverifiedPathError(f"{self._name}: path edges {sorted(set(path) - checked_free)} not checked free")
         vertices = self.path_vertices(path)
         states = self.path_states(path)
         seconds["total"] = time.perf_counter() - t0

@@ -28,14 +28,10 @@ def rclpy_qos(profile: Qos | None, topic: str) -> QoSProfile:
     if durable not in (QosDurability.VOLATILE, QosDurability.TRANSIENT_LOCAL):  # system default, unknown
         durable = fallback.durability
     durability = (
-        DurabilityPolicy.TRANSIENT_LOCAL
-        if durable == QosDurability.TRANSIENT_LOCAL
-        else DurabilityPolicy.VOLATILE
+        DurabilityPolicy.TRANSIENT_LOCAL if durable == QosDurability.TRANSIENT_LOCAL else DurabilityPolicy.VOLATILE
     )
     depth = chosen.depth if chosen.depth > 0 else fallback.depth
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=reliability, durability=durability
-    )
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=reliability, durability=durability)
 
 
 def offered_qos(node: Any, topic: str, *, latched: Sequence[str] = ()) -> Qos:

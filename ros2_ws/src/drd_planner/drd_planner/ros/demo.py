@@ -75,14 +75,8 @@ def print_record(number: int, record: PlanRecord) -> None:
     print(f"\nplan {number}: {asked} on map version {result.map_version}, prior {result.prior}")
     if "replan_reason" in record.request:
         print(f"  why: {record.request['replan_reason']}")
-    cached = (
-        " (reused from the query cache)"
-        if result.query_cached and not result.query.startswith("tree:")
-        else ""
-    )
-    print(
-        f"  served by: {_served_by(result.query)}{cached} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)"
-    )
+    cached = " (reused from the query cache)" if result.query_cached and not result.query.startswith("tree:") else ""
+    print(f"  served by: {_served_by(result.query)}{cached} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)")
     for check in result.checks:
         state = "free   " if check.free else "BLOCKED"
         source = "cache" if check.cached else f"{check.check_ms:7.3f} ms"

@@ -86,9 +86,7 @@ def guard_callback(
         try:
             callback(*args)
         except Exception as exc:
-            _report_safely(
-                report, f"{name}: internal error, input dropped (the node goes on): {_describe(exc)}"
-            )
+            _report_safely(report, f"{name}: internal error, input dropped (the node goes on): {_describe(exc)}")
         finally:
             if taken is not None:
                 taken[name] += 1
@@ -96,9 +94,7 @@ def guard_callback(
     return guarded
 
 
-def guard_service(
-    callback: Callable[[Any, Any], Any], *, name: str, report: Report
-) -> Callable[[Any, Any], Any]:
+def guard_service(callback: Callable[[Any, Any], Any], *, name: str, report: Report) -> Callable[[Any, Any], Any]:
     """``callback`` (a service callback) that answers the untouched response instead of raising."""
 
     def guarded(request: Any, response: Any) -> Any:

@@ -37,9 +37,7 @@ __all__ = ["SCENE_QOS", "SCENE_TOPIC", "SERVICE_NAME", "MoveItHost", "duration_o
 SCENE_TOPIC = "monitored_planning_scene"
 SERVICE_NAME = "plan_kinematic_path"
 #: QoS of the scene subscription (MoveIt publishes scenes reliable and volatile).
-SCENE_QOS = QoSProfile(
-    depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
-)
+SCENE_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 #: Seconds :meth:`MoveItHost.stop` waits for a running callback.
 STOP_WAIT_S = 5.0
 
@@ -64,9 +62,7 @@ class MoveItHost:
     Use :meth:`start`; :meth:`stop` removes both.
     """
 
-    def __init__(
-        self, planner: Any, node: Any, service: PlannerService, report: Callable[[str], None]
-    ) -> None:
+    def __init__(self, planner: Any, node: Any, service: PlannerService, report: Callable[[str], None]) -> None:
         self.planner = planner
         self.node = node
         self.subscription: Any = None
@@ -94,9 +90,7 @@ class MoveItHost:
             )
             return None
         if service.joint_goal_session is None:
-            planner.get_logger().info(
-                f"MoveIt interface off ({SCENE_TOPIC}, {SERVICE_NAME}): no arm prior loaded"
-            )
+            planner.get_logger().info(f"MoveIt interface off ({SCENE_TOPIC}, {SERVICE_NAME}): no arm prior loaded")
             return None
         node = rclpy.create_node(
             f"{planner.get_name()}_moveit",

@@ -64,9 +64,7 @@ class Nav2Host:
         self._thread = threading.Thread(target=self._spin, name="drd_planner-nav2", daemon=True)
 
     @classmethod
-    def start(
-        cls, planner: Any, service: PlannerService, *, report: Callable[[str], None]
-    ) -> Nav2Host | None:
+    def start(cls, planner: Any, service: PlannerService, *, report: Callable[[str], None]) -> Nav2Host | None:
         """Offer ``compute_path_to_pose`` and ``is_path_valid`` for ``planner`` (None: nav2_msgs missing, logged)."""
         try:
             action_type, service_type = nav2_interfaces()
@@ -94,9 +92,7 @@ class Nav2Host:
         host.cancel_all = action.cancel_all
         host._executor.add_node(node)
         host._thread.start()
-        planner.get_logger().info(
-            f"Nav2 interface on {node.get_name()}: action {action.name}, service {validity.name}"
-        )
+        planner.get_logger().info(f"Nav2 interface on {node.get_name()}: action {action.name}, service {validity.name}")
         return host
 
     def _spin(self) -> None:

@@ -62,9 +62,7 @@ class PathValidityService:
         frame = str(path.header.frame_id)
         if frame not in ("", self._service.frame_id):
             response.is_valid = False
-            self._node.get_logger().warning(
-                f"{SERVICE_NAME}: a path in frame {frame[:80]!r} is not valid here"
-            )
+            self._node.get_logger().warning(f"{SERVICE_NAME}: a path in frame {frame[:80]!r} is not valid here")
             return response
         try:
             positions, yaws = path_arrays(path)
@@ -75,7 +73,5 @@ class PathValidityService:
             return response
         response.is_valid = answer.valid
         response.invalid_pose_indices = list(answer.invalid)
-        self._node.get_logger().info(
-            f"{SERVICE_NAME}: {'valid' if answer.valid else 'not valid'}: {answer.text}"
-        )
+        self._node.get_logger().info(f"{SERVICE_NAME}: {'valid' if answer.valid else 'not valid'}: {answer.text}")
         return response

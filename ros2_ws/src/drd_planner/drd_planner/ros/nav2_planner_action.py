@@ -140,9 +140,7 @@ class PlannerActionServer:
         request = goal_handle.request
         names = [s.name for s in self._service.sessions]
         if request.planner_id and request.planner_id not in names:
-            text = (
-                f"planner_id {request.planner_id!r} names no loaded prior (planner ids: {', '.join(names)})"
-            )
+            text = f"planner_id {request.planner_id!r} names no loaded prior (planner ids: {', '.join(names)})"
             return self._end(goal_handle, Nav2Error("INVALID_PLANNER", text), started)
         parsed = request_poses(request, self._service.frame_id)
         if isinstance(parsed, Nav2Error):
@@ -155,13 +153,9 @@ class PlannerActionServer:
                 goal_handle, error if error.name != "NONE" else Nav2Error("UNKNOWN", "not published"), started
             )
         assert outcome.result is not None and outcome.session is not None and outcome.snapshot is not None
-        self._served.remember(
-            outcome.session, outcome.result.path_edges, outcome.sent.states, outcome.snapshot
-        )
+        self._served.remember(outcome.session, outcome.result.path_edges, outcome.sent.states, outcome.snapshot)
         goal_handle.succeed()
-        return self._type.Result(
-            path=outcome.sent.path(), planning_time=duration_of(time.perf_counter() - started)
-        )
+        return self._type.Result(path=outcome.sent.path(), planning_time=duration_of(time.perf_counter() - started))
 
     def _end(self, goal_handle: Any, error: Nav2Error, started: float) -> Any:
         """Abort the goal with ``error`` (its code and text)."""

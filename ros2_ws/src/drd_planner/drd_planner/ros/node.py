@@ -2,7 +2,8 @@
 
 Interface (names relative to the node namespace):
 
-- subscriptions (after ``activate``): ``obstacles`` (MarkerArray, taken raw: serialized bytes), ``terrain`` (PointCloud2) and
+- subscriptions (after ``activate``): ``obstacles`` (MarkerArray, taken raw: serialized bytes), ``terrain``
+  (PointCloud2) and
   ``robot_description`` (String, arm), reliable depth 1, transient_local (``map_subscribe_transient_local``
   true, the default) or volatile (false: hears volatile publishers too), with QoS override parameters;
   requests ``goal_pose`` (PoseStamped: the helicopter's goal, or the arm's end-effector goal position) and
@@ -11,7 +12,8 @@ Interface (names relative to the node namespace):
 - services ``get_plan`` (``nav_msgs/srv/GetPlan``: as ``goal_pose``, from ``start`` when its frame is set)
   and ``replan`` (``std_srvs/srv/Trigger``: the published plan's goal again, from the robot's state now);
   Nav2's ``compute_path_to_pose`` action and ``is_path_valid`` service (:mod:`drd_planner.ros.nav2_host`);
-  MoveIt's ``monitored_planning_scene`` topic and ``plan_kinematic_path`` service, arm (:mod:`drd_planner.ros.moveit_host`);
+  MoveIt's ``monitored_planning_scene`` topic and ``plan_kinematic_path`` service, arm
+  (:mod:`drd_planner.ros.moveit_host`);
 - publications: ``plan`` (Path, transient_local: the helicopter path, or the arm's end-effector path),
   ``joint_trajectory`` (JointTrajectory, transient_local, arm), ``edge_checks`` (DiagnosticArray, one
   status per check) and ``checked_edges`` (MarkerArray) are lifecycle publishers (silent until
@@ -21,7 +23,8 @@ Interface (names relative to the node namespace):
 
 Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
 --help`` lists them). Each file in ``prior_paths`` (or its deprecated alias ``tree_paths``) is a world
-prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.query_session.QuerySession`; a request goes to the prior
+prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.query_session.QuerySession`;
+a request goes to the prior
 of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.planning.requests`).
 
 The node keeps the lifecycle, the parameters and the ROS I/O. Maps, requests, coalescing, planning and
@@ -272,9 +275,7 @@ class PlannerNode(LifecycleNode):
         ]
         report = self._report_to("plan")
         self._ros_services = [
-            self.create_service(
-                kind, name, guard_service(callback, name=name, report=report), qos_profile=REQUESTS
-            )
+            self.create_service(kind, name, guard_service(callback, name=name, report=report), qos_profile=REQUESTS)
             for kind, name, callback in (
                 (GetPlan, "get_plan", self._on_get_plan),
                 (Trigger, "replan", self._on_replan),
@@ -284,9 +285,7 @@ class PlannerNode(LifecycleNode):
         scenes = self._map_callback("monitored_planning_scene")
         on_scene = guard_callback(scenes, name="monitored_planning_scene", report=self._report_to("maps"))
         self._moveit = (
-            None
-            if self._service is None
-            else MoveItHost.start(self, self._service, on_scene=on_scene, report=report)
+            None if self._service is None else MoveItHost.start(self, self._service, on_scene=on_scene, report=report)
         )
         durability = "transient_local" if maps is LATCHED else "volatile"
         self.get_logger().info(
@@ -343,9 +342,7 @@ class PlannerNode(LifecycleNode):
         """Hand a map message to the service; log and report what it made of it."""
         assert self._service is not None  # subscriptions exist only while configured
         try:
-            snapshot = self._service.take_map(
-                source, msg, on_accept=lambda snap: self._log_accepted(source, snap)
-            )
+            snapshot = self._service.take_map(source, msg, on_accept=lambda snap: self._log_accepted(source, snap))
         except (MessageError, DrdError) as exc:
             self._report_error(f"{source} refused, {_UNCHANGED[source]}: {exc}", topic="maps")
             return
@@ -443,9 +440,7 @@ class PlannerNode(LifecycleNode):
     # Reports
 
     def _on_worker_error(self, exc: Exception) -> None:
-        self._report_bug(
-            f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}", exc
-        )
+        self._report_bug(f"internal error while planning (the node goes on): {type(exc).__name__}: {exc}", exc)
 
     def _report_bug(self, text: str, exc: BaseException) -> None:
         """:meth:`_report_error` of a bug: the log line (ERROR) is followed by ``exc``'s traceback."""
@@ -482,7 +477,7 @@ class PlannerNode(LifecycleNode):
         return SetParametersResult(successful=True)
 
     def _report_error(self, text: str, topic: str = "plan", *, trace: str = "") -> None:
-        """Log ``text`` (shortened; then ``trace``, a traceback), keep it, put it on ``/diagnostics`` under ``topic``."""
+        """Log ``text`` (shortened; then ``trace``, a traceback), keep it, put it on ``/diagnostics`` (``topic``)."""
         text = shorten(text)
         self.get_logger().error(f"{text}\n{trace}" if trace else text)
         with self._lock:

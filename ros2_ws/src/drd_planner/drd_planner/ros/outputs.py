@@ -39,9 +39,7 @@ from drd_planner.ros.status import status_name
 
 __all__ = ["CHECK_LOG", "LATCHED", "PlannerOutputs", "SentPlan", "plan_summary_values"]
 
-LATCHED = QoSProfile(
-    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: The per-check log.
 CHECK_LOG = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 #: Segments per library edge in the grey background of ``checked_edges`` (checked edges are drawn in full).
@@ -184,14 +182,10 @@ class PlannerOutputs:
     ) -> None:
         """Publish one ``<node>: <topic>`` status on ``/diagnostics``."""
         name = self._node.get_name()
-        status = summary_fields(
-            ok=ok, message=message, values=values, name=status_name(name, topic), hardware_id=name
-        )
+        status = summary_fields(ok=ok, message=message, values=values, name=status_name(name, topic), hardware_id=name)
         self._diagnostics.publish(diagnostic_array_cdr([status], stamp=stamp or self.stamp()))
 
-    def plan(
-        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
-    ) -> SentPlan:
+    def plan(self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]) -> SentPlan:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm), serialized from its arrays.
 
         The arm's JointTrajectory goes first, then its end-effector Path (positions of the plan's
@@ -220,21 +214,16 @@ class PlannerOutputs:
         self._plan.publish(path_cdr(np.zeros((0, 3)), frame_id=self.frame, stamp=stamp))
         if session.domain.publishes_joint_trajectory:
             names = session.joint_names
-            self._trajectory.publish(
-                joint_trajectory_cdr(names, np.zeros((0, len(names))), frame_id=self.frame)
-            )
+            self._trajectory.publish(joint_trajectory_cdr(names, np.zeros((0, len(names))), frame_id=self.frame))
 
     def checks(self, result: PlanResult, stamp: tuple[int, int]) -> None:
         """Publish the plan's check log on ``edge_checks``."""
         records = [
-            CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached)
-            for c in result.checks
+            CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached) for c in result.checks
         ]
         self._checks.publish(diagnostic_array_cdr(check_statuses(records), stamp=stamp))
 
-    def markers(
-        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
-    ) -> None:
+    def markers(self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]) -> None:
         """Publish ``checked_edges`` when someone listens (thousands of points)."""
         if self._markers.get_subscription_count() > 0:
             self._markers.publish(self._checked_markers(session, result, snapshot, stamp))
@@ -252,9 +241,7 @@ class PlannerOutputs:
         val = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
         library = self._library_marker(session, snapshot)
         library.header.stamp.sec, library.header.stamp.nanosec = stamp
-        return checked_edges_markers(
-            seg, val, frame_id=self.frame, stamp=stamp, msgs=self.msgs, background=[library]
-        )
+        return checked_edges_markers(seg, val, frame_id=self.frame, stamp=stamp, msgs=self.msgs, background=[library])
 
     def _library_marker(self, session: Session, snapshot: MapSnapshot) -> Any:
         """Every library edge as a grey LINE_LIST, each drawn with at most :data:`LIBRARY_EDGE_SEGMENTS` segments."""

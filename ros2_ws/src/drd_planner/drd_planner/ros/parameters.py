@@ -72,9 +72,7 @@ def _topic(value: Any) -> str | None:
 
 def _one_of(*choices: str) -> Callable[[Any], str | None]:
     def check(value: Any) -> str | None:
-        return (
-            None if str(value) in choices else f"must be one of {', '.join(choices)}, got {str(value)[:40]!r}"
-        )
+        return None if str(value) in choices else f"must be one of {', '.join(choices)}, got {str(value)[:40]!r}"
 
     return check
 
@@ -131,9 +129,7 @@ class ParameterSpec:
                 FloatingPointRange(from_value=self.float_range[0], to_value=self.float_range[1], step=0.0)
             ]
         if self.int_range is not None:
-            descriptor.integer_range = [
-                IntegerRange(from_value=self.int_range[0], to_value=self.int_range[1], step=0)
-            ]
+            descriptor.integer_range = [IntegerRange(from_value=self.int_range[0], to_value=self.int_range[1], step=0)]
         return descriptor
 
 
@@ -156,12 +152,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         _prior_paths,
         deprecated_for="prior_paths",
     ),
-    ParameterSpec(
-        "frame_id", "map", "The planning frame: maps and goals must be in it; read at configure.", _frame
-    ),
-    ParameterSpec(
-        "seed", 0, "Seed of every random choice of a plan (same seed, same checks).", _non_negative
-    ),
+    ParameterSpec("frame_id", "map", "The planning frame: maps and goals must be in it; read at configure.", _frame),
+    ParameterSpec("seed", 0, "Seed of every random choice of a plan (same seed, same checks).", _non_negative),
     ParameterSpec(
         "max_checks",
         0,
@@ -194,9 +186,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         _positive_at_most(math.pi, "rad"),
         float_range=(0.0, math.pi),
     ),
-    ParameterSpec(
-        "autostart", False, "planner_node configures and activates itself at start.", read_only=True
-    ),
+    ParameterSpec("autostart", False, "planner_node configures and activates itself at start.", read_only=True),
     ParameterSpec(
         "map_subscribe_transient_local",
         True,
@@ -304,7 +294,7 @@ def prior_paths_of(values: Mapping[str, Any]) -> tuple[list[str], str | None]:
 
 
 def goal_tolerances_of(values: Mapping[str, Any]) -> GoalTolerances:
-    """The goal tolerances of the node's parameter values (``goal_tolerance``, ``joint_tolerance``, ``goal_yaw_tolerance``)."""
+    """The goal tolerances of the parameter values (``goal_tolerance``, ``joint_tolerance``, ``goal_yaw_tolerance``)."""
     from drd_planner.planning.requests import GoalTolerances
 
     return GoalTolerances(

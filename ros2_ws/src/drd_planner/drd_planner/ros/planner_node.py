@@ -76,9 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(usage(), end="")
             return 0
         if ours:
-            print(
-                f"{usage()}\nplanner_node: error: unrecognised arguments: {' '.join(ours)}", file=sys.stderr
-            )
+            print(f"{usage()}\nplanner_node: error: unrecognised arguments: {' '.join(ours)}", file=sys.stderr)
             return 2
         try:
             _IMPORTING[0] = True

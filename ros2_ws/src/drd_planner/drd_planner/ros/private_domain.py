@@ -68,6 +68,5 @@ def private_domain(listen_s: float = 0.5, pid: int | None = None) -> int:
             return domain_id
         taken.append(f"{domain_id} ({', '.join(others[:3])})")
     raise DrdError(
-        f"no private ROS domain is free among {ids[0]}-{ids[-1]}: seen {'; '.join(taken)}; "
-        "give one with --domain-id N"
+        f"no private ROS domain is free among {ids[0]}-{ids[-1]}: seen {'; '.join(taken)}; give one with --domain-id N"
     )

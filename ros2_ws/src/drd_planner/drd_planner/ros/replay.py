@@ -236,9 +236,7 @@ class ReplayOptions:
 class _Replayer:
     """The replay node, its executor, publishers and recording subscriptions (one replay)."""
 
-    def __init__(
-        self, contents: BagContents, context: Any, nodes: Sequence[Any], options: ReplayOptions
-    ) -> None:
+    def __init__(self, contents: BagContents, context: Any, nodes: Sequence[Any], options: ReplayOptions) -> None:
         self.contents, self.options, self.nodes = contents, options, nodes
         self.node = rclpy.create_node("drd_replay", context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -345,16 +343,12 @@ class _Replayer:
             publisher.publish(raw.data)
             late = max(0.0, time.monotonic() - due)
             published.append(Published(publisher.topic_name, raw.msgtype, raw.time_ns, sent, late))
-            self.options.say(
-                f"  +{(raw.time_ns - self.start_ns) / 1e9:6.2f} s  {publisher.topic_name} ({raw.msgtype})"
-            )
+            self.options.say(f"  +{(raw.time_ns - self.start_ns) / 1e9:6.2f} s  {publisher.topic_name} ({raw.msgtype})")
         return published
 
     def write(self, out: Path) -> Path:
         """Write the recorded outputs with the QoS their publishers offer."""
-        qos_out = {
-            topic: offered_qos(self.node, topic, latched=LATCHED_OUTPUTS) for topic in self.subscriptions
-        }
+        qos_out = {topic: offered_qos(self.node, topic, latched=LATCHED_OUTPUTS) for topic in self.subscriptions}
         return write_raw_bag(out, self.recorded, qos=qos_out, overwrite=self.options.overwrite)
 
 

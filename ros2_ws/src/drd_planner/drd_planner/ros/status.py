@@ -66,7 +66,7 @@ def heartbeat_values(
     last: LastPlan | None,
     now: float,
 ) -> dict[str, Any]:
-    """The heartbeat's key/values: lifecycle state, priors loaded, maps known, the published plan, the last plan and its age (s).
+    """The heartbeat's key/values: lifecycle state, priors loaded, maps known, published plan, last plan, its age (s).
 
     ``priors`` counts the loaded priors (``trees``: the same, a deprecated key kept for one release).
     """

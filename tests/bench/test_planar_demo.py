@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drd_planner.bench.demo import DemoOptions, run_demo
+from drd_planner.bench.planar_demo import DemoOptions, run_demo
 
 
 def test_the_demo_plans_the_asked_episodes_and_compares_policies(capsys: pytest.CaptureFixture[str]) -> None:

@@ -67,9 +67,7 @@ def run_demo(options: DemoOptions) -> int:
         f"paths; {worlds.train_ids.size} training / {worlds.test_ids.size} test worlds"
     )
     tree = build_tree(problem, progress=False)
-    print(
-        f"DiRECt tree: {tree.num_nodes} nodes, depth {tree.depth()}, built in {tree.info['build_seconds']:.2f} s"
-    )
+    print(f"DiRECt tree: {tree.num_nodes} nodes, depth {tree.depth()}, built in {tree.info['build_seconds']:.2f} s")
     theta = bias_from_worlds(worlds.X[worlds.train_ids])
     for k, world in enumerate(worlds.test_ids[: options.episodes]):
         ctx = PolicyContext(problem.library, problem.edge_costs, theta, tree, options.seed + k)
@@ -83,6 +81,7 @@ def run_demo(options: DemoOptions) -> int:
     means = {p: float(np.mean(bench.policies[p].checks)) for p in policies}
     summary = ", ".join(f"{p} {v:.2f}" for p, v in means.items())
     print(
-        f"mean checks over {len(bench.test_ids)} test worlds: {summary}; oracle bound {np.nanmean(bench.lower_bound):.2f}"
+        f"mean checks over {len(bench.test_ids)} test worlds: {summary}; oracle bound "
+        f"{np.nanmean(bench.lower_bound):.2f}"
     )
     return 0
