@@ -41,7 +41,7 @@ from drd_planner.bench.ompl_peer import ompl_available
 from drd_planner.bench.rrt_connect import RrtTask, run_rrt_connect
 from drd_planner.cli.main import main as drd
 from drd_planner.planner import load_prior
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 from drd_planner.planning.scene_plan import SceneRequest, plan_moveit_request
 from drd_planner.settings import shared_data_dir
 

@@ -53,7 +53,7 @@ from drd_planner.planner.dubins_connector import DubinsConnector, dubins_connect
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.result import PlanResult
 from drd_planner.planner.roadmap_growth import GrowthSettings
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 ROOT = Path(__file__).resolve().parents[2]
 #: The world model each shipped prior was built with (``trees/README.md``).

@@ -39,7 +39,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from drd_planner import Planner, TableOracle
 from drd_planner.planner import load_prior
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 ROOT = Path(__file__).resolve().parents[2]
 #: The world model each shipped prior was built with (``trees/README.md``).

@@ -13,7 +13,7 @@ from drd_planner.bench.rrt_connect import RrtTask, run_rrt_connect, verify_waypo
 from drd_planner.data.scene_source import scene_of, scene_primitives
 from drd_planner.geometry.moveit_request import joint_vector, read_motion_plan_request
 from drd_planner.planner import load_prior
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 FAMILY = SHARED_DATA / "mbm" / "table_pick_panda"
 

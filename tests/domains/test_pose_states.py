@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from drd_planner.domains.pose_states import state_from_pose, wrap_angle
+from drd_planner.domains.pose_states import state_from_pose, wrap_angle, yaw_from_quaternion
 from drd_planner.exceptions import PlanningError
 
 
@@ -32,3 +32,13 @@ def test_state_from_pose_wraps_the_heading_and_refuses_bad_input() -> None:
         state_from_pose([1.0, math.nan, 0.0], 0.0)
     with pytest.raises(PlanningError, match="finite angle"):
         state_from_pose([1.0, 2.0, 3.0], math.inf)
+
+
+def test_yaw_from_a_quaternion_about_z_and_refusals() -> None:
+    for yaw in (-3.0, -1.0, 0.0, 0.5, 3.0):
+        q = [0.0, 0.0, np.sin(yaw / 2), np.cos(yaw / 2)]
+        assert yaw_from_quaternion(q) == pytest.approx(yaw)
+        assert yaw_from_quaternion(2.5 * np.asarray(q)) == pytest.approx(yaw)  # need not be normalised
+    for bad in ([0.0, 0.0, 0.0, 0.0], [0.0, 0.0, np.nan, 1.0], [1.0, 2.0, 3.0]):
+        with pytest.raises(PlanningError, match="quaternion"):
+            yaw_from_quaternion(bad)

@@ -22,7 +22,7 @@ from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanStage, PlanStatus
 from drd_planner.planner.roadmap_growth import GrowthSettings
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 PRIOR = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
 LINES = PRIOR.with_name("heli_lines.npz")

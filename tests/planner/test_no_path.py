@@ -18,7 +18,7 @@ from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.no_path import blocked_end, edge_states_of, no_path_reason
 from drd_planner.planner.query_graph import QueryGraph
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 #: Offset (rad) of an off-graph goal from the prior's goal vertex.
 NEAR_GOAL = np.array([0.05, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0])

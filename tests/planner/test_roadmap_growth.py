@@ -11,7 +11,7 @@ from drd_planner import Planner, PlanStage, PlanStatus
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planner.roadmap_growth import DEFAULT_GROWTH, GROWTH_STAGE, GrowthSettings
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 from drd_planner.planning.scene_plan import path_states
 from tests.conftest import REPO_ROOT, SHARED_DATA
 

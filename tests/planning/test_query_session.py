@@ -20,7 +20,7 @@ from drd_planner.cli.main import main
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.domains.helicopter_worlds import world_parts
-from drd_planner.domains.pose_states import state_from_pose
+from drd_planner.domains.pose_states import state_from_pose, yaw_from_quaternion
 from drd_planner.exceptions import PlanningError, PriorFileError, ProblemError, TreeFileError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box
@@ -29,8 +29,8 @@ from drd_planner.planner import WorldPrior, load_prior
 from drd_planner.planner.anytime import ImproveBudget
 from drd_planner.planning.map_state import MapSnapshot, Parts
 from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.query_support import MotionRegistry, yaw_from_quaternion
 from drd_planner.planning.replan import affected_edges, recheck_plan
+from drd_planner.planning.session_motions import MotionRegistry
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
 HELI_SPEC = '{"lattice": {"x_range": [0.0, 300.0], "y_range": [-100.0, 100.0], "goal": [300.0, 0.0]}}'

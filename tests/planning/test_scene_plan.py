@@ -11,7 +11,7 @@ from conftest import REPO_ROOT, SHARED_DATA
 
 from drd_planner.cli.main import main
 from drd_planner.planner import WorldPrior, load_prior
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 from drd_planner.planning.scene_plan import SceneRequest, plan_moveit_request
 
 FAMILY = SHARED_DATA / "mbm" / "table_pick_panda"

@@ -14,7 +14,7 @@ import numpy.typing as npt
 from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import PlanningError
 
-__all__ = ["state_from_pose", "wrap_angle"]
+__all__ = ["state_from_pose", "wrap_angle", "yaw_from_quaternion"]
 
 
 def wrap_angle(angle: float) -> float:
@@ -34,3 +34,16 @@ def state_from_pose(position: npt.ArrayLike, yaw: float) -> FloatArray:
     if not math.isfinite(float(yaw)):
         raise PlanningError(f"a yaw must be a finite angle (rad), got {yaw}")
     return np.array([xyz[0], xyz[1], xyz[2], wrap_angle(float(yaw))], dtype=np.float64)
+
+
+def yaw_from_quaternion(xyzw: npt.ArrayLike) -> float:
+    """The yaw (rad, about +z, in [-pi, pi)) of an (x, y, z, w) quaternion (need not be normalised).
+
+    Raises:
+        PlanningError: not four finite numbers, or a zero quaternion.
+    """
+    q = np.asarray(xyzw, dtype=np.float64).ravel()
+    if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.any(q):
+        raise PlanningError(f"an orientation must be a finite non-zero (x, y, z, w) quaternion, got {q.tolist()}")
+    x, y, z, w = q / np.linalg.norm(q)
+    return wrap_angle(math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))

@@ -79,7 +79,7 @@ class MotionExplainer(Protocol):
     resolution. Implementations: the arm's :meth:`ArmEdgeChecker.explain_motion
     <drd_planner.domains.arm_checker.ArmEdgeChecker.explain_motion>` (spheres and meshes). Another domain
     implements it on its edge checker (the object whose ``check_motion`` the oracle calls); the node's
-    :class:`~drd_planner.planning.query_support.SnapshotOracle` forwards it to the snapshot's checker (and
+    :class:`~drd_planner.planning.snapshot_oracle.SnapshotOracle` forwards it to the snapshot's checker (and
     answers ``"blocked"`` / "" from ``check_motion`` when the checker has none).
     """
 

@@ -1,7 +1,7 @@
 """Cancelling a plan between two checks: a token the requester sets, the plan's oracle reads.
 
 A plan cannot be interrupted inside a collision check (an FCL query), but it can be stopped before the next
-one: :class:`~drd_planner.planning.query_support.SnapshotOracle` reads the token before every check it is
+one: :class:`~drd_planner.planning.snapshot_oracle.SnapshotOracle` reads the token before every check it is
 asked for (graph edges and motions alike) and raises :class:`PlanCancelled` once it is set. The plan then
 ends at once: nothing is published, the snapshot's outcome cache keeps only completed checks (each one a
 true outcome, so a later plan may use them), and the planning lock is released on the way out.

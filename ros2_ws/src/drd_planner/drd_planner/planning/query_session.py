@@ -12,7 +12,7 @@ query when there is one, DiRECt online otherwise, the graph fallback when the li
   the graph are checked like every edge, and nothing unchecked lies between the robot and the path.
 - Checks run on the snapshot's FCL checker; outcomes are cached per snapshot (graph edges by id, motions
   by their session id), so repeated requests on one map answer from the cache.
-- Motion edges get session-wide ids from E on (:class:`~drd_planner.planning.query_support.MotionRegistry`):
+- Motion edges get session-wide ids from E on (:class:`~drd_planner.planning.session_motions.MotionRegistry`):
   ``edge_states`` answers them for the last plans, and :func:`~drd_planner.planning.replan.recheck_plan`
   re-checks a published plan's motions after a map update like its graph edges.
 - With an ``improve_budget`` (:class:`~drd_planner.planner.anytime.ImproveBudget`) a plan goes on after its
@@ -45,14 +45,10 @@ from drd_planner.planner.result import PlanStatus
 from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.domain_view import DomainSession, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_support import (
-    DEFAULT_MOTIONS_KEPT,
-    MotionRegistry,
-    SnapshotOracle,
-    join_pieces,
-    rebuild_domain,
-)
+from drd_planner.planning.prior_domain import rebuild_domain
 from drd_planner.planning.session import PLANNER_STATUS, PlanResult, SessionCheck
+from drd_planner.planning.session_motions import DEFAULT_MOTIONS_KEPT, MotionRegistry, join_pieces
+from drd_planner.planning.snapshot_oracle import SnapshotOracle
 
 #: How far (state units) a start or goal state may lie from a vertex and still be that vertex.
 DEFAULT_SNAP_TOLERANCE = 1e-6

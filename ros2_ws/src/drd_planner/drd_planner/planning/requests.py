@@ -36,13 +36,12 @@ from drd_msgs_py.obstacles import pose_from_msg
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
 from drd_planner.domains.online import RobotStateTopic
-from drd_planner.domains.pose_states import state_from_pose
+from drd_planner.domains.pose_states import state_from_pose, yaw_from_quaternion
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_intake import pose_of
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.query_session import QuerySession
-from drd_planner.planning.query_support import yaw_from_quaternion
 
 __all__ = [
     "DEFAULT_TOLERANCES",

@@ -32,7 +32,7 @@ from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult
 from drd_planner.planning.domain_view import straight_edge_states
-from drd_planner.planning.query_support import rebuild_domain
+from drd_planner.planning.prior_domain import rebuild_domain
 
 __all__ = ["SCENE_SNAP_TOLERANCE", "ScenePlan", "SceneRequest", "plan_moveit_request"]
 

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from drd_planner.domains.pose_states import yaw_from_quaternion
 from drd_planner.planning.path_validity import ServedPaths
-from drd_planner.planning.query_support import yaw_from_quaternion
 from drd_planner.planning.service import PlannerService
 
 __all__ = ["SERVICE_NAME", "PathValidityService", "path_arrays"]
