@@ -46,7 +46,7 @@ EmbeddingName = Literal["auto", "coords", "index"]
 
 PEER_NAME = "ompl_lazyprm"
 SKIP_MESSAGE = f"ompl_lazyprm skipped: OMPL not installed (the 'peer' extra): {install_hint('peer')}"
-WORKER_MODULE = "drd_planner.bench.ompl_worker"
+WORKER_MODULE = "drd_planner.cli.ompl_worker"
 
 #: How much shorter than the straight line (length units) an edge may be for the coords embedding: the
 #: authors' files round coordinates to 5 significant digits and lengths to 6 decimals (errors ~1e-5).

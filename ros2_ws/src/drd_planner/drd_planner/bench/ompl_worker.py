@@ -4,7 +4,8 @@ OMPL 1.7.0's Python bindings can crash while the interpreter tears down, so ever
 lives in this process. It reads a request (``request.npz`` with the graph and the worlds' rows of X,
 ``config.json`` with the scalars), writes one JSON line per world to the result file (flushed after
 each line, then a final ``{"done": true}`` line) and leaves with ``os._exit`` so that no teardown
-runs. ``--probe`` only imports OMPL and prints one JSON line.
+runs. ``--probe`` only imports OMPL and prints one JSON line. Its entry point (argv) is
+:mod:`drd_planner.cli.ompl_worker`.
 
 **Live mode** (``config["live"]``: a domain name, its spec and a list of
 :class:`~drd_planner.bench.world_recipes.WorldRecipe` dicts): instead of rows of X, the motion validator
@@ -35,11 +36,8 @@ How LazyPRM is made to search exactly our graph:
 
 from __future__ import annotations
 
-import argparse
 import functools
 import json
-import os
-import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -118,7 +116,8 @@ def _space(ob: Any, coords: npt.NDArray[np.float64]) -> Any:
     return space
 
 
-def _run(request: Path, config_path: Path, out: IO[str]) -> None:
+def run_request(request: Path, config_path: Path, out: IO[str]) -> None:
+    """Solve ``request`` (.npz) with the ``config_path`` (JSON) settings; one JSON line per world to ``out``."""
     ob, og, ou = _import_ompl()
     config = json.loads(config_path.read_text())
     with np.load(request, allow_pickle=False) as data:
@@ -337,40 +336,7 @@ class _Session:
         return path_vertices
 
 
-def _probe() -> dict[str, Any]:
+def probe() -> dict[str, Any]:
+    """Whether OMPL imports here and has LazyPRM and PlannerData (a JSON-able dict)."""
     ob, og, _ = _import_ompl()
     return {"ok": True, "has_lazyprm": hasattr(og, "LazyPRM"), "has_planner_data": hasattr(ob, "PlannerData")}
-
-
-def main(argv: list[str] | None = None) -> None:
-    """Entry point: ``--probe`` or ``--request R --config C --result OUT``; never returns (``os._exit``)."""
-    parser = argparse.ArgumentParser(prog="python -m drd_planner.bench.ompl_worker")
-    parser.add_argument("--probe", action="store_true")
-    parser.add_argument("--request", type=Path)
-    parser.add_argument("--config", type=Path)
-    parser.add_argument("--result", type=Path)
-    args = parser.parse_args(argv)
-    code = 0
-    try:
-        if args.probe:
-            sys.stdout.write(json.dumps(_probe()) + "\n")
-        else:
-            if args.request is None or args.config is None or args.result is None:
-                parser.error("--request, --config and --result are required")
-            with args.result.open("w") as out:
-                try:
-                    _run(args.request, args.config, out)
-                except Exception as exc:
-                    out.write(json.dumps({"error": f"{type(exc).__name__}: {exc}"}) + "\n")
-                    out.flush()
-                    raise
-    except Exception as exc:
-        sys.stderr.write(f"ompl_worker: {type(exc).__name__}: {exc}\n")
-        code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)  # skip interpreter teardown, where the OMPL bindings crash
-
-
-if __name__ == "__main__":
-    main()

@@ -33,7 +33,7 @@ from drd_planner.planning.domain_view import straight_edge_states
 __all__ = ["PEER_NAME", "RrtTask", "run_rrt_connect", "verify_waypoints"]
 
 PEER_NAME = "rrt_connect"
-WORKER_MODULE = "drd_planner.bench.rrt_connect_worker"
+WORKER_MODULE = "drd_planner.cli.rrt_connect_worker"
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,7 @@ Times: wall and CPU of ``solve`` (the scene and checker are built and warmed up 
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
-import sys
 import time
 from pathlib import Path
 from typing import IO, Any
@@ -111,7 +108,8 @@ def _solve(ob: Any, og: Any, space: Any, counter: _Counter, task: dict[str, Any]
     }
 
 
-def _run(config_path: Path, out: IO[str]) -> None:
+def run_tasks(config_path: Path, out: IO[str]) -> None:
+    """Run every task of ``config_path`` (JSON: MoveIt requests, limits), one JSON line per task to ``out``."""
     ob, og, ou = _import_ompl()
     from drd_planner.domains.base import domain_from_spec
 
@@ -137,30 +135,3 @@ def _run(config_path: Path, out: IO[str]) -> None:
         out.flush()
     out.write(json.dumps({"done": True}) + "\n")
     out.flush()
-
-
-def main(argv: list[str] | None = None) -> None:
-    """Entry point: ``--config C --result OUT``; never returns (``os._exit``)."""
-    parser = argparse.ArgumentParser(prog="python -m drd_planner.bench.rrt_connect_worker")
-    parser.add_argument("--config", type=Path, required=True)
-    parser.add_argument("--result", type=Path, required=True)
-    args = parser.parse_args(argv)
-    code = 0
-    try:
-        with args.result.open("w") as out:
-            try:
-                _run(args.config, out)
-            except Exception as exc:
-                out.write(json.dumps({"error": f"{type(exc).__name__}: {exc}"}) + "\n")
-                out.flush()
-                raise
-    except Exception as exc:
-        sys.stderr.write(f"rrt_connect_worker: {type(exc).__name__}: {exc}\n")
-        code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)  # skip interpreter teardown, where the OMPL bindings crash
-
-
-if __name__ == "__main__":
-    main()
