@@ -6,8 +6,8 @@ first path's checks in all), reported side by side (``drd_planner.bench.anytime`
 
     python scripts/experiments/bench_anytime.py                       # SE(2) and helicopter sets of ../shared/data/gccd
     python scripts/experiments/bench_anytime.py --factors 1,3 --json results/anytime.json --markdown results/anytime.md
-    python scripts/experiments/bench_anytime.py --gccd ../shared/data/gccd/dataset_2d_3 --dataset
-    datasets/heli_wires.npz
+    python scripts/experiments/bench_anytime.py --gccd ../shared/data/gccd/dataset_2d_3 \\
+        --dataset datasets/heli_wires.npz
 
 Datasets: the folders named by ``--gccd`` and the files named by ``--dataset``; with neither, the SE(2)
 (``dataset_xyh_1,3,4,5``) and helicopter (``dataset_heli_canyon_1``) folders under ``../shared/data/gccd``

@@ -17,8 +17,7 @@ worlds (seeds 0, 1, ...) and the first ``--scenes`` MotionBenchMaker scenes of `
    ``lazysp`` and ``ompl_lazyprm`` on the first ``--plan-worlds`` worlds; a plan counts only when every edge
    of its path was checked free in that run. Each plan is timed ``--repeats`` times with fresh checkers and
    the least time kept (repeats make the same checks; the machine may be loaded). Ratios are mesh / sphere over the
-   worlds where both verified
-   a plan: of the mean times, and the median of the per-world ratios.
+   worlds where both verified a plan: of the mean times, and the median of the per-world ratios.
 
 ``--quick``: 2 + 2 seeded worlds, 2 scenes per family, 400 edges each, plans on 6 worlds.
 """

@@ -7,8 +7,7 @@ own planning thread for plans) and a peer run in threads of this process (the ha
 Maps: the first ``/obstacles`` and ``/terrain`` of
 the bag (default ``bags/heli_wires.mcap``; ``--tree trees/arm_table_clutter.npz --bag
 bags/arm_table_clutter.mcap --frame-id panda_link0`` for the arm), else the helicopter "wires" world of the tree's
-domain
-drawn with ``--world-seed``. Each measured request is one ``goal_pose`` at the tree's goal (the arm's
+domain drawn with ``--world-seed``. Each measured request is one ``goal_pose`` at the tree's goal (the arm's
 tool-point position), sent when the node is idle; its latency is the wall time from publishing it
 to the ``Path`` arriving at the peer (subscribed raw: timed when its bytes arrive; rclpy's decoding
 of a Path into Python objects, 35 to 75 us a pose, is a Python subscriber's own cost and is printed
@@ -264,8 +263,7 @@ def _samples(
 
 
 def decode_ms(data: bytes, repeat: int = 5) -> float:
-    """Median ms rclpy takes to decode the serialized Path ``data`` into message objects (a Python subscriber pays "
-    "it)."""
+    """Median ms rclpy takes to decode the serialized Path ``data`` into message objects (a Python subscriber's)."""
     times = []
     for _ in range(repeat):
         start = time.perf_counter()

@@ -3,8 +3,7 @@
 "lower bound" is the mean of the fewest checks any planner needs knowing each episode's world: the fewest
 edges of a free path, or the smallest cut of blocked edges (``bench.queries.certificate_size``).
 
-    python scripts/experiments/bench_queries.py --run      # drd bench --queries 100 --seed 1 on every dataset (about
-    25 min)
+    python scripts/experiments/bench_queries.py --run      # drd bench --queries 100 --seed 1, every dataset, 25 min
     python scripts/experiments/bench_queries.py            # the table from results/queries/*.json
 
 Datasets: every authors' folder under ``../shared/data/gccd`` (DRD_SHARED_DATA) with a graph, and our
@@ -58,8 +57,7 @@ def table(out: Path) -> str:
     lines = [
         "| dataset | episodes (no free path) | lower bound | direct_bisect | bisect | lazysp_set | lazysp | "
         "check_all | direct_bisect / lazysp | direct_bisect failures, false no-path | direct_bisect with a free "
-        "path: checks, "
-        "path cost ratio |",
+        "path: checks, path cost ratio |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|",
     ]
     for path in sorted(out.glob("*.json")):

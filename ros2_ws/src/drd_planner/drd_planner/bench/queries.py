@@ -14,8 +14,7 @@ Policies:
 
 Per episode the fewest checks any planner needs knowing the world (:func:`certificate_size`); their mean is
 ``certificate_lower_bound``. Per policy: checks in episode order, failures (no verified path although the world has a
-free one,
-or a budget ran out), ``false_no_path`` ("no path" although the world's graph has a free path: a
+free one, or a budget ran out), ``false_no_path`` ("no path" although the world's graph has a free path: a
 correctness error), mean overhead (library + selection) per episode, and the path cost over the
 cheapest free graph path of that world. Every returned path is re-verified against the episode's own
 check log.

@@ -3,8 +3,7 @@
 Built breadth-first from the root (all training worlds active). Each expanded node stores the
 DiRECt edge to check; both children are created, and a child is expanded further only while its
 consistent-world fraction is at least ``expand_threshold`` (:data:`DEFAULT_EXPAND_THRESHOLD`). For every node the tree
-keeps
-what the online side needs without the database: the consistent-world count and fraction, the
+keeps what the online side needs without the database: the consistent-world count and fraction, the
 fraction of consistent worlds in which each library edge is free (BiSECt's leaf bias), and the
 library path with the most consistent worlds (DiRECt-only's final guess).
 """

@@ -4,8 +4,7 @@ The layout follows the tree file (:mod:`drd_planner.data.tree_file`): a zip of `
 them ``header``, a uint8 array of UTF-8 JSON holding the format name and version, free header fields, a
 SHA-256 per array (``array_sha256``) and a SHA-256 over all array digests and header fields
 (``payload_sha256``). Reading goes through :mod:`drd_planner.data.safe_npz` (never a pickle, every size checked before
-it
-is allocated), so a crafted file is refused with one clear error and never executes code.
+it is allocated), so a crafted file is refused with one clear error and never executes code.
 
 Two extras over ``numpy.savez_compressed``: members carry a fixed timestamp and are written in sorted
 order, so equal contents give byte-identical files; and files are written to a temporary name and

@@ -199,8 +199,7 @@ class HelicopterChecker:
         The first blocked sample's cause as a user would fix it: the terrain (below it, or within the clearance
         of it, with the ground height there), or the obstacles whose clearance it enters (each tested alone, by
         its map name); for K > 1 also where along the motion; then the sample's position. Slow by design (a test per
-        obstacle):
-        the planner asks only after a plan failed.
+        obstacle): the planner asks only after a plan failed.
         """
         xyz = np.asarray(states, dtype=np.float64)[:, :3]
         blocked = self._scene.spheres_collide_mask(xyz, self._radius)

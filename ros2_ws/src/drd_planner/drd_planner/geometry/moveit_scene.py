@@ -2,8 +2,7 @@
 
 Reads ``world.collision_objects`` of a ``moveit_msgs/PlanningScene`` (or ``collision_objects`` of a
 ``PlanningSceneWorld``) with the bounded safe loader of :mod:`~drd_planner.geometry.moveit_yaml`. Each object's
-primitives become
-:class:`ScenePrimitive` values whose pose is the object pose (``pose``, identity when absent, as in
+primitives become :class:`ScenePrimitive` values whose pose is the object pose (``pose``, identity when absent, as in
 older MoveIt messages) composed with the primitive pose; an all-zero (unset) quaternion means no rotation,
 as in MoveIt. Poses may be written as lists
 (``position: [x, y, z]``, ``orientation: [x, y, z, w]``) or as mappings with keys x, y, z(, w).

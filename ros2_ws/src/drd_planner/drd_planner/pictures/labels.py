@@ -14,8 +14,8 @@ Within each ring, a spot clear of every obstacle that also keeps clear of the nu
 and of the start and goal markers wins, then such a spot on a background surface; when no ring has one,
 the nearest spot clear of obstacles (over another number); a number that finds no spot clear of
 obstacles in any ring is left out (thinned, counted in ``hidden``). Everything is computed in display pixels of the
-drawn figure (its layout fixed first), so
-what is tested is what the PNG shows. matplotlib is imported only here and in the drawing modules.
+drawn figure (its layout fixed first), so what is tested is what the PNG shows. matplotlib is imported only here and in
+the drawing modules.
 """
 
 from __future__ import annotations

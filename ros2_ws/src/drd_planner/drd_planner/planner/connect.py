@@ -70,8 +70,7 @@ class MotionExplainer(Protocol):
       blocked: ``explain_motion`` of the (1, D) state ("" means free, anything else is quoted as the cause);
       without this protocol, ``check_motion`` of it;
     - with this protocol it also explains the (up to 8 shortest) blocked motions joining that end (up to 8 other
-      blocked edges
-      around the smaller known-reachable side when neither end is walled in), counted per cause, with the
+      blocked edges around the smaller known-reachable side when neither end is walled in), counted per cause, with the
       ``" at sample ..."`` suffix dropped: so a cause should read the same for every motion it blocks.
 
     ``states`` are the (K, D) states a motion is checked at: a motion off the graph as ``check_motion`` gets

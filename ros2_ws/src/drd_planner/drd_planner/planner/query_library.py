@@ -2,8 +2,7 @@
 
 The authors' library (docs/algorithms.md, "Worlds, the path library and the split") is the union over
 worlds of each world's k shortest free paths, subsampled to m. Yen's k shortest paths over a thousand worlds take
-seconds; a planner
-asked for a new goal has milliseconds. The online library keeps the idea with k = 1:
+seconds; a planner asked for a new goal has milliseconds. The online library keeps the idea with k = 1:
 
 1. a seeded sample of W distinct training worlds (:data:`~drd_planner.planner.goal_trees.SEARCH_WORLDS`,
    the same for every query of a prior) is searched;

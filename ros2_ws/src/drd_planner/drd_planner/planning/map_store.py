@@ -13,8 +13,7 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   whose content equals that of the held obstacle is not validated again;
 - ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
   unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in
-  the planning frame, or
-  above every vertex: heights in another datum);
+  the planning frame, or above every vertex: heights in another datum);
 - ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
   (an arm prior), else the text is only kept;
 - ``monitored_planning_scene`` (moveit_msgs PlanningScene, full or diff): its collision objects become

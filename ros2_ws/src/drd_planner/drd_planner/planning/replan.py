@@ -41,8 +41,7 @@ The growth by half a sample step (every point of the continuous motion between t
 half the path length between them of one of the two) makes the affected set conservative for the swept
 volume of the continuous motion too, not only for the sampled check. Boxes are cached per session in its
 :class:`SweepBoxCache` (without the margin, which is added per query) and computed only for the edges asked; the
-spheres are
-recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
+spheres are recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
 ones) count every plan edge as affected.
 
 **Motion edges** (a :class:`~drd_planner.planning.query_session.QuerySession`'s plans from or to a state

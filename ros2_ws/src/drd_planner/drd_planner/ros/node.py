@@ -24,8 +24,8 @@ Interface (names relative to the node namespace):
 Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
 --help`` lists them). Each file in ``prior_paths`` (or its deprecated alias ``tree_paths``) is a world
 prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.query_session.QuerySession`;
-a request goes to the prior
-of its domain and is planned from the robot's state to its goal (:mod:`drd_planner.planning.requests`).
+a request goes to the prior of its domain and is planned from the robot's state to its goal
+(:mod:`drd_planner.planning.requests`).
 
 The node keeps the lifecycle, the parameters and the ROS I/O. Maps, requests, coalescing, planning and
 replanning after map updates are the :class:`~drd_planner.planning.service.PlannerService`'s (ROS-free; its
