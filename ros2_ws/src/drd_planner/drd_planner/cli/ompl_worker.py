@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
 from drd_planner.bench.ompl_worker import probe, run_request
+from drd_planner.cli.worker_entry import exit_after, write_result
 
 __all__ = ["main"]
 
@@ -25,26 +25,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--config", type=Path)
     parser.add_argument("--result", type=Path)
     args = parser.parse_args(argv)
-    code = 0
-    try:
+
+    def work() -> None:
         if args.probe:
             sys.stdout.write(json.dumps(probe()) + "\n")
-        else:
-            if args.request is None or args.config is None or args.result is None:
-                parser.error("--request, --config and --result are required")
-            with args.result.open("w") as out:
-                try:
-                    run_request(args.request, args.config, out)
-                except Exception as exc:
-                    out.write(json.dumps({"error": f"{type(exc).__name__}: {exc}"}) + "\n")
-                    out.flush()
-                    raise
-    except Exception as exc:
-        sys.stderr.write(f"ompl_worker: {type(exc).__name__}: {exc}\n")
-        code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)  # skip interpreter teardown, where the OMPL bindings crash
+            return
+        if args.request is None or args.config is None or args.result is None:
+            parser.error("--request, --config and --result are required")
+        write_result(args.result, lambda out: run_request(args.request, args.config, out))
+
+    exit_after("ompl_worker", work)
 
 
 if __name__ == "__main__":

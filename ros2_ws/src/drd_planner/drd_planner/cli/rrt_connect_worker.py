@@ -7,12 +7,10 @@ is :mod:`drd_planner.bench.rrt_connect_worker`'s.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import sys
 from pathlib import Path
 
 from drd_planner.bench.rrt_connect_worker import run_tasks
+from drd_planner.cli.worker_entry import exit_after, write_result
 
 __all__ = ["main"]
 
@@ -23,21 +21,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--config", type=Path, required=True)
     parser.add_argument("--result", type=Path, required=True)
     args = parser.parse_args(argv)
-    code = 0
-    try:
-        with args.result.open("w") as out:
-            try:
-                run_tasks(args.config, out)
-            except Exception as exc:
-                out.write(json.dumps({"error": f"{type(exc).__name__}: {exc}"}) + "\n")
-                out.flush()
-                raise
-    except Exception as exc:
-        sys.stderr.write(f"rrt_connect_worker: {type(exc).__name__}: {exc}\n")
-        code = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)  # skip interpreter teardown, where the OMPL bindings crash
+    exit_after("rrt_connect_worker", lambda: write_result(args.result, lambda out: run_tasks(args.config, out)))
 
 
 if __name__ == "__main__":
