@@ -21,6 +21,11 @@ def gccd_folder(name: str) -> Path:
     return folder
 
 
+def own_query(session: Any) -> tuple[int, int]:
+    """(start, goal) vertex ids of the query stored with a session's prior: a tree file's own query."""
+    return int(session.domain.start), int(session.domain.goal)
+
+
 def require_ompl() -> None:
     """Skip a test that needs OMPL (the 'peer' extra) when it is absent; in CI (``CI`` set) fail instead.
 

@@ -57,7 +57,7 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Sphere
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import BagPlan, maps_until, plan_bag_request
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.session import QuerySession
 from drd_planner.planning.world_messages import (
     arm_world_messages,
     helicopter_world_messages,

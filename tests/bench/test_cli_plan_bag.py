@@ -13,7 +13,7 @@ from drd_msgs_py.bags import BagMessage, read_bag, write_bag
 from drd_planner.cli.main import main
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.session import QuerySession
 
 BAG = REPO_ROOT / "bags" / "heli_wires.mcap"
 TREE = REPO_ROOT / "trees" / "heli_wires.npz"

@@ -13,7 +13,7 @@ import pytest
 
 pytest.importorskip("matplotlib", reason="the plots extra (matplotlib) is not installed")
 
-from conftest import REPO_ROOT, SHARED_DATA
+from conftest import REPO_ROOT, SHARED_DATA, own_query
 from matplotlib.colors import to_hex
 from rosbags.typesys import Stores, get_typestore
 
@@ -26,11 +26,11 @@ from drd_planner.geometry.shapes import Capsule
 from drd_planner.pictures.geometry import profile_crossings, split_obstacles
 from drd_planner.pictures.labels import BACKGROUND_SHARE, boxes_hit_segments
 from drd_planner.pictures.plan import PictureError, PlanDrawing, draw_plan_picture, plan_picture, served_by
-from drd_planner.planner import load_tree_bundle
+from drd_planner.planner import load_prior
 from drd_planner.planning.map_intake import obstacle_map, obstacles_data, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult
-from drd_planner.planning.session import PlanningSession, PlanResult, SessionCheck
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionCheck, SessionPlan
 from drd_planner.planning.world_messages import helicopter_world_messages
 
 TREES = REPO_ROOT / "trees"
@@ -39,9 +39,9 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 @dataclass
 class Case:
-    session: PlanningSession
+    session: QuerySession
     snapshot: MapSnapshot
-    result: PlanResult
+    result: SessionPlan
 
 
 def _msgs() -> RosbagsMessages:
@@ -54,20 +54,20 @@ def _snapshot_from_markers(markers: object, frame: str, cloud: object | None, ma
     return MapSnapshot(1, obstacles, terrain, margin)
 
 
-def _heli_case(session: PlanningSession, seed: int) -> Case:
+def _heli_case(session: QuerySession, seed: int) -> Case:
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     markers, cloud = helicopter_world_messages(
         domain.make_world("wires", seed), wire_segments=8, frame_id="map", msgs=_msgs()
     )
     snapshot = _snapshot_from_markers(markers, "map", cloud, session.margin)
-    return Case(session, snapshot, session.plan(snapshot, seed=0))
+    return Case(session, snapshot, session.plan(snapshot, *own_query(session), seed=0))
 
 
 @pytest.fixture(scope="module")
 def heli() -> Case:
     """The first world from seed 3 on with a plan and a blocked check (seed 3 with the shipped tree)."""
-    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="heli_wires")
+    session = QuerySession(load_prior(TREES / "heli_wires.npz"), name="heli_wires")
     cases = (_heli_case(session, seed) for seed in range(3, 23))
     case = next((c for c in cases if c.result.ok and c.result.num_blocked > 0), None)
     assert case is not None, "no world in 20 with a plan and a blocked check"
@@ -75,13 +75,13 @@ def heli() -> Case:
 
 
 @pytest.fixture(scope="module")
-def arm_session() -> PlanningSession:
+def arm_session() -> QuerySession:
     if not (SHARED_DATA / "panda" / "panda_spherized.urdf").is_file():
         pytest.skip("shared Panda model not present (set DRD_SHARED_DATA)")
-    return PlanningSession(load_tree_bundle(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
+    return QuerySession(load_prior(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
 
 
-def _arm_case(session: PlanningSession, seeds: range, *, ok: bool) -> Case:
+def _arm_case(session: QuerySession, seeds: range, *, ok: bool) -> Case:
     """The first world of ``seeds`` with (ok) a plan after a blocked check, or (not ok) no plan."""
     for seed in seeds:
         case = _arm_world(session, seed)
@@ -90,14 +90,14 @@ def _arm_case(session: PlanningSession, seeds: range, *, ok: bool) -> Case:
     raise AssertionError(f"no world in {seeds} with ok = {ok}")
 
 
-def _arm_world(session: PlanningSession, seed: int) -> Case:
+def _arm_world(session: QuerySession, seed: int) -> Case:
     domain = session.domain
     assert isinstance(domain, ArmDomain)
     world = domain.make_world("table_clutter", seed)
     obstacles = [(f"object/{k}", o.shape, o.pose) for k, o in enumerate(world.obstacles)]
     markers = markers_from_obstacles(obstacles_data(obstacles), frame_id="panda_link0", msgs=_msgs())
     snapshot = _snapshot_from_markers(markers, "panda_link0", None, session.margin)
-    return Case(session, snapshot, session.plan(snapshot, seed=0))
+    return Case(session, snapshot, session.plan(snapshot, *own_query(session), seed=0))
 
 
 def _png_size(path: Path) -> tuple[int, int]:
@@ -180,7 +180,7 @@ def test_helicopter_drawing_encodes_the_check_log(heli: Case) -> None:
 
     for edge, segment in zip(free, _segments(drawing, "free"), strict=True):
         assert segment == pytest.approx(drawn(session.edge_states(edge)))
-    library = set(session.bundle.problem.library.library_edges.tolist())
+    library = set(session.library_edges().tolist())
     unchecked = library - {c.edge for c in result.checks}
     assert drawing.counts["unchecked"] == len(unchecked) == len(_segments(drawing, "unchecked"))
     # The plan is one polyline through the result's states.
@@ -319,24 +319,24 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
     assert "served by the precomputed DiRECt tree 'heli_wires'" in first
     assert "cache" not in first
     # The same request again on the same maps: every check comes from the snapshot's cache.
-    again = session.plan(snapshot, seed=0)
+    again = session.plan(snapshot, *own_query(session), seed=0)
     assert again.checks
     assert all(c.cached for c in again.checks)
     title = draw_plan_picture(session, snapshot, again).figure.get_suptitle()
     assert f"served from cache: all {len(again.checks)} checks answered from map v1's check cache" in title
-    # What a prior's session says of new queries (QueryPlanResult.query), first built and then reused.
+    # What a prior's session says of new queries (SessionPlan.query), first built and then reused.
     common = {"ok": True, "status": "path_found", "message": "m", "map_version": 4, "prior": "t"}
     fresh = SessionCheck(1, 5, (0, 1), True, "bisect", 0.1, 0.0, False)
     reused = dataclasses.replace(fresh, step=2, edge=6, cached=True)
-    online = QueryPlanResult(**common, checks=(fresh, reused), query="online")
+    online = SessionPlan(**common, checks=(fresh, reused), query="online")
     assert served_by(online) == (
         "served by a library and DiRECt tree built online for this query; 1 of 2 checks from the map's check cache"
     )
     assert served_by(online, query_cached=True).startswith("served from cache: the library and DiRECt tree")
-    connected = QueryPlanResult(**common, checks=(fresh,), query="connected")
+    connected = SessionPlan(**common, checks=(fresh,), query="connected")
     assert "joined by new motions" in served_by(connected)
     assert "cache" not in served_by(connected)
-    tree = QueryPlanResult(**common, checks=(reused,), query="tree:heli_wires")
+    tree = SessionPlan(**common, checks=(reused,), query="tree:heli_wires")
     assert served_by(tree) == (
         "served from cache: all 1 checks answered from map v4's check cache; the precomputed DiRECt tree 'heli_wires'"
     )
@@ -364,14 +364,14 @@ def test_helicopter_files_are_valid_and_deterministic(heli: Case, tmp_path: Path
 
 
 def test_helicopter_failed_request(heli: Case, tmp_path: Path) -> None:
-    capped = PlanningSession(heli.session.bundle, name="capped", max_checks=4)
-    result = capped.plan(heli.snapshot, seed=0)
+    capped = QuerySession(heli.session.prior, name="capped", max_checks=4)
+    result = capped.plan(heli.snapshot, *own_query(capped), seed=0)
     assert not result.ok
     assert len(result.checks) == 4
     drawing = draw_plan_picture(capped, heli.snapshot, result)
     title = drawing.figure.get_suptitle()
     assert "NO PLAN" in title
-    assert "max_checks" in title
+    assert "check budget" in title
     assert _segments(drawing, "path") == []
     assert len(_segments(drawing, "free")) + len(_segments(drawing, "blocked")) == 4
     assert "start-goal line" in drawing.side.get_xlabel()
@@ -390,7 +390,7 @@ def test_missing_matplotlib_is_a_clear_error(heli: Case, tmp_path: Path, monkeyp
 # Arm
 
 
-def test_arm_drawing_shows_end_effector_paths(arm_session: PlanningSession, tmp_path: Path) -> None:
+def test_arm_drawing_shows_end_effector_paths(arm_session: QuerySession, tmp_path: Path) -> None:
     case = _arm_case(arm_session, range(40, 80), ok=True)  # seed 40 with the shipped tree
     result = case.result
     assert result.ok
@@ -422,11 +422,12 @@ def test_arm_drawing_shows_end_effector_paths(arm_session: PlanningSession, tmp_
     assert 600 <= height <= width
 
 
-def test_arm_without_a_free_path(arm_session: PlanningSession) -> None:
-    case = _arm_case(arm_session, range(3, 43), ok=False)  # seed 3 with the shipped tree
+def test_arm_without_a_verified_path(arm_session: QuerySession) -> None:
+    capped = QuerySession(arm_session.prior, name="capped", max_checks=2)
+    case = _arm_case(capped, range(3, 43), ok=False)  # a world whose plan needs more than two checks
     assert not case.result.ok
-    drawing = draw_plan_picture(arm_session, case.snapshot, case.result)
+    drawing = draw_plan_picture(capped, case.snapshot, case.result)
     assert "NO PLAN" in drawing.figure.get_suptitle()
-    assert "no library path" in drawing.figure.get_suptitle()
+    assert "check budget" in drawing.figure.get_suptitle()
     assert _segments(drawing, "path") == []
     assert drawing.counts["labels"] == len(case.result.checks)

@@ -11,7 +11,7 @@ from drd_msgs_py.exceptions import MessageError
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request, request_goal, robot_state_at
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.session import QuerySession
 
 BAG = REPO_ROOT / "bags" / "heli_wires.mcap"
 PRIOR = REPO_ROOT / "trees" / "heli_wires.npz"

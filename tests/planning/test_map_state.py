@@ -196,3 +196,26 @@ def test_each_lineage_of_snapshots_owns_its_cache() -> None:
     assert other.cache is not first.cache
     assert second.scene is second.scene
     assert other.scene is not second.scene
+
+
+def test_changed_parts_of_a_wires_world() -> None:
+    """Removing an obstacle changes its parts; equal terrain heights change nothing, other heights everything."""
+    from drd_planner.domains.helicopter import HelicopterDomain
+    from drd_planner.domains.helicopter_worlds import world_parts
+
+    domain = HelicopterDomain()
+    world = domain.make_world("wires", 101)
+    parts = {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}
+    snapshot = MapSnapshot(1, parts, world.terrain, 0.5)
+    same = snapshot.with_obstacles(dict(snapshot.obstacles))
+    assert changed_parts(snapshot, same) == []
+    key = sorted(snapshot.obstacles)[0]
+    fewer = dict(snapshot.obstacles)
+    removed = fewer.pop(key)
+    assert changed_parts(snapshot, snapshot.with_obstacles(fewer)) == list(removed)
+    terrain = snapshot.terrain
+    assert terrain is not None
+    copy = Heightfield(terrain.origin, terrain.cell_size, terrain.heights.copy())
+    assert changed_parts(snapshot, snapshot.with_terrain(copy)) == []  # equal heights: nothing changed
+    raised = Heightfield(terrain.origin, terrain.cell_size, terrain.heights + 1.0)
+    assert changed_parts(snapshot, snapshot.with_terrain(raised)) is None  # terrain changed: check all

@@ -19,9 +19,10 @@ from drd_planner.geometry.shapes import Box
 from drd_planner.planner import load_prior
 from drd_planner.planning.nav2_codes import NAV2_CODES, Nav2Error, nav2_error
 from drd_planner.planning.plan_outcome import PlanOutcome
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.requests import Goal, read_goal
 from drd_planner.planning.service import LiveSettings, PlannerService
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 from drd_planner.planning.world_messages import obstacle_markers
 
 BAG = TREE.parents[1] / "bags" / "heli_wires.mcap"
@@ -112,7 +113,7 @@ def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[B
 
 
 def _failed(message: str, status: str = "no_free_path", cause: str = "") -> PlanOutcome:
-    result = QueryPlanResult(ok=False, status=status, message=message, map_version=1, prior="t", cause=cause)
+    result = SessionPlan(ok=False, status=status, message=message, map_version=1, prior="t", cause=cause)
     return PlanOutcome(result=result)
 
 

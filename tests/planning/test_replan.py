@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import own_query
 from rosbags.typesys import Stores, get_typestore
 
 from drd_msgs_py.factory import RosbagsMessages
@@ -21,7 +22,7 @@ from drd_planner.exceptions import PlanningError, ProblemError
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere
 from drd_planner.geometry.terrain import Heightfield
-from drd_planner.planner import load_tree_bundle
+from drd_planner.planner import load_prior
 from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot, Parts, changed_parts
 from drd_planner.planning.replan import (
@@ -31,7 +32,8 @@ from drd_planner.planning.replan import (
     edge_sweep_boxes,
     recheck_plan,
 )
-from drd_planner.planning.session import PlanningSession, PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 from drd_planner.planning.world_messages import helicopter_world_messages
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
@@ -65,21 +67,21 @@ def _random_shape(rng: np.random.Generator, scale: float) -> Shape:
 
 
 @pytest.fixture(scope="module")
-def heli() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
-    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="heli_wires")
+def heli() -> tuple[QuerySession, MapSnapshot, SessionPlan]:
+    session = QuerySession(load_prior(TREES / "heli_wires.npz"), name="heli_wires")
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     world = domain.make_world("wires", HELI_SEED)
     parts = {name: ((shape, pose),) for name, shape, pose in world_parts(world, wire_segments=8)}
     snapshot = MapSnapshot(1, parts, world.terrain, session.margin)
-    plan = session.plan(snapshot, seed=0)
+    plan = session.plan(snapshot, *own_query(session), seed=0)
     assert plan.ok
     assert len(plan.path_edges) >= 3
     return session, snapshot, plan
 
 
 def test_heli_sweep_boxes_hold_every_checked_sphere(
-    heli: tuple[PlanningSession, MapSnapshot, PlanResult],
+    heli: tuple[QuerySession, MapSnapshot, SessionPlan],
 ) -> None:
     session, _, plan = heli
     domain = session.domain
@@ -100,7 +102,7 @@ def test_heli_sweep_boxes_hold_every_checked_sphere(
 
 
 def test_sweep_boxes_are_cached_only_for_the_edges_asked() -> None:
-    session = PlanningSession(load_tree_bundle(TREES / "heli_wires.npz"), name="fresh")
+    session = QuerySession(load_prior(TREES / "heli_wires.npz"), name="fresh")
     assert cached_sweep_edges(session) == frozenset()
     edge_sweep_boxes(session, [5, 7, 5])
     assert cached_sweep_edges(session) == {5, 7}
@@ -116,7 +118,7 @@ def test_sweep_boxes_are_cached_only_for_the_edges_asked() -> None:
         edge_sweep_boxes(session, [1], margin=-1.0)
 
 
-def test_heli_far_obstacle_affects_nothing(heli: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
+def test_heli_far_obstacle_affects_nothing(heli: tuple[QuerySession, MapSnapshot, SessionPlan]) -> None:
     session, snapshot, plan = heli
     far = _with(snapshot, {"probe/far": ((Box([20.0, 20.0, 20.0]), Pose([5000.0, 4000.0, 100.0])),)})
     assert affected_edges(session, plan.path_edges, snapshot, far) == ()
@@ -134,7 +136,7 @@ def test_heli_far_obstacle_affects_nothing(heli: tuple[PlanningSession, MapSnaps
     assert not same.all_edges
 
 
-def test_heli_box_on_a_plan_edge_blocks_it(heli: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
+def test_heli_box_on_a_plan_edge_blocks_it(heli: tuple[QuerySession, MapSnapshot, SessionPlan]) -> None:
     session, snapshot, plan = heli
     edge = plan.path_edges[len(plan.path_edges) // 2]
     states = session.edge_states(edge)
@@ -156,7 +158,7 @@ def test_heli_box_on_a_plan_edge_blocks_it(heli: tuple[PlanningSession, MapSnaps
 
 
 def test_heli_small_change_near_the_plan_is_rechecked_and_kept(
-    heli: tuple[PlanningSession, MapSnapshot, PlanResult],
+    heli: tuple[QuerySession, MapSnapshot, SessionPlan],
 ) -> None:
     session, snapshot, plan = heli
     domain = session.domain
@@ -176,7 +178,7 @@ def test_heli_small_change_near_the_plan_is_rechecked_and_kept(
 
 
 def test_heli_terrain_change_rechecks_every_edge(
-    heli: tuple[PlanningSession, MapSnapshot, PlanResult],
+    heli: tuple[QuerySession, MapSnapshot, SessionPlan],
 ) -> None:
     session, snapshot, plan = heli
     terrain = snapshot.terrain
@@ -201,7 +203,7 @@ def test_heli_terrain_change_rechecks_every_edge(
 
 
 def test_heli_map_resent_through_messages_is_compared_by_value(
-    heli: tuple[PlanningSession, MapSnapshot, PlanResult],
+    heli: tuple[QuerySession, MapSnapshot, SessionPlan],
 ) -> None:
     session, _, _ = heli
     domain = session.domain
@@ -216,7 +218,7 @@ def test_heli_map_resent_through_messages_is_compared_by_value(
         return MapSnapshot(version, obstacles, terrain, session.margin)
 
     first = snapshot_of(1)
-    plan = session.plan(first, seed=0)
+    plan = session.plan(first, *own_query(session), seed=0)
     assert plan.ok
     again = snapshot_of(2)  # DELETEALL + every marker again: new objects, same geometry
     assert differing_parts(first, again) == []
@@ -234,7 +236,7 @@ def test_heli_map_resent_through_messages_is_compared_by_value(
     assert edge in affected_edges(session, plan.path_edges, first, moved)
 
 
-def test_heli_affected_edges_are_conservative(heli: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
+def test_heli_affected_edges_are_conservative(heli: tuple[QuerySession, MapSnapshot, SessionPlan]) -> None:
     session, snapshot, plan = heli
     rng = np.random.default_rng(20240605)
     graph = session.domain.graph
@@ -270,25 +272,25 @@ def test_heli_affected_edges_are_conservative(heli: tuple[PlanningSession, MapSn
 
 
 @pytest.fixture(scope="module")
-def arm() -> tuple[PlanningSession, MapSnapshot, PlanResult]:
+def arm() -> tuple[QuerySession, MapSnapshot, SessionPlan]:
     try:
         default_panda_dir()
     except ProblemError as exc:
         pytest.skip(str(exc))
-    session = PlanningSession(load_tree_bundle(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
+    session = QuerySession(load_prior(TREES / "arm_table_clutter.npz"), name="arm_table_clutter")
     domain = session.domain
     assert isinstance(domain, ArmDomain)
     world = domain.make_world("table_clutter", ARM_SEED)
     parts = {o.name: ((o.shape, o.pose),) for o in world.obstacles}
     snapshot = MapSnapshot(1, parts, None, session.margin)
-    plan = session.plan(snapshot, seed=0)
+    plan = session.plan(snapshot, *own_query(session), seed=0)
     assert plan.ok
     assert len(plan.path_edges) >= 3
     return session, snapshot, plan
 
 
 def test_arm_sweep_boxes_hold_the_continuous_motion(
-    arm: tuple[PlanningSession, MapSnapshot, PlanResult],
+    arm: tuple[QuerySession, MapSnapshot, SessionPlan],
 ) -> None:
     session, _, plan = arm
     domain = session.domain
@@ -305,7 +307,7 @@ def test_arm_sweep_boxes_hold_the_continuous_motion(
         assert np.all(centres + radii[:, None] + 0.01 <= hi[k])
 
 
-def test_arm_far_obstacle_and_blocking_box(arm: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
+def test_arm_far_obstacle_and_blocking_box(arm: tuple[QuerySession, MapSnapshot, SessionPlan]) -> None:
     session, snapshot, plan = arm
     domain = session.domain
     assert isinstance(domain, ArmDomain)
@@ -330,7 +332,7 @@ def test_arm_far_obstacle_and_blocking_box(arm: tuple[PlanningSession, MapSnapsh
     assert "replanning" in result.reason
 
 
-def test_arm_affected_edges_are_conservative(arm: tuple[PlanningSession, MapSnapshot, PlanResult]) -> None:
+def test_arm_affected_edges_are_conservative(arm: tuple[QuerySession, MapSnapshot, SessionPlan]) -> None:
     session, snapshot, plan = arm
     domain = session.domain
     assert isinstance(domain, ArmDomain)

@@ -18,7 +18,6 @@ from drd_msgs_py.exceptions import MessageError
 from drd_planner.exceptions import PlanningError
 from drd_planner.planner import load_prior
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.requests import (
     Goal,
     GoalTolerances,
@@ -31,6 +30,7 @@ from drd_planner.planning.requests import (
     read_robot_state,
     start_from_odometry,
 )
+from drd_planner.planning.session import QuerySession
 
 TREE = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
 

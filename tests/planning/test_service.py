@@ -25,11 +25,11 @@ from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planner import load_prior
 from drd_planner.planning.bag_plan import plan_bag_request
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.replan import RecheckResult
 from drd_planner.planning.requests import Goal, read_goal
 from drd_planner.planning.service import LiveSettings, PlannerService, PlanRecord
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 BAG = REPO_ROOT / "bags" / "heli_wires.mcap"
 TREE = REPO_ROOT / "trees" / "heli_wires.npz"
@@ -41,7 +41,7 @@ class Recorder:
 
     errors: list[str] = field(default_factory=list)
     records: list[PlanRecord] = field(default_factory=list)
-    plans: list[PlanResult] = field(default_factory=list)
+    plans: list[SessionPlan] = field(default_factory=list)
     kept_versions: list[int] = field(default_factory=list)
     bugs: list[tuple[str, BaseException]] = field(default_factory=list)
     withdrawn: int = 0
@@ -66,7 +66,7 @@ class Recorder:
         return publish((0, 0))
 
     def plan(
-        self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+        self, session: QuerySession, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> tuple[Any, bool]:
         self.plans.append(result)
         return f"path of {len(result.path_edges)} edges", self.active

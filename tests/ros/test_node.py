@@ -19,6 +19,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from conftest import own_query  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from harness import Peer, active_planner, private_context, spin_for, spin_until, use_domain  # noqa: E402
 from lifecycle_msgs.msg import State  # noqa: E402
@@ -33,12 +34,11 @@ from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.exceptions import UnverifiedPathError  # noqa: E402
 from drd_planner.geometry.pose import Pose  # noqa: E402
 from drd_planner.geometry.shapes import Box, Sphere  # noqa: E402
-from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planner import load_prior, load_tree_bundle  # noqa: E402
 from drd_planner.planner.anytime import ImproveBudget  # noqa: E402
 from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
-from drd_planner.planning.query_session import QuerySession  # noqa: E402
-from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages, obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 from drd_planner.ros.parameters import parameter_problems, plan_budgets_of  # noqa: E402
@@ -62,7 +62,7 @@ def _node(ctx: Any, trees: list[str], **overrides: Any) -> PlannerNode:
     return PlannerNode(context=ctx, parameter_overrides=params)
 
 
-def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
+def _goal(session: QuerySession, frame: str = "map") -> PoseStamped:
     goal = PoseStamped()
     goal.header.frame_id = frame
     x, y, z = (float(v) for v in session.goal_state[:3])
@@ -102,7 +102,8 @@ def test_lifecycle_maps_request_plan_and_service(context: Any) -> None:
             terrain_from_cloud(cloud, frame_id="map"),
             session.margin,
         )
-        offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
+        offline_session = QuerySession(load_prior(TREE), name="offline")
+        offline = offline_session.plan(snapshot, *own_query(offline_session), seed=0)
         assert offline.ok
         assert [s.name for s in log.status] == [f"edge/{c.edge}" for c in offline.checks]
         assert [s.level == b"\x00" for s in log.status] == [c.free for c in offline.checks]
@@ -288,7 +289,7 @@ def test_bad_requests_and_maps_leave_errors_not_plans(context: Any) -> None:
         node.destroy_node()
 
 
-def _world(session: PlanningSession, seed: int = 3) -> tuple[Any, Any]:
+def _world(session: QuerySession, seed: int = 3) -> tuple[Any, Any]:
     domain = session.domain
     assert isinstance(domain, HelicopterDomain)
     return helicopter_world_messages(
@@ -375,7 +376,7 @@ def test_planner_node_console_script_autostarts_and_plans(context: Any) -> None:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(peer.node)
     try:
-        session = PlanningSession(load_tree_bundle(TREE))
+        session = QuerySession(load_prior(TREE), name="tree")
         markers, cloud = _world(session)
         peer.terrain.publish(cloud)
         peer.obstacles.publish(markers)

@@ -12,6 +12,7 @@ import pytest
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from conftest import own_query  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from harness import Peer, active_planner, private_context, spin_until, use_domain  # noqa: E402
 from rclpy.lifecycle import TransitionCallbackReturn  # noqa: E402
@@ -21,10 +22,10 @@ from std_msgs.msg import String  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.domains.arm import ArmDomain, default_panda_dir  # noqa: E402
-from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planner import load_prior  # noqa: E402
 from drd_planner.planning.map_intake import obstacle_map  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
-from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
 from drd_planner.planning.world_messages import obstacle_markers  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 
@@ -56,7 +57,7 @@ def _world_markers(domain: ArmDomain, seed: int) -> Any:
     return obstacle_markers(obstacles, frame_id=FRAME, msgs=RclpyMessages())
 
 
-def _joint_goal(session: PlanningSession, *, reverse: bool = True) -> JointState:
+def _joint_goal(session: QuerySession, *, reverse: bool = True) -> JointState:
     msg = JointState()
     msg.header.frame_id = FRAME
     names, q = list(session.joint_names), [float(v) for v in session.goal_state]
@@ -95,7 +96,8 @@ def test_arm_requests_give_a_trajectory_and_the_end_effector_path(context: Any) 
         np.testing.assert_allclose(xyz, domain.end_effector_positions(q), atol=1e-9)
         # Same checks as the offline session on the same decoded map; the plan's edges were checked free.
         snapshot = MapSnapshot(1, obstacle_map(markers, frame_id=FRAME), None, session.margin)
-        offline = PlanningSession(load_tree_bundle(TREE), name="offline").plan(snapshot, seed=0)
+        offline_session = QuerySession(load_prior(TREE), name="offline")
+        offline = offline_session.plan(snapshot, *own_query(offline_session), seed=0)
         assert offline.ok
         assert [s.name for s in log.status] == [f"edge/{c.edge}" for c in offline.checks]
         assert [s.level == b"\x00" for s in log.status] == [c.free for c in offline.checks]
@@ -152,7 +154,7 @@ def test_robot_description_is_used_and_bad_ones_are_refused(context: Any) -> Non
         node.destroy_node()
 
 
-def _pose_goal(session: PlanningSession) -> PoseStamped:
+def _pose_goal(session: QuerySession) -> PoseStamped:
     goal = PoseStamped()
     goal.header.frame_id = FRAME
     goal.pose.position.x, goal.pose.position.y, goal.pose.position.z = (float(v) for v in session.goal_position)

@@ -25,6 +25,7 @@ import pytest
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
 import malformed as mf  # noqa: E402
+from conftest import own_query  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
@@ -41,11 +42,11 @@ from visualization_msgs.msg import MarkerArray  # noqa: E402
 import drd_planner.ros.node as node_module  # noqa: E402
 from drd_msgs_py.exceptions import MessageError  # noqa: E402
 from drd_planner.exceptions import DrdError  # noqa: E402
-from drd_planner.planner import load_tree_bundle  # noqa: E402
+from drd_planner.planner import load_prior  # noqa: E402
 from drd_planner.planning.map_intake import obstacle_map, terrain_from_cloud  # noqa: E402
 from drd_planner.planning.map_state import MapSnapshot  # noqa: E402
 from drd_planner.planning.map_store import MapStore  # noqa: E402
-from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
 from drd_planner.ros.node import LATCHED, REQUESTS, PlannerNode  # noqa: E402
 
 pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
@@ -221,7 +222,7 @@ def _settle(
             last, count = time.monotonic(), now
 
 
-def _decode_path(points: np.ndarray, free: set[int], session: PlanningSession) -> list[int] | None:
+def _decode_path(points: np.ndarray, free: set[int], session: QuerySession) -> list[int] | None:
     """Edges, all in ``free``, whose samples chained from the start give exactly ``points`` (K, d).
 
     ``d`` leading state coordinates are compared: x, y, z of the helicopter, the arm's joint angles.
@@ -253,7 +254,7 @@ def _free_edges(checks: Any) -> set[int]:
     return {int(s.name.split("/")[1]) for s in checks.status if s.level == b"\x00"}
 
 
-def _verify_plans(peer: _Peer, session: PlanningSession) -> int:
+def _verify_plans(peer: _Peer, session: QuerySession) -> int:
     """Every plan received decodes into edges checked free in the edge_checks of its stamp.
 
     Helicopter: the Path's positions; arm: the JointTrajectory's configurations. An empty plan is a
@@ -285,7 +286,8 @@ def _verify_plans(peer: _Peer, session: PlanningSession) -> int:
 def _offline_plan(session_tree: Path, markers: Any, cloud: Any | None, frame: str, margin: float) -> Any:
     terrain = terrain_from_cloud(cloud, frame_id=frame) if cloud is not None else None
     snapshot = MapSnapshot(1, obstacle_map(markers, frame_id=frame), terrain, margin)
-    return PlanningSession(load_tree_bundle(session_tree), name="offline").plan(snapshot, seed=0)
+    offline_session = QuerySession(load_prior(session_tree), name="offline")
+    return offline_session.plan(snapshot, *own_query(offline_session), seed=0)
 
 
 def _start(ctx: Any, tree: Path, frame: str) -> tuple[PlannerNode, _Peer, Any]:
@@ -326,7 +328,7 @@ def _final_problems(tally: _Tally, peer: _Peer, executor: Any) -> None:
 
 def test_generator_is_seeded_and_its_malformed_cases_are_refused_offline() -> None:
     """The cases are a function of the seed, and the map store refuses each must-fail one with its reason."""
-    session = PlanningSession(load_tree_bundle(HELI_TREE), name="heli")
+    session = QuerySession(load_prior(HELI_TREE), name="heli")
     markers, cloud = mf.helicopter_bases(session.domain, seed=3)
     a = mf.marker_cases(np.random.default_rng(5), markers, count=200)
     b = mf.marker_cases(np.random.default_rng(5), markers, count=200)

@@ -33,7 +33,7 @@ from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
 from drd_planner.planning import map_store as map_store_module  # noqa: E402
 from drd_planner.planning import service as service_module  # noqa: E402
-from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.guard import MAX_ERROR_CHARS, traceback_of  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
@@ -57,7 +57,7 @@ def _node(ctx: Any, **overrides: Any) -> PlannerNode:
     return PlannerNode(context=ctx, parameter_overrides=params)
 
 
-def _goal(session: PlanningSession, frame: str = "map") -> PoseStamped:
+def _goal(session: QuerySession, frame: str = "map") -> PoseStamped:
     goal = PoseStamped()
     goal.header.frame_id = frame
     x, y, z = (float(v) for v in session.goal_state[:3])

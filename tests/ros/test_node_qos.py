@@ -19,8 +19,8 @@ from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from drd_msgs_py.factory import RclpyMessages  # noqa: E402
 from drd_planner.domains.helicopter import HelicopterDomain  # noqa: E402
-from drd_planner.planner import load_tree_bundle  # noqa: E402
-from drd_planner.planning.session import PlanningSession  # noqa: E402
+from drd_planner.planner import load_prior  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
 from drd_planner.planning.world_messages import helicopter_world_messages  # noqa: E402
 from drd_planner.ros.node import LATCHED, PlannerNode  # noqa: E402
 
@@ -76,7 +76,7 @@ def _maps_reach_the_node(ctx: Any, *, transient_local: bool, publisher_qos: Any,
 
 def _domain() -> HelicopterDomain:
     """The helicopter domain of the tree (rebuilt from the tree file's spec)."""
-    domain = PlanningSession(load_tree_bundle(TREE)).domain
+    domain = QuerySession(load_prior(TREE), name="tree").domain
     assert isinstance(domain, HelicopterDomain)
     return domain
 

@@ -24,8 +24,7 @@ from drd_msgs_py.plans import (
     summary_status,
 )
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult
-from drd_planner.planning.session import SessionCheck
+from drd_planner.planning.session_plan import SessionCheck, SessionPlan
 from drd_planner.ros.outputs import TRAJECTORY_JOINT_SPEED, PlannerOutputs, plan_summary_values
 
 
@@ -141,7 +140,7 @@ def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
 
 def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:
     checks = (_check(1, True, "tree"), _check(2, False, "tree"), _check(3, True, "bisect"))
-    result = QueryPlanResult(
+    result = SessionPlan(
         ok=True,
         status="path_found",
         message="found",
@@ -172,14 +171,14 @@ def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:
     checks = (_check(1, True, "tree"), _check(2, True, "improve"), _check(3, False, "improve"))
     common = {"ok": True, "status": "path_found", "message": "found", "map_version": 1, "prior": "heli"}
     plain = plan_summary_values(
-        QueryPlanResult(**common, checks=checks[:1], cost=751.1),  # type: ignore[arg-type]
+        SessionPlan(**common, checks=checks[:1], cost=751.1),  # type: ignore[arg-type]
         {"request": "goal_pose"},
         wait_s=0.0,
         plan_messaging_s=0.0,
         messaging_s=0.0,
     )
     assert not {"improvements", "improve_stop", "improve_checks", "first_cost", "cost"} & set(plain)
-    improved = QueryPlanResult(
+    improved = SessionPlan(
         **common,  # type: ignore[arg-type]
         checks=checks,
         stage="improve",

@@ -27,7 +27,8 @@ from drd_msgs_py.bags import BagMessage, bag_requests, open_bag, read_bag  # noq
 from drd_planner.cli.replay import main  # noqa: E402
 from drd_planner.planner import load_prior  # noqa: E402
 from drd_planner.planning.bag_plan import plan_bag_request  # noqa: E402
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession  # noqa: E402
+from drd_planner.planning.session import QuerySession  # noqa: E402
+from drd_planner.planning.session_plan import SessionPlan  # noqa: E402
 from drd_planner.ros.node import PlannerNode  # noqa: E402
 from drd_planner.ros.replay import ReplayOptions, ReplaySummary, replay_bag  # noqa: E402
 
@@ -87,7 +88,7 @@ def _response(recorded: list[BagMessage], after_ns: int, before_ns: int) -> BagM
     return hits[0]
 
 
-def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str) -> list[QueryPlanResult]:
+def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, frame: str) -> list[SessionPlan]:
     """The assertions of the module docstring for every request; the offline results."""
     messages = read_bag(bag)
     requests = bag_requests(messages)

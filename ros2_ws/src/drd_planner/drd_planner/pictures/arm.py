@@ -15,7 +15,6 @@ import numpy as np
 from drd_planner.arrays import FloatArray
 from drd_planner.pictures.geometry import (
     TOP,
-    AnySession,
     PictureError,
     PlanGeometry,
     domain_robot,
@@ -26,7 +25,8 @@ from drd_planner.pictures.geometry import (
 from drd_planner.pictures.style import EXTRA_COLOURS
 from drd_planner.pictures.view import PanelView, PlanDrawing
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 __all__ = ["arm_skeleton", "arm_views"]
 
 
-def arm_skeleton(session: AnySession, snapshot: MapSnapshot, q: FloatArray) -> FloatArray:
+def arm_skeleton(session: QuerySession, snapshot: MapSnapshot, q: FloatArray) -> FloatArray:
     """(D + 2, 3) joint-frame origins and the end effector (metres) of one (D,) arm configuration."""
     from drd_planner.geometry.robot import RobotModel
 
@@ -48,9 +48,9 @@ def arm_skeleton(session: AnySession, snapshot: MapSnapshot, q: FloatArray) -> F
 def arm_views(
     top: Axes,
     side: Axes,
-    session: AnySession,
+    session: QuerySession,
     snapshot: MapSnapshot,
-    result: PlanResult,
+    result: SessionPlan,
     geometry: PlanGeometry,
     drawing: PlanDrawing,
 ) -> None:

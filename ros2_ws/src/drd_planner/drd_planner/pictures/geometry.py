@@ -21,16 +21,12 @@ from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.geometry.shapes import Box, Capsule, Cylinder, Shape, Sphere, TriangleMesh
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
-from drd_planner.planning.session import PlanningSession, PlanResult
-
-#: A session of one tree, or of a whole prior: what a picture reads of them is the same.
-AnySession = PlanningSession | QuerySession
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 __all__ = [
     "CIRCLE_POINTS",
     "TOP",
-    "AnySession",
     "PictureError",
     "PlanGeometry",
     "capsule_segment",
@@ -123,11 +119,11 @@ def shape_outline(shape: Shape, pose: Pose, *, plane: npt.ArrayLike = TOP) -> Fl
     return convex_hull(shape_points(shape, pose, matrix) @ matrix)
 
 
-def edge_points(session: AnySession, edges: Sequence[int], snapshot: MapSnapshot | None = None) -> list[FloatArray]:
+def edge_points(session: QuerySession, edges: Sequence[int], snapshot: MapSnapshot | None = None) -> list[FloatArray]:
     """One (K, 3) polyline (metres, planning frame) per edge, in the order of ``edges``.
 
-    The positions (:meth:`PlanningSession.positions`, as the node publishes them) of each edge's
-    samples (:meth:`PlanningSession.edge_states`): x, y, z for the helicopter, the end effector for the
+    The positions (:meth:`QuerySession.positions`, as the node publishes them) of each edge's
+    samples (:meth:`QuerySession.edge_states`): x, y, z for the helicopter, the end effector for the
     arm (of ``snapshot.robot`` when the snapshot carries a ``robot_description``).
     """
     if not edges:
@@ -174,7 +170,7 @@ def along(points: FloatArray) -> FloatArray:
     return np.concatenate([[0.0], np.cumsum(steps)])
 
 
-def end_states(session: AnySession, result: PlanResult) -> tuple[FloatArray, FloatArray]:
+def end_states(session: QuerySession, result: SessionPlan) -> tuple[FloatArray, FloatArray]:
     """(D,) start and goal states drawn: the plan's own ends, else the prior's stored query."""
     if result.ok and result.states.shape[0] >= 2:
         return np.asarray(result.states[0]), np.asarray(result.states[-1])
@@ -207,10 +203,10 @@ class PlanGeometry:
         plan: (K, 3) the plan's positions (empty without a plan).
     """
 
-    def __init__(self, session: AnySession, snapshot: MapSnapshot, result: PlanResult) -> None:
+    def __init__(self, session: QuerySession, snapshot: MapSnapshot, result: SessionPlan) -> None:
         checked = {c.edge for c in result.checks}
         # The stored query's library, drawn only for a plan of that query (a new query has its own).
-        own_query = not isinstance(result, QueryPlanResult) or result.query.startswith("tree:")
+        own_query = result.query.startswith("tree:")
         library = np.asarray(session.library_edges() if own_query else (), dtype=np.int64)
         self.layers: dict[str, list[int]] = {
             "unchecked": sorted(int(e) for e in library if int(e) not in checked),
@@ -233,11 +229,11 @@ class PlanGeometry:
 # What a picture reads of a domain beyond the session's interface
 
 
-def domain_robot(session: AnySession) -> RobotModel | None:
+def domain_robot(session: QuerySession) -> RobotModel | None:
     """The domain's robot model (the arm's), or None when it has none."""
     return session.domain.robot
 
 
-def vehicle_radius(session: AnySession) -> float:
+def vehicle_radius(session: QuerySession) -> float:
     """The domain's vehicle radius in metres (the helicopter's), 0 when it has none."""
     return session.domain.vehicle_radius

@@ -18,7 +18,6 @@ import numpy as np
 from drd_planner.arrays import FloatArray
 from drd_planner.geometry.terrain import Heightfield
 from drd_planner.pictures.geometry import (
-    AnySession,
     PlanGeometry,
     along,
     end_states,
@@ -28,7 +27,8 @@ from drd_planner.pictures.geometry import (
 from drd_planner.pictures.style import COLOURS, DPI, EXTRA_COLOURS, TERRAIN_CMAP, TERRAIN_CMAP_TOP
 from drd_planner.pictures.view import PanelView
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -127,9 +127,9 @@ def edge_lift(points: FloatArray, xlim: tuple[float, float]) -> tuple[float, flo
 def helicopter_top(
     fig: Figure,
     view: PanelView,
-    session: AnySession,
+    session: QuerySession,
     snapshot: MapSnapshot,
-    result: PlanResult,
+    result: SessionPlan,
     geometry: PlanGeometry,
 ) -> FloatArray:
     """The helicopter's top view; returns the wire segments."""
@@ -156,9 +156,9 @@ def helicopter_top(
 
 def helicopter_side(
     ax: Axes,
-    session: AnySession,
+    session: QuerySession,
     snapshot: MapSnapshot,
-    result: PlanResult,
+    result: SessionPlan,
     geometry: PlanGeometry,
     wires: FloatArray,
 ) -> int:

@@ -17,7 +17,7 @@ were reused), and how many checks were free and blocked. Two panels:
   plan passes over or under them. Without a plan the side view runs along the straight start-goal line
   and shows the checked edges projected onto it. The figure's height follows the top view's aspect.
 - **arm** (``session.domain.name == "arm"``; :mod:`~drd_planner.pictures.arm`): the
-  end-effector paths (:meth:`PlanningSession.positions` of each edge's joint samples, the positions the
+  end-effector paths (:meth:`QuerySession.positions` of each edge's joint samples, the positions the
   node publishes) in a top view (x, y) and a side view (the vertical plane through the start-goal
   direction of the end effector), with the obstacles' outlines projected onto each plane and the arm (its
   joint frames) drawn at its start and goal; checked edges green / red with their numbers.
@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from drd_planner.pictures.arm import arm_views
-from drd_planner.pictures.geometry import TOP, AnySession, PictureError, PlanGeometry
+from drd_planner.pictures.geometry import TOP, PictureError, PlanGeometry
 from drd_planner.pictures.helicopter import (
     HELI_ROWS,
     HELI_TITLE,
@@ -53,8 +53,8 @@ from drd_planner.pictures.helicopter import (
 from drd_planner.pictures.style import DPI
 from drd_planner.pictures.view import PanelView, PlanDrawing, legend_entries, require_matplotlib
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 __all__ = ["DPI", "PictureError", "PlanDrawing", "draw_plan_picture", "plan_picture", "served_by"]
 
@@ -62,7 +62,7 @@ __all__ = ["DPI", "PictureError", "PlanDrawing", "draw_plan_picture", "plan_pict
 TITLE_CHARS_PER_INCH = 11.0
 
 
-def served_by(result: PlanResult, *, query_cached: bool = False) -> str:
+def served_by(result: SessionPlan, *, query_cached: bool = False) -> str:
     """One line on what served a plan; it starts "served from cache" when no new work was needed.
 
     A plan is served from cache when every one of its checks was answered from the map snapshot's
@@ -70,12 +70,11 @@ def served_by(result: PlanResult, *, query_cached: bool = False) -> str:
     tree of a new query were reused from the planner's query cache (built online by an earlier request).
 
     Args:
-        result: the plan; a :class:`QueryPlanResult` names its query (``tree:<name>``, ``online``,
-            ``connected``), a tree session's result is served by its tree.
+        result: the plan; it names its query (``tree:<name>``, ``online``, ``connected``; "" when refused).
         query_cached: the query's library and tree came from the planner's query cache (the caller
             knows; only meaningful for ``online`` and ``connected`` queries).
     """
-    query = result.query if isinstance(result, QueryPlanResult) else f"tree:{result.prior}"
+    query = result.query
     online = query in ("online", "connected")
     if query.startswith("tree:"):
         source = f"the precomputed DiRECt tree {query[5:]!r}"
@@ -98,7 +97,7 @@ def served_by(result: PlanResult, *, query_cached: bool = False) -> str:
     return f"served by {source}{reused}"
 
 
-def _title(session: AnySession, result: PlanResult, title: str | None) -> str:
+def _title(session: QuerySession, result: SessionPlan, title: str | None) -> str:
     """The figure title: the given one, else tree, map version, outcome (the reason when there is no plan)."""
     if title is not None:
         return title
@@ -107,9 +106,9 @@ def _title(session: AnySession, result: PlanResult, title: str | None) -> str:
 
 
 def draw_plan_picture(
-    session: AnySession,
+    session: QuerySession,
     snapshot: MapSnapshot,
-    result: PlanResult,
+    result: SessionPlan,
     *,
     title: str | None = None,
     query_cached: bool = False,
@@ -157,7 +156,7 @@ def draw_plan_picture(
 
 
 def _helicopter_picture(
-    session: AnySession, snapshot: MapSnapshot, result: PlanResult, geometry: PlanGeometry
+    session: QuerySession, snapshot: MapSnapshot, result: SessionPlan, geometry: PlanGeometry
 ) -> PlanDrawing:
     """The helicopter's figure: top view, one legend for both views, side view; sized to the top view.
 
@@ -191,9 +190,9 @@ def _targets(path: Path) -> list[Path]:
 
 
 def plan_picture(
-    session: AnySession,
+    session: QuerySession,
     snapshot: MapSnapshot,
-    result: PlanResult,
+    result: SessionPlan,
     path: str | Path,
     *,
     title: str | None = None,

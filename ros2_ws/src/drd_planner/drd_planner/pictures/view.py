@@ -31,7 +31,7 @@ from drd_planner.pictures.style import (
     PLOTS_INSTALL_HINT,
 )
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session_plan import SessionPlan
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -163,7 +163,7 @@ class PanelView:
         out[:, 1] += per_metre * (points[:, 2] - base)
         return out
 
-    def edges(self, geometry: PlanGeometry, result: PlanResult, heights: ScalarMappable | None = None) -> None:
+    def edges(self, geometry: PlanGeometry, result: SessionPlan, heights: ScalarMappable | None = None) -> None:
         """Draw the edge layers and keep each check's number (1 = first) to write on its edge.
 
         Args:

@@ -66,7 +66,7 @@ def plan_bag(options: BagPlanOptions) -> int:
     from drd_msgs_py.exceptions import MessageError
     from drd_planner.planner.prior_file import load_prior
     from drd_planner.planning.bag_plan import plan_bag_request
-    from drd_planner.planning.query_session import QuerySession
+    from drd_planner.planning.session import QuerySession
     from drd_planner.planning.shipped import resolve_bag_path, resolve_tree_path
 
     tree_path = resolve_tree_path(options.prior)

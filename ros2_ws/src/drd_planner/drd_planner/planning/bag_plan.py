@@ -20,7 +20,6 @@ from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader, TerrainFit, terrain_fit_of
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
     Goal,
@@ -29,6 +28,8 @@ from drd_planner.planning.requests import (
     read_goal,
     read_robot_state,
 )
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 __all__ = [
     "BagMaps",
@@ -154,7 +155,7 @@ class BagPlan:
     maps: BagMaps
     start: Endpoint
     goal: Endpoint
-    result: QueryPlanResult
+    result: SessionPlan
     notes: tuple[str, ...] = ()
 
 

@@ -1,7 +1,8 @@
 """What a planning session needs of its domain on map snapshots: positions, edge states, the checker.
 
-Shared by :class:`~drd_planner.planning.session.PlanningSession` (one tree) and
-:class:`~drd_planner.planning.query_session.QuerySession` (a whole prior).
+The base of :class:`~drd_planner.planning.session.QuerySession`: what it reads of the rebuilt domain
+whatever the query (the checker per snapshot, positions, straight edge states, the snapshot's check cache),
+kept apart from the query planning so that each module stays one concept.
 """
 
 from __future__ import annotations
@@ -101,7 +102,7 @@ class SnapshotCheckers:
 
 
 class DomainSession:
-    """What a planning session reads of its domain on snapshots; the base of both session classes.
+    """What a planning session reads of its domain on snapshots; the base of the session class.
 
     Args:
         domain: the session's domain.

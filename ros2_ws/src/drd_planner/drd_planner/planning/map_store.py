@@ -201,7 +201,7 @@ class MapStore:
 def robot_loader_of(sessions: Sequence[Any], limits: MapLimits) -> RobotLoader | None:
     """The ``robot_description`` reader with ``limits`` of the prior that needs one (None: no prior does).
 
-    ``sessions``: the loaded priors (:class:`~drd_planner.planning.query_session.QuerySession`).
+    ``sessions``: the loaded priors (:class:`~drd_planner.planning.session.QuerySession`).
     """
     needs = next((s for s in sessions if s.domain.needs_robot_description), None)
     loader: Any = None if needs is None else needs.robot_loader

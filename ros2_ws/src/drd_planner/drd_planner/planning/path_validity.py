@@ -28,8 +28,8 @@ import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.replan import recheck_plan
+from drd_planner.planning.session import QuerySession
 
 __all__ = ["MATCH_TOLERANCE_M", "PATHS_KEPT", "PathValidity", "ServedPaths"]
 

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 __all__ = ["PlanOutcome", "RefusedPart"]
 
@@ -40,7 +41,7 @@ class PlanOutcome:
     """
 
     sent: Any | None = None
-    result: QueryPlanResult | None = None
+    result: SessionPlan | None = None
     refusal: str = ""
     refused: RefusedPart = ""
     internal_error: str = ""

@@ -44,7 +44,7 @@ volume of the continuous motion too, not only for the sampled check. Boxes are c
 spheres are recomputed for the few edges whose box overlaps a change. Domains without a sweep model (the planar
 ones) count every plan edge as affected.
 
-**Motion edges** (a :class:`~drd_planner.planning.query_session.QuerySession`'s plans from or to a state
+**Motion edges** (a :class:`~drd_planner.planning.session.QuerySession`'s plans from or to a state
 off the graph) have ids from E on that the session maps to the motion's states (``session.motion_states``;
 an id names one motion for the session's lifetime, so the box cache stays valid). Their sweep spheres are
 those of the motion's own samples (helicopter: the vehicle sphere at each; arm: every collision sphere at
@@ -101,11 +101,7 @@ class SweepBoxCache:
 
 
 class ReplanSession(Protocol):
-    """What re-checking reads of a session.
-
-    A :class:`~drd_planner.planning.session.PlanningSession` or a
-    :class:`~drd_planner.planning.query_session.QuerySession`.
-    """
+    """What re-checking reads of a session (:class:`~drd_planner.planning.session.QuerySession` has it)."""
 
     @property
     def name(self) -> str:

@@ -41,7 +41,7 @@ from drd_planner.exceptions import PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_intake import pose_of
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
+from drd_planner.planning.session import QuerySession
 
 __all__ = [
     "DEFAULT_TOLERANCES",

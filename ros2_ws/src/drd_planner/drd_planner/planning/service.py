@@ -1,7 +1,7 @@
 """The planner service: maps, requests, coalescing, publishing decisions and replanning, without ROS.
 
 :class:`PlannerService` is what the ``drd_planner`` node (:mod:`drd_planner.ros.node`) does apart from ROS
-I/O: it holds the loaded priors (:class:`~drd_planner.planning.query_session.QuerySession`), the maps (one
+I/O: it holds the loaded priors (:class:`~drd_planner.planning.session.QuerySession`), the maps (one
 :class:`~drd_planner.planning.map_store.MapStore`), the robot's latest state, the pending requests and the
 published plan. What it sends out goes through a :class:`ServiceOutputs` (the node publishes it; a test can
 record it).
@@ -42,7 +42,6 @@ from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MapStore, robot_loader_of, terrain_fit_of
 from drd_planner.planning.plan_outcome import PlanOutcome, RefusedPart
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
@@ -53,6 +52,7 @@ from drd_planner.planning.requests import (
     read_robot_state,
 )
 from drd_planner.planning.service_outputs import PlanRecord, Published, ServiceOutputs
+from drd_planner.planning.session import QuerySession
 
 __all__ = [
     "HISTORY_LENGTH",

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult, QuerySession
 from drd_planner.planning.replan import RecheckResult
 from drd_planner.planning.requests import Goal
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 
 __all__ = ["PlanRecord", "Published", "ServiceOutputs"]
 
@@ -33,7 +33,7 @@ class PlanRecord:
     """
 
     session: QuerySession
-    result: QueryPlanResult
+    result: SessionPlan
     snapshot: MapSnapshot | None
     request: dict[str, Any]
 
@@ -43,7 +43,7 @@ class Published:
     """The plan out there now: what a map update must re-check, and its goal for a replan."""
 
     session: QuerySession
-    result: PlanResult
+    result: SessionPlan
     snapshot: MapSnapshot
     goal: Goal
 
@@ -73,7 +73,7 @@ class ServiceOutputs(Protocol):
         """
 
     def plan(
-        self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+        self, session: QuerySession, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> tuple[Any, bool]:
         """Publish a found plan: what was sent (the node: its Path on demand), whether it is out (False: inactive)."""
 

@@ -23,7 +23,7 @@ Interface (names relative to the node namespace):
 
 Parameters: :mod:`drd_planner.ros.parameters` (each with its description and range; ``planner_node
 --help`` lists them). Each file in ``prior_paths`` (or its deprecated alias ``tree_paths``) is a world
-prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.query_session.QuerySession`;
+prior (a tree file is a prior of its one query) served by a :class:`~drd_planner.planning.session.QuerySession`;
 a request goes to the prior of its domain and is planned from the robot's state to its goal
 (:mod:`drd_planner.planning.requests`).
 
@@ -62,10 +62,10 @@ from drd_msgs_py.exceptions import MessageError
 from drd_planner.exceptions import DrdError
 from drd_planner.planner.prior_file import load_prior
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.requests import ambiguity, goal_from_pose, read_goal
 from drd_planner.planning.service import LiveSettings, PlannerService, PlanRecord
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 from drd_planner.planning.shipped import resolve_tree_path
 from drd_planner.ros.guard import guard_callback, guard_change_state, guard_service, shorten, traceback_of
 from drd_planner.ros.moveit_host import MoveItHost
@@ -146,7 +146,7 @@ class PlannerNode(LifecycleNode):
         return self._service.snapshot if self._service is not None else MapSnapshot(0)
 
     @property
-    def published(self) -> PlanResult | None:
+    def published(self) -> SessionPlan | None:
         """The plan currently on ``plan`` (None: none, or it was withdrawn)."""
         published = self._service.published if self._service is not None else None
         return published.result if published is not None else None

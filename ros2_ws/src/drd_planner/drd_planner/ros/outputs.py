@@ -33,8 +33,7 @@ from drd_msgs_py.plans import (
     summary_fields,
 )
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QueryPlanResult
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session_plan import SessionPlan
 from drd_planner.ros.status import status_name
 
 __all__ = ["CHECK_LOG", "LATCHED", "PlannerOutputs", "SentPlan", "plan_summary_values"]
@@ -73,7 +72,7 @@ class SentPlan:
 
 
 class Session(Protocol):
-    """What the outputs read of a planning session (PlanningSession and QuerySession have it)."""
+    """What the outputs read of a planning session (:class:`~drd_planner.planning.session.QuerySession` has it)."""
 
     @property
     def name(self) -> str: ...
@@ -87,7 +86,7 @@ class Session(Protocol):
 
 
 def plan_summary_values(
-    result: QueryPlanResult,
+    result: SessionPlan,
     extra: Mapping[str, Any],
     *,
     wait_s: float,
@@ -185,7 +184,7 @@ class PlannerOutputs:
         status = summary_fields(ok=ok, message=message, values=values, name=status_name(name, topic), hardware_id=name)
         self._diagnostics.publish(diagnostic_array_cdr([status], stamp=stamp or self.stamp()))
 
-    def plan(self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]) -> SentPlan:
+    def plan(self, session: Session, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]) -> SentPlan:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm), serialized from its arrays.
 
         The arm's JointTrajectory goes first, then its end-effector Path (positions of the plan's
@@ -216,20 +215,20 @@ class PlannerOutputs:
             names = session.joint_names
             self._trajectory.publish(joint_trajectory_cdr(names, np.zeros((0, len(names))), frame_id=self.frame))
 
-    def checks(self, result: PlanResult, stamp: tuple[int, int]) -> None:
+    def checks(self, result: SessionPlan, stamp: tuple[int, int]) -> None:
         """Publish the plan's check log on ``edge_checks``."""
         records = [
             CheckRecord(c.step, c.edge, c.free, c.stage, c.check_ms, c.endpoints, c.cached) for c in result.checks
         ]
         self._checks.publish(diagnostic_array_cdr(check_statuses(records), stamp=stamp))
 
-    def markers(self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]) -> None:
+    def markers(self, session: Session, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]) -> None:
         """Publish ``checked_edges`` when someone listens (thousands of points)."""
         if self._markers.get_subscription_count() > 0:
             self._markers.publish(self._checked_markers(session, result, snapshot, stamp))
 
     def _checked_markers(
-        self, session: Session, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+        self, session: Session, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> Any:
         """The checked edges at full resolution over the library edges in grey (built once per tree and arm)."""
         segments, values = [], []

@@ -21,8 +21,8 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from drd_planner.geometry.map_limits import MapLimits
 
 if TYPE_CHECKING:
-    from drd_planner.planning.query_session import SessionBudgets
     from drd_planner.planning.requests import GoalTolerances
+    from drd_planner.planning.session import SessionBudgets
 
 __all__ = [
     "MAP_LIMIT_PARAMETERS",

@@ -13,10 +13,10 @@ from collections.abc import Callable
 from typing import Any
 
 from drd_planner.planning.map_state import MapSnapshot
-from drd_planner.planning.query_session import QuerySession
 from drd_planner.planning.replan import RecheckResult
 from drd_planner.planning.service import PlanRecord
-from drd_planner.planning.session import PlanResult
+from drd_planner.planning.session import QuerySession
+from drd_planner.planning.session_plan import SessionPlan
 from drd_planner.ros.guard import shorten
 from drd_planner.ros.node_log import NodeLog
 from drd_planner.ros.outputs import PlannerOutputs, plan_summary_values
@@ -72,7 +72,7 @@ class NodeReporter:
 
         After the plan come the check log, the markers and last the summary. Its timing values
         (seconds): ``check_s``, ``selection_s``, ``policy_s``, ``prepare_s`` and ``total_s`` of the plan
-        (:class:`PlanResult`), ``wait_s`` (request taken -> served), ``plan_messaging_s`` (building and
+        (:class:`SessionPlan`), ``wait_s`` (request taken -> served), ``plan_messaging_s`` (building and
         publishing ``plan``/``joint_trajectory``) and ``messaging_s`` (all messages before the summary).
         """
         session, result, snapshot, extra = record.session, record.result, record.snapshot, record.request
@@ -104,7 +104,7 @@ class NodeReporter:
         return path
 
     def plan(
-        self, session: QuerySession, result: PlanResult, snapshot: MapSnapshot, stamp: tuple[int, int]
+        self, session: QuerySession, result: SessionPlan, snapshot: MapSnapshot, stamp: tuple[int, int]
     ) -> tuple[Any, bool]:
         """Publish a found plan on ``plan`` (and ``joint_trajectory`` for the arm); it is out there if active."""
         return self._out.plan(session, result, snapshot, stamp), self._out.active
