@@ -92,7 +92,7 @@ class BurstReport:
             or in flight hold memory then, so these rows show the peak and fall towards the end).
         before: the row just before the burst, after a garbage collection (nothing in flight).
         after: the row once every request was handled, after a garbage collection.
-        results: ``result`` value of each summary (``path_found``, ...), service: poses per response.
+        results: ``result`` value of each summary (``found``, ...), service: poses per response.
     """
 
     mode: str

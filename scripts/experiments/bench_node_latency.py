@@ -175,13 +175,13 @@ class Probe:
         def done() -> bool:
             with self._lock:
                 summary = self._summaries.get(key)
-                return summary is not None and (len(self._plans) > plans or summary.get("result") != "path_found")
+                return summary is not None and (len(self._plans) > plans or summary.get("result") != "found")
 
         if not wait_for(done, timeout):
             raise RuntimeError(f"no plan for request {key}: {self.harness.node.errors[-3:]}")
         with self._lock:
             values = self._summaries[key]
-            if values.get("result") != "path_found":
+            if values.get("result") != "found":
                 return None
             arrived = self._plans[plans]
         return Sample(

@@ -445,7 +445,7 @@ def _verify(path: Path, scenario: Scenario, prior_file: str) -> None:
             )
     queries = [p.result.query for p in again]
     if not all(p.result.ok for p in again) or queries[2:] != ["online", "connected"]:
-        raise DrdError(f"{path}: the requests do not plan as intended: {[p.result.status for p in again]}, {queries}")
+        raise DrdError(f"{path}: the requests do not plan as intended: {[p.result.outcome for p in again]}, {queries}")
 
 
 def _where(endpoint: Any) -> str:

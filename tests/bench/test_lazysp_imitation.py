@@ -23,11 +23,12 @@ from drd_planner.bench.lazysp_imitation import (
 )
 from drd_planner.bench.lazysp_learned import all_edge_outcomes
 from drd_planner.bench.learned_policies import TRAIN_WORLD_POLICIES
-from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
+from drd_planner.core.episode import EpisodeResult, GraphPathPolicy, TableOracle, run_episode
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import LazySP
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import POLICIES, PolicyContext, graph_policies
+from drd_planner.core.status import PlanStatus
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -140,13 +141,13 @@ def test_training_is_deterministic_and_episodes_end_on_a_checked_free_path() -> 
     outcomes = all_edge_outcomes(x)
     for world in toy_worlds(20, seed=2):
         result = run(ImitationLazySP(GRAPH, 0, 3, outcomes, first), world)
-        if result.status is EpisodeStatus.PATH_FOUND:
+        if result.status is PlanStatus.FOUND:
             assert result.path_edges is not None
             checked_free = {c.edge for c in result.checks if c.free}
             assert set(result.path_edges.tolist()) <= checked_free
             assert world[result.path_edges].all()
         else:
-            assert result.status is EpisodeStatus.NO_FREE_PATH
+            assert result.status is PlanStatus.NO_PATH
         assert len({c.edge for c in result.checks}) == result.num_checks  # never checks twice
 
 

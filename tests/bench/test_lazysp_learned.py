@@ -16,11 +16,12 @@ from drd_planner.bench.lazysp_learned import (
     all_edge_outcomes,
     delta_choice,
 )
-from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
+from drd_planner.core.episode import EpisodeResult, GraphPathPolicy, TableOracle, run_episode
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import DEFAULT_PSEUDO_COUNT, POLICIES, PolicyContext, graph_policies
+from drd_planner.core.status import PlanStatus
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -226,14 +227,14 @@ def test_episode_outcomes_and_determinism(delta: bool) -> None:
     free = np.ones(9, dtype=bool)
     runs = [episode(policy(DETOURS, DETOUR_WORLDS, delta=delta), free) for _ in range(2)]
     assert [c.edge for c in runs[0].checks] == [c.edge for c in runs[1].checks]
-    assert runs[0].status is EpisodeStatus.PATH_FOUND
+    assert runs[0].status is PlanStatus.FOUND
     np.testing.assert_array_equal(runs[0].path_edges, [0, 1, 2])
     assert sorted(c.edge for c in runs[0].checks) == [0, 1, 2]
     # e2 and its detour blocked: start and goal are disconnected.
     cut = free.copy()
     cut[[2, 7]] = False
     result = episode(policy(DETOURS, DETOUR_WORLDS, delta=delta), cut)
-    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.status is PlanStatus.NO_PATH
     assert result.path_edges is None
     assert {2, 7} <= {c.edge for c in result.checks if not c.free}
 
@@ -304,7 +305,7 @@ def test_dataset_episodes_find_the_shortest_feasible_path() -> None:
             result = run_episode(problem.library, problem.edge_costs, pol, TableOracle(x))
             edges = [c.edge for c in result.checks]
             assert len(set(edges)) == len(edges)
-            assert result.status is EpisodeStatus.PATH_FOUND
+            assert result.status is PlanStatus.FOUND
             path = result.path_edges
             assert path is not None
             assert set(path.tolist()) <= set(edges)

@@ -308,7 +308,7 @@ def test_demo(capsys: pytest.CaptureFixture[str]) -> None:
     assert "mean checks" in out
     assert "DiRECt tree:" in out
     assert out.count("test world ") == 1
-    assert "verified free after" in out or "no_free_path" in out
+    assert "verified free after" in out or "no_path" in out
 
 
 def test_version_in_process(capsys: pytest.CaptureFixture[str]) -> None:

@@ -19,9 +19,10 @@ from drd_planner.core.baselines import (
     segment_logsumexp,
 )
 from drd_planner.core.bisect import bias_from_worlds
-from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode
+from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import POLICIES, PolicyContext, graph_policies
+from drd_planner.core.status import PlanStatus
 from drd_planner.data.bern_sets import load_bernoulli_test_set, load_stored_costs
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
@@ -221,7 +222,7 @@ def test_dataset_smoke_every_baseline_finds_a_verified_path() -> None:
             edges = [c.edge for c in result.checks]
             assert len(set(edges)) == len(edges)
             assert all(x[c.edge] == c.free for c in result.checks)
-            assert result.status is EpisodeStatus.PATH_FOUND, name  # test worlds are feasible
+            assert result.status is PlanStatus.FOUND, name  # test worlds are feasible
             assert result.path_index is not None
             assert result.path_edges is not None
             assert all(x[int(e)] for e in result.path_edges)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drd_planner.core.episode import EpisodeStatus, GraphPathPolicy, TableOracle, run_episode, verify_path
+from drd_planner.core.episode import GraphPathPolicy, TableOracle, run_episode, verify_path
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import PolicyError, UnverifiedPathError
 
 
@@ -40,7 +41,7 @@ def test_stops_as_soon_as_a_path_is_verified() -> None:
     world = np.array([True, True, False, True, True])
     policy = ScriptedPolicy([0, 1, 2, 3, 4])
     result = run_episode(LIB, COSTS, policy, TableOracle(world))
-    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.status is PlanStatus.FOUND
     assert result.path_index == 0
     assert [c.edge for c in result.checks] == [0, 1]
     assert policy.observed == [(0, True), (1, True)]
@@ -56,7 +57,7 @@ def test_cheapest_of_simultaneously_verified_paths_wins() -> None:
 def test_no_free_path_reports_evidence_per_path() -> None:
     world = np.array([False, True, False, True, False])
     result = run_episode(LIB, COSTS, ScriptedPolicy([0, 2, 4]), TableOracle(world))
-    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.status is PlanStatus.NO_PATH
     assert result.path_edges is None
     np.testing.assert_array_equal(result.blocked_evidence, [0, 2, 4])
     assert not result.success
@@ -65,10 +66,12 @@ def test_no_free_path_reports_evidence_per_path() -> None:
 def test_policy_giving_up_and_max_checks() -> None:
     world = np.ones(5, dtype=bool)
     gave_up = run_episode(LIB, COSTS, ScriptedPolicy([0]), TableOracle(world))
-    assert gave_up.status is EpisodeStatus.POLICY_GAVE_UP
+    assert (gave_up.status, gave_up.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.POLICY_GAVE_UP)
     capped = run_episode(LIB, COSTS, ScriptedPolicy([0, 2, 1]), TableOracle(world), max_checks=2)
-    assert capped.status is EpisodeStatus.MAX_CHECKS
+    assert (capped.status, capped.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET)
     assert capped.num_checks == 2
+    assert capped.ran_out is PlanCause.CHECK_BUDGET
+    assert gave_up.ran_out is None  # a policy giving up is no budget running out
 
 
 def test_policy_contract_violations_raise() -> None:
@@ -142,7 +145,7 @@ def test_graph_policy_ends_on_its_own_path_not_on_a_library_path() -> None:
     world = np.ones(5, dtype=bool)
     # Library path 0 = [0, 1] is proven after two checks; the policy's own path [2, 4] after four.
     result = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 4, 3], [2, 4]), TableOracle(world))
-    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.status is PlanStatus.FOUND
     assert [c.edge for c in result.checks] == [0, 1, 2, 4]
     assert result.path_index is None
     np.testing.assert_array_equal(result.path_edges, [2, 4])
@@ -156,7 +159,7 @@ def test_graph_policy_blocked_library_does_not_end_it() -> None:
     # Edges 0, 2 and 1 block all three library paths; the policy's path [3] is still checked.
     world = np.array([False, False, False, True, True])
     result = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 2, 1, 3], [3]), TableOracle(world))
-    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.status is PlanStatus.FOUND
     assert result.num_checks == 4
     np.testing.assert_array_equal(result.path_edges, [3])
 
@@ -164,20 +167,34 @@ def test_graph_policy_blocked_library_does_not_end_it() -> None:
 def test_graph_policy_disconnected_and_budgets() -> None:
     world = np.ones(5, dtype=bool)
     gone = run_episode(LIB, COSTS, ScriptedGraphPolicy([0], None), TableOracle(world))
-    assert gone.status is EpisodeStatus.NO_FREE_PATH
+    assert gone.status is PlanStatus.NO_PATH
     assert gone.num_checks == 0
     assert gone.blocked_evidence is None
     assert gone.path_edges is None
     capped = run_episode(LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 3], [3], max_checks=2), TableOracle(world))
-    assert (capped.status, capped.num_checks) == (EpisodeStatus.MAX_CHECKS, 2)
+    assert (capped.status, capped.cause, capped.num_checks) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET, 2)
     tighter = run_episode(
         LIB, COSTS, ScriptedGraphPolicy([0, 1, 2, 3], [3], max_checks=2), TableOracle(world), max_checks=1
     )
-    assert (tighter.status, tighter.num_checks) == (EpisodeStatus.MAX_CHECKS, 1)
+    assert (tighter.status, tighter.cause, tighter.num_checks) == (
+        PlanStatus.BUDGET_EXHAUSTED,
+        PlanCause.CHECK_BUDGET,
+        1,
+    )
     # The path verified by the last allowed check counts as found.
     last = run_episode(LIB, COSTS, ScriptedGraphPolicy([2, 3], [2, 3], max_checks=2), TableOracle(world))
-    assert last.status is EpisodeStatus.PATH_FOUND
+    assert last.status is PlanStatus.FOUND
     # A policy that stops asking before its path is checked gives up; nothing unverified is returned.
     quits = run_episode(LIB, COSTS, ScriptedGraphPolicy([2], [2, 3]), TableOracle(world))
-    assert quits.status is EpisodeStatus.POLICY_GAVE_UP
+    assert (quits.status, quits.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.POLICY_GAVE_UP)
     assert quits.path_edges is None
+
+
+def test_a_passed_deadline_ends_with_the_time_budget() -> None:
+    import time
+
+    world = np.ones(5, dtype=bool)
+    late = run_episode(LIB, COSTS, ScriptedPolicy([0, 1]), TableOracle(world), deadline=time.perf_counter() - 1.0)
+    assert (late.status, late.cause, late.num_checks) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.TIME_BUDGET, 0)
+    assert late.ran_out is PlanCause.TIME_BUDGET
+    assert late.path_edges is None

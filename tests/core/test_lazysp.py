@@ -10,11 +10,12 @@ from conftest import gccd_folder
 from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.core.bisect import bias_from_worlds
-from drd_planner.core.episode import EpisodeResult, EpisodeStatus, GraphPathPolicy, TableOracle, run_episode
+from drd_planner.core.episode import EpisodeResult, GraphPathPolicy, TableOracle, run_episode
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import DEFAULT_MAX_CHECKS, GraphArcs, LazySP, LazySPSettings, bisection_position
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.policies import POLICIES, PolicyContext, graph_policies
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import ProblemError
 
@@ -68,7 +69,7 @@ def run(policy: LazySP, x: np.ndarray, library: PathLibrary | None = None) -> Ep
 def test_selector_check_orders_on_the_grid(selector: str, expected: list[int]) -> None:
     result = run(LazySP(grid(), 0, 8, LazySPSettings(selector=selector)), world(10))
     assert [c.edge for c in result.checks] == expected
-    assert result.status is EpisodeStatus.PATH_FOUND
+    assert result.status is PlanStatus.FOUND
     assert result.path_index is None  # LazySP's own path, not a library path
     np.testing.assert_array_equal(result.path_edges, PATH_B)
     assert all(c.stage == "lazysp" for c in result.checks)
@@ -93,7 +94,7 @@ def test_disconnected_start_ends_with_no_free_path() -> None:
     # A: e0 blocked -> 0-3-4-5-8 = [e6, e2, e3, e11]: e6 blocked -> start is cut off.
     result = run(LazySP(grid(), 0, 8), world(0, 6))
     assert [c.edge for c in result.checks] == [0, 6]
-    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.status is PlanStatus.NO_PATH
     assert result.path_edges is None
     assert result.blocked_evidence is None
     assert not result.success
@@ -110,12 +111,12 @@ def test_does_not_stop_on_a_proven_library_path() -> None:
 
 def test_check_budget_reports_max_checks() -> None:
     result = run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=3)), world(10))
-    assert result.status is EpisodeStatus.MAX_CHECKS
+    assert (result.status, result.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET)
     assert result.num_checks == 3
     assert not result.success
     assert result.path_edges is None
     # The budget does not cut an episode whose path is verified by the last allowed check.
-    assert run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=4)), world()).status is EpisodeStatus.PATH_FOUND
+    assert run(LazySP(grid(), 0, 8, LazySPSettings(max_checks=4)), world()).status is PlanStatus.FOUND
 
 
 def test_default_budget_is_1000_checks() -> None:
@@ -130,7 +131,7 @@ def test_default_budget_is_1000_checks() -> None:
     assert policy.max_checks == DEFAULT_MAX_CHECKS == 1000
     lib = PathLibrary.from_sequences([[0, routes]], len(edges))
     result = run_episode(lib, np.ones(len(edges)), policy, TableOracle(x))
-    assert result.status is EpisodeStatus.MAX_CHECKS
+    assert (result.status, result.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET)
     assert result.num_checks == 1000
     assert [c.edge for c in result.checks[:4]] == [0, routes, 1, routes + 1]
 
@@ -258,7 +259,7 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
             result = run_episode(problem.library, problem.edge_costs, POLICIES[name](ctx), TableOracle(x))
             edges = [c.edge for c in result.checks]
             assert len(set(edges)) == len(edges)
-            assert result.status is EpisodeStatus.PATH_FOUND, name
+            assert result.status is PlanStatus.FOUND, name
             path = result.path_edges
             assert path is not None
             assert all(x[int(e)] for e in path)
@@ -284,4 +285,4 @@ def test_balanced_checks_from_the_walled_in_end() -> None:
     assert policy.known_free_reach() == (2, 1)
     assert policy.select() == 11
     result = run(LazySP(grid(), 0, 8, LazySPSettings(selector="balanced")), world(0, 6))
-    assert result.status is EpisodeStatus.NO_FREE_PATH
+    assert result.status is PlanStatus.NO_PATH

@@ -10,8 +10,9 @@ from drd_planner.bench.lazysp_imitation import DaggerSettings, train_for_problem
 from drd_planner.core import policies
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.bounds import oracle_lower_bound
-from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode
+from drd_planner.core.episode import TableOracle, run_episode
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, PolicyContext, graph_policies, register_policy
+from drd_planner.core.status import PlanStatus
 from drd_planner.core.tree import build_tree
 from drd_planner.data.gccd import load_gccd_folder
 from drd_planner.exceptions import PolicyError
@@ -41,7 +42,7 @@ def test_every_returned_path_was_checked_free(name: str) -> None:
             assert len(checked) == result.num_checks  # each edge checked once
             assert all(x[e] == free for e, free in checked.items())
             if policy_name != "direct_only":
-                assert result.status is EpisodeStatus.PATH_FOUND  # test worlds are feasible
+                assert result.status is PlanStatus.FOUND  # test worlds are feasible
             if result.success:
                 assert result.path_edges is not None
                 assert all(checked.get(int(e)) is True for e in result.path_edges)

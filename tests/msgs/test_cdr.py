@@ -114,7 +114,7 @@ def _summary(msgs: MessageFactory | None) -> Any:
         "tree": "heli_lines",
         "checks": 8,
         "total_s": "0.012345",
-        "result": "path_found",
+        "result": "found",
         "request": "goal_pose",
     }
     kwargs = {"ok": True, "message": "path of 7 edges", "values": values, "name": "drd_planner: plan"}

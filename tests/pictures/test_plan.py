@@ -20,6 +20,7 @@ from rosbags.typesys import Stores, get_typestore
 from drd_msgs_py.factory import RosbagsMessages
 from drd_msgs_py.obstacles import markers_from_obstacles
 from drd_planner.bench.plots import COLOURS
+from drd_planner.core.status import PlanStatus
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
 from drd_planner.geometry.shapes import Capsule
@@ -325,7 +326,7 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
     title = draw_plan_picture(session, snapshot, again).figure.get_suptitle()
     assert f"served from cache: all {len(again.checks)} checks answered from map v1's check cache" in title
     # What a prior's session says of new queries (SessionPlan.query), first built and then reused.
-    common = {"ok": True, "status": "path_found", "message": "m", "map_version": 4, "prior": "t"}
+    common = {"status": PlanStatus.FOUND, "message": "m", "map_version": 4, "prior": "t"}
     fresh = SessionCheck(1, 5, (0, 1), True, "bisect", 0.1, 0.0, False)
     reused = dataclasses.replace(fresh, step=2, edge=6, cached=True)
     online = SessionPlan(**common, checks=(fresh, reused), query="online")

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.planning.moveit_plan import (
     JOINT_SPEED_RAD_S,
     MOVEIT_CODES,
@@ -18,6 +19,7 @@ from drd_planner.planning.moveit_plan import (
     timed_waypoints,
 )
 from drd_planner.planning.plan_outcome import PlanOutcome
+from drd_planner.planning.session_plan import SessionPlan
 
 #: Stand-ins for message objects (fields as attributes).
 Msg = SimpleNamespace
@@ -91,24 +93,24 @@ def test_refused_requests_have_moveit_codes(req: Msg, name: str, text: str) -> N
     assert read.code == MOVEIT_CODES[name]
 
 
-def result(ok: bool, status: str = "path_found", message: str = "", cause: str = "") -> Any:
-    return Msg(ok=ok, status=status, message=message, cause=cause)
+def result(status: PlanStatus, message: str = "", cause: PlanCause | None = None) -> SessionPlan:
+    return SessionPlan(status=status, message=message, map_version=1, prior="t", cause=cause)
 
 
 @pytest.mark.parametrize(
     ("outcome", "name"),
     [
-        (PlanOutcome(result=result(True)), "SUCCESS"),
+        (PlanOutcome(result=result(PlanStatus.FOUND)), "SUCCESS"),
         (
-            PlanOutcome(result=result(False, "no_free_path", "the start state itself is blocked", "start_blocked")),
+            PlanOutcome(result=result(PlanStatus.NO_PATH, "the start state is blocked", PlanCause.START_BLOCKED)),
             "START_STATE_IN_COLLISION",
         ),
         (
-            PlanOutcome(result=result(False, "no_free_path", "the goal state itself is blocked", "goal_blocked")),
+            PlanOutcome(result=result(PlanStatus.NO_PATH, "the goal state is blocked", PlanCause.GOAL_BLOCKED)),
             "GOAL_IN_COLLISION",
         ),
-        (PlanOutcome(result=result(False, "max_checks", "10 checks")), "TIMED_OUT"),
-        (PlanOutcome(result=result(False, "no_free_path", "every path blocked")), "PLANNING_FAILED"),
+        (PlanOutcome(result=result(PlanStatus.BUDGET_EXHAUSTED, "10 checks", PlanCause.CHECK_BUDGET)), "TIMED_OUT"),
+        (PlanOutcome(result=result(PlanStatus.NO_PATH, "every path blocked")), "PLANNING_FAILED"),
         (PlanOutcome(refusal="no joint_states yet", refused="start"), "INVALID_ROBOT_STATE"),
         (PlanOutcome(refusal="no maps", refused="maps"), "FAILURE"),
     ],

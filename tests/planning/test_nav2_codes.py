@@ -14,6 +14,7 @@ from test_service import TREE, Recorder, _feed
 
 from drd_msgs_py.bags import BagMessage, bag_requests, jazzy_typestore, read_bag, topic_base
 from drd_msgs_py.factory import RosbagsMessages
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.geometry.pose import Pose
 from drd_planner.geometry.shapes import Box
 from drd_planner.planner import load_prior
@@ -82,7 +83,7 @@ def test_a_plan_and_each_failure_get_their_one_code(prior: Any, messages: list[B
     timed_out, _ = _ready(prior, messages, max_checks=1)
     timeout = nav2_error(timed_out.serve_request(goal, None))
     assert timeout.name == "TIMEOUT"
-    assert timeout.text.startswith("max checks ran out")
+    assert timeout.text.startswith("the check budget ran out")
 
 
 def test_no_robot_state_and_no_maps_are_tf_error_and_unknown(prior: Any, messages: list[BagMessage]) -> None:
@@ -112,20 +113,24 @@ def test_a_goal_inside_an_obstacle_is_goal_occupied(prior: Any, messages: list[B
     assert error.name == "GOAL_OCCUPIED", error.text
 
 
-def _failed(message: str, status: str = "no_free_path", cause: str = "") -> PlanOutcome:
-    result = SessionPlan(ok=False, status=status, message=message, map_version=1, prior="t", cause=cause)
+def _failed(message: str, status: PlanStatus = PlanStatus.NO_PATH, cause: PlanCause | None = None) -> PlanOutcome:
+    result = SessionPlan(status=status, message=message, map_version=1, prior="t", cause=cause)
     return PlanOutcome(result=result)
 
 
 def test_the_codes_come_from_the_cause_not_from_the_text() -> None:
     walled = "no free path; all 12 edges joining the start [1.0, 2.0] to the graph (3-5 long) were checked blocked"
-    assert nav2_error(_failed(walled, cause="start_blocked")).name == "START_OCCUPIED"
+    assert nav2_error(_failed(walled, cause=PlanCause.START_BLOCKED)).name == "START_OCCUPIED"
     assert nav2_error(_failed(walled)).name == "NO_VALID_PATH"  # words alone name no cause
-    assert nav2_error(_failed("x", cause="goal_blocked")).name == "GOAL_OCCUPIED"
-    assert nav2_error(_failed("x", status="refused", cause="start_outside")).name == "START_OUTSIDE_MAP"
-    assert nav2_error(_failed("x", status="refused", cause="goal_outside")).name == "GOAL_OUTSIDE_MAP"
+    assert nav2_error(_failed("x", cause=PlanCause.GOAL_BLOCKED)).name == "GOAL_OCCUPIED"
+    assert (
+        nav2_error(_failed("x", status=PlanStatus.REFUSED, cause=PlanCause.START_OUTSIDE)).name == "START_OUTSIDE_MAP"
+    )
+    assert nav2_error(_failed("x", status=PlanStatus.REFUSED, cause=PlanCause.GOAL_OUTSIDE)).name == "GOAL_OUTSIDE_MAP"
     cut = "no free path from the start to the goal in the graph: 9 blocked edges disconnect them (40 checks)"
     assert nav2_error(_failed(cut)).name == "NO_VALID_PATH"
-    assert nav2_error(_failed("time budget", status="time_budget")).name == "TIMEOUT"
-    assert nav2_error(_failed("start must be a vertex id", status="refused")).name == "UNKNOWN"
+    assert nav2_error(_failed("x", status=PlanStatus.BUDGET_EXHAUSTED, cause=PlanCause.TIME_BUDGET)).name == "TIMEOUT"
+    capped = nav2_error(_failed("x", status=PlanStatus.BUDGET_EXHAUSTED, cause=PlanCause.CHECK_BUDGET))
+    assert (capped.name, capped.text) == ("TIMEOUT", "x")
+    assert nav2_error(_failed("start must be a vertex id", status=PlanStatus.REFUSED)).name == "UNKNOWN"
     assert nav2_error(PlanOutcome(refusal="x", refused="goal")).name == "GOAL_OUTSIDE_MAP"

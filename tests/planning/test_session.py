@@ -21,6 +21,7 @@ from conftest import SHARED_DATA, own_query
 from drd_planner.cli.main import main
 from drd_planner.core.episode import run_episode
 from drd_planner.core.policies import POLICIES, PolicyContext
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.data.tree_file import save_tree
 from drd_planner.domains.arm import ArmDomain
 from drd_planner.domains.helicopter import HelicopterDomain
@@ -109,7 +110,7 @@ def test_off_graph_start_to_another_goal_on_a_real_map(
     assert HELI_GOAL != prior.trees[0].goal
     assert np.linalg.norm(start - session.vertex_state(0)) == pytest.approx(30.0)
     assert result.ok
-    assert result.status == "path_found"
+    assert result.status is PlanStatus.FOUND
     assert result.query == "connected"
     assert result.stage in ("tree", "bisect", "graph")
     assert result.stage in result.message
@@ -153,10 +154,10 @@ def test_every_found_path_is_free_and_every_failure_has_a_status(heli_prior: Wor
                 np.testing.assert_allclose(result.states[0], start)
                 np.testing.assert_allclose(result.states[-1], session.vertex_state(goal))
             else:
-                assert result.status == "no_free_path"
+                assert result.status is PlanStatus.NO_PATH
                 assert result.path_edges == ()
                 assert "blocked" in result.message
-    assert statuses == {"path_found", "no_free_path"}
+    assert statuses == {PlanStatus.FOUND, PlanStatus.NO_PATH}
 
 
 def test_same_seed_same_checks_and_the_snapshot_cache(
@@ -202,13 +203,13 @@ def test_budgets_end_with_their_own_status(heli_prior: WorldPrior) -> None:
     snapshot = _heli_snapshot(session, 100)
     capped = session.plan(snapshot, _heli_start(session), HELI_GOAL)
     assert not capped.ok
-    assert capped.status == "max_checks"
+    assert (capped.status, capped.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET)
     assert len(capped.checks) == 1
     assert "check budget" in capped.message
     session.set_budgets(None, 1e-9)
     timed = session.plan(snapshot, _heli_start(session) + np.array([1.0, 0.0, 0.0, 0.0]), HELI_GOAL)
     assert not timed.ok
-    assert timed.status == "time_budget"
+    assert (timed.status, timed.cause) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.TIME_BUDGET)
     assert "time budget" in timed.message
     with pytest.raises(ProblemError, match="max_checks"):
         session.set_budgets(0, None)
@@ -303,7 +304,7 @@ def test_unreachable_or_malformed_starts_are_refused(
     session, snapshot, _ = heli_plan
     result = session.plan(snapshot, start, HELI_GOAL)  # type: ignore[arg-type]
     assert not result.ok
-    assert result.status == "refused"
+    assert result.status is PlanStatus.REFUSED
     assert fragment in result.message
     assert result.checks == ()
     assert result.path_edges == ()
@@ -436,7 +437,7 @@ def test_a_legacy_tree_file_serves_its_own_query_only(tmp_path: Path) -> None:
     assert own.query == f"tree:{tree.name}"
     assert own.stage in ("tree", "bisect")
     other = session.plan(snapshot, tree.start, tree.goal - 1, seed=0)
-    assert other.status == "refused"
+    assert other.status is PlanStatus.REFUSED
     assert "drd build-tree" in other.message
     assert session.library_edges().size > 0
 
@@ -508,7 +509,7 @@ def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySe
         goal = session.goal_state_from_position(tool + np.array([0.01, 0.0, 0.0]), snapshot=snapshot)
         np.testing.assert_array_equal(goal, session.vertex_state(vertex))
         result = session.plan(snapshot, start, goal, seed=0)
-        assert result.status in ("path_found", "no_free_path")
+        assert result.status in (PlanStatus.FOUND, PlanStatus.NO_PATH)
         if not result.ok:
             continue
         found += 1
@@ -523,7 +524,7 @@ def test_arm_plans_from_a_joint_state_to_an_end_effector_goal(arm: tuple[QuerySe
         session.goal_state_from_position([5.0, 5.0, 5.0])
     far = session.plan(snapshot, start + 10.0, ARM_GOALS[0])
     # one reason per cause
-    assert far.status == "refused"
+    assert far.status is PlanStatus.REFUSED
     assert "beyond the joint limits" in far.message
 
 
@@ -592,13 +593,13 @@ def test_a_start_below_the_terrain_or_far_outside_gets_its_own_reason(heli_prior
     hill = domain.frame.heightfield(np.full((ys.size, xs.size), 55.0))  # a plateau at 55 m under every level
     snapshot = MapSnapshot(1, {}, hill, session.margin)
     below = session.plan(snapshot, np.array([120.0, 10.0, 45.0, 0.0]), HELI_GOAL)
-    assert below.status == "no_free_path"
+    assert below.status is PlanStatus.NO_PATH
     assert "the start state itself is blocked" in below.message
     assert "the terrain (below it, ground at 55.0 m)" in below.message
     far = session.plan(snapshot, np.array([4120.0, 10.0, 65.0, 0.0]), HELI_GOAL)
-    assert far.status == "refused"
+    assert far.status is PlanStatus.REFUSED
     assert "outside the lattice's horizontal extent" in far.message
     off_line = session.plan(
         _heli_snapshot(session, 101), session.vertex_state(0) + np.array([27.0, 2.0, 0.0, 0.0]), HELI_GOAL
     )
-    assert off_line.status != "refused"  # 2 m off a lattice line joins the lattice
+    assert off_line.status is not PlanStatus.REFUSED  # 2 m off a lattice line joins the lattice

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from drd_planner.core.status import PlanStatus
 from drd_planner.planning.session_plan import SessionCheck, SessionPlan
 
 
@@ -11,13 +12,13 @@ def _check(step: int, free: bool) -> SessionCheck:
 
 def test_blocked_checks_are_counted_from_the_log() -> None:
     checks = tuple(_check(k + 1, free) for k, free in enumerate([True, False, True, False, False]))
-    plan = SessionPlan(ok=False, status="no_free_path", message="", map_version=3, prior="heli", checks=checks)
+    plan = SessionPlan(status=PlanStatus.NO_PATH, message="", map_version=3, prior="heli", checks=checks)
     assert plan.num_blocked == 3
-    assert SessionPlan(ok=False, status="refused", message="", map_version=3, prior="heli").num_blocked == 0
+    assert SessionPlan(status=PlanStatus.REFUSED, message="", map_version=3, prior="heli").num_blocked == 0
 
 
 def test_the_prior_keeps_its_old_name_tree_for_one_release() -> None:
-    plan = SessionPlan(ok=True, status="path_found", message="", map_version=1, prior="heli_lines")
+    plan = SessionPlan(status=PlanStatus.FOUND, message="", map_version=1, prior="heli_lines")
     assert plan.tree == plan.prior == "heli_lines"
     assert plan.states.shape == (0, 3)
     assert (plan.query, plan.stage, plan.cost, plan.improvements) == ("", "", 0.0, 0)

@@ -356,7 +356,7 @@ def test_maps_are_prepared_on_arrival_and_a_bug_in_a_plan_leaves_the_node_planni
         peer.goals.publish(_goal(session))  # the planning thread is still there
         assert spin_until(executor, lambda: bool(peer.plans) and bool(peer.summaries()))
         summary = peer.summaries()[-1]
-        assert summary["result"] == "path_found"
+        assert summary["result"] == "found"
         assert summary["prior"] == summary["tree"] == "heli_wires"  # tree: deprecated, kept for one release
         assert float(summary["prepare_s"]) < 1e-3
         assert float(summary["plan_messaging_s"]) <= float(summary["messaging_s"])

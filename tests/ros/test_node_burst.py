@@ -117,7 +117,7 @@ def test_topic_burst_is_answered_or_coalesced_with_flat_memory(harness: Any) -> 
             bench.print_report(report)
             assert report.lost == 0, f"{report.lost} requests neither answered nor coalesced"
             assert report.answered >= 1
-            assert set(report.results) == {"path_found"}
+            assert set(report.results) == {"found"}
             reports.append(report)
     finally:
         tracemalloc.stop()

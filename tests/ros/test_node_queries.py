@@ -114,7 +114,7 @@ def test_plans_start_at_the_robot_state_reach_any_goal_and_follow_the_robot(cont
             count = len(peer.summaries())
             peer.goals.publish(goal)
             assert spin_until(executor, lambda count=count: len(peer.summaries()) > count)
-            if peer.summaries()[-1]["result"] == "path_found":
+            if peer.summaries()[-1]["result"] == "found":
                 break
         else:
             pytest.fail("no world with a free path")

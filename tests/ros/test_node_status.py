@@ -83,7 +83,7 @@ def test_statuses_are_named_after_the_node_and_say_what_happened(context: Any) -
         beat = peer.summaries("heli_planner: heartbeat")[-1]
         assert beat["maps_known"] == "True"
         assert beat["plan_published"] == "True"
-        assert beat["last_plan"] == "path_found (goal_pose)"
+        assert beat["last_plan"] == "found (goal_pose)"
         assert float(beat["last_plan_age_s"]) < 5
 
 

@@ -23,6 +23,7 @@ from drd_msgs_py.plans import (
     joint_trajectory_message,
     summary_status,
 )
+from drd_planner.core.status import PlanStatus
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.session_plan import SessionCheck, SessionPlan
 from drd_planner.ros.outputs import TRAJECTORY_JOINT_SPEED, PlannerOutputs, plan_summary_values
@@ -141,8 +142,7 @@ def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
 def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:
     checks = (_check(1, True, "tree"), _check(2, False, "tree"), _check(3, True, "bisect"))
     result = SessionPlan(
-        ok=True,
-        status="path_found",
+        status=PlanStatus.FOUND,
         message="found",
         map_version=3,
         prior="heli",
@@ -159,7 +159,8 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     assert (values["tree_checks"], values["bisect_checks"]) == (2, 1)
     assert values["planning_time"] == values["total_s"] == "0.250000"
     assert (values["query"], values["stage"], values["library_s"]) == ("online", "bisect", "0.125000")
-    assert values["result"] == "path_found"
+    assert values["result"] == "found"
+    assert values["cause"] == ""
     assert values["request"] == "goal_pose"
     assert values["map_version"] == 3
     assert values["prior"] == "heli"
@@ -169,7 +170,7 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
 
 def test_summary_reports_the_anytime_improvement_only_when_it_ran() -> None:
     checks = (_check(1, True, "tree"), _check(2, True, "improve"), _check(3, False, "improve"))
-    common = {"ok": True, "status": "path_found", "message": "found", "map_version": 1, "prior": "heli"}
+    common = {"status": PlanStatus.FOUND, "message": "found", "map_version": 1, "prior": "heli"}
     plain = plan_summary_values(
         SessionPlan(**common, checks=checks[:1], cost=751.1),  # type: ignore[arg-type]
         {"request": "goal_pose"},

@@ -138,7 +138,7 @@ def _check_requests(summary: ReplaySummary, bag: Path, out: Path, tree: str, fra
             for s in m.message.status
         ]
         assert any(
-            v.get("result") == "path_found"
+            v.get("result") == "found"
             and v.get("checks") == str(len(offline.checks))
             and v.get("query") == offline.query
             for v in summaries

@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy (ROS or the PyPI wheels) not installed")
 
+from drd_planner.core.status import PlanStatus
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.service import PlanRecord
 from drd_planner.ros.reporter import NodeReporter
@@ -55,7 +56,9 @@ class _Logger:
 def _result(ok: bool) -> Any:
     return SimpleNamespace(
         ok=ok,
-        status="path_found" if ok else "no_free_path",
+        status=PlanStatus.FOUND if ok else PlanStatus.NO_PATH,
+        outcome="found" if ok else "no_path",
+        cause=None,
         message="m",
         prior="t",
         query="q",
@@ -82,7 +85,7 @@ def test_a_found_plan_goes_out_first_and_the_summary_last() -> None:
     assert reporter.result(record, wait_s=0.5, publish=publish) == "path"
     assert [k for k, _ in outputs.sent] == ["plan", "checks", "markers", "plan"]
     summary = outputs.sent[-1][1]
-    assert summary["result"] == "path_found"
+    assert summary["result"] == "found"
     assert summary["wait_s"] == "0.500000"
     assert summary["request"] == "goal_pose"
     assert summary["prior"] == "t"

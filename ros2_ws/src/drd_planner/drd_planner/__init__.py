@@ -20,6 +20,7 @@ __version__ = "0.1.0"
 
 if TYPE_CHECKING:  # the names below load on first use (``planner_node`` installs its signal handlers first)
     from drd_planner.core.episode import CheckRecord, EdgeOracle, TableOracle
+    from drd_planner.core.status import PlanCause, PlanStatus
     from drd_planner.exceptions import DrdError, PlanningError, PriorFileError
     from drd_planner.planner import (
         PLAN_POLICIES,
@@ -29,7 +30,6 @@ if TYPE_CHECKING:  # the names below load on first use (``planner_node`` install
         Planner,
         PlanResult,
         PlanStage,
-        PlanStatus,
         PlanTimings,
         QueryError,
         QueryTree,
@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # the names below load on first use (``planner_node`` install
 #: Exported name -> the module that defines it (imported on first access, PEP 562).
 _EXPORTS: dict[str, str] = {
     **dict.fromkeys(("CheckRecord", "EdgeOracle", "TableOracle"), "drd_planner.core.episode"),
+    **dict.fromkeys(("PlanCause", "PlanStatus"), "drd_planner.core.status"),
     **dict.fromkeys(("DrdError", "PlanningError", "PriorFileError"), "drd_planner.exceptions"),
     **dict.fromkeys(
         (
@@ -52,7 +53,6 @@ _EXPORTS: dict[str, str] = {
             "Planner",
             "PlanResult",
             "PlanStage",
-            "PlanStatus",
             "PlanTimings",
             "QueryError",
             "QueryTree",
@@ -73,6 +73,7 @@ __all__ = [
     "ImproveBudget",
     "Improvement",
     "LeafSetting",
+    "PlanCause",
     "PlanResult",
     "PlanStage",
     "PlanStatus",

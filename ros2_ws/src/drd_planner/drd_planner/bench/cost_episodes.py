@@ -28,7 +28,7 @@ import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray
 from drd_planner.bench.check_cost import Timed, timed, with_check_cost
-from drd_planner.core.episode import EdgeOracle, EpisodeStatus, run_episode
+from drd_planner.core.episode import EdgeOracle, run_episode
 from drd_planner.core.lazysp import GraphArcs, LazySP, LazySPSettings
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph
@@ -146,7 +146,7 @@ def lazysp_episode(planner: Planner, query: CostQuery, index: int, oracle: EdgeO
         graph = graph_query.graph
         search = LazySP(graph, graph_query.start, graph_query.goal, LazySPSettings(max_checks=None))
         episode = run_episode(None, graph.lengths, search, _target(graph_query, costly))
-        if episode.status is not EpisodeStatus.PATH_FOUND or episode.path_edges is None:
+        if not episode.success or episode.path_edges is None:
             return []
         log = {c.edge: c.free for c in episode.checks}
         edges = [int(e) for e in episode.path_edges]

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from drd_planner.bench.ompl_peer import LiveWorlds, run_ompl_lazyprm_live
-from drd_planner.core.episode import EpisodeStatus, run_episode
+from drd_planner.core.episode import run_episode
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import LazySP, LazySPSettings
 from drd_planner.domains.base import EdgeChecker
@@ -127,7 +127,7 @@ def time_lazysp(
     policy = LazySP(graph, query[0], query[1], LazySPSettings(max_checks=None))
     episode = run_episode(None, graph.lengths, policy, oracle)
     seconds = time.perf_counter() - t0
-    found = episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None
+    found = episode.success and episode.path_edges is not None
     edges = [int(e) for e in episode.path_edges] if found and episode.path_edges is not None else []
     return PlanRun(
         "lazysp",

@@ -141,9 +141,12 @@ def draw_checked_edges(ax: Axes, problem: Problem, result: EpisodeResult, *, tit
 
 
 def episode_title(name: str, result: EpisodeResult) -> str:
-    """``name: N checks`` (plus the failure status when no path was verified)."""
+    """``name: N checks`` (plus the failure status, and its cause when it has one, when no path was verified)."""
     text = f"{name}: {result.num_checks} checks"
-    return text if result.success else f"{text} ({result.status.value})"
+    if result.success:
+        return text
+    cause = f": {result.cause.value}" if result.cause is not None else ""
+    return f"{text} ({result.status.value}{cause})"
 
 
 def plot_checked_edges(

@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import maximum_flow, shortest_path
 
 from drd_planner.arrays import BoolArray, IntArray
-from drd_planner.core.episode import EpisodeStatus, TableOracle, run_episode, verify_path
+from drd_planner.core.episode import TableOracle, run_episode, verify_path
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import SELECTORS, GraphArcs, LazySP, LazySPSettings, lazysp_name
 from drd_planner.core.problem import Problem
@@ -197,10 +197,7 @@ def _episode(
         t0 = time.perf_counter()
         result = run_episode(None, planner.prior.edge_costs, policy, TableOracle(outcomes), max_checks=max_checks)
         spent = (time.perf_counter() - t0) * 1e3 - sum(c.check_ms for c in result.checks)
-        status = {EpisodeStatus.PATH_FOUND: "found", EpisodeStatus.NO_FREE_PATH: "no_path"}.get(
-            result.status, "budget_exhausted"
-        )
-        return result.path_edges, result.num_checks, status, spent, "lazysp"
+        return result.path_edges, result.num_checks, result.status.value, spent, "lazysp"
     plan = planner.plan(start, goal, TableOracle(outcomes), seed=seed, max_checks=max_checks, policy=name)
     edges = plan.edges if plan.found else None
     if edges is not None and edges.size:

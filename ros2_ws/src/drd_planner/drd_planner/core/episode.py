@@ -10,7 +10,6 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from enum import Enum
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -18,6 +17,7 @@ import numpy.typing as npt
 
 from drd_planner.arrays import IntArray
 from drd_planner.core.library import PathLibrary
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import PolicyError, UnverifiedPathError
 
 
@@ -56,8 +56,8 @@ class Policy(Protocol):
 class GraphPathPolicy(Policy, Protocol):
     """A policy whose answer is its own path in the graph, not a library path (LazySP).
 
-    The runner ends its episode with PATH_FOUND (``path_index`` None, ``path_edges`` the proposed
-    path) once every edge of :meth:`proposed_path` was checked free, and with NO_FREE_PATH when that
+    The runner ends its episode with FOUND (``path_index`` None, ``path_edges`` the proposed
+    path) once every edge of :meth:`proposed_path` was checked free, and with NO_PATH when that
     returns None. Library paths stop it too only if :attr:`stops_on_library_path` is True.
     """
 
@@ -95,14 +95,14 @@ class TableOracle:
         return bool(self._outcomes[edge])
 
 
-class EpisodeStatus(str, Enum):
-    """How an episode ended."""
+#: How an episode ended: its status, and why it found no path (a :class:`PlanCause`, or None).
+Ending = tuple[PlanStatus, PlanCause | None]
 
-    PATH_FOUND = "path_found"
-    NO_FREE_PATH = "no_free_path"
-    POLICY_GAVE_UP = "policy_gave_up"
-    MAX_CHECKS = "max_checks"
-    TIME_BUDGET = "time_budget"
+_FOUND: Ending = (PlanStatus.FOUND, None)
+_NO_PATH: Ending = (PlanStatus.NO_PATH, None)
+_GAVE_UP: Ending = (PlanStatus.BUDGET_EXHAUSTED, PlanCause.POLICY_GAVE_UP)
+_CHECK_BUDGET: Ending = (PlanStatus.BUDGET_EXHAUSTED, PlanCause.CHECK_BUDGET)
+_TIME_BUDGET: Ending = (PlanStatus.BUDGET_EXHAUSTED, PlanCause.TIME_BUDGET)
 
 
 @dataclass(frozen=True)
@@ -123,18 +123,21 @@ class EpisodeResult:
 
     Attributes:
         checks: every check in order.
-        status: how the episode ended.
-        path_index: index of the proven-free library path, when status is PATH_FOUND (None when a
+        status: how the episode ended: FOUND, NO_PATH or BUDGET_EXHAUSTED (see :func:`run_episode`).
+        path_index: index of the proven-free library path, when status is FOUND (None when a
             :class:`GraphPathPolicy` found its own path).
         path_edges: the proven-free path's edge ids in traversal order.
-        blocked_evidence: for NO_FREE_PATH, (m,) the checked blocked edge that rules out each path.
+        blocked_evidence: for NO_PATH, (m,) the checked blocked edge that rules out each path.
+        cause: for BUDGET_EXHAUSTED, what stopped it: ``CHECK_BUDGET``, ``TIME_BUDGET`` or
+            ``POLICY_GAVE_UP``; None otherwise.
     """
 
     checks: tuple[CheckRecord, ...]
-    status: EpisodeStatus
+    status: PlanStatus
     path_index: int | None
     path_edges: IntArray | None
     blocked_evidence: IntArray | None = None
+    cause: PlanCause | None = None
 
     @property
     def num_checks(self) -> int:
@@ -144,7 +147,12 @@ class EpisodeResult:
     @property
     def success(self) -> bool:
         """True when a path was proven free."""
-        return self.status is EpisodeStatus.PATH_FOUND
+        return self.status is PlanStatus.FOUND
+
+    @property
+    def ran_out(self) -> PlanCause | None:
+        """The budget that ran out (``CHECK_BUDGET`` or ``TIME_BUDGET``); None otherwise (a policy giving up too)."""
+        return self.cause if self.cause is not None and self.cause.is_budget else None
 
     def total_cost(self, edge_costs: npt.ArrayLike) -> float:
         """Sum of the checked edges' costs."""
@@ -196,13 +204,14 @@ def run_episode(
 ) -> EpisodeResult:
     """Drive ``policy`` against ``oracle`` until a library path is proven free or none can be.
 
-    The episode ends when (1) some library path has every edge checked free (PATH_FOUND), (2) every
-    library path has a checked blocked edge (NO_FREE_PATH), (3) the policy has nothing left to ask
-    (POLICY_GAVE_UP), (4) ``max_checks`` checks were made (MAX_CHECKS), or (5) ``time.perf_counter()``
-    passed ``deadline`` before a selection (TIME_BUDGET).
+    The episode ends when (1) some library path has every edge checked free (FOUND), (2) every
+    library path has a checked blocked edge (NO_PATH), or BUDGET_EXHAUSTED with its cause when (3) the
+    policy has nothing left to ask (``POLICY_GAVE_UP``: nothing proven either way), (4) ``max_checks``
+    checks were made (``CHECK_BUDGET``), or (5) ``time.perf_counter()`` passed ``deadline`` before a
+    selection (``TIME_BUDGET``).
 
-    A :class:`GraphPathPolicy` is instead stopped by its own path: before each selection, PATH_FOUND
-    (``path_index`` None) when every edge of ``proposed_path()`` was checked free, NO_FREE_PATH (no
+    A :class:`GraphPathPolicy` is instead stopped by its own path: before each selection, FOUND
+    (``path_index`` None) when every edge of ``proposed_path()`` was checked free, NO_PATH (no
     ``blocked_evidence``) when it is None. Rules (1) and (2) then apply only if the policy's
     ``stops_on_library_path`` says so, and its ``max_checks`` caps the episode too.
 
@@ -217,10 +226,10 @@ def run_episode(
         UnverifiedPathError: never, unless the bookkeeping itself is broken (a last safety net).
     """
     episode = _Episode(library, edge_costs, policy, oracle, max_checks, known)
-    status = episode.settled_by_known()
-    if status is None:
-        status = episode.run(deadline)
-    return episode.result(status)
+    ending = episode.settled_by_known()
+    if ending is None:
+        ending = episode.run(deadline)
+    return episode.result(ending)
 
 
 class _Episode:
@@ -258,48 +267,48 @@ class _Episode:
         self.log: list[CheckRecord] = []
         self.own_path: IntArray | None = None
 
-    def settled_by_known(self) -> EpisodeStatus | None:
-        """PATH_FOUND or NO_FREE_PATH when the earlier checks already settle the library, else None."""
+    def settled_by_known(self) -> Ending | None:
+        """FOUND or NO_PATH when the earlier checks already settle the library, else None."""
         if self.progress is None or not self.library_stops or not self.outcome:
             return None
         if self.progress.proven_path(self.costs) is not None:
-            return EpisodeStatus.PATH_FOUND
+            return _FOUND
         if self.progress.all_blocked():
-            return EpisodeStatus.NO_FREE_PATH
+            return _NO_PATH
         return None
 
-    def run(self, deadline: float | None) -> EpisodeStatus:
+    def run(self, deadline: float | None) -> Ending:
         """Select, check and observe until one of the stopping rules of :func:`run_episode` applies."""
         while True:
             t0 = time.perf_counter()  # a graph policy's re-planning in proposed_path() is selection time
-            status = self._stop_before_selection(t0, deadline)
-            if status is not None:
-                return status
+            ending = self._stop_before_selection(t0, deadline)
+            if ending is not None:
+                return ending
             choice = self.policy.select()
             t1 = time.perf_counter()
             if choice is None:
-                return EpisodeStatus.POLICY_GAVE_UP
-            status = self._check(int(choice), t0, t1)
-            if status is not None:
-                return status
+                return _GAVE_UP
+            ending = self._check(int(choice), t0, t1)
+            if ending is not None:
+                return ending
 
-    def _stop_before_selection(self, t0: float, deadline: float | None) -> EpisodeStatus | None:
+    def _stop_before_selection(self, t0: float, deadline: float | None) -> Ending | None:
         """The graph policy's own path rules, then the check cap, then the deadline."""
         if self.graph_policy is not None:
             proposed = self.graph_policy.proposed_path()
             if proposed is None:
-                return EpisodeStatus.NO_FREE_PATH
+                return _NO_PATH
             if all(self.outcome.get(int(e)) is True for e in proposed):
                 self.own_path = np.array(proposed, dtype=np.int64)
-                return EpisodeStatus.PATH_FOUND
+                return _FOUND
         if self.limit is not None and len(self.log) >= self.limit:
-            return EpisodeStatus.MAX_CHECKS
+            return _CHECK_BUDGET
         if deadline is not None and t0 >= deadline:
-            return EpisodeStatus.TIME_BUDGET
+            return _TIME_BUDGET
         return None
 
-    def _check(self, edge: int, t0: float, t1: float) -> EpisodeStatus | None:
-        """Check ``edge`` (chosen between ``t0`` and ``t1``), log it, tell the policy; the status if it ends."""
+    def _check(self, edge: int, t0: float, t1: float) -> Ending | None:
+        """Check ``edge`` (chosen between ``t0`` and ``t1``), log it, tell the policy; the ending if it ends."""
         if not 0 <= edge < self.num_edges:
             raise PolicyError(f"policy {self.policy.name} chose edge {edge}, outside [0, {self.num_edges})")
         if edge in self.outcome:
@@ -316,29 +325,30 @@ class _Episode:
         if not self.library_stops:
             return None
         if free and progress.proven_path(self.costs) is not None:
-            return EpisodeStatus.PATH_FOUND
+            return _FOUND
         if not free and progress.all_blocked():
-            return EpisodeStatus.NO_FREE_PATH
+            return _NO_PATH
         return None
 
-    def result(self, status: EpisodeStatus) -> EpisodeResult:
+    def result(self, ending: Ending) -> EpisodeResult:
         """The episode's result; the returned path is verified against the outcomes (the safety net)."""
+        status, cause = ending
         path_index: int | None = None
         path_edges: IntArray | None = None
         progress = self.progress
         if self.own_path is not None:
             path_edges = self.own_path
-        elif status is EpisodeStatus.PATH_FOUND and progress is not None and self.library is not None:
+        elif status is PlanStatus.FOUND and progress is not None and self.library is not None:
             path_index = progress.proven_path(self.costs)
             if path_index is not None:
                 path_edges = self.library.path_edges[path_index]
         if path_edges is not None:
             verify_path(path_edges, self.outcome)
         evidence = None
-        if status is EpisodeStatus.NO_FREE_PATH and progress is not None and self.library_stops:
+        if status is PlanStatus.NO_PATH and progress is not None and self.library_stops:
             if progress.all_blocked():
                 evidence = progress.blocker.copy()
-        return EpisodeResult(tuple(self.log), status, path_index, path_edges, evidence)
+        return EpisodeResult(tuple(self.log), status, path_index, path_edges, evidence, cause)
 
 
 def verify_path(path_edges: Sequence[int] | IntArray, outcome: dict[int, bool]) -> None:

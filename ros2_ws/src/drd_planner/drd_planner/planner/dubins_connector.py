@@ -32,10 +32,10 @@ import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.status import PlanCause
 from drd_planner.domains.dubins import DubinsPath, dubins_lengths, dubins_path, path_to_point, point_lengths
 from drd_planner.domains.dubins_batch import dubins_sketches
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.connect import Motion, vertex_states_of
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior

@@ -20,8 +20,8 @@ from scipy.spatial import cKDTree
 
 from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.status import PlanCause
 from drd_planner.exceptions import PlanningError
-from drd_planner.planner.cause import PlanCause
 
 #: Default snap tolerance as a fraction of the median edge length.
 SNAP_FRACTION_OF_EDGE = 0.25

@@ -26,7 +26,7 @@ import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord, EdgeOracle
-from drd_planner.planner.cause import PlanCause
+from drd_planner.core.status import PlanCause
 from drd_planner.planner.connect import MotionExplainer, MotionOracle
 from drd_planner.planner.growth_samples import known_reachable
 from drd_planner.planner.prior import WorldPrior

@@ -35,11 +35,12 @@ from typing import Any
 import numpy as np
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeStatus, run_episode
+from drd_planner.core.episode import CheckRecord, EdgeOracle, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
+from drd_planner.core.status import PlanCause
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
@@ -316,11 +317,10 @@ class Planner:
             )
             checks.extend(episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
-            if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
+            if episode.success and episode.path_edges is not None:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)
-            if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-                ran_out = episode.status is EpisodeStatus.MAX_CHECKS
-                return exhausted_result(model, ran_out, checks, t_model, t_begin)
+            if episode.ran_out is not None:  # a policy that gave up goes on to the graph, as a blocked library
+                return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
         return self._plan_on_graph(model, oracle, known, checks, limits, times)
 
     def _resolve(self, start: Endpoint, goal: Endpoint, oracle: EdgeOracle) -> QueryModel | int:
@@ -357,17 +357,17 @@ class Planner:
         t_model, t_begin = times
         budget = None if limits.max_checks is None else limits.max_checks - len(checks)
         if budget is not None and budget <= 0:
-            return exhausted_result(model, True, checks, t_model, t_begin)
+            return exhausted_result(model, PlanCause.CHECK_BUDGET, checks, t_model, t_begin)
         graph_episode = lazy_search(
             self.prior, model.query, oracle, known, budget=budget, deadline=limits.deadline, stage="graph"
         )
         offset = len(checks)
         checks.extend(dataclasses.replace(c, step=c.step + offset) for c in graph_episode.checks)
         known.update({c.edge: c.free for c in graph_episode.checks})
-        if graph_episode.status is EpisodeStatus.PATH_FOUND and graph_episode.path_edges is not None:
+        if graph_episode.success and graph_episode.path_edges is not None:
             return found_result(model, graph_episode.path_edges, checks, PlanStage.GRAPH, times)
-        if graph_episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-            return exhausted_result(model, graph_episode.status is EpisodeStatus.MAX_CHECKS, checks, t_model, t_begin)
+        if graph_episode.ran_out is not None:
+            return exhausted_result(model, graph_episode.ran_out, checks, t_model, t_begin)
         raw, report = _unwrapped(oracle), None
         growth = self._growth(model)
         if growth is not None and isinstance(raw, MotionOracle):
@@ -375,11 +375,10 @@ class Planner:
                 raw, known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
             )
             report = grown.report
-            if grown.status is EpisodeStatus.PATH_FOUND and grown.path_edges is not None:
+            if grown.status is PlanStatus.FOUND and grown.path_edges is not None:
                 return found_result(model, grown.path_edges, checks, PlanStage.GROW, times, report)
-            if grown.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
-                ran_out = grown.status is EpisodeStatus.MAX_CHECKS
-                return exhausted_result(model, ran_out, checks, t_model, t_begin, report)
+            if grown.cause is not None and grown.cause.is_budget:
+                return exhausted_result(model, grown.cause, checks, t_model, t_begin, report)
         query = model.query if report is None else report.query
         along = edge_states_of(self.prior, query, getattr(self._connector, "segment", None))
         reason = no_path_reason(query, checks, raw, along, report)

@@ -9,8 +9,8 @@ import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
+from drd_planner.core.status import PlanCause
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.connect import EdgeSampleIndex, Motion, MotionOracle, QueryConnector, imputed_columns
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior

@@ -1,7 +1,12 @@
-"""What :meth:`drd_planner.planner.Planner.plan` returns: status, verified path, check log, timings."""
+"""What :meth:`drd_planner.planner.Planner.plan` returns: status, verified path, check log, timings.
+
+The status (:class:`~drd_planner.core.status.PlanStatus`) and cause (:class:`~drd_planner.core.status.PlanCause`)
+enums live at the core's floor (the episode runner speaks them too); ``PlanStatus`` is re-exported here.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -12,27 +17,28 @@ import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import PlanningError
-from drd_planner.planner.cause import PlanCause
 from drd_planner.planner.query_library import vertex_sequence
+
+__all__ = [
+    "GrowthReport",
+    "Improvement",
+    "PlanResult",
+    "PlanStage",
+    "PlanStatus",
+    "PlanTimings",
+    "exhausted_result",
+    "found_result",
+    "library_stage",
+    "plan_timings",
+    "trivial_result",
+    "unproven_result",
+]
 
 if TYPE_CHECKING:
     from drd_planner.planner.query_graph import QueryGraph
     from drd_planner.planner.query_model import QueryModel
-
-
-class PlanStatus(str, Enum):
-    """How a plan ended."""
-
-    #: A path was found and every edge of it was checked free in this plan.
-    FOUND = "found"
-    #: No free start-goal path was found: the graph has none given the checks made and, for a domain that
-    #: grows its roadmap, none was found within the growth budget (the reason says what was tried).
-    NO_PATH = "no_path"
-    #: ``max_checks`` or ``time_budget_s`` ran out first: nothing is known to be free yet.
-    BUDGET_EXHAUSTED = "budget_exhausted"
-    #: The query cannot be served (a malformed or unreachable start or goal); no check was made.
-    REFUSED = "refused"
 
 
 class PlanStage(str, Enum):
@@ -157,7 +163,9 @@ class PlanResult:
             ``plan_checks``, ``plan_time``); empty without an ``improve_budget``.
         growth: what roadmap growth did when the plan grew the graph (None when it did not); then
             ``vertices``, ``edges``, ``checks`` and ``motions`` use the ids of ``growth.query``.
-        cause: why it failed, as a value, where the planner can tell (None otherwise, and when FOUND).
+        cause: why it failed, as a value, where the planner can tell: the end outside or walled in, or for
+            BUDGET_EXHAUSTED the budget that ran out (``CHECK_BUDGET``, ``TIME_BUDGET``); None otherwise, and
+            when FOUND.
     """
 
     status: PlanStatus
@@ -247,18 +255,19 @@ def unproven_result(
 
 def exhausted_result(
     model: QueryModel,
-    checks_ran_out: bool,
+    ran_out: PlanCause,
     checks: list[CheckRecord],
     t_model: float,
     t_begin: float,
     growth: GrowthReport | None = None,
 ) -> PlanResult:
-    """The BUDGET_EXHAUSTED result of a plan whose check budget (or else time budget) ran out."""
-    what = "check budget" if checks_ran_out else "time budget"
+    """The BUDGET_EXHAUSTED result of a plan whose ``ran_out`` budget (``CHECK_BUDGET``, ``TIME_BUDGET``) ran out."""
+    what = "check budget" if ran_out is PlanCause.CHECK_BUDGET else "time budget"
     reason = f"the {what} ran out after {len(checks)} checks before a path was verified"
     if growth is not None:
         reason += f"; {growth.summary()}"
-    return unproven_result(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin, growth)
+    result = unproven_result(model, PlanStatus.BUDGET_EXHAUSTED, reason, checks, t_model, t_begin, growth)
+    return dataclasses.replace(result, cause=ran_out)
 
 
 def found_result(

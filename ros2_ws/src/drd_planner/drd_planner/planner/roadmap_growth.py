@@ -33,8 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
-from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, EpisodeStatus, run_episode
+from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, run_episode
 from drd_planner.core.lazysp import LazySP, LazySPSettings
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.connect import EdgeSampleIndex, MotionOracle
 from drd_planner.planner.graph_fallback import (
@@ -152,15 +153,17 @@ class GrowthOutcome:
     """How growth ended.
 
     Attributes:
-        status: PATH_FOUND, NO_FREE_PATH (a growth budget ended first), MAX_CHECKS or TIME_BUDGET (the
-            plan's budgets).
-        path_edges: (L,) edge ids of the verified path in the grown graph (None unless PATH_FOUND).
+        status: FOUND, NO_PATH (a growth budget ended first, or nothing more to add) or BUDGET_EXHAUSTED
+            (one of the plan's budgets ran out).
+        path_edges: (L,) edge ids of the verified path in the grown graph (None unless FOUND).
         report: what growth did, with the grown query.
+        cause: for BUDGET_EXHAUSTED, the plan's budget that ran out (``CHECK_BUDGET``, ``TIME_BUDGET``).
     """
 
-    status: EpisodeStatus
+    status: PlanStatus
     path_edges: IntArray | None
     report: GrowthReport
+    cause: PlanCause | None = None
 
 
 def lazy_search(
@@ -294,12 +297,13 @@ class GraphGrowth(ABC):
             offset = len(checks)
             checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
-            if episode.status is EpisodeStatus.PATH_FOUND and episode.path_edges is not None:
-                return GrowthOutcome(EpisodeStatus.PATH_FOUND, episode.path_edges, self._report("path", checks))
-            if episode.status in (EpisodeStatus.MAX_CHECKS, EpisodeStatus.TIME_BUDGET):
+            if episode.success and episode.path_edges is not None:
+                return GrowthOutcome(PlanStatus.FOUND, episode.path_edges, self._report("path", checks))
+            if episode.ran_out is not None:
                 stop = self._budget_stop(checks, max_checks, deadline, own_deadline) or "checks"
-        status = {"plan_checks": EpisodeStatus.MAX_CHECKS, "plan_time": EpisodeStatus.TIME_BUDGET}
-        return GrowthOutcome(status.get(stop, EpisodeStatus.NO_FREE_PATH), None, self._report(stop, checks))
+        ran_out = {"plan_checks": PlanCause.CHECK_BUDGET, "plan_time": PlanCause.TIME_BUDGET}.get(stop)
+        status = PlanStatus.NO_PATH if ran_out is None else PlanStatus.BUDGET_EXHAUSTED
+        return GrowthOutcome(status, None, self._report(stop, checks), ran_out)
 
     def _checks_left(self, checks: list[CheckRecord], max_checks: int | None) -> int | None:
         """Checks this round may make: the least of the plan's and the growth's budgets left (None: no limit)."""

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drd_planner.core.status import PlanStatus
 from drd_planner.exceptions import DrdError
 
 __all__ = ["BagPlanOptions", "plan_bag", "print_check"]
@@ -90,7 +91,7 @@ def plan_bag(options: BagPlanOptions) -> int:
             f"{options.request} refused; the node would plan on the maps before them, map version "
             f"{plan.maps.snapshot.version}: --skip-refused-maps plans that way)"
         )
-    if plan.result.status == "refused":  # a start or goal the prior cannot serve
+    if plan.result.status is PlanStatus.REFUSED:  # a start or goal the prior cannot serve
         raise DrdError(f"request {options.request} refused: {plan.result.message}")
     snapshot, request, result = plan.maps.snapshot, plan.request, plan.result
     terrain = "none" if snapshot.terrain is None else "x".join(str(n) for n in snapshot.terrain.shape)
@@ -106,7 +107,7 @@ def plan_bag(options: BagPlanOptions) -> int:
     for k, check in enumerate(result.checks):
         print_check(k + 1, check.edge, check.endpoints, check.free, check.stage)
     if not result.ok:
-        print(f"  -> {result.status} after {len(result.checks)} checks: {result.message}")
+        print(f"  -> {result.outcome} after {len(result.checks)} checks: {result.message}")
         return 1
     print(
         f"  -> path ({len(result.path_edges)} edges) verified free after {len(result.checks)} checks "

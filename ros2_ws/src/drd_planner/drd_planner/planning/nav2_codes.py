@@ -23,16 +23,17 @@ no free path otherwise                              ``NO_VALID_PATH``
 no maps yet, a malformed request, a bug, the rest   ``UNKNOWN``
 ==================================================  ======================
 
-The codes come from the plan's cause (:class:`~drd_planner.planner.cause.PlanCause`), never from its reason
-text. When both ends are walled in, the start's code wins (Nav2's result lists its codes in priority order,
-start before goal). A cancelled plan has no code: the goal ends CANCELED, as in Nav2.
+The codes come from the plan's status and cause (:class:`~drd_planner.core.status.PlanStatus`,
+:class:`~drd_planner.core.status.PlanCause`), never from its reason text. When both ends are walled in, the
+start's code wins (Nav2's result lists its codes in priority order, start before goal). A cancelled
+plan has no code: the goal ends CANCELED, as in Nav2.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from drd_planner.planner.cause import PlanCause
+from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.planning.plan_outcome import PlanOutcome
 
 __all__ = ["NAV2_CODES", "Nav2Error", "nav2_error"]
@@ -72,12 +73,12 @@ class Nav2Error:
         return NAV2_CODES[self.name]
 
 
-#: The code of each failure cause the planner names (the values of :class:`PlanCause`).
+#: The code of each failure cause of an end the planner names.
 _CAUSE_CODE = {
-    PlanCause.START_OUTSIDE.value: "START_OUTSIDE_MAP",
-    PlanCause.GOAL_OUTSIDE.value: "GOAL_OUTSIDE_MAP",
-    PlanCause.START_BLOCKED.value: "START_OCCUPIED",
-    PlanCause.GOAL_BLOCKED.value: "GOAL_OCCUPIED",
+    PlanCause.START_OUTSIDE: "START_OUTSIDE_MAP",
+    PlanCause.GOAL_OUTSIDE: "GOAL_OUTSIDE_MAP",
+    PlanCause.START_BLOCKED: "START_OCCUPIED",
+    PlanCause.GOAL_BLOCKED: "GOAL_OCCUPIED",
 }
 
 
@@ -91,7 +92,8 @@ def nav2_error(outcome: PlanOutcome) -> Nav2Error:
     if result.ok:
         return Nav2Error("NONE", "")
     message = result.message
-    if result.status in ("max_checks", "time_budget"):
-        return Nav2Error("TIMEOUT", f"{result.status.replace('_', ' ')} ran out: {message}")
-    fallback = "UNKNOWN" if result.status == "refused" else "NO_VALID_PATH"
-    return Nav2Error(_CAUSE_CODE.get(result.cause, fallback), message)
+    if result.status is PlanStatus.BUDGET_EXHAUSTED:  # the message says which budget ran out
+        return Nav2Error("TIMEOUT", message)
+    fallback = "UNKNOWN" if result.status is PlanStatus.REFUSED else "NO_VALID_PATH"
+    code = _CAUSE_CODE.get(result.cause, fallback) if result.cause is not None else fallback
+    return Nav2Error(code, message)

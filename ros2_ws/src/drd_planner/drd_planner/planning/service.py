@@ -33,6 +33,7 @@ from typing import Any
 from drd_msgs_py.exceptions import MessageError
 from drd_msgs_py.topics import topic_base
 from drd_planner.arrays import FloatArray
+from drd_planner.core.status import PlanStatus
 from drd_planner.domains.online import RobotStateTopic
 from drd_planner.domains.pose_states import state_from_pose
 from drd_planner.exceptions import DrdError, InvariantError, PlanningError
@@ -389,7 +390,7 @@ class PlannerService:
             self._out.bug(text, exc)
             return PlanOutcome(internal_error=text, session=session, snapshot=snapshot)
         # A start or goal the prior cannot serve is a refused request, not a plan.
-        if result.status == "refused":
+        if result.status is PlanStatus.REFUSED:
             self._out.error(f"{values.get('request', 'request')} refused: {result.message}")
             return PlanOutcome(result=result, session=session, snapshot=snapshot)
         refused = self._refused

@@ -34,6 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray, IntArray
+from drd_planner.core.status import PlanStatus
 from drd_planner.exceptions import PlanningError, ProblemError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.planner.anytime import ImproveBudget, as_improve_budget
@@ -41,7 +42,6 @@ from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
-from drd_planner.planner.result import PlanStatus
 from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.domain_view import DomainSession, state_positions, straight_edge_states
 from drd_planner.planning.map_state import MapSnapshot
@@ -54,13 +54,6 @@ from drd_planner.planning.snapshot_oracle import SnapshotOracle
 DEFAULT_SNAP_TOLERANCE = 1e-6
 #: How far (m) an arm's end-effector goal may lie from the nearest roadmap vertex's end effector.
 DEFAULT_POSITION_TOLERANCE = 0.05
-
-#: The :attr:`SessionPlan.status` of each planner status (a budget's status depends on the budget).
-PLANNER_STATUS = {
-    PlanStatus.FOUND: "path_found",
-    PlanStatus.NO_PATH: "no_free_path",
-    PlanStatus.REFUSED: "refused",
-}
 
 
 class SessionBudgets(TypedDict):
@@ -288,8 +281,8 @@ class QuerySession(DomainSession):
         """Plan from ``start`` to ``goal`` (vertex ids or (D,) states) on ``snapshot``; ``cancel`` stops it.
 
         Returns:
-            ``ok`` only with a verified path (status ``path_found``); otherwise status ``no_free_path``,
-            ``max_checks``, ``time_budget`` or ``refused`` (a malformed or unreachable start or goal, or a
+            ``ok`` only with a verified path (status FOUND); otherwise status NO_PATH, BUDGET_EXHAUSTED
+            (``cause`` CHECK_BUDGET or TIME_BUDGET) or REFUSED (a malformed or unreachable start or goal, or a
             query a legacy tree file cannot serve) and the reason in ``message``.
 
         Raises:
@@ -328,21 +321,20 @@ class QuerySession(DomainSession):
             "query": result.query,
             "query_cached": result.query_cached,
             "library_size": result.library_size,
-            "cause": "" if result.cause is None else result.cause.value,
+            "cause": result.cause,
         }
         blocked = sum(not c.free for c in checks)
         if not result.found:
-            status = PLANNER_STATUS.get(result.status) or self._budget_status(result)
             seconds["total"] = time.perf_counter() - t0
-            message = result.reason if status == "refused" else f"{result.reason} ({blocked} blocked)"
-            return SessionPlan(ok=False, status=status, message=message, seconds=seconds, **common)
+            refused = result.status is PlanStatus.REFUSED
+            message = result.reason if refused else f"{result.reason} ({blocked} blocked)"
+            return SessionPlan(status=result.status, message=message, seconds=seconds, **common)
         path, states = self._verified_path(result, query)
         motions = sum(e >= self._num_edges for e in path)
         stage = result.stage.value if result.stage is not None else ""
         seconds["total"] = time.perf_counter() - t0
         return SessionPlan(
-            ok=True,
-            status="path_found",
+            status=PlanStatus.FOUND,
             message=(
                 f"path of {len(path)} edges ({motions} new motions) proven by the {stage} stage after "
                 f"{len(checks)} checks ({blocked} blocked){_improvement_text(result)}"
@@ -358,12 +350,6 @@ class QuerySession(DomainSession):
             improve_stop=result.improve_stop,
             **common,
         )
-
-    def _budget_status(self, result: PlannerResult) -> str:
-        if result.status is not PlanStatus.BUDGET_EXHAUSTED:
-            raise PlanningError(f"unexpected plan status {result.status!r}")
-        limit = self._max_checks
-        return "max_checks" if limit is not None and result.num_checks >= limit else "time_budget"
 
     def _query_edges(
         self, result: PlannerResult, start: Endpoint, goal: Endpoint

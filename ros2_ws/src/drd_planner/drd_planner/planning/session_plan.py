@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drd_planner.arrays import FloatArray
+from drd_planner.core.status import PlanCause, PlanStatus
 
 __all__ = ["SessionCheck", "SessionPlan"]
 
@@ -51,8 +52,8 @@ class SessionPlan:
     start or goal state (or a vertex roadmap growth added).
 
     Attributes:
-        ok: a path was proven free.
-        status: ``path_found``, ``no_free_path``, ``max_checks``, ``time_budget`` or ``refused``.
+        status: how it ended, in the planner's words: FOUND (a path was proven free; :attr:`ok`), NO_PATH,
+            BUDGET_EXHAUSTED (``cause`` says which budget) or REFUSED (a start or goal the prior cannot serve).
         message: one line for logs and diagnostics.
         map_version: the snapshot planned on.
         prior: name of the prior that planned it (its file stem; a tree file loads as a prior).
@@ -64,8 +65,8 @@ class SessionPlan:
             :meth:`~drd_planner.planning.session.QuerySession.prepare` had not built them already), ``checks``
             (in FCL), ``selection`` (the policy choosing edges), ``library`` (finding or building the query's
             library and tree), ``policy`` (the planner's time less library and checks), ``total``.
-        cause: why it failed, as a value (:class:`~drd_planner.planner.cause.PlanCause`'s: ``start_outside``,
-            ``goal_outside``, ``start_blocked``, ``goal_blocked``), where the planner can tell; "" otherwise.
+        cause: why it failed, where the planner can tell (:class:`~drd_planner.core.status.PlanCause`: the start
+            or goal outside or walled in, or the budget that ran out); None otherwise, and when FOUND.
         stage: which stage proved the path (``tree``, ``bisect``, ``library``, ``graph``, ``trivial``, or
             ``improve`` when the anytime improvement found a shorter one; "" unless ok).
         query: ``tree:<name>`` (a precomputed tree), ``online`` or ``connected`` (with new motions).
@@ -79,8 +80,7 @@ class SessionPlan:
             ``seconds``, ``patience``, ``plan_checks``, ``plan_time``); "" without one or unless ok.
     """
 
-    ok: bool
-    status: str
+    status: PlanStatus
     message: str
     map_version: int
     prior: str
@@ -89,7 +89,7 @@ class SessionPlan:
     states: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     checks: tuple[SessionCheck, ...] = ()
     seconds: dict[str, float] = field(default_factory=dict)
-    cause: str = ""
+    cause: PlanCause | None = None
     stage: str = ""
     query: str = ""
     query_cached: bool = False
@@ -98,6 +98,19 @@ class SessionPlan:
     first_cost: float = 0.0
     improvements: int = 0
     improve_stop: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """A path was proven free (status FOUND)."""
+        return self.status is PlanStatus.FOUND
+
+    @property
+    def outcome(self) -> str:
+        """The status's value, and the cause's after a colon when there is one (``budget_exhausted: check_budget``).
+
+        What log lines, ``drd plan`` and the heartbeat's ``last_plan`` show.
+        """
+        return self.status.value if self.cause is None else f"{self.status.value}: {self.cause.value}"
 
     @property
     def tree(self) -> str:

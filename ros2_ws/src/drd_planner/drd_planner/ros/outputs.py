@@ -98,7 +98,9 @@ def plan_summary_values(
     ``prior`` names the prior that planned it (``tree``: the same, a deprecated key kept for one release).
     ``query`` says what served it (``tree:<name>`` a precomputed tree, ``online`` a library and tree
     built for a new query, ``connected`` the same with new motions to off-graph states) and ``stage``
-    what proved the path; ``library_s`` is the time spent finding or building the query's library.
+    what proved the path; ``result`` is the plan's status (``found``, ``no_path``, ``budget_exhausted``,
+    ``refused``) and ``cause`` why it failed where the planner can tell (``start_blocked``, ``check_budget``,
+    ...; "" otherwise); ``library_s`` is the time spent finding or building the query's library.
     A plan that ran the anytime improvement (``improve_stop`` set) adds ``improvements`` (shorter verified
     paths after the first), ``improve_stop`` (why it stopped), ``improve_checks`` (its checks),
     ``first_cost`` and ``cost`` (path lengths, the first and the published one, in the domain's unit).
@@ -125,7 +127,8 @@ def plan_summary_values(
         "wait_s": f"{wait_s:.6f}",
         "plan_messaging_s": f"{plan_messaging_s:.6f}",
         "messaging_s": f"{messaging_s:.6f}",
-        "result": result.status,
+        "result": result.status.value,
+        "cause": "" if result.cause is None else result.cause.value,
     }
     stop = result.improve_stop
     if stop:

@@ -217,7 +217,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         "planning_time_budget",
         0.0,
-        "Seconds a plan may take before it ends with status time_budget (0: no limit); read at configure.",
+        "Seconds a plan may take before it ends with status budget_exhausted (cause time_budget; 0: no limit); "
+        "read at configure.",
         _non_negative_seconds,
         float_range=(0.0, 3600.0),
     ),

@@ -90,7 +90,7 @@ class NodeReporter:
             plan_messaging_s=plan_messaging_s,
             messaging_s=time.perf_counter() - started,
         )
-        self.last_plan = LastPlan(str(result.status), str(extra.get("request", "request")), time.monotonic())
+        self.last_plan = LastPlan(result.outcome, str(extra.get("request", "request")), time.monotonic())
         self._out.status("plan", ok=result.ok, message=result.message, values=values, stamp=stamp)
         if "newer_map_refused" in extra:
             self._logger.warning(

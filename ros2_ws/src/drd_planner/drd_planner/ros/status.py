@@ -45,7 +45,8 @@ class LastPlan:
     """The newest served request, as the heartbeat shows it.
 
     Attributes:
-        result: its result string (``path_found``, ``no_free_path``, ...).
+        result: its outcome (:attr:`SessionPlan.outcome <drd_planner.planning.session_plan.SessionPlan.outcome>`:
+            ``found``, ``no_path``, ``budget_exhausted: check_budget``, ...).
         request: where it came from (``goal_pose``, ``get_plan``, ``map_update``, ...).
         finished: ``time.monotonic()`` when it was answered, seconds.
     """
