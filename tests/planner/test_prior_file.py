@@ -26,7 +26,7 @@ from drd_planner.planner import (
     save_prior,
 )
 from drd_planner.planner.build_settings import TreeSettings
-from drd_planner.planner.commands import query_tree
+from drd_planner.planner.prior_build import query_tree
 
 REPO = Path(__file__).resolve().parents[2]
 

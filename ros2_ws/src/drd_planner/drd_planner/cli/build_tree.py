@@ -1,4 +1,4 @@
-"""``drd build-tree``: its flags, made into :class:`~drd_planner.planner.commands.BuildTreeOptions`."""
+"""``drd build-tree``: its flags, made into :class:`~drd_planner.planner.prior_build.BuildTreeOptions`."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from drd_planner.cli.shared_flags import (
     problem_source,
     tree_settings,
 )
-from drd_planner.planner.commands import BuildTreeOptions, write_prior
+from drd_planner.planner.prior_build import BuildTreeOptions, write_prior
 
 __all__ = ["add_build_tree_parser", "build_tree_options", "cmd_build_tree"]
 

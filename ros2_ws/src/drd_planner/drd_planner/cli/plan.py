@@ -1,6 +1,6 @@
 """``drd plan``: its flags, made into the options of one of its three forms.
 
-``--gccd``/``--dataset`` -> :class:`~drd_planner.planner.commands.DatasetPlanOptions`, ``--bag`` ->
+``--gccd``/``--dataset`` -> :class:`~drd_planner.planner.dataset_plan.DatasetPlanOptions`, ``--bag`` ->
 :class:`~drd_planner.planning.bag_command.BagPlanOptions`, ``--scene`` ->
 :class:`~drd_planner.planning.scene_command.ScenePlanOptions`.
 """
@@ -13,7 +13,7 @@ from typing import Any
 from drd_planner.cli.argtypes import query_arg
 from drd_planner.cli.shared_flags import problem_source
 from drd_planner.exceptions import DrdError
-from drd_planner.planner.commands import DatasetPlanOptions, plan_dataset_world
+from drd_planner.planner.dataset_plan import DatasetPlanOptions, plan_dataset_world
 
 __all__ = ["add_plan_parser", "cmd_plan", "request_index"]
 

@@ -21,12 +21,30 @@ from scipy.spatial import cKDTree
 from drd_planner.arrays import FloatArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.status import PlanCause
-from drd_planner.exceptions import PlanningError
+from drd_planner.exceptions import DrdError, PlanningError
 
 #: Default snap tolerance as a fraction of the median edge length.
 SNAP_FRACTION_OF_EDGE = 0.25
 
 Endpoint = int | npt.ArrayLike
+
+#: A query as given on the command line: the start's and the goal's text (a vertex id, or a state's numbers).
+QueryText = tuple[str, str]
+
+
+def endpoint_value(text: str) -> int | FloatArray:
+    """A vertex id (one integer) or a (d,) state (several numbers, separated by spaces or ';') from its text.
+
+    Raises:
+        DrdError: text that is neither.
+    """
+    fields = text.replace(";", " ").split()
+    try:
+        if len(fields) == 1 and fields[0].lstrip("-").isdigit():
+            return int(fields[0])
+        return np.array([float(f) for f in fields], dtype=np.float64)
+    except ValueError:
+        raise DrdError(f"{text!r} is neither a vertex id nor a state of numbers") from None
 
 
 class QueryError(PlanningError):
