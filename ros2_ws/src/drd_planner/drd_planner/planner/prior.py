@@ -100,7 +100,8 @@ class WorldPrior:
         domain_spec: JSON-safe spec that rebuilds the domain (and its FCL checker).
         check_metadata: how edges were checked (resolution, margin, ... with units).
         edge_trajectories: per edge a (K_e, D) float64 array of states along it, or None.
-        provenance: JSON-safe build information.
+        provenance: JSON-safe build information; ``world_model`` names the world model of the training
+            worlds when the problem named it (:func:`prior_from_problem`).
     """
 
     name: str
@@ -265,5 +266,17 @@ def prior_from_problem(
         domain_spec=dict(meta.get("domain_spec") or {}),
         check_metadata=dict(meta.get("check_metadata") or {}),
         edge_trajectories=options.get("edge_trajectories"),
-        provenance=dict(options.get("provenance") or {}),
+        provenance=_provenance(meta, options.get("provenance")),
     )
+
+
+def _provenance(meta: dict[str, Any], given: dict[str, Any] | None) -> dict[str, Any]:
+    """The prior's provenance: ``given``, plus the world model of the training worlds when the problem names it.
+
+    The world model tells whose terrain a map must be (a ``corridors`` prior's is one real site).
+    """
+    out = dict(given or {})
+    model = meta.get("world_model")
+    if isinstance(model, str) and model and "world_model" not in out:
+        out["world_model"] = model
+    return out

@@ -20,6 +20,7 @@ from drd_planner.exceptions import DrdError, PlanningError
 from drd_planner.planner.endpoints import Endpoint
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MAP_SOURCES, MapStore, RobotLoader, TerrainFit, terrain_fit_of
+from drd_planner.planning.prior_site import prior_sites
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
     Goal,
@@ -219,7 +220,7 @@ def plan_bag_request(
         frame_id=frame,
         margin=session.margin,
         robot_loader=session.robot_loader,
-        terrain_fit=terrain_fit_of([session.domain]),
+        terrain_fit=terrain_fit_of([session.domain], prior_sites([(session.prior, session.domain)])[0]),
     )
     goal = request_goal(session, request, frame)
     state, notes = robot_state_at(session, messages[: request.position], request.time_ns, frame)

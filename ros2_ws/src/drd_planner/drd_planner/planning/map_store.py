@@ -13,7 +13,8 @@ through a :class:`MapStore`, so they hold the same maps after the same messages:
   whose content equals that of the held obstacle is not validated again;
 - ``terrain`` (PointCloud2): the cloud's grid becomes the terrain heightfield (``unknown_terrain`` of the limits),
   unless no loaded prior can take it as its ground (``terrain_fit``, see :func:`terrain_fit_of`: it lies elsewhere in
-  the planning frame, or above every vertex: heights in another datum);
+  the planning frame, or above every vertex: heights in another datum; for a prior of a real site, it is not
+  that site: :mod:`~drd_planner.planning.site_match`);
 - ``robot_description`` (String): the URDF becomes the arm of the snapshot when the store has a robot loader
   (an arm prior), else the text is only kept;
 - ``monitored_planning_scene`` (moveit_msgs PlanningScene, full or diff): its collision objects become
@@ -33,6 +34,7 @@ from typing import Any
 from drd_msgs_py.marker_cdr import MarkerArrayReader
 from drd_msgs_py.obstacles import Obstacle, obstacle_update
 from drd_msgs_py.topics import topic_base
+from drd_planner.domains.helicopter_site import OperatingSite
 from drd_planner.domains.online import OnlineDomain
 from drd_planner.exceptions import DrdError
 from drd_planner.geometry.map_limits import MapLimits
@@ -41,6 +43,7 @@ from drd_planner.geometry.terrain import Heightfield
 from drd_planner.planning.map_intake import obstacle_parts, terrain_from_cloud
 from drd_planner.planning.map_state import MapSnapshot, Parts
 from drd_planner.planning.moveit_world import MoveItWorld
+from drd_planner.planning.site_match import site_mismatch
 
 __all__ = ["MAP_SOURCES", "MapStore", "RobotLoader", "TerrainFit", "robot_loader_of", "terrain_fit_of"]
 
@@ -50,15 +53,24 @@ RobotLoader = Callable[[str], RobotModel]
 TerrainFit = Callable[[Heightfield], str | None]
 
 
-def terrain_fit_of(domains: Sequence[OnlineDomain[Any]]) -> TerrainFit:
-    """The fit of a terrain to the loaded priors: refused only when every prior's domain says why not.
+def terrain_fit_of(domains: Sequence[OnlineDomain[Any]], sites: Sequence[OperatingSite | None] = ()) -> TerrainFit:
+    """The fit of a terrain to the loaded priors: refused only when every prior says why not.
 
     Args:
         domains: the loaded priors' domains (:meth:`OnlineDomain.terrain_mismatch`; an arm's takes any).
+        sites: per prior (same order) the real site it was trained on, or None
+            (:func:`~drd_planner.planning.prior_site.prior_sites`); a terrain that fits a site prior's domain
+            must also be that site (:func:`~drd_planner.planning.site_match.site_mismatch`). Missing
+            entries count as None.
     """
 
+    def mismatch(i: int, terrain: Heightfield) -> str | None:
+        reason = domains[i].terrain_mismatch(terrain)
+        site = sites[i] if i < len(sites) else None
+        return site_mismatch(site, terrain) if reason is None and site is not None else reason
+
     def fit(terrain: Heightfield) -> str | None:
-        reasons = [domain.terrain_mismatch(terrain) for domain in domains]
+        reasons = [mismatch(i, terrain) for i in range(len(domains))]
         if not reasons or any(reason is None for reason in reasons):
             return None
         return "; ".join(f"prior {i}: {reason}" for i, reason in enumerate(reasons)) if len(reasons) > 1 else reasons[0]

@@ -43,6 +43,7 @@ from drd_planner.planning.cancel import Cancel
 from drd_planner.planning.map_state import MapSnapshot
 from drd_planner.planning.map_store import MapStore, robot_loader_of, terrain_fit_of
 from drd_planner.planning.plan_outcome import PlanOutcome, RefusedPart
+from drd_planner.planning.prior_site import prior_sites
 from drd_planner.planning.replan import recheck_plan
 from drd_planner.planning.requests import (
     DEFAULT_TOLERANCES,
@@ -136,12 +137,15 @@ class PlannerService:
         self._live = live
         self._wake = wake
         margin = self._sessions[0].margin if self._sessions else 0.0
+        sites, notes = prior_sites([(s.prior, s.domain) for s in self._sessions])
+        for note in notes:
+            outputs.warning(note)
         self.maps = MapStore(
             frame_id=frame_id,
             margin=margin,
             limits=limits,
             robot_loader=robot_loader_of(self._sessions, limits),
-            terrain_fit=terrain_fit_of([s.domain for s in self._sessions]),
+            terrain_fit=terrain_fit_of([s.domain for s in self._sessions], sites),
         )
         self._snapshot = self.maps.snapshot
         self._robot_states: dict[RobotStateTopic, FloatArray] = {}  # its topic -> the latest robot state
