@@ -55,6 +55,7 @@ setup(
             "planner_node = drd_planner.ros.planner_node:main",
             "drd_replay = drd_planner.cli.replay:main",
             "planner_demo = drd_planner.cli.planner_demo:main",
+            "drd_map_server = drd_planner.cli.map_server:main",
         ],
     },
 )
