@@ -18,10 +18,16 @@ are read once at start and are read-only; each bad one is named in the one error
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Mapping
 from typing import Any
 
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.utilities import try_shutdown
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import MarkerArray
 
@@ -166,14 +172,6 @@ def run_map_server(overrides: Mapping[str, str], args: list[str] | None = None) 
         overrides: parameter values from the command line's flags (they win over ``--ros-args -p``).
         args: the process's arguments for rclpy (program name first, then ``--ros-args ...``).
     """
-    import sys
-
-    import rclpy
-    from rclpy.exceptions import ParameterException
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-    from rclpy.parameter import Parameter
-    from rclpy.utilities import try_shutdown
-
     rclpy.init(args=args)
     try:
         node = MapServer(parameter_overrides=[Parameter(name, value=value) for name, value in overrides.items()])
