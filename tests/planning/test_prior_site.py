@@ -25,20 +25,25 @@ def heli_lines() -> tuple[WorldPrior, HelicopterDomain]:
     return prior, domain
 
 
-def test_the_recorded_world_model_decides_and_older_priors_go_by_their_spec(
+def test_the_recorded_world_model_decides_and_an_unrecorded_one_is_no_site(
     heli_lines: tuple[WorldPrior, HelicopterDomain],
 ) -> None:
     prior, domain = heli_lines
-    assert "world_model" not in prior.provenance  # written before priors recorded it
-    assert site_world_model(prior) == SITE_MODEL  # its spec holds the corridors model
+    assert site_world_model(prior) == SITE_MODEL  # the shipped prior records its world model
     wires = dataclasses.replace(prior, provenance={**prior.provenance, "world_model": "wires"})
     assert site_world_model(wires) == "wires"
     assert prior_site(wires, domain) is None
-    no_corridors = dict(prior.domain_spec, models={"wires": {}})
-    assert site_world_model(dataclasses.replace(prior, domain_spec=no_corridors)) is None
-    assert site_world_model(dataclasses.replace(prior, domain="arm")) is None
+    # A prior of before the record: its spec holds the corridors model (every helicopter spec does), yet it is
+    # not taken for a site prior, so a wires prior of that time keeps taking its own terrain.
+    unrecorded = dataclasses.replace(
+        prior, provenance={k: v for k, v in prior.provenance.items() if k != "world_model"}
+    )
+    assert "corridors" in unrecorded.domain_spec["models"]
+    assert site_world_model(unrecorded) is None
+    assert prior_site(unrecorded, domain) is None
     shipped_wires = load_prior(ROOT / "trees" / "heli_wires.npz")
-    assert site_world_model(shipped_wires) is None
+    assert site_world_model(shipped_wires) == "wires"
+    assert prior_site(shipped_wires, rebuild_domain(shipped_wires, "heli_wires")) is None
 
 
 def test_the_site_is_the_dem_seen_from_the_lattice_with_z_zero_at_the_lattice_origin(

@@ -5,9 +5,10 @@ A corridors prior was trained on worlds of one real operating site; its site
 lattice) is what a map server publishes and what the planner compares a terrain map with.
 
 Which priors are site priors (:func:`site_world_model`): a prior records the world model of its training
-worlds in its provenance (``world_model``, written by ``drd build-tree`` since this module exists); a prior
-written before that is a site prior when its helicopter spec holds a ``corridors`` model (the shipped
-``trees/heli_lines.npz``; the helicopter spec holds every model's parameters only since that model exists).
+worlds in its provenance (``world_model``, written by ``drd build-tree``; the shipped priors carry it too). A
+prior without it is not taken for a site prior: its terrain maps are not compared with any site. Guessing from
+its spec would be wrong, since every helicopter spec written since the corridors model exists holds that
+model's parameters, whatever model drew the worlds, and a wires prior would then refuse its own terrain.
 """
 
 from __future__ import annotations
@@ -25,16 +26,9 @@ __all__ = ["SITE_MODEL", "prior_site", "prior_sites", "site_world_model"]
 
 
 def site_world_model(prior: WorldPrior) -> str | None:
-    """The world model of the prior's training worlds, when known (see the module docstring).
-
-    The provenance's ``world_model`` when recorded; else ``"corridors"`` for a helicopter prior whose spec
-    holds that model, else None (unknown).
-    """
+    """The world model of the prior's training worlds, as its provenance records it; None when it does not."""
     recorded = prior.provenance.get("world_model")
-    if isinstance(recorded, str) and recorded:
-        return recorded
-    models = prior.domain_spec.get("models") if prior.domain == "helicopter" else None
-    return SITE_MODEL if isinstance(models, dict) and SITE_MODEL in models else None
+    return recorded if isinstance(recorded, str) and recorded else None
 
 
 def prior_site(
