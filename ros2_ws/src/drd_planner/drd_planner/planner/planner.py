@@ -432,6 +432,16 @@ def _check_plan_arguments(policy: str, max_checks: int | None, time_budget_s: fl
     """ProblemError for an unknown policy or a budget that is not positive."""
     if policy not in PLAN_POLICIES:
         raise ProblemError(f"unknown planning policy {policy!r}; known: {', '.join(PLAN_POLICIES)}")
+    check_budgets(max_checks, time_budget_s)
+
+
+def check_budgets(max_checks: int | None, time_budget_s: float | None) -> None:
+    """ProblemError for a plan budget that is not positive (None: no budget of that kind).
+
+    Args:
+        max_checks: cap on a plan's checks (count).
+        time_budget_s: cap on a plan's time (s).
+    """
     if max_checks is not None and max_checks < 1:
         raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
     if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):

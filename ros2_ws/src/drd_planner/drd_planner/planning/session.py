@@ -35,11 +35,11 @@ import numpy.typing as npt
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.status import PlanStatus
-from drd_planner.exceptions import PlanningError, ProblemError, UnverifiedPathError
+from drd_planner.exceptions import PlanningError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
 from drd_planner.planner.anytime import ImproveBudget, as_improve_budget
 from drd_planner.planner.endpoints import Endpoint
-from drd_planner.planner.planner import Planner
+from drd_planner.planner.planner import Planner, check_budgets
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
 from drd_planner.planning.cancel import Cancel
@@ -155,10 +155,7 @@ class QuerySession(DomainSession):
         Raises:
             ProblemError: a cap that is not positive.
         """
-        if max_checks is not None and max_checks < 1:
-            raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
-        if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
-            raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")
+        check_budgets(max_checks, time_budget_s)
         self._max_checks = max_checks
         self._time_budget_s = None if time_budget_s is None else float(time_budget_s)
 
