@@ -240,3 +240,19 @@ def test_the_shipped_lines_prior_walks_its_tree_on_a_corridors_world() -> None:
     stages = [check.stage for check in result.checks]
     assert stages[0] == "tree"
     assert "bisect" in stages
+
+
+def test_a_geotiff_dem_gives_the_same_worlds_as_its_ascii_grid_and_its_crs_must_match_grid_units(
+    plane: Path, tmp_path: Path
+) -> None:
+    pytest.importorskip("rasterio")
+    from drd_planner.geometry.geotiff import write_geotiff
+    from drd_planner.geometry.terrain import read_esri_ascii
+
+    tif = tmp_path / "plane.tif"
+    write_geotiff(tif, read_esri_ascii(plane), "EPSG:32613")
+    from_asc = CorridorsModel().draw(np.random.default_rng(4), _params(plane), FRAME)
+    from_tif = CorridorsModel().draw(np.random.default_rng(4), _params(tif), FRAME)
+    np.testing.assert_allclose(from_tif.terrain.heights, from_asc.terrain.heights, atol=1e-3)  # float32 pixels
+    with pytest.raises(ProblemError, match=r"is measured in metres \(its CRS\) but models\.corridors\.grid_units"):
+        CorridorsModel().site(_params(tif, grid_units="degrees", site_origin=(-105.0, 40.0)))

@@ -54,3 +54,7 @@ class PriorFileError(TreeFileError):
 
 class ParameterError(DrdError):
     """A configuration value (a node parameter, a map limit) is out of range or not one of its choices."""
+
+
+class SiteFileError(DatasetError):
+    """A site file, or a GIS file it names (DEM, OSM, GeoJSON), is missing, malformed, too large or off the site."""

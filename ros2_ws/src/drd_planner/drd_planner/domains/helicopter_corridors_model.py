@@ -3,8 +3,8 @@
 What a real operator has, and what stays uncertain from flight to flight
 (:class:`~drd_planner.domains.helicopter_corridors_params.CorridorsParams`):
 
-- **terrain**: the site's elevation model (an ESRI ASCII grid, e.g. SRTM at ~90 m) at its true scale, with
-  its registration error. The world's terrain is the DEM shifted horizontally by a random (dx, dy) and
+- **terrain**: the site's elevation model (an ESRI ASCII grid or a GeoTIFF, e.g. SRTM at ~90 m) at its true
+  scale, with its registration error. The world's terrain is the DEM shifted horizontally by a random (dx, dy) and
   vertically by a random bias (Gaussian, ``shift_sigma`` / ``bias_sigma``, clipped at 3 sigma), sampled
   bilinearly on the frame's terrain grid; z = 0 is the ``datum`` (default: the DEM's height at the lattice
   origin). Within ``keep_clear_radius`` of the start and goal it is capped below them (a pad).
@@ -277,9 +277,17 @@ class CorridorsModel:
         """The site's view of its elevation grid.
 
         Raises:
-            ProblemError: the grid file is missing or unusable.
+            ProblemError: the grid file is missing or unusable, or its CRS is not measured in ``grid_units``.
         """
-        return SiteGrid(self.grids.load(p.resolved_path()), p)
+        path = p.resolved_path()
+        grid = self.grids.load(path)
+        units = self.grids.units(path)
+        if units is not None and units != p.grid_units:
+            raise ProblemError(
+                f"the elevation grid {path} is measured in {units} (its CRS) but models.corridors.grid_units is "
+                f"{p.grid_units!r}; set grid_units to {units!r} and site_origin in the grid's coordinates"
+            )
+        return SiteGrid(grid, p)
 
     def draw(self, rng: np.random.Generator, p: CorridorsParams, frame: WorldFrame) -> ModelDraw:
         """One world of the site: registered terrain, the present lines and the active zones.

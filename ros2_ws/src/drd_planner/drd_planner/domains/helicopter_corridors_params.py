@@ -223,7 +223,8 @@ class CorridorsParams(NoFlyParams):
     """Parameters of the ``"corridors"`` model (see :mod:`~drd_planner.domains.helicopter_corridors_model`).
 
     Attributes:
-        path: the elevation grid, ESRI ASCII (file); None: the shared SRTM Front Range grid.
+        path: the elevation grid (file), ESRI ASCII or GeoTIFF (``.tif``, ``.tiff``; its CRS must be measured
+            in ``grid_units``); None: the shared SRTM Front Range grid.
         grid_units: how the grid's x and y are measured (name): "degrees" (geographic grid: x longitude,
             y latitude) or "metres" (projected grid).
         site_origin: (x, y) of the lattice origin (x = y = 0) in the grid's own coordinates (deg), or in

@@ -31,6 +31,7 @@ from drd_planner.arrays import FloatArray
 from drd_planner.domains.helicopter_world_frame import ModelDraw, WorldFrame, draw_uniform, flatten_near
 from drd_planner.domains.helicopter_world_params import DEFAULT_TERRAIN_FILE, TerrainParams
 from drd_planner.exceptions import GeometryError, ProblemError
+from drd_planner.geometry.geotiff import is_geotiff, read_geotiff
 from drd_planner.geometry.terrain import Heightfield, read_esri_ascii
 
 __all__ = ["TerrainGrids", "TerrainModel"]
@@ -39,7 +40,9 @@ __all__ = ["TerrainGrids", "TerrainModel"]
 class TerrainGrids:
     """Elevation grids read from disk, kept per file version (resolved path, modification time).
 
-    At most ``size`` grids are kept; the least recently used one goes first.
+    A file ending in ``.tif`` or ``.tiff`` is read as a GeoTIFF (:mod:`~drd_planner.geometry.geotiff`: its size
+    checked from the header first; whether its CRS is geographic is kept, see :meth:`units`); any other as an
+    ESRI ASCII grid. At most ``size`` grids are kept; the least recently used one goes first.
     """
 
     def __init__(self, size: int = 4) -> None:
@@ -47,13 +50,21 @@ class TerrainGrids:
             raise ValueError(f"a terrain grid cache holds at least one grid, got size {size}")
         self._size = size
         self._grids: OrderedDict[tuple[str, int], Heightfield] = OrderedDict()
+        self._units: dict[str, str] = {}
 
     def __len__(self) -> int:
         """Number of grids kept."""
         return len(self._grids)
 
+    def units(self, path: Path) -> str | None:
+        """How a loaded GeoTIFF's x and y are measured: "degrees" or "metres" (from its CRS).
+
+        None: not known (an ESRI ASCII grid, a GeoTIFF without a CRS, or a file not loaded yet).
+        """
+        return self._units.get(str(path.resolve()))
+
     def load(self, path: Path) -> Heightfield:
-        """The ESRI ASCII grid at ``path`` (read once per file version).
+        """The elevation grid at ``path``, GeoTIFF or ESRI ASCII (read once per file version).
 
         Raises:
             ProblemError: the file is missing or not a usable grid (the message names the path).
@@ -69,7 +80,12 @@ class TerrainGrids:
             self._grids.move_to_end(key)
             return grid
         try:
-            grid = read_esri_ascii(key[0])
+            if is_geotiff(path):
+                grid, header = read_geotiff(key[0])
+                if header.crs_wkt:
+                    self._units[key[0]] = "degrees" if header.geographic else "metres"
+            else:
+                grid = read_esri_ascii(key[0])
         except GeometryError as exc:
             raise ProblemError(f"cannot use terrain grid {path}: {exc}") from exc
         self._grids[key] = grid
