@@ -14,7 +14,7 @@ from drd_planner.cli.dataset_sources import (
     source_from_args,
     source_summary,
 )
-from drd_planner.data.world_sources import MapBags, SceneFolder, TerrainFile
+from drd_planner.data.world_sources import MapBags, SceneFolder, SiteFile, TerrainFile
 
 
 class ArgError(Exception):
@@ -52,6 +52,10 @@ def test_each_source_flag_gives_its_request(tmp_path: Path) -> None:
     west = TerrainFile("t.asc", site=(-105.5, 40.15))
     again, _ = _parse(west.argv())  # a negative X survives the round trip through the flags
     assert source_from_args(again, _error) == west
+    args, _ = _parse(["--site-file", "site.yaml"])
+    site = source_from_args(args, _error)
+    assert site == SiteFile("site.yaml")
+    assert Path(site.path).is_absolute()
     args, _ = _parse(["--world-model", "forest"])
     assert source_from_args(args, _error) is None
 
@@ -82,6 +86,21 @@ def test_required_arguments_depend_on_the_source() -> None:
         check_required(args, _error)
     args, _ = _parse(["--scenes", "d", "--seed", "0", "--out", "x"])
     check_required(args, _error)
+    args, _ = _parse(["--site-file", "s.yaml", "--seed", "0"])  # --worlds comes from the site file
+    with pytest.raises(ArgError, match=r"^the following arguments are required: --out$"):
+        check_required(args, _error)
+
+
+def test_site_file_goes_alone(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        _parse(["--site-file", "s.yaml", "--terrain", "t.asc"])
+    assert "not allowed with argument" in capsys.readouterr().err
+    args, _ = _parse(["--site-file", "s.yaml", "--site", "1,2"])
+    with pytest.raises(ArgError, match="--site goes with --terrain"):
+        source_from_args(args, _error)
+    args, _ = _parse(["--site-file", "s.yaml", "--world-model", "corridors"])
+    with pytest.raises(ArgError, match="--world-model: not allowed with --site-file"):
+        source_from_args(args, _error)
 
 
 def test_the_summary_says_where_the_worlds_came_from() -> None:
@@ -97,4 +116,8 @@ def test_the_summary_says_where_the_worlds_came_from() -> None:
     }
     assert source_summary({"world_source": terrain}) == (
         "worlds: terrain model on /t.asc (models.terrain.site_jitter=5.0)"
+    )
+    site = {"kind": "site", "site": "ridge", "files": [{}] * 3, "dem": {"path": "/d.tif"}, "lines": ["a"], "zones": []}
+    assert source_summary({"world_source": site}) == (
+        "worlds: site 'ridge' (3 files): corridors model on the DEM /d.tif with 1 mapped line(s) and 0 zone(s)"
     )

@@ -17,6 +17,7 @@ from drd_planner.data.world_sources import (
     FileRecord,
     MapBags,
     SceneFolder,
+    SiteFile,
     SourceCache,
     TerrainFile,
     online_domain,
@@ -118,8 +119,8 @@ def test_recipes_with_a_source_name_their_world_model_and_command() -> None:
 
 
 def test_the_registry_names_a_module_per_kind() -> None:
-    assert set(SOURCE_MODULES) == {SceneFolder.kind, MapBags.kind, TerrainFile.kind}
-    with pytest.raises(DatasetError, match="unknown world source 'tape'; known: scenes, terrain, bags"):
+    assert set(SOURCE_MODULES) == {SceneFolder.kind, MapBags.kind, TerrainFile.kind, SiteFile.kind}
+    with pytest.raises(DatasetError, match="unknown world source 'tape'; known: scenes, terrain, site, bags"):
         open_world_set({"kind": "tape"})
 
 

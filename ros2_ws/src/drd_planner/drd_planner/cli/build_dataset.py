@@ -77,13 +77,22 @@ def cmd_build_dataset(args: argparse.Namespace) -> int:
     Raises:
         DrdError: any user-triggered failure (the caller prints one line and exits 2).
     """
-    from drd_planner.cli.dataset_sources import check_required, print_spec, source_from_args, source_summary
+    from drd_planner.cli.dataset_sources import (
+        check_required,
+        print_spec,
+        site_file_defaults,
+        source_from_args,
+        source_summary,
+    )
     from drd_planner.data.dataset_builder import build_dataset
     from drd_planner.data.dataset_options import ALL_WORLDS, BuildOptions, DatasetRecipe
 
-    if getattr(args, "print_spec", False):
-        return print_spec(args.domain)
     error = getattr(args, "build_dataset_error", None) or _raise
+    if getattr(args, "print_spec", False):
+        if args.domain is None:
+            error("the following arguments are required: --domain")
+        return print_spec(args.domain)
+    site_file_defaults(args)
     check_required(args, error)
     source = source_from_args(args, error)
     workers = args.workers if args.workers is not None else default_workers()
@@ -154,14 +163,18 @@ def add_build_dataset_parser(subparsers: Any) -> argparse.ArgumentParser:
             "kept in OUT.parts, so an interrupted build resumes where it stopped."
         ),
     )
-    p.add_argument("--domain", required=True, help=f"domain name ({', '.join(sorted(DOMAIN_CLASSES))})")
+    p.add_argument(
+        "--domain",
+        help=f"domain name ({', '.join(sorted(DOMAIN_CLASSES))}; required, except with --site-file: helicopter)",
+    )
     p.add_argument("--world-model", help="the domain's world model to sample (required without a file source)")
     p.add_argument(
         "--worlds",
         type=_positive_int,
-        help="number of worlds n (required with --world-model and --terrain; files: the first n, default all)",
+        help="number of worlds n (required with --world-model and --terrain; files: the first n, default all; "
+        "--site-file: default its dataset.worlds)",
     )
-    p.add_argument("--seed", type=_non_negative_int, help="base seed (non-negative; required)")
+    p.add_argument("--seed", type=_non_negative_int, help="base seed (non-negative; required, except with --site-file)")
     p.add_argument("--out", help="dataset file to write (.npz; required)")
     p.add_argument("--workers", type=_positive_int, default=None, help="local worker processes (default: all CPUs)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask scheduler (tcp://host:port)")

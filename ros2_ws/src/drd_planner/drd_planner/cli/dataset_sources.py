@@ -17,6 +17,9 @@ line. The flags:
 ``--crop {random,as-is}``            with ``--terrain``: random rotation, mirror, scale and relief, or north up
                                      at the grid's own cell size and heights
 ``--crop-scale M|LO,HI``             with ``--terrain``: metres per source cell
+``--site-file FILE``                 the ``corridors`` world model over a real site from GIS files (a site file:
+                                     DEM, OSM power lines, GeoJSON no-fly zones); ``--domain`` defaults to
+                                     ``helicopter``, ``--worlds`` and ``--seed`` to the site file's ``dataset``
 ``--print-spec``                     print every spec key of ``--domain`` (default, unit, meaning) and exit
 ==================================== ================================================================================
 """
@@ -30,13 +33,21 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from drd_planner.cli.argtypes import bounded_float
-from drd_planner.data.world_sources import CROP_CHOICES, MapBags, SceneFolder, TerrainFile, WorldSourceRequest
+from drd_planner.data.world_sources import (
+    CROP_CHOICES,
+    MapBags,
+    SceneFolder,
+    SiteFile,
+    TerrainFile,
+    WorldSourceRequest,
+)
 from drd_planner.exceptions import DatasetError
 
 __all__ = [
     "add_source_arguments",
     "check_required",
     "print_spec",
+    "site_file_defaults",
     "source_from_args",
     "source_summary",
 ]
@@ -93,6 +104,11 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
         "--bags", metavar="FILE", nargs="+", help="one world per map snapshot of these rosbag2 MCAP bags"
     )
     exclusive.add_argument("--terrain", metavar="FILE", help="the terrain world model on this ESRI ASCII grid")
+    exclusive.add_argument(
+        "--site-file",
+        metavar="FILE",
+        help="the corridors world model over the real site this site file (drd-site/1 YAML) describes",
+    )
     group.add_argument(
         "--no-requests", action="store_true", help="--scenes: do not add the request*.yaml states as vertices"
     )
@@ -125,17 +141,37 @@ def add_source_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _kind(args: argparse.Namespace) -> str | None:
-    """Which source flag was given (None: a seeded build)."""
+    """Which source flag was given (None: a seeded build); ``--site-file`` is kind ``site``."""
     for kind in ("scenes", "bags", "terrain"):
         if getattr(args, kind, None):
             return kind
-    return None
+    return "site" if getattr(args, "site_file", None) else None
+
+
+def site_file_defaults(args: argparse.Namespace) -> None:
+    """With ``--site-file``: ``--domain`` helicopter, and ``--worlds`` and ``--seed`` from the site file's ``dataset``.
+
+    Raises:
+        SiteFileError: the site file cannot be used.
+    """
+    if _kind(args) != "site":
+        return
+    if args.domain is None:
+        args.domain = "helicopter"
+    if args.worlds is None or args.seed is None:
+        from drd_planner.data.site_file import load_site
+
+        site = load_site(args.site_file)
+        args.worlds = site.worlds if args.worlds is None else args.worlds
+        args.seed = site.seed if args.seed is None else args.seed
 
 
 def check_required(args: argparse.Namespace, error: ErrorFn) -> None:
     """Refuse a build without the arguments it needs (they are optional only for ``--print-spec``)."""
     kind = _kind(args)
     missing = [flag for flag, attr in (("--seed", "seed"), ("--out", "out")) if getattr(args, attr) is None]
+    if hasattr(args, "domain") and args.domain is None and kind != "site":
+        missing = ["--domain", *missing]
     if kind is None:
         missing = [
             f for f, a in (("--world-model", "world_model"), ("--worlds", "worlds")) if getattr(args, a) is None
@@ -143,7 +179,11 @@ def check_required(args: argparse.Namespace, error: ErrorFn) -> None:
     elif kind == "terrain" and args.worlds is None:
         missing = ["--worlds", *missing]
     if missing:
-        hint = "" if kind is not None or args.world_model else " (or worlds from files: --scenes, --bags or --terrain)"
+        hint = (
+            ""
+            if kind is not None or args.world_model
+            else " (or worlds from files: --scenes, --bags, --terrain or --site-file)"
+        )
         error(f"the following arguments are required: {', '.join(missing)}{hint}")
 
 
@@ -159,11 +199,14 @@ def source_from_args(args: argparse.Namespace, error: ErrorFn) -> WorldSourceReq
     if getattr(args, "crop", None) is not None and kind != "terrain":
         error("--crop goes with --terrain")
     if kind is not None and args.world_model is not None:
-        error(f"--world-model: not allowed with --{kind} (its worlds come from files)")
+        flag = "--site-file" if kind == "site" else f"--{kind}"
+        error(f"--world-model: not allowed with {flag} (its worlds come from files)")
     if kind == "scenes":
         return SceneFolder(args.scenes, requests=not args.no_requests)
     if kind == "bags":
         return MapBags(tuple(args.bags), frame=args.frame)
+    if kind == "site":
+        return SiteFile(args.site_file)
     if kind == "terrain":
         return TerrainFile(
             args.terrain,
@@ -207,6 +250,13 @@ def source_summary(provenance: Mapping[str, Any]) -> str | None:
     if kind == "bags":
         names = ", ".join(Path(str(f.get("path"))).name for f in source.get("files", []))
         return f"worlds: {len(source.get('snapshots', []))} map snapshot(s) of {names} in frame {source.get('frame')!r}"
+    if kind == "site":
+        lines, zones = len(source.get("lines", [])), len(source.get("zones", []))
+        dem = source.get("dem", {})
+        return (
+            f"worlds: site {source.get('site')!r} ({len(source.get('files', []))} files): corridors model on the DEM "
+            f"{dem.get('path')} with {lines} mapped line(s) and {zones} zone(s)"
+        )
     if kind == "terrain":
         keys = ", ".join(f"{k}={v}" for k, v in source.get("spec_keys", {}).items())
         return f"worlds: terrain model on {source.get('file', {}).get('path')} ({keys})"

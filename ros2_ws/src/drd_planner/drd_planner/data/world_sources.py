@@ -8,6 +8,8 @@ exactly as before sources existed. A *source request* names files instead:
   (:mod:`drd_planner.data.scene_source`);
 - :class:`TerrainFile` (``--terrain FILE``): the ``terrain`` world model cropping the user's ESRI ASCII grid,
   with the operating site, crop and jitter as flags (:mod:`drd_planner.data.terrain_source`);
+- :class:`SiteFile` (``--site-file FILE``): the ``corridors`` world model over a real site described by a site
+  file (DEM, mapped power lines, no-fly zones; :mod:`drd_planner.data.site_source`);
 - :class:`MapBags` (``--bags FILE...``): one world per map snapshot of recorded bags
   (:mod:`drd_planner.planning.bag_worlds`: it applies the map messages with the planner's one map store, and
   ``planning/`` may import ``data/`` but not the reverse, so it lives there).
@@ -48,6 +50,7 @@ __all__ = [
     "MapBags",
     "ResolvedSource",
     "SceneFolder",
+    "SiteFile",
     "SourceCache",
     "TerrainFile",
     "WorldSet",
@@ -63,6 +66,7 @@ __all__ = [
 SOURCE_MODULES: Mapping[str, str] = {
     "scenes": "drd_planner.data.scene_source",
     "terrain": "drd_planner.data.terrain_source",
+    "site": "drd_planner.data.site_source",
     "bags": "drd_planner.planning.bag_worlds",
 }
 
@@ -264,7 +268,27 @@ class TerrainFile:
         return out
 
 
-WorldSourceRequest = SceneFolder | MapBags | TerrainFile
+@dataclass(frozen=True)
+class SiteFile:
+    """``--site-file FILE``: the ``corridors`` world model over the site a site file describes.
+
+    Attributes:
+        path: the site file (made absolute); see :mod:`drd_planner.data.site_file`.
+    """
+
+    kind: ClassVar[str] = "site"
+    world_model: ClassVar[str] = "corridors"
+    path: str
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "path", _absolute(self.path))
+
+    def argv(self) -> list[str]:
+        """The ``drd build-dataset`` flags that ask for this source."""
+        return ["--site-file", self.path]
+
+
+WorldSourceRequest = SceneFolder | MapBags | TerrainFile | SiteFile
 
 
 # --------------------------------------------------------------------------------------------------
