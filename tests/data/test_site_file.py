@@ -55,6 +55,8 @@ def test_the_bundled_site_gives_lines_zones_and_a_domain_spec() -> None:
     assert p.site_origin == pytest.approx((-105.4617, 40.1825))
     assert p.site_heading_deg == pytest.approx(90.0)
     assert (p.shift_sigma, p.bias_sigma) == (10.0, 15.0)
+    assert (p.unmapped_lines, p.unmapped_towers) == ((0, 1), (0, 2))
+    assert (p.unmapped_line.tower_height, p.unmapped_line.sag, p.unmapped_line.probability) == ((40, 60), (4, 15), 1.0)
     assert [line.name for line in p.lines] == ["West Feeder", "East Trunk", "Valley Tap", "Ridge Tap"]
     assert {line.probability for line in p.lines} == {0.7}
     feeder = np.asarray(p.lines[0].route)  # drawn along x = 450..600 m, y = -1400..1400 m, clipped at 1350 m
@@ -125,6 +127,8 @@ def test_datums_set_the_height_of_z_zero(site_copy: Path) -> None:
         ("heading_deg: 0 ", "heading_deg: 0\n  speed: 3 ", r"origin: unknown key\(s\) \['speed'\]"),
         ("line_probability: 0.7", "line_probability: 7", "uncertainty.line_probability must be a probability"),
         ("  seed: 1", "  seed: -1", "dataset.seed must be an integer >= 0"),
+        ("unmapped_lines: [0, 1]", "unmapped_lines: [2, 1]", r"uncertainty.unmapped_lines must be \[lo, hi\]"),
+        ("unmapped_towers: [0, 2]", "unmapped_towers: [0, 1.5]", "uncertainty.unmapped_towers must be whole"),
         ("lattice: spec.json", "lattice: {file: spec.json, vehicle_radius: -1}", "lattice: helicopter spec"),
         ("lattice: spec.json", "lattice: {file: spec.json, wings: 2}", r"unknown key\(s\) \['wings'\]"),
         ("power_lines: power.osm", "power_lines: zones.geojson", "must end in one of .osm"),

@@ -256,3 +256,49 @@ def test_a_geotiff_dem_gives_the_same_worlds_as_its_ascii_grid_and_its_crs_must_
     np.testing.assert_allclose(from_tif.terrain.heights, from_asc.terrain.heights, atol=1e-3)  # float32 pixels
     with pytest.raises(ProblemError, match=r"is measured in metres \(its CRS\) but models\.corridors\.grid_units"):
         CorridorsModel().site(_params(tif, grid_units="degrees", site_origin=(-105.0, 40.0)))
+
+
+def test_unmapped_lines_and_towers_cross_the_lattice_clear_of_the_start_and_goal(plane: Path) -> None:
+    template = {
+        "name": "u",
+        "span": [60.0, 60.0],
+        "tower_height": [25.0, 25.0],
+        "sag": [3.0, 3.0],
+        "conductors": [1, 1],
+    }
+    params = _params(plane, unmapped_lines=(1, 2), unmapped_towers=(2, 2), unmapped_line=template, tower_jitter=0.0)
+    assert params.unmapped_line.tower_height == (25.0, 25.0)
+    need = params.nofly_keep_clear + FRAME.clearance
+    counts = set()
+    for seed in range(25):
+        draw = CorridorsModel().draw(np.random.default_rng(seed), params, FRAME)
+        unmapped = draw.info["unmapped"]
+        counts.add(len(unmapped["lines"]))
+        assert len(unmapped["towers"]) == 2
+        for route in unmapped["lines"]:
+            ends = np.asarray(route)
+            assert np.all((ends[:, 0] >= -1e-6) & (ends[:, 0] <= 300.0 + 1e-6))
+            assert np.all((ends[:, 1] >= -150.0 - 1e-6) & (ends[:, 1] <= 150.0 + 1e-6))
+            a, b = ends
+            for point in ((0.0, 0.0), (300.0, 0.0)):
+                t = np.clip(np.dot(np.asarray(point) - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0)
+                assert np.hypot(*(a + t * (b - a) - point)) >= need
+        for x, y, height in unmapped["towers"]:
+            assert min(np.hypot(x, y), np.hypot(x - 300.0, y)) >= need
+            assert height == 25.0
+        names = [name for name, _s, _p in draw.solids]
+        assert sum(n.startswith("tower_lone_") for n in names) == 2
+        assert len(draw.wires) == sum(
+            sum(n.startswith(f"tower_unmapped_line_{k}_") for n in names) - 1 for k in range(len(unmapped["lines"]))
+        )
+    assert counts == {1, 2}
+
+
+def test_without_unmapped_obstacles_a_seed_draws_what_it_drew_before(plane: Path) -> None:
+    line = KnownLine(name="l", route=((150.0, -150.0), (150.0, 150.0)), probability=0.5)
+    plain = CorridorsModel().draw(np.random.default_rng(9), _params(plane, lines=(line,)), FRAME)
+    assert "unmapped" not in plain.info
+    more = CorridorsModel().draw(np.random.default_rng(9), _params(plane, lines=(line,), unmapped_towers=(1, 1)), FRAME)
+    assert more.info["lines"] == plain.info["lines"]
+    assert more.info["registration"] == plain.info["registration"]
+    assert len(more.solids) == len(plain.solids) + 1

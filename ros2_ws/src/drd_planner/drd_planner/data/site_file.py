@@ -73,7 +73,9 @@ DATASET_KEYS = ("worlds", "seed")
 
 #: Keys of ``uncertainty`` (defaults: a mapped line stands with 0.8, tower spacing 250-400 m where the towers
 #: are not all mapped, heights 40-60 m, sag 4-15 m, 1-3 conductors; registration error 10 m per axis and
-#: 15 m vertically (one sigma); a zone without ``p_active`` is active with 0.5; no random zones).
+#: 15 m vertically (one sigma); a zone without ``p_active`` is active with 0.5; no random zones; no power lines
+#: or lone towers missing from the map, ``unmapped_lines`` / ``unmapped_towers`` [lo, hi] per world, built
+#: like the mapped lines).
 UNCERTAINTY_KEYS = (
     "line_probability",
     "span_m",
@@ -84,6 +86,8 @@ UNCERTAINTY_KEYS = (
     "height_error_m",
     "zone_probability",
     "random_zones",
+    "unmapped_lines",
+    "unmapped_towers",
 )
 
 #: Worlds and seed of ``drd build-dataset --site-file`` when neither the flags nor ``dataset`` say.
@@ -281,17 +285,17 @@ def _load(file: Path, data: Mapping[str, Any]) -> Site:
     notes: list[str] = []
     lines: list[dict[str, object]] = []
     zones: list[dict[str, object]] = []
+    defaults = LineDefaults(
+        probability=get_probability(unc, "line_probability", "uncertainty.", 0.8),
+        span=get_range(unc, "span_m", "uncertainty.", (250.0, 400.0), low=1.0),
+        tower_height=get_range(unc, "tower_height_m", "uncertainty.", (40.0, 60.0)),
+        sag=get_range(unc, "sag_m", "uncertainty.", (4.0, 15.0)),
+        conductors=_count_range(unc, "conductors", (1, 3), low=1),
+    )
     power_path = _layer(data, "power_lines", base)
     if power_path is not None:
         power = read_power(power_path)
         files.append(power.path)
-        defaults = LineDefaults(
-            probability=get_probability(unc, "line_probability", "uncertainty.", 0.8),
-            span=get_range(unc, "span_m", "uncertainty.", (250.0, 400.0), low=1.0),
-            tower_height=get_range(unc, "tower_height_m", "uncertainty.", (40.0, 60.0)),
-            sag=get_range(unc, "sag_m", "uncertainty.", (4.0, 15.0)),
-            conductors=_count_range(unc, "conductors", (1, 3), low=1),
-        )
         lines = known_lines(power, frame, region, defaults, keep)
         zones += mast_zones(power, frame, region, keep)
         notes.append(f"{len(power.lines)} power way(s) in {power.path} gave {len(lines)} line(s) over the site")
@@ -303,7 +307,7 @@ def _load(file: Path, data: Mapping[str, Any]) -> Site:
         found = known_zones(geo, frame, region, zone_p, keep)
         notes.append(f"{len(geo.zones)} zone(s) in {geo.path} gave {len(found)} prism(s) over the site")
         zones += found
-    corridors = _corridors(given, dem, frame, datum, unc, shift, lines, zones)
+    corridors = _corridors(given, dem, frame, datum, (unc, shift, defaults), lines, zones)
     models = dict(spec.get("models") or {})
     models["corridors"] = params_to_dict(corridors)
     full = _helicopter({**spec, "models": models}).to_spec()
@@ -326,11 +330,11 @@ def _load(file: Path, data: Mapping[str, Any]) -> Site:
     )
 
 
-def _count(data: Mapping[str, Any], key: str, default: int, *, low: int) -> int:
+def _count(data: Mapping[str, Any], key: str, default: int, *, low: int, where: str = "dataset.") -> int:
     """The integer ``data[key]`` >= ``low`` (``default`` when absent)."""
     value = data.get(key, default)
     if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise SiteFileError(f"dataset.{key} must be an integer >= {low}, got {value!r}")
+        raise SiteFileError(f"{where}{key} must be an integer >= {low}, got {value!r}")
     return value
 
 
@@ -347,12 +351,23 @@ def _corridors(
     dem: SiteDem,
     frame: SiteFrame,
     datum: float | None,
-    unc: Mapping[str, Any],
-    shift: float,
+    uncertainty: tuple[Mapping[str, Any], float, LineDefaults],
     lines: list[dict[str, object]],
     zones: list[dict[str, object]],
 ) -> CorridorsParams:
-    """The corridors parameters: the spec's own keys, then the site's (DEM, frame, datum, lines, zones)."""
+    """The corridors parameters: the spec's own keys, then the site's (DEM, frame, datum, lines, zones).
+
+    ``uncertainty``: the site file's section, its registration error (m) and the line defaults.
+    """
+    unc, shift, defaults = uncertainty
+    template = {
+        "name": "unmapped",
+        "probability": 1.0,
+        "span": list(defaults.span),
+        "tower_height": list(defaults.tower_height),
+        "sag": list(defaults.sag),
+        "conductors": list(defaults.conductors),
+    }
     site_keys: dict[str, Any] = {
         "path": dem.path,
         "grid_units": dem.units,
@@ -363,7 +378,10 @@ def _corridors(
         "bias_sigma": get_number(unc, "height_error_m", "uncertainty.", 15.0, low=0.0),
         "lines": lines,
         "zones": zones,
-        "nofly": int(_count({"random_zones": unc.get("random_zones", 0)}, "random_zones", 0, low=0)),
+        "nofly": _count(unc, "random_zones", 0, low=0, where="uncertainty."),
+        "unmapped_lines": list(_count_range(unc, "unmapped_lines", (0, 0), low=0)),
+        "unmapped_towers": list(_count_range(unc, "unmapped_towers", (0, 0), low=0)),
+        "unmapped_line": template,
     }
     try:
         return CorridorsParams(**{**given, **site_keys})

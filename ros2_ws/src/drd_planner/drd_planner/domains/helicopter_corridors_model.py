@@ -14,6 +14,10 @@ What a real operator has, and what stays uncertain from flight to flight
   the number of conductors and every span's sag are drawn per world.
 - **no-fly zones** from a published list
   (:class:`~drd_planner.domains.helicopter_corridors_params.KnownZone`), each active with its ``probability``.
+- **what is missing from the map** (off by default): ``unmapped_lines`` straight power lines across the
+  lattice's extent at random places and bearings, and ``unmapped_towers`` lone towers, their numbers drawn per
+  world, each kept clear of the start and goal (left out after 20 tries). They are drawn after everything
+  else, and only when asked for, so the other draws of a seed do not change.
 
 Every line and zone is drawn in every world (present or not), so the same seed gives the same numbers
 whatever the others do. Known routes and zones that come within ``nofly_keep_clear`` (plus the vehicle
@@ -322,7 +326,77 @@ class CorridorsModel:
                 solids.extend(more_solids)
         zones = tuple(zone.column() for zone, on in zip(p.zones, active, strict=True) if on)
         info = _summary(p, reg, datum, draws, active)
+        if p.unmapped_lines[1] > 0 or p.unmapped_towers[1] > 0:  # no draw otherwise: other worlds keep their numbers
+            more_wires, more_solids, info["unmapped"] = _unmapped(rng, p, frame, truth)
+            wires.extend(more_wires)
+            solids.extend(more_solids)
         return ModelDraw(frame.heightfield(heights), tuple(wires), tuple(solids), info, zones)
+
+
+#: Tries to place an unmapped line or tower clear of the start and goal before it is left out of the world.
+_UNMAPPED_TRIES = 20
+
+
+def _chord(centre: FloatArray, theta: float, box: tuple[tuple[float, float], tuple[float, float]]) -> FloatArray:
+    """(2, 2) ends of the line through ``centre`` (inside ``box``) at angle ``theta`` rad, cut at the box's edges."""
+    u = np.array([math.cos(theta), math.sin(theta)])
+    lo, hi = -math.inf, math.inf
+    for axis, (a, b) in enumerate(box):
+        if abs(u[axis]) > 1e-12:
+            t1, t2 = (a - centre[axis]) / u[axis], (b - centre[axis]) / u[axis]
+            lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
+    return np.stack([centre + lo * u, centre + hi * u])
+
+
+def _unmapped(
+    rng: np.random.Generator, p: CorridorsParams, frame: WorldFrame, ground: _TrueTerrain
+) -> tuple[list[Wire], list[tuple[str, Shape, Pose]], dict[str, Any]]:
+    """Power lines and lone towers missing from the map, inside the lattice's extent and clear of the start/goal.
+
+    Returns the wires, the solids (towers) and the summary (each line's ends, each tower's place and height).
+    """
+    box = (frame.x_range, frame.y_range)
+    keep = np.asarray(frame.keep_clear, dtype=np.float64).reshape(-1, 3)
+    need = p.nofly_keep_clear + frame.clearance
+    wires: list[Wire] = []
+    solids: list[tuple[str, Shape, Pose]] = []
+    summary: dict[str, Any] = {"lines": [], "towers": []}
+    for k in range(draw_integer(rng, p.unmapped_lines)):
+        for _try in range(_UNMAPPED_TRIES):
+            centre = np.array([rng.uniform(*box[0]), rng.uniform(*box[1])])
+            route = _chord(centre, rng.uniform(0.0, math.pi), box)
+            if not keep.size or float(_distance_to_route(keep, route).min()) >= need:
+                break
+        else:
+            continue
+        line = KnownLine(
+            f"unmapped_line_{k}",
+            tuple(map(tuple, route)),
+            1.0,
+            p.unmapped_line.span,
+            p.unmapped_line.tower_height,
+            p.unmapped_line.sag,
+            p.unmapped_line.conductors,
+        )
+        more_wires, more_solids = _line_parts(line, _draw_line(rng, line, p.tower_jitter), ground, p)
+        wires.extend(more_wires)
+        solids.extend(more_solids)
+        summary["lines"].append(route.tolist())
+    for k in range(draw_integer(rng, p.unmapped_towers)):
+        for _try in range(_UNMAPPED_TRIES):
+            xy = np.array([rng.uniform(*box[0]), rng.uniform(*box[1])])
+            if not keep.size or float(np.hypot(*(keep[:, :2] - xy).T).min()) - p.tower_radius >= need:
+                break
+        else:
+            continue
+        height = draw_uniform(rng, p.unmapped_line.tower_height)
+        z0 = float(ground(xy[:1], xy[1:])[0])
+        if not math.isfinite(z0):
+            raise ProblemError(f"an unmapped tower at {xy.tolist()} stands outside the elevation grid")
+        axis = (float(xy[0]), float(xy[1]), z0 - 10.0 + (height + 10.0) / 2.0)
+        solids.append((f"tower_lone_{k}", Cylinder(p.tower_radius, height + 10.0), Pose(axis)))
+        summary["towers"].append([float(xy[0]), float(xy[1]), height])
+    return wires, solids, summary
 
 
 def _summary(

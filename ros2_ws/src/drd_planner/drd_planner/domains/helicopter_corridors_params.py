@@ -254,6 +254,14 @@ class CorridorsParams(NoFlyParams):
         nofly_keep_clear: how far random zones, known zones and known line routes keep from the start and
             goal, plus the vehicle clearance (m).
         nofly_region: [[x0, x1], [y0, y1]] where random zone centres are drawn (m).
+        unmapped_lines: [lo, hi] power lines missing from the map (count), drawn per world: each a straight
+            line across the lattice's extent through a random point at a random bearing, kept clear of the start
+            and goal; its towers, heights, sag and conductors as ``unmapped_line`` says (its route and name are
+            not used).
+        unmapped_towers: [lo, hi] lone towers or masts missing from the map (count), drawn per world at random
+            points of the lattice's extent: cylinders of ``tower_radius`` as tall as ``unmapped_line``'s
+            ``tower_height``.
+        unmapped_line: the template of an unmapped line (a :class:`KnownLine` record or dict).
     """
 
     path: str | None = None
@@ -271,6 +279,9 @@ class CorridorsParams(NoFlyParams):
     tower_jitter: float = 3.0
     conductor_gap: float = 5.0
     wire_diameter: float = 0.03
+    unmapped_lines: tuple[int, int] = (0, 0)
+    unmapped_towers: tuple[int, int] = (0, 0)
+    unmapped_line: KnownLine = field(default_factory=lambda: KnownLine("unmapped", probability=1.0))
 
     def __post_init__(self) -> None:
         self._check_common()
@@ -290,6 +301,11 @@ class CorridorsParams(NoFlyParams):
         object.__setattr__(self, "lines", _records(self.lines, KnownLine, "corridors lines"))
         object.__setattr__(self, "zones", _records(self.zones, KnownZone, "corridors zones"))
         _check_links(self.lines, self.zones)
+        for name in ("unmapped_lines", "unmapped_towers"):
+            object.__setattr__(self, name, check_range(getattr(self, name), f"corridors {name}", low=0, integer=True))
+        if not isinstance(self.unmapped_line, KnownLine):
+            line = params_from_dict(KnownLine, self.unmapped_line, what="corridors unmapped_line")
+            object.__setattr__(self, "unmapped_line", line)
 
     def resolved_path(self) -> Path:
         """The grid file to read (``path``, else the shared SRTM Front Range grid)."""
