@@ -102,3 +102,28 @@ def test_crop_keeps_the_points_inside_the_box() -> None:
     np.testing.assert_array_equal(crop.heights[0], grid.heights[1, 1:4])
     with pytest.raises(GeometryError, match="holds 0 x"):
         crop_heightfield(grid, (0.0, 1.0), (40.0, 41.0))
+
+
+def test_the_convert_dem_tool_crops_an_ascii_grid_into_a_geotiff(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from conftest import REPO_ROOT
+
+    source = tmp_path / "in.asc"
+    rows = "\n".join(" ".join(str(10 * r + c) for c in range(6)) for r in range(5))  # north row first
+    source.write_text(f"ncols 6\nnrows 5\nxllcorner -105.0\nyllcorner 40.0\ncellsize 0.001\n{rows}\n")
+    out = tmp_path / "out.tif"
+    tool = REPO_ROOT / "scripts" / "tools" / "convert_dem.py"
+    crop = "--crop=-104.9986,-104.9974,40.0010,40.0030"
+    done = subprocess.run([sys.executable, str(tool), str(source), str(out), crop], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f"wrote {out}: 2 x 2 cells")
+    grid, header = read_geotiff(out)
+    assert header.geographic
+    np.testing.assert_allclose(grid.heights, [[31, 32], [21, 22]])  # rows south to north
+    bad = subprocess.run(
+        [sys.executable, str(tool), str(source), str(out), "--crop=0,1,0,1"], capture_output=True, text=True
+    )
+    assert bad.returncode == 2
+    assert bad.stderr.startswith("convert_dem: error: the crop")

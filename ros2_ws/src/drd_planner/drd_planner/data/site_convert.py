@@ -100,7 +100,7 @@ def known_lines(
 
     ``keep``: (the start and goal (x, y), the distance lines and zones keep from them) in metres.
     """
-    from shapely.geometry import MultiPoint
+    from shapely.geometry import LineString, MultiPoint
 
     points, need = keep
     keep_points = MultiPoint([tuple(p) for p in points])
@@ -113,8 +113,6 @@ def known_lines(
         span = _span(way, xy, defaults)
         for k, route in enumerate(_pieces(xy, region)):
             name = _unique(way.name if k == 0 else f"{way.name}_{k + 1}", way.osm_id, names)
-            from shapely.geometry import LineString
-
             _keep_clear(f"power line {name!r} (OSM way {way.osm_id})", LineString(route).distance(keep_points), need)
             lines.append(
                 {
