@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import REPO_ROOT
 
@@ -80,3 +81,21 @@ def test_a_file_that_is_neither_kind_and_a_missing_file(tmp_path: Path) -> None:
         open_dem(path)
     with pytest.raises(SiteFileError, match="not found"):
         open_dem(tmp_path / "missing.tif")
+
+
+def test_nodata_under_the_lattice_is_refused_and_elsewhere_allowed(tmp_path: Path) -> None:
+    from drd_planner.data.geo_dem import check_known_heights
+    from drd_planner.geometry.geotiff import read_geotiff, write_geotiff
+    from drd_planner.geometry.terrain import Heightfield
+
+    frame = SiteFrame(40.1825, -105.4617, 0.0)
+    grid, _header = read_geotiff(DEM)
+    check_known_heights(open_dem(DEM), frame, LATTICE)
+    holes = np.array(grid.heights)
+    holes[-1, 0] = np.nan  # the north-west corner cell: outside the lattice
+    write_geotiff(tmp_path / "corner.tif", Heightfield(grid.origin, grid.cell_size, holes), "EPSG:4326")
+    check_known_heights(open_dem(tmp_path / "corner.tif"), frame, LATTICE)
+    holes[12, 20] = np.nan  # under the lattice
+    write_geotiff(tmp_path / "hole.tif", Heightfield(grid.origin, grid.cell_size, holes), "EPSG:4326")
+    with pytest.raises(SiteFileError, match=r"has 1 NODATA cell\(s\) under the lattice, the first at x -105\.47"):
+        check_known_heights(open_dem(tmp_path / "hole.tif"), frame, LATTICE)

@@ -10,7 +10,9 @@ none, so it is the site file's ``crs``, or WGS84 longitude/latitude when its cel
 and its extent lies within longitudes and latitudes.
 
 :func:`check_covers` refuses a DEM that does not hold the lattice's terrain around the origin (a tile
-elsewhere on the globe, or the wrong CRS), saying where the tile is and where the origin is.
+elsewhere on the globe, or the wrong CRS), saying where the tile is and where the origin is;
+:func:`check_known_heights` then reads the DEM (its size already bounded) and refuses NODATA cells under the
+lattice.
 
 Units: the DEM's own (degrees or metres); metres in the lattice frame.
 """
@@ -26,9 +28,10 @@ import numpy as np
 
 from drd_planner.data.geo_frame import WGS84, SiteFrame, crs_of
 from drd_planner.exceptions import GeometryError, SiteFileError
-from drd_planner.geometry.geotiff import MAX_DEM_CELLS, is_geotiff, read_geotiff_header
+from drd_planner.geometry.geotiff import MAX_DEM_CELLS, is_geotiff, read_geotiff, read_geotiff_header
+from drd_planner.geometry.terrain import read_esri_ascii
 
-__all__ = ["DEM_KINDS", "MAX_ASCII_DEM_BYTES", "SiteDem", "check_covers", "open_dem"]
+__all__ = ["DEM_KINDS", "MAX_ASCII_DEM_BYTES", "SiteDem", "check_covers", "check_known_heights", "open_dem"]
 
 #: DEM file kinds.
 DEM_KINDS: tuple[str, ...] = ("geotiff", "esri_ascii")
@@ -222,4 +225,36 @@ def check_covers(dem: SiteDem, frame: SiteFrame, region: tuple[tuple[float, floa
             f"the origin is at latitude {frame.latitude:.4f}, longitude {frame.longitude:.4f}, and the terrain "
             f"needs x [{rx0:g}, {rx1:g}] m, y [{ry0:g}, {ry1:g}] m around it (heading {frame.heading_deg:g} deg); "
             "use a DEM tile of the site, or check the origin and the DEM's CRS"
+        )
+
+
+def check_known_heights(
+    dem: SiteDem, frame: SiteFrame, region: tuple[tuple[float, float], tuple[float, float]]
+) -> None:
+    """Refuse ``dem`` when a cell under the lattice-frame rectangle ``region`` is NODATA (or not finite).
+
+    Reads the DEM (after :func:`open_dem` bounded its size) and looks at the cells of the rectangle's bounding
+    box in the DEM's grid.
+
+    Raises:
+        SiteFileError: unreadable cells, or NODATA under the lattice (how many, and where the first is).
+    """
+    try:
+        grid = read_geotiff(dem.path)[0] if dem.kind == "geotiff" else read_esri_ascii(dem.path)
+    except GeometryError as exc:
+        raise SiteFileError(f"DEM: {exc}") from None
+    points = _outline(region)
+    gx, gy = frame.from_lattice(points[:, 0], points[:, 1], dem.crs)
+    ox, oy = (float(v) for v in grid.origin)
+    cell = float(grid.cell_size)
+    rows, cols = grid.heights.shape
+    j0, j1 = max(int(np.floor((gx.min() - ox) / cell)), 0), min(int(np.ceil((gx.max() - ox) / cell)), cols - 1)
+    i0, i1 = max(int(np.floor((gy.min() - oy) / cell)), 0), min(int(np.ceil((gy.max() - oy) / cell)), rows - 1)
+    block = grid.heights[i0 : i1 + 1, j0 : j1 + 1]
+    unknown = np.argwhere(np.isnan(block))
+    if unknown.size:
+        i, j = unknown[0] + (i0, j0)
+        raise SiteFileError(
+            f"DEM {dem.path} has {len(unknown)} NODATA cell(s) under the lattice, the first at x {ox + j * cell:.6f}, "
+            f"y {oy + i * cell:.6f} (its CRS); fill them (e.g. gdal_fillnodata) or move the origin"
         )

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from drd_planner.data.geo_dem import SiteDem, check_covers, open_dem
+from drd_planner.data.geo_dem import SiteDem, check_covers, check_known_heights, open_dem
 from drd_planner.data.geo_frame import SiteFrame
 from drd_planner.data.geo_power import read_power
 from drd_planner.data.geo_zones import read_zones
@@ -254,26 +254,44 @@ def load_site(path: str | Path) -> Site:
         raise SiteFileError(f"site file {file}: {exc}") from None
 
 
+def _dem(data: Mapping[str, Any], base: Path) -> tuple[SiteDem, str]:
+    """The DEM's header facts and the vertical datum of its heights (the ``dem`` section)."""
+    section = get_section(data, "dem", "", DEM_KEYS)
+    if not section:
+        raise SiteFileError(f"dem is required: a mapping with keys {', '.join(DEM_KEYS)}")
+    path = _file(section.get("path"), base, "dem.path")
+    crs = section.get("crs")
+    if crs is not None and not isinstance(crs, str):
+        raise SiteFileError(f"dem.crs must be a string such as 'EPSG:4326', got {crs!r}")
+    vertical = get_string(section, "vertical_datum", "dem.", "EGM96", choices=DATUMS[1:])
+    return open_dem(path, crs), vertical
+
+
+def _line_defaults(unc: Mapping[str, Any]) -> LineDefaults:
+    """What is not known of a mapped line (the ``uncertainty`` section's line keys)."""
+    return LineDefaults(
+        probability=get_probability(unc, "line_probability", "uncertainty.", 0.8),
+        span=get_range(unc, "span_m", "uncertainty.", (250.0, 400.0), low=1.0),
+        tower_height=get_range(unc, "tower_height_m", "uncertainty.", (40.0, 60.0)),
+        sag=get_range(unc, "sag_m", "uncertainty.", (4.0, 15.0)),
+        conductors=_count_range(unc, "conductors", (1, 3), low=1),
+    )
+
+
 def _load(file: Path, data: Mapping[str, Any]) -> Site:
     """The site of the checked top level ``data`` of ``file``."""
     base = file.parent
     files = [str(file)]
-    dem_section = get_section(data, "dem", "", DEM_KEYS)
-    if not dem_section:
-        raise SiteFileError(f"dem is required: a mapping with keys {', '.join(DEM_KEYS)}")
-    dem_path = _file(dem_section.get("path"), base, "dem.path")
-    crs = dem_section.get("crs")
-    if crs is not None and not isinstance(crs, str):
-        raise SiteFileError(f"dem.crs must be a string such as 'EPSG:4326', got {crs!r}")
-    vertical = get_string(dem_section, "vertical_datum", "dem.", "EGM96", choices=DATUMS[1:])
-    dem = open_dem(dem_path, crs)
+    dem, vertical = _dem(data, base)
     files.append(dem.path)
     origin, frame, datum = _origin(data, vertical)
     spec = _spec(data, base, files)
     params = _helicopter(spec)
     unc = get_section(data, "uncertainty", "", UNCERTAINTY_KEYS)
     shift = get_number(unc, "registration_error_m", "uncertainty.", 10.0, low=0.0)
-    check_covers(dem, frame, _region(params, params.world_margin + 3.0 * shift + params.terrain_cell))
+    terrain_region = _region(params, params.world_margin + 3.0 * shift + params.terrain_cell)
+    check_covers(dem, frame, terrain_region)
+    check_known_heights(dem, frame, terrain_region)
     lattice = params.lattice
     starts = [tuple(lattice.start), tuple(lattice.goal)]
     given = params_to_dict(params.model("corridors"))
@@ -285,13 +303,7 @@ def _load(file: Path, data: Mapping[str, Any]) -> Site:
     notes: list[str] = []
     lines: list[dict[str, object]] = []
     zones: list[dict[str, object]] = []
-    defaults = LineDefaults(
-        probability=get_probability(unc, "line_probability", "uncertainty.", 0.8),
-        span=get_range(unc, "span_m", "uncertainty.", (250.0, 400.0), low=1.0),
-        tower_height=get_range(unc, "tower_height_m", "uncertainty.", (40.0, 60.0)),
-        sag=get_range(unc, "sag_m", "uncertainty.", (4.0, 15.0)),
-        conductors=_count_range(unc, "conductors", (1, 3), low=1),
-    )
+    defaults = _line_defaults(unc)
     power_path = _layer(data, "power_lines", base)
     if power_path is not None:
         power = read_power(power_path)
