@@ -30,7 +30,7 @@ from drd_planner.bench.cross_validation import CrossValidationResult, cross_vali
 from drd_planner.bench.runner import PolicySettings, check_policy_names, run_world, train_bias
 from drd_planner.core.policies import DEFAULT_ALPHA
 from drd_planner.core.problem import Problem
-from drd_planner.core.tree import build_tree
+from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD, build_tree
 from drd_planner.data.dataset_file import load_dataset_problem
 from drd_planner.exceptions import DrdError
 
@@ -50,7 +50,10 @@ def _tree_stage(problem: Problem, result: CrossValidationResult, fold: int) -> d
     sub = _fold_problem(problem, held)
     eta = result.etas[fold]
     kappa = result.settings["chosen_pseudo_counts"][fold]
-    tree = build_tree(sub, expand_threshold=0.05, progress=False)
+    rule = result.settings["chosen_region_rules"][fold]
+    options = dict(result.settings.get("tree_options") or {})
+    expand = float(options.pop("expand_threshold", DEFAULT_EXPAND_THRESHOLD))
+    tree = build_tree(sub, expand_threshold=expand, progress=False, **{**options, "region_rule": rule})
     theta = train_bias(sub, alpha=DEFAULT_ALPHA)
     settings = PolicySettings(eta, DEFAULT_ALPHA, kappa)
     seed = int(result.settings["seed"])
