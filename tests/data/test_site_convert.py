@@ -98,3 +98,10 @@ def test_masts_on_no_line_become_columns() -> None:
     assert zones[0]["radius"] == MAST_RADIUS
     assert zones[0]["probability"] == 1.0
     np.testing.assert_allclose(zones[0]["center"], (1200.0, 300.0), atol=0.01)
+
+
+def test_a_zone_without_area_is_refused() -> None:
+    flat = _lonlat([(1000.0, 0.0), (1100.0, 0.0), (1200.0, 0.0)])
+    zones = GeoZones("z", "OGC:CRS84", (GeoZone("Flat", (flat,), 0.0, 100.0, None),))
+    with pytest.raises(SiteFileError, match="no-fly zone 'Flat' has no area"):
+        known_zones(zones, FRAME, REGION, 0.5, KEEP)

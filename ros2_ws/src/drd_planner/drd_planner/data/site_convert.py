@@ -192,6 +192,8 @@ def known_zones(
                 parts.append(polygon)
         for k, polygon in enumerate(parts):
             name = zone.name if len(parts) == 1 else f"{zone.name}_{k + 1}"
+            if not polygon.area > 1.0:
+                raise SiteFileError(f"no-fly zone {name!r} has no area (its polygon is {polygon.area:.2g} m^2)")
             _keep_clear(f"no-fly zone {name!r}", polygon.distance(keep_points), need)
             out.append(
                 {
