@@ -1,7 +1,7 @@
 """The ``drd_map_server`` node: a site prior's site as the planner's latched maps, like Nav2's map_server.
 
 Given a world prior of a real site (``prior``: a ``"corridors"`` prior such as the shipped ``heli_lines``;
-or ``site_file`` where this install reads GIS site files), it publishes once, latched (reliable,
+or ``site_file``: a GIS site file, :mod:`~drd_planner.data.site_file`), it publishes once, latched (reliable,
 transient_local, depth 1, so a planner that starts later still gets them):
 
 - ``terrain`` (sensor_msgs/PointCloud2): the site's DEM as an organized cloud on the prior's terrain grid,
@@ -34,7 +34,7 @@ from visualization_msgs.msg import MarkerArray
 from drd_msgs_py.factory import RclpyMessages
 from drd_planner.domains.helicopter_site import OperatingSite
 from drd_planner.exceptions import DrdError
-from drd_planner.planning.site_source import SITE_FILES, site_of_prior_file, site_of_site_file
+from drd_planner.planning.served_site import site_of_prior_file, site_of_site_file
 from drd_planner.planning.site_world import site_messages, site_world
 from drd_planner.ros.outputs import LATCHED
 from drd_planner.ros.parameters import ParameterSpec
@@ -76,7 +76,7 @@ MAP_SERVER_PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         "site_file",
         "",
-        "GIS site file whose site is published instead of a prior's (only where this install reads site files).",
+        "GIS site file (drd-site/1 YAML) whose site is published instead of a prior's.",
         _file,
         read_only=True,
     ),
@@ -108,8 +108,6 @@ def map_server_problems(values: Mapping[str, Any]) -> list[str]:
         problems.append("prior or site_file must name the site to publish (e.g. prior:=heli_lines)")
     elif prior and site_file:
         problems.append("prior and site_file are both set: give one of them")
-    elif site_file and not SITE_FILES:
-        problems.append("site_file: this install reads no site files (drd_planner.data.site_file is missing)")
     return problems
 
 

@@ -2,19 +2,17 @@
 
 :func:`site_of_prior_file` reads a world prior (a path or a shipped name such as ``heli_lines``), rebuilds
 its helicopter domain from the stored spec and returns the site it was trained on; a prior of no real site
-is refused naming its world model. :func:`site_of_site_file` reads a GIS site file through
-``drd_planner.data.site_file.load_site`` (published by the site-file work; :data:`SITE_FILES` says whether
-this install has it) and returns the site of its corridors parameters on the lattice of its domain spec.
+is refused naming its world model. :func:`site_of_site_file` reads a GIS site file
+(:func:`~drd_planner.data.site_file.load_site`) and returns the site of its corridors parameters on the
+lattice of its domain spec.
 Each failure is one :class:`~drd_planner.exceptions.DrdError` whose text names the file and the reason.
 """
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 from collections.abc import Callable
-from pathlib import Path
 
+from drd_planner.data.site_file import load_site
 from drd_planner.domains.base import domain_from_spec
 from drd_planner.domains.helicopter_site import SITE_MODEL, OperatingSite, operating_site
 from drd_planner.exceptions import DrdError
@@ -23,12 +21,7 @@ from drd_planner.planning.prior_domain import rebuild_domain
 from drd_planner.planning.prior_site import prior_site, site_world_model
 from drd_planner.planning.shipped import resolve_tree_path
 
-__all__ = ["SITE_FILES", "site_of_prior_file", "site_of_site_file"]
-
-#: The module that reads GIS site files; present once the site-file work is merged.
-SITE_FILE_MODULE = "drd_planner.data.site_file"
-#: Whether this install reads site files (``--site-file``).
-SITE_FILES = importlib.util.find_spec(SITE_FILE_MODULE) is not None
+__all__ = ["site_of_prior_file", "site_of_site_file"]
 
 
 def site_of_prior_file(name: str, *, log: Callable[[str], None] = lambda _text: None) -> OperatingSite:
@@ -64,14 +57,12 @@ def site_of_site_file(path: str, *, log: Callable[[str], None] = lambda _text: N
     """The site of a GIS site file (its corridors parameters on the lattice of its domain spec).
 
     Raises:
-        DrdError: this install reads no site files, or the file or its site is refused.
+        DrdError: the file or its site is refused (:class:`~drd_planner.exceptions.SiteFileError` for the file).
     """
-    if not SITE_FILES:
-        raise DrdError(f"this install reads no site files ({SITE_FILE_MODULE} is missing): give a prior instead")
     log(f"loading site file {path}")
-    site = importlib.import_module(SITE_FILE_MODULE).load_site(path)
+    site = load_site(path)
     domain = domain_from_spec("helicopter", site.domain_spec)
-    found = operating_site(domain, name=Path(path).stem, params=site.corridors)
+    found = operating_site(domain, name=site.name, params=site.corridors)
     if found is None:  # a helicopter spec always gives a helicopter domain
         raise DrdError(f"site file {path}: its domain spec is not a helicopter lattice's")
     return found
