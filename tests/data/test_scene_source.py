@@ -233,7 +233,7 @@ def test_argument_combinations_are_argparse_errors(tmp_path: Path, capsys: pytes
         (["--bags", "a.mcap", "--no-requests"], "--no-requests goes with --scenes"),
         (["--scenes", "d", "--crop", "as-is"], "--crop goes with --terrain"),
         (["--world-model", "clutter"], "the following arguments are required: --worlds"),
-        ([], "required: --world-model, --worlds (or worlds from files: --scenes, --bags or --terrain)"),
+        ([], "required: --world-model, --worlds (or worlds from files: --scenes, --bags, --terrain or --site-file)"),
         (["--scenes", "d", "--bags", "b"], "not allowed with argument --scenes"),
     ]
     for extra, message in cases:
