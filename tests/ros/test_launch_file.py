@@ -10,51 +10,30 @@ from __future__ import annotations
 import ast
 import importlib.util
 import inspect
-from pathlib import Path
 from types import ModuleType
 
 import pytest
+from launch_syntax import PACKAGE_DIR, LaunchSyntax
 
-PACKAGE_DIR = Path(__file__).resolve().parents[2] / "ros2_ws" / "src" / "drd_planner"
 LAUNCH = PACKAGE_DIR / "launch" / "planner.launch.py"
-
-
-def _tree() -> ast.Module:
-    return ast.parse(LAUNCH.read_text(), filename=str(LAUNCH))
-
-
-def _constants() -> dict[str, str]:
-    """Module-level ``NAME = "string"`` assignments of the launch file."""
-    out = {}
-    for node in _tree().body:
-        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
-            for target in node.targets:
-                if isinstance(target, ast.Name) and isinstance(node.value.value, str):
-                    out[target.id] = node.value.value
-    return out
-
-
-def _calls(name: str) -> list[ast.Call]:
-    return [
-        n for n in ast.walk(_tree()) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == name
-    ]
+_SYNTAX = LaunchSyntax(LAUNCH)
 
 
 def test_launch_file_compiles() -> None:
     compile(LAUNCH.read_text(), str(LAUNCH), "exec")
-    assert any(isinstance(n, ast.FunctionDef) and n.name == "generate_launch_description" for n in _tree().body)
+    assert any(isinstance(n, ast.FunctionDef) and n.name == "generate_launch_description" for n in _SYNTAX.tree.body)
 
 
 def test_launch_file_names_the_package_executable_node_and_config_that_exist() -> None:
-    consts = _constants()
+    consts = _SYNTAX.constants()
     assert f"<name>{consts['PACKAGE']}</name>" in (PACKAGE_DIR / "package.xml").read_text()
     setup = (PACKAGE_DIR / "setup.py").read_text()
     assert f'"{consts["EXECUTABLE"]} = drd_planner.ros.planner_node:main"' in setup
     assert (PACKAGE_DIR / "config" / consts["DEFAULT_CONFIG"]).is_file()
-    (node,) = _calls("LifecycleNode")
+    (node,) = _SYNTAX.calls("LifecycleNode")
     keywords = {k.arg: k.value for k in node.keywords}
     assert {"package", "executable", "name", "namespace", "parameters"} <= set(keywords)
-    declared = {c.args[0].value for c in _calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)}
+    declared = {c.args[0].value for c in _SYNTAX.calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)}
     assert {"config", "namespace", "autostart"} <= declared
     # Both automatic transitions are emitted: configure, then activate once inactive.
     source = LAUNCH.read_text()
@@ -67,7 +46,7 @@ def test_launched_node_name_is_the_node_class_default() -> None:
     from drd_planner.ros.node import PlannerNode
 
     default = inspect.signature(PlannerNode.__init__).parameters["node_name"].default
-    assert _constants()["NODE_NAME"] == default
+    assert _SYNTAX.constants()["NODE_NAME"] == default
 
 
 def _load() -> ModuleType:

@@ -10,48 +10,27 @@ from __future__ import annotations
 import ast
 import importlib.util
 import inspect
-from pathlib import Path
 from types import ModuleType
 
 import pytest
+from launch_syntax import PACKAGE_DIR, LaunchSyntax
 
-PACKAGE_DIR = Path(__file__).resolve().parents[2] / "ros2_ws" / "src" / "drd_planner"
 LAUNCH = PACKAGE_DIR / "launch" / "site.launch.py"
-
-
-def _tree() -> ast.Module:
-    return ast.parse(LAUNCH.read_text(), filename=str(LAUNCH))
-
-
-def _constants() -> dict[str, str]:
-    """Module-level ``NAME = "string"`` assignments of the launch file."""
-    out = {}
-    for node in _tree().body:
-        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
-            for target in node.targets:
-                if isinstance(target, ast.Name) and isinstance(node.value.value, str):
-                    out[target.id] = node.value.value
-    return out
-
-
-def _calls(name: str) -> list[ast.Call]:
-    return [
-        n for n in ast.walk(_tree()) if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == name
-    ]
+_SYNTAX = LaunchSyntax(LAUNCH)
 
 
 def test_the_site_launch_file_names_both_executables_the_prior_and_the_config_that_exist() -> None:
     compile(LAUNCH.read_text(), str(LAUNCH), "exec")
-    consts = _constants()
+    consts = _SYNTAX.constants()
     setup = (PACKAGE_DIR / "setup.py").read_text()
     assert f'"{consts["EXECUTABLE"]} = drd_planner.ros.planner_node:main"' in setup
     assert f'"{consts["MAP_SERVER_EXECUTABLE"]} = drd_planner.cli.map_server:main"' in setup
     assert (PACKAGE_DIR / "config" / consts["DEFAULT_CONFIG"]).is_file()
     assert (PACKAGE_DIR.parents[2] / "trees" / f"{consts['DEFAULT_PRIOR']}.npz").is_file()
-    declared = {c.args[0].value for c in _calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)}
+    declared = {c.args[0].value for c in _SYNTAX.calls("DeclareLaunchArgument") if isinstance(c.args[0], ast.Constant)}
     assert declared == {"prior", "config", "frame_id", "namespace", "autostart", "log_level"}
-    (planner,) = _calls("LifecycleNode")
-    (server,) = _calls("Node")
+    (planner,) = _SYNTAX.calls("LifecycleNode")
+    (server,) = _SYNTAX.calls("Node")
     for call in (planner, server):
         assert {"package", "executable", "name", "namespace", "parameters"} <= {k.arg for k in call.keywords}
     source = LAUNCH.read_text()
@@ -64,7 +43,7 @@ def test_the_node_names_are_the_node_classes_defaults() -> None:
     from drd_planner.ros.map_server import MapServer
     from drd_planner.ros.node import PlannerNode
 
-    consts = _constants()
+    consts = _SYNTAX.constants()
     assert consts["NODE_NAME"] == inspect.signature(PlannerNode.__init__).parameters["node_name"].default
     assert consts["MAP_SERVER_NAME"] == inspect.signature(MapServer.__init__).parameters["node_name"].default
 
