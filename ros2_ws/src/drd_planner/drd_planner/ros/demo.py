@@ -42,7 +42,7 @@ from drd_planner.ros.node import PlannerNode
 from drd_planner.ros.private_domain import private_domain
 from drd_planner.ros.replay import ReplayOptions, replay_bag
 
-__all__ = ["PlannerDemoOptions", "print_record", "run_planner_demo"]
+__all__ = ["PlannerDemoOptions", "print_record", "report_served", "run_planner_demo"]
 
 
 @dataclass(frozen=True)
@@ -108,6 +108,36 @@ def _served_by(query: str) -> str:
     return query or "-"
 
 
+def report_served(node: PlannerNode, out: Path, *, pictures: bool) -> int:
+    """Print the node's errors and every served request's check log; draw ``out/plan_<k>.png`` of each.
+
+    Returns 0 when every request got a verified plan, 1 if one did not or none was served.
+    """
+    for error in node.errors:
+        print(f"node error: {error}")
+    history = node.history
+    for k, served in enumerate(history):
+        print_record(k, served)
+    if pictures:
+        from drd_planner.pictures.plan import plan_picture
+
+        for k, served in enumerate(history):
+            if served.snapshot is None:  # an old record: its maps are no longer kept
+                continue
+            files = plan_picture(
+                served.session,
+                served.snapshot,
+                served.result,
+                out / f"plan_{k}.png",
+                query_cached=served.result.query_cached,
+            )
+            print(f"picture: {', '.join(str(f) for f in files)}")
+    if not history:
+        print("planner_demo: the node served no request", file=sys.stderr)
+        return 1
+    return 0 if all(s.result.ok for s in history) else 1
+
+
 def run_planner_demo(options: PlannerDemoOptions) -> int:
     """Run the main job; 0 when every request got a verified plan, 1 if one did not, 2 on bad input."""
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -157,29 +187,7 @@ def run_planner_demo(options: PlannerDemoOptions) -> int:
             + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))
             + f" into {record}"
         )
-        for error in node.errors:
-            print(f"node error: {error}")
-        history = node.history
-        for k, served in enumerate(history):
-            print_record(k, served)
-        if options.pictures:
-            from drd_planner.pictures.plan import plan_picture
-
-            for k, served in enumerate(history):
-                if served.snapshot is None:  # an old record: its maps are no longer kept
-                    continue
-                files = plan_picture(
-                    served.session,
-                    served.snapshot,
-                    served.result,
-                    options.out / f"plan_{k}.png",
-                    query_cached=served.result.query_cached,
-                )
-                print(f"picture: {', '.join(str(f) for f in files)}")
-        if not history:
-            print("planner_demo: the node served no request", file=sys.stderr)
-            return 1
-        return 0 if all(s.result.ok for s in history) else 1
+        return report_served(node, options.out, pictures=options.pictures)
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
