@@ -7,11 +7,15 @@ as the planner node (:class:`~drd_planner.ros.node.PlannerNode`, on the prior ``
 its mapped lines, towers and no-fly zones reach the node as they would from ``drd_map_server``. Then it
 sends the node what a bag replay sends (:func:`site_requests`): the robot's state at the prior's stored start
 on ``odom``, then on ``goal_pose`` the stored query's goal and :data:`EXTRA_GOALS` more lattice vertices far
-from the start (drawn with the seed). The requests go through :func:`~drd_planner.ros.replay.replay_bag`,
-stepped by events like the bag (each one after the node took the maps and answered the one before), which
-also records the node's outputs into ``OUT/outputs.mcap``. Each plan's check log is printed and drawn
-(``OUT/plan_<k>.png``: the site's terrain, the map server's lines and zones as the node's snapshot holds
-them, the checked edges, the plan) by :func:`~drd_planner.ros.demo.report_served`.
+from the start that the site's known map leaves reachable (drawn with the seed). The map server publishes
+every mapped line as energised and every zone as active, so the stored query's goal may be cut off there;
+the node then says so ("no free path"), as it would on a robot.
+
+The requests go through :func:`~drd_planner.ros.replay.replay_bag`, stepped by events like a bag (each one
+after the node took the maps and answered the one before), which also records the node's outputs into
+``OUT/outputs.mcap``. Each plan's check log is printed and drawn (``OUT/plan_<k>.png``: the site's terrain,
+the map server's lines and zones as the node's snapshot holds them, the checked edges, the plan) by
+:func:`~drd_planner.ros.demo.report_served`.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +47,7 @@ from drd_planner.ros.node import PlannerNode
 from drd_planner.ros.private_domain import private_domain
 from drd_planner.ros.replay import ReplayOptions, replay_bag
 
-__all__ = ["EXTRA_GOALS", "SiteDemoOptions", "far_goals", "run_site_demo", "site_requests"]
+__all__ = ["EXTRA_GOALS", "SiteDemoOptions", "far_goals", "reachable", "run_site_demo", "site_requests"]
 
 #: Goals sent after the stored query's: lattice vertices far from the start.
 EXTRA_GOALS = 2
@@ -76,31 +81,51 @@ class SiteDemoOptions:
     domain_id: int | None = None
 
 
-def far_goals(session: QuerySession, start: int, count: int, seed: int, free: Callable[[int], bool]) -> list[int]:
-    """``count`` lattice vertices far from vertex ``start``, drawn with ``seed``, each with a free edge.
+def reachable(session: QuerySession, start: int, free: Callable[[int], bool]) -> list[int]:
+    """The lattice vertices joined to ``start`` by edges ``free`` passes (the site's known map), in search order.
 
-    The candidates are the vertices in the farthest half from the start's position (x, y, z, m), other than
-    the stored goal; they are taken in a seeded random order, and one is kept when ``free`` (an edge check
-    on the site's known map) passes for one of its edges, so a goal inside a no-fly zone or under the
-    terrain is not asked for. The same seed and map give the same goals; fewer than ``count`` when the map
-    leaves fewer.
+    A breadth-first search that checks only the edges leaving the vertices it reaches (a helicopter lattice's
+    edges are one-way motions), so a start fenced in by a mapped line costs few checks.
+    """
+    directed = session.prior.graph.directed
+    edges = np.asarray(session.prior.graph.edges)
+    leaving: dict[int, list[int]] = {}
+    for e, (u, v) in enumerate(edges.tolist()):
+        leaving.setdefault(int(u), []).append(e)
+        if not directed:
+            leaving.setdefault(int(v), []).append(e)
+    seen, queue = {start}, deque([start])
+    order = [start]
+    while queue:
+        vertex = queue.popleft()
+        for e in leaving.get(vertex, []):
+            other = int(edges[e, 1] if edges[e, 0] == vertex else edges[e, 0])
+            if other not in seen and free(e):
+                seen.add(other)
+                queue.append(other)
+                order.append(other)
+    return order
+
+
+def far_goals(session: QuerySession, start: int, count: int, seed: int, free: Callable[[int], bool]) -> list[int]:
+    """``count`` vertices the site's known map leaves reachable from ``start``, far from it, drawn with ``seed``.
+
+    The candidates are the vertices :func:`reachable` finds (``free``: an edge check on the maps the node holds),
+    other than the start and the stored goal, in the farther half from the start's position (x, y, z, m);
+    ``count`` of them are drawn without replacement (fewer when fewer are reachable). The same seed and map give
+    the same goals; a goal asked for this way has a plan on the served maps.
     """
     states = session.prior.graph.vertex_states
     if states is None:
         raise DrdError(f"{session.name}: the prior's graph has no vertex states: its goals cannot be posed")
     xyz = np.asarray(states, dtype=np.float64)[:, :3]
-    distance = np.linalg.norm(xyz - xyz[start], axis=1)
-    far = distance >= np.median(distance)
-    far[[start, int(session.domain.goal)]] = False
-    edges = np.asarray(session.prior.graph.edges)
-    chosen: list[int] = []
-    for vertex in np.random.default_rng(seed).permutation(np.flatnonzero(far)):
-        if len(chosen) == count:
-            break
-        incident = np.flatnonzero((edges[:, 0] == vertex) | (edges[:, 1] == vertex))
-        if any(free(int(e)) for e in incident):
-            chosen.append(int(vertex))
-    return chosen
+    found = np.array([v for v in reachable(session, start, free) if v not in (start, int(session.domain.goal))])
+    if found.size == 0:
+        return []
+    distance = np.linalg.norm(xyz[found] - xyz[start], axis=1)
+    candidates = found[distance >= np.median(distance)]
+    chosen = np.random.default_rng(seed).choice(candidates, size=min(count, candidates.size), replace=False)
+    return [int(v) for v in chosen]
 
 
 def _pose(msg: PoseStamped | Odometry, state: FloatArray) -> None:
@@ -190,12 +215,12 @@ def run_site_demo(options: SiteDemoOptions) -> int:
             return 2
         node.trigger_activate()
         session = node.sessions[0]
-        checker = session.domain.checker(server.world)  # type: ignore[attr-defined]
-        requests = site_requests(session, seed=options.seed, free=checker.check)
         print(f"map server: site {server.site.name} from {options.site_file}; planner node: prior {session.name}")
         if not _spin_until_maps(context, nodes, node):
             print(f"planner_demo: error: the node did not take the site's maps in {_MAPS_S:g} s", file=sys.stderr)
             return 2
+        # The goals are chosen on the maps the node holds, with its own checker (the node is idle until asked).
+        requests = site_requests(session, seed=options.seed, free=session.checker(node.snapshot).check)
         options.out.mkdir(parents=True, exist_ok=True)
         record = options.out / "outputs.mcap"
         taken = node.inputs_taken  # the maps: the requests are counted from here
