@@ -32,7 +32,9 @@ import numpy as np
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import serialize_message
 
@@ -168,9 +170,9 @@ def site_requests(session: QuerySession, *, seed: int, free: Callable[[int], boo
     return BagContents(Path(f"site requests of {session.name}"), topics, tuple(messages))
 
 
-def _spin_until_maps(context: rclpy.context.Context, nodes: list[rclpy.node.Node], node: PlannerNode) -> bool:
+def _spin_until_maps(context: rclpy.context.Context, nodes: list[Node], node: PlannerNode) -> bool:
     """Spin the nodes until the planner took both maps (terrain and obstacles) or :data:`_MAPS_S` passed."""
-    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor = SingleThreadedExecutor(context=context)
     for each in nodes:
         executor.add_node(each)
     end = time.monotonic() + _MAPS_S
@@ -194,7 +196,7 @@ def run_site_demo(options: SiteDemoOptions) -> int:
     print(f"ROS domain {domain_id}" + (" (private)" if options.domain_id is None else ""))
     context = rclpy.context.Context()
     rclpy.init(context=context, domain_id=domain_id)
-    nodes: list[rclpy.node.Node] = []
+    nodes: list[Node] = []
     try:
         server = MapServer(
             context=context,
