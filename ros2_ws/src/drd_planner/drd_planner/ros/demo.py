@@ -25,15 +25,17 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from drd_msgs_py.bags import bag_frame, open_bag, read_bag
+from drd_msgs_py.bags import BagContents, bag_frame, open_bag, read_bag
 from drd_msgs_py.exceptions import MessageError
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.service import PlanRecord
@@ -42,7 +44,16 @@ from drd_planner.ros.node import PlannerNode
 from drd_planner.ros.private_domain import private_domain
 from drd_planner.ros.replay import ReplayOptions, replay_bag
 
-__all__ = ["PlannerDemoOptions", "print_record", "report_served", "run_planner_demo"]
+__all__ = [
+    "PlannerDemoOptions",
+    "ReplayReport",
+    "active_planner_node",
+    "demo_domain",
+    "print_record",
+    "replay_and_report",
+    "report_served",
+    "run_planner_demo",
+]
 
 
 @dataclass(frozen=True)
@@ -138,6 +149,88 @@ def report_served(node: PlannerNode, out: Path, *, pictures: bool) -> int:
     return 0 if all(s.result.ok for s in history) else 1
 
 
+def demo_domain(domain_id: int | None) -> int:
+    """The ROS domain of a demo run: ``domain_id``, or a private one where no other node is seen (None).
+
+    Raises:
+        DrdError: a domain id outside [0, 232].
+    """
+    if domain_id is not None and not 0 <= domain_id <= 232:
+        raise DrdError(f"--domain-id must lie in [0, 232], got {domain_id}")
+    return private_domain() if domain_id is None else domain_id
+
+
+def active_planner_node(context: rclpy.context.Context, *, prior: str, frame: str, seed: int) -> PlannerNode | None:
+    """A planner node on ``prior`` in planning frame ``frame``, configured and active.
+
+    Returns None (the reason printed, the node destroyed) when it cannot be configured.
+    """
+    node = PlannerNode(
+        context=context,
+        parameter_overrides=[
+            Parameter("prior_paths", value=[prior]),
+            Parameter("frame_id", value=frame),
+            Parameter("seed", value=seed),
+        ],
+    )
+    if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+        print(f"planner_demo: error: {node.errors[-1] if node.errors else 'configure failed'}", file=sys.stderr)
+        node.destroy_node()
+        return None
+    node.trigger_activate()
+    return node
+
+
+def replay_and_report(
+    contents: BagContents,
+    *,
+    context: rclpy.context.Context,
+    nodes: Sequence[Node],
+    node: PlannerNode,
+    options: ReplayReport,
+) -> int:
+    """Replay ``contents`` into ``nodes`` (the planner ``node`` among them) and report what it served.
+
+    The node's outputs are recorded into ``out/outputs.mcap``; it prints what was published and recorded, then
+    every served request (:func:`report_served`). Each message is sent after the node took the ones before
+    (counted from now) and answered; after the last, until it answered. Returns :func:`report_served`'s status.
+    """
+    options.out.mkdir(parents=True, exist_ok=True)
+    record = options.out / "outputs.mcap"
+    taken = node.inputs_taken
+    replay_options = ReplayOptions(
+        record=record,
+        overwrite=True,
+        rate=options.rate,
+        settle_until=lambda: node.planning_idle,
+        ready=lambda published: node.inputs_taken - taken >= published and node.planning_idle,
+    )
+    summary = replay_bag(contents, context=context, nodes=list(nodes), options=replay_options)
+    print(
+        f"published {len(summary.published)} {options.what}; recorded "
+        + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))
+        + f" into {record}"
+    )
+    return report_served(node, options.out, pictures=options.pictures)
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """How :func:`replay_and_report` replays and reports.
+
+    Attributes:
+        out: output folder (outputs.mcap, plan pictures).
+        rate: playback speed factor.
+        pictures: draw the plan pictures.
+        what: what the messages are, for the summary line ("bag messages").
+    """
+
+    out: Path
+    rate: float
+    pictures: bool
+    what: str
+
+
 def run_planner_demo(options: PlannerDemoOptions) -> int:
     """Run the main job; 0 when every request got a verified plan, 1 if one did not, 2 on bad input."""
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -145,49 +238,21 @@ def run_planner_demo(options: PlannerDemoOptions) -> int:
         bag_path = resolve_bag_path(options.bag)
         bag = open_bag(bag_path)
         frame = bag_frame(read_bag(bag_path)) or "map"
-        if options.domain_id is not None and not 0 <= options.domain_id <= 232:
-            raise DrdError(f"--domain-id must lie in [0, 232], got {options.domain_id}")
-        domain_id = private_domain() if options.domain_id is None else options.domain_id
+        domain_id = demo_domain(options.domain_id)
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
     print(f"ROS domain {domain_id}" + (" (private)" if options.domain_id is None else ""))
     context = rclpy.context.Context()
     rclpy.init(context=context, domain_id=domain_id)
-    node = PlannerNode(
-        context=context,
-        parameter_overrides=[
-            Parameter("prior_paths", value=[options.prior]),
-            Parameter("frame_id", value=frame),
-            Parameter("seed", value=options.seed),
-        ],
-    )
+    node = active_planner_node(context, prior=options.prior, frame=frame, seed=options.seed)
+    if node is None:
+        context.try_shutdown()
+        return 2
     try:
-        if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-            print(
-                f"planner_demo: error: {node.errors[-1] if node.errors else 'configure failed'}",
-                file=sys.stderr,
-            )
-            return 2
-        node.trigger_activate()
-        options.out.mkdir(parents=True, exist_ok=True)
-        record = options.out / "outputs.mcap"
         print(f"replaying {bag_path} into the planner node (frame {frame!r}, prior {node.sessions[0].name})")
-        # Each message after the node took the ones before and answered; after the bag, until it answered.
-        replay_options = ReplayOptions(
-            record=record,
-            overwrite=True,
-            rate=options.rate,
-            settle_until=lambda: node.planning_idle,
-            ready=lambda published: node.inputs_taken >= published and node.planning_idle,
-        )
-        summary = replay_bag(bag, context=context, nodes=[node], options=replay_options)
-        print(
-            f"published {len(summary.published)} bag messages; recorded "
-            + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))
-            + f" into {record}"
-        )
-        return report_served(node, options.out, pictures=options.pictures)
+        report = ReplayReport(options.out, options.rate, options.pictures, "bag messages")
+        return replay_and_report(bag, context=context, nodes=[node], node=node, options=report)
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2

@@ -33,7 +33,6 @@ import rclpy
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import serialize_message
@@ -43,11 +42,9 @@ from drd_msgs_py.exceptions import MessageError
 from drd_planner.arrays import FloatArray
 from drd_planner.exceptions import DrdError
 from drd_planner.planning.session import QuerySession
-from drd_planner.ros.demo import report_served
+from drd_planner.ros.demo import ReplayReport, active_planner_node, demo_domain, replay_and_report
 from drd_planner.ros.map_server import MapServer
 from drd_planner.ros.node import PlannerNode
-from drd_planner.ros.private_domain import private_domain
-from drd_planner.ros.replay import ReplayOptions, replay_bag
 
 __all__ = ["EXTRA_GOALS", "SiteDemoOptions", "far_goals", "reachable", "run_site_demo", "site_requests"]
 
@@ -189,10 +186,11 @@ def _spin_until_maps(context: rclpy.context.Context, nodes: list[Node], node: Pl
 def run_site_demo(options: SiteDemoOptions) -> int:
     """Run the site mode; 0 when every request got a verified plan, 1 if one did not, 2 on bad input."""
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-    if options.domain_id is not None and not 0 <= options.domain_id <= 232:
-        print(f"planner_demo: error: --domain-id must lie in [0, 232], got {options.domain_id}", file=sys.stderr)
+    try:
+        domain_id = demo_domain(options.domain_id)
+    except DrdError as exc:
+        print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
-    domain_id = private_domain() if options.domain_id is None else options.domain_id
     print(f"ROS domain {domain_id}" + (" (private)" if options.domain_id is None else ""))
     context = rclpy.context.Context()
     rclpy.init(context=context, domain_id=domain_id)
@@ -203,19 +201,10 @@ def run_site_demo(options: SiteDemoOptions) -> int:
             parameter_overrides=[Parameter("site_file", value=options.site_file), Parameter("frame_id", value=_FRAME)],
         )
         nodes.append(server)
-        node = PlannerNode(
-            context=context,
-            parameter_overrides=[
-                Parameter("prior_paths", value=[options.prior]),
-                Parameter("frame_id", value=_FRAME),
-                Parameter("seed", value=options.seed),
-            ],
-        )
-        nodes.append(node)
-        if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-            print(f"planner_demo: error: {node.errors[-1] if node.errors else 'configure failed'}", file=sys.stderr)
+        node = active_planner_node(context, prior=options.prior, frame=_FRAME, seed=options.seed)
+        if node is None:
             return 2
-        node.trigger_activate()
+        nodes.append(node)
         session = node.sessions[0]
         print(f"map server: site {server.site.name} from {options.site_file}; planner node: prior {session.name}")
         if not _spin_until_maps(context, nodes, node):
@@ -223,28 +212,9 @@ def run_site_demo(options: SiteDemoOptions) -> int:
             return 2
         # The goals are chosen on the maps the node holds, with its own checker (the node is idle until asked).
         requests = site_requests(session, seed=options.seed, free=session.checker(node.snapshot).check)
-        options.out.mkdir(parents=True, exist_ok=True)
-        record = options.out / "outputs.mcap"
-        taken = node.inputs_taken  # the maps: the requests are counted from here
         print(f"sending {len(requests.messages)} messages (odometry at the stored start, goals) to the planner node")
-        summary = replay_bag(
-            requests,
-            context=context,
-            nodes=nodes,
-            options=ReplayOptions(
-                record=record,
-                overwrite=True,
-                rate=options.rate,
-                settle_until=lambda: node.planning_idle,
-                ready=lambda published: node.inputs_taken - taken >= published and node.planning_idle,
-            ),
-        )
-        print(
-            f"published {len(summary.published)} messages; recorded "
-            + ", ".join(f"{n} on {t}" for t, n in sorted(summary.recorded_per_topic.items()))
-            + f" into {record}"
-        )
-        return report_served(node, options.out, pictures=options.pictures)
+        report = ReplayReport(options.out, options.rate, options.pictures, "messages")
+        return replay_and_report(requests, context=context, nodes=nodes, node=node, options=report)
     except (DrdError, MessageError) as exc:
         print(f"planner_demo: error: {exc}", file=sys.stderr)
         return 2
