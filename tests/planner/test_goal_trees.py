@@ -61,13 +61,14 @@ def test_trees_are_kept_per_goal_and_a_joined_goal_leaves_the_graph_as_it_was() 
     for goal in range(GOAL_TREES_KEPT + 1):
         search.tree(goal)
     assert search.tree(20) is not first  # dropped, rebuilt with the same numbers
-    assert np.array_equal(search.tree(20).dist, first.dist)
+    every = np.arange(36)
+    assert np.array_equal(search.tree(20).dist_at(every), first.dist_at(every))
     w = search.num_worlds
     joins = JoinMotions(np.array([14, 21]), np.array([0.5, 0.25]), np.tile([True, False], (w, 1)))
     joined = search.joined_tree(joins)
     assert joined.goal == 36  # the extra vertex of each block
-    assert np.allclose(joined.dist[:, 14], 0.5)  # only the first join is free
-    assert np.array_equal(search.tree(20).dist, first.dist)  # the shared graph is unchanged
+    assert np.allclose(joined.dist_at(np.array([14]))[:, 0], 0.5)  # only the first join is free
+    assert np.array_equal(search.tree(20).dist_at(every), first.dist_at(every))  # the shared graph is unchanged
     with pytest.raises(ProblemError, match="join outcomes"):
         search.joined_tree(JoinMotions(np.array([14]), np.array([1.0]), np.ones((w + 1, 1), dtype=bool)))
 
@@ -83,10 +84,16 @@ def test_distinct_rows_are_found_exactly() -> None:
 
 
 def _libraries(
-    monkeypatch: pytest.MonkeyPatch, radius: float, graph: ExplicitGraph, x: np.ndarray
+    monkeypatch: pytest.MonkeyPatch,
+    radius: float | tuple[float, ...],
+    graph: ExplicitGraph,
+    x: np.ndarray,
+    follow: bool = True,
 ) -> list[list[tuple[int, ...]]]:
-    """Every query's library with the first search radius set to ``radius`` (a fresh search per radius)."""
-    monkeypatch.setattr(goal_trees, "FIRST_RADIUS", radius)
+    """Every query's library with the first search radius ``radius`` (a fresh search per radius), ``follow``: the
+    union's paths read where they are a world's only shortest ones."""
+    monkeypatch.setattr(goal_trees, "ELLIPSE_FACTORS", radius if isinstance(radius, tuple) else (radius,))
+    monkeypatch.setattr(goal_trees, "FOLLOW_UNION", follow)
     search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
     rng = np.random.default_rng(9)
     out = []
@@ -112,29 +119,62 @@ def test_searching_only_as_far_as_the_start_gives_the_paths_of_whole_trees(
     monkeypatch: pytest.MonkeyPatch, directed: bool
 ) -> None:
     graph, x = _grid(directed)
-    whole = _libraries(monkeypatch, np.inf, graph, x)
+    whole = _libraries(monkeypatch, np.inf, graph, x, follow=False)
     assert sum(len(paths) for paths in whole) > 100
-    for radius in (0.5, 1.0, 1.25, 2.0):  # below 1 every world is widened; 1 widens all but straight paths
+    for radius in (0.5, 1.0, 1.25, 2.0, (1.25, 2.5, 5.0)):  # below 1 nothing is found in the ellipse
+        assert _libraries(monkeypatch, radius, graph, x, follow=False) == whole
         assert _libraries(monkeypatch, radius, graph, x) == whole
 
 
-def test_a_bounded_tree_covers_what_it_reached_and_is_widened_in_place() -> None:
+@pytest.mark.parametrize("directed", [False, True])
+def test_reading_the_unions_paths_gives_the_paths_of_searched_worlds_where_lengths_tie(
+    monkeypatch: pytest.MonkeyPatch, directed: bool
+) -> None:
+    graph, x = _grid(directed)
+    # Equal lengths: many equally short paths, so the union's path is often not a world's only shortest one.
+    tied = ExplicitGraph(graph.edges, np.ones(graph.num_edges), graph.num_vertices, directed)
+    whole = _libraries(monkeypatch, np.inf, tied, x, follow=False)
+    assert _libraries(monkeypatch, 1.25, tied, x) == whole
+
+
+def _reference_walks(graph: ExplicitGraph, x: np.ndarray, goal: int, start: int) -> list[tuple[int, ...] | None]:
+    """Each search world's walk from ``start`` read off whole trees (every world searched without bound)."""
+    search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
+    walks = search.tree(goal).walks(np.full(search.num_worlds, start))
+    return [None if w is None else tuple(w.tolist()) for w in walks]
+
+
+def _walks(search: SearchWorlds, goal: int, start: int) -> list[tuple[int, ...] | None]:
+    walks = search.walks_from(goal, start)
+    return [tuple(walks.table[w, :n].tolist()) if n else None for w, n in enumerate(walks.counts.tolist())]
+
+
+def test_a_bounded_tree_searches_only_what_the_start_needs_and_is_widened_in_place(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     graph, x = _grid(False)
+    monkeypatch.setattr(goal_trees, "ELLIPSE_FACTORS", (2.0,))  # so that the detours near the start stay bounded
     search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
     tree = search.tree(35, 28)  # a start two rows from the goal: a small part of the grid searched
-    assert tree.covers(28).all()
-    bounded = np.isfinite(tree.radius)  # the others were widened: 28 lay beyond their radius (a detour)
-    assert 0 < bounded.sum() < search.num_worlds
-    assert not np.isfinite(tree.dist[bounded, 0]).any()  # the far corner lies beyond every bounded radius
-    assert not tree.covers(0)[bounded].all()  # covered only where 0 is walled off from the goal (below)
-    assert search.tree(35, 0) is tree  # widened in place for the far start
+    searched = tree.rows.searched
+    # Worlds where the union's path is the only shortest one were not searched at all.
+    assert 0 < searched.sum() < search.num_worlds
+    assert _walks(search, 35, 28) == _reference_walks(graph, x, 35, 28)
+    radius = tree.world_radius()
+    bounded = searched & np.isfinite(radius)
+    assert bounded.any()  # searched only as far as the start needed
+    assert not np.isfinite(tree.dist_at(np.array([0]))[bounded, 0]).any()  # the far corner lies beyond them
+    assert search.tree(35, 0) is tree  # searched further in place for the far start
+    assert _walks(search, 35, 0) == _reference_walks(graph, x, 35, 0)
     reference = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1).tree(35)
-    assert tree.covers(0).all()
-    assert np.array_equal(tree.dist[:, 0], reference.dist[:, 0])
-    whole = np.isinf(tree.radius)
-    assert np.array_equal(tree.dist[whole], reference.dist[whole])
-    assert np.array_equal(tree.hop[whole], reference.hop[whole])
-    # A world left bounded had its start walled off from the goal: another part of its free arcs, no path.
+    whole = np.isinf(tree.world_radius())
+    every = np.arange(36)
+    assert np.array_equal(tree.dist_at(every)[whole], reference.dist_at(every)[whole])
+    for vertex in every.tolist():
+        hops = tree.rows.hop_of(np.flatnonzero(whole), np.full(int(whole.sum()), vertex))
+        assert np.array_equal(hops, reference.rows.hop_of(np.flatnonzero(whole), np.full(int(whole.sum()), vertex)))
+    # A world whose start is walled off from the goal (another part of its free arcs) is never searched for it.
     assert tree.parts is not None
-    assert (tree.parts[~whole, 0] != tree.parts[~whole, 35]).all()
-    assert not np.isfinite(reference.dist[~whole, 0]).any()
+    walled = tree.parts[:, 0] != tree.parts[:, 35]
+    assert walled.any()
+    assert not np.isfinite(reference.dist_at(np.array([0]))[walled, 0]).any()

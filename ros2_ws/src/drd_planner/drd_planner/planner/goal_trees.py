@@ -5,24 +5,27 @@ seeded sample of the training worlds. A robot's goal changes rarely while its st
 replan, so the searches run from the goal: one reverse shortest-path tree per search world gives every start's
 shortest free path to that goal by following next hops, and the trees are kept per goal.
 
-**One scipy call for all worlds.** The W search worlds' free arcs, reversed, are the blocks of one
-block-diagonal graph built once per prior (:class:`SearchWorlds`): vertex v of world c is ``c * B + v``. A
-Dijkstra from the goal's copy in every block at once (``min_only``: the blocks do not touch, so each vertex's
-distance is its own world's) computes all W trees in C: about 0.1 ms per world on the real-scale helicopter
-lattice (3935 vertices, 20 999 edges), against 0.17 ms for one search and the Python around it.
+**Most worlds need no search.** Where the shortest path over the arcs free in *any* search world (the union) is
+free in a world and is its only shortest path there, it is that world's path
+(:mod:`~drd_planner.planner.union_paths`): one search of the union per goal and a test per start resolve them.
 
-**Searched only as far as the start.** A search for a start s explores, in every world, only the vertices at
-most ``FIRST_RADIUS`` times s's distance to the goal over the arcs free in any search world (a lower bound of every
-world's): on short queries a small part of the graph. Within that radius the distances and next hops are
-exactly those of an unbounded search; a world whose start lies beyond it (a long detour) is searched again
-without bound, as is every world a later start of the same goal is not covered in (:meth:`GoalTree.covers`).
-A start in another weakly connected part of a world's free arcs than the goal (computed once per prior) cannot
-reach it there, so that world needs no second search for it (most of them: a start walled in by blocked edges).
-So a replan from along the route walks the kept trees, and any start gets the same paths as unbounded trees.
+**The others in one scipy call.** Their free arcs, reversed, are blocks of one block-diagonal graph
+(:mod:`~drd_planner.planner.world_blocks`); a Dijkstra from the goal's copy in each of them at once computes their
+trees in C, on a graph of just the blocks searched.
+
+**Searched only where the start's path can be.** A world is searched first only in the ellipse of vertices
+through which a path from the start of at most ``ELLIPSE_FACTORS[0]`` times the start's distance over the union
+(a lower bound of every world's) could pass: on a robot's query a small part of the graph. A vertex whose
+distance found there plus its union distance from the start is within the ellipse's length has its exact
+distance and next hop; a world whose start is not among them (a long detour) is searched again in wider
+ellipses, then without bound. A start in another weakly connected part of a world's free arcs than the goal
+(computed once per prior) cannot reach it there, so that world needs no search for it (most of them: a start
+walled in by blocked edges). A later start of the same goal reads what is known, and searches only the worlds
+it is not covered in (:meth:`GoalTree.covers`). So a replan from along the route walks the kept trees, and any
+start gets the same paths as unbounded trees of every world.
 
 **A goal off the graph** is the extra vertex ``B - 1`` of each block; the motions joining it (their vertex,
-length and imputed outcome per world) are written into the block graph's spare arcs for that search only (as
-far as the start needs, like a graph goal; its trees are not kept).
+length and imputed outcome per world) are arcs into it for that query only (its trees are not kept).
 
 The search worlds: the distinct training worlds (rows compared through a 64-bit hash, then exactly) in a
 seeded order, the first W of them.
@@ -31,23 +34,27 @@ seeded order, the first W of them.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.exceptions import ProblemError
+from drd_planner.planner.tree_rows import TreeRows
+from drd_planner.planner.union_paths import NO_HOP, TIGHT_TOLERANCE, JoinMotions, UnionTree, follows_union
+from drd_planner.planner.world_blocks import WorldBlocks
 
 __all__ = [
-    "FIRST_RADIUS",
+    "ELLIPSE_FACTORS",
+    "FOLLOW_UNION",
     "GOAL_JOIN_SLOTS",
     "GOAL_TREES_KEPT",
+    "NO_HOP",
     "SEARCH_WORLDS",
     "GoalTree",
+    "GoalWalks",
     "JoinMotions",
     "SearchWorlds",
     "distinct_rows",
@@ -59,10 +66,12 @@ SEARCH_WORLDS = 256
 GOAL_JOIN_SLOTS = 64
 #: Goals whose trees a :class:`SearchWorlds` keeps (least recently used dropped first).
 GOAL_TREES_KEPT = 8
-#: A new goal's first search radius, as a multiple of the start's distance over the arcs free in any search world.
-FIRST_RADIUS = 1.25
-#: A reverse tree's next hop where there is none (the goal itself, or a vertex that cannot reach it).
-NO_HOP = -1
+#: How long a path a world's searches look for, in turn, as multiples of the start's distance over the arcs free in
+#: any search world (each search covers the ellipse such paths could pass through; then the whole graph).
+ELLIPSE_FACTORS = (1.25, 2.5, 5.0)
+#: Read a world's path off the union where it is provably that world's only shortest path (False: search every
+#: world; the paths are the same, only slower).
+FOLLOW_UNION = True
 
 
 def distinct_rows(x: npt.ArrayLike) -> IntArray:
@@ -101,106 +110,112 @@ def distinct_rows(x: npt.ArrayLike) -> IntArray:
 
 
 @dataclass(frozen=True)
-class JoinMotions:
-    """The motions joining an off-graph state (a goal, or a start) to the graph.
-
-    Attributes:
-        vertices: (k,) the graph vertex at each motion's other end.
-        lengths: (k,) their lengths (the graph's unit).
-        free: (W, k) bool: whether each motion counts as free in each search world (imputed).
-    """
-
-    vertices: IntArray
-    lengths: FloatArray
-    free: BoolArray
-
-
-@dataclass(frozen=True)
 class GoalTree:
-    """The reverse shortest-path trees of one goal in every search world (searched as far as ``radius``).
+    """The reverse shortest-path trees of one goal: the union's, and those of the worlds that were searched.
 
     Attributes:
         goal: the goal's vertex in a block (``B - 1`` for an off-graph goal).
-        dist: (W, B) distance of each vertex to the goal in each world (inf: it cannot reach it, or lies beyond
-            the world's radius).
-        hop: (W, B) int32, the next vertex on its shortest free path to the goal (:data:`NO_HOP` at the goal,
-            where the goal is unreachable, or beyond the radius).
-        radius: (W,) how far each world was searched (the graph's length unit; inf: the whole graph). Within it
-            ``dist`` and ``hop`` are those of an unbounded search. :meth:`SearchWorlds.tree` widens the rows of a
-            kept tree in place (to inf) when a later start needs it; rows never change otherwise.
+        union: the goal's tree over the arcs free in any search world (a lower bound of every world's distance).
+        rows: the searched worlds' rows (distance to the goal and next hop of the vertices each search covered;
+            every vertex within a world's ``radius`` is known, as in an unbounded search). Rows are searched again
+            further when a later start needs it, and never change otherwise.
         parts: (W, B) int32 label of each vertex's weakly connected part of each world's free arcs (vertices
             of different parts cannot reach each other), or None when unknown.
+        joins: the motions into an off-graph goal (None for a graph vertex).
     """
 
     goal: int
-    dist: FloatArray
-    hop: npt.NDArray[np.int32]
-    radius: FloatArray
+    union: UnionTree
+    rows: TreeRows
     parts: npt.NDArray[np.int32] | None = None
+    joins: JoinMotions | None = None
+
+    @property
+    def num_worlds(self) -> int:
+        """W, the search worlds."""
+        return int(self.rows.segment.size)
+
+    def dist_at(self, vertices: IntArray) -> FloatArray:
+        """(W, n) each world's searched distance of ``vertices`` (n,) to the goal (inf where not known)."""
+        return self.rows.dist_at(vertices)
+
+    def world_radius(self) -> FloatArray:
+        """(W,) how far each world was searched (0 where it was not, or only its known vertices are exact)."""
+        return self.rows.radius
 
     def covers(self, start: int | JoinMotions) -> BoolArray:
-        """(W,) whether each world's shortest free path from ``start`` can be read off this tree.
+        """(W,) whether each world's shortest free path from ``start`` can be read off its searched tree.
 
-        A vertex start is covered where it was reached, lies in another part than the goal (it cannot reach
-        it), or the world was searched without bound. A joined start (``free`` (W, k)) is covered where no free
-        motion's vertex beyond the radius (and in the goal's part) could beat the best one within it (the best
-        free motion is then exactly chosen, :meth:`best_joins`).
+        A vertex start is covered where it was reached, lies in another part than the goal or where no world
+        reaches the goal from it (it cannot reach it), or the world was searched without bound. A joined start
+        (``free`` (W, k)) is covered where no free motion's vertex beyond the radius (and in the goal's part)
+        could beat the best one within it (the best free motion is then exactly chosen, :meth:`best_joins`).
         """
-        whole = np.isinf(self.radius)
+        whole = np.isinf(self.world_radius())
         if not isinstance(start, JoinMotions):
             vertex = int(start)
             cut = np.zeros_like(whole) if self.parts is None else self.parts[:, vertex] != self.parts[:, self.goal]
-            return np.asarray(whole | cut | np.isfinite(self.dist[:, vertex]), dtype=bool)
-        reached = np.isfinite(self.dist[:, start.vertices])  # (W, k)
-        best = np.min(np.where(start.free & reached, start.lengths[None, :] + self.dist[:, start.vertices], np.inf), 1)
+            nowhere = not np.isfinite(self.union.dist[vertex])
+            return np.asarray(whole | cut | nowhere | np.isfinite(self.dist_at(np.array([vertex]))[:, 0]), dtype=bool)
+        dist = self.dist_at(start.vertices)  # (W, k)
+        reached = np.isfinite(dist)
+        best = np.min(np.where(start.free & reached, start.lengths[None, :] + dist, np.inf), 1)
         open_ = start.free & ~reached
         if self.parts is not None:
             open_ &= self.parts[:, start.vertices] == self.parts[:, self.goal][:, None]
-        # A motion to a vertex beyond the radius is at least its length plus the radius long.
-        floor = np.where(open_, start.lengths[None, :] + self.radius[:, None], np.inf)
+        # A motion to a vertex beyond the radius is at least its length plus the radius (and its union distance).
+        beyond = np.maximum(self.world_radius()[:, None], self.union.dist[start.vertices][None, :])
+        floor = np.where(open_, start.lengths[None, :] + beyond, np.inf)
         return np.asarray(whole | (best <= floor.min(axis=1)), dtype=bool)
 
     def best_joins(self, start: JoinMotions) -> tuple[IntArray, BoolArray]:
-        """Per world, the free motion with the shortest free path behind it (the first of equally short ones).
+        """Per world, the free motion with the shortest searched free path behind it (the first of equally short).
 
         Returns:
             (W,) the motion's index (0 where none), (W,) whether a free path exists.
         """
-        behind = np.where(start.free, start.lengths[None, :] + self.dist[:, start.vertices], np.inf)
+        behind = np.where(start.free, start.lengths[None, :] + self.dist_at(start.vertices), np.inf)
         choice = np.asarray(np.argmin(behind, axis=1), dtype=np.int64)
         reachable = np.isfinite(behind[np.arange(behind.shape[0]), choice])
         return choice, np.asarray(reachable, dtype=bool)
 
-    def walks(self, starts: IntArray) -> list[IntArray | None]:
+    def walks(self, starts: IntArray, via: BoolArray | None = None) -> list[IntArray | None]:
         """Per world the vertex sequence from ``starts[w]`` to the goal, or None when it cannot reach it.
 
         Args:
             starts: (W,) a start vertex per world (the same one, or each world's best join); each must be
-                covered (:meth:`covers`).
+                covered (:meth:`covers`) or read off the union (``via``).
+            via: (W,) bool, the worlds whose walk follows the union's tree (None: none).
         """
-        table, lengths = self.walk_table(starts)
+        table, lengths = self.walk_table(starts, via)
         return [None if n == 0 else np.asarray(table[w, :n], dtype=np.int64) for w, n in enumerate(lengths)]
 
-    def walk_table(self, starts: IntArray) -> tuple[npt.NDArray[np.int32], IntArray]:
+    def walk_table(self, starts: IntArray, via: BoolArray | None = None) -> tuple[npt.NDArray[np.int32], IntArray]:
         """The walks of :meth:`walks` as one table.
 
         Returns:
             (W, L) int32 vertex sequences from ``starts[w]`` to the goal, the goal repeated after each walk's
             end, and (W,) each walk's vertex count (0 where the goal cannot be reached).
         """
-        num = self.dist.shape[0]
-        rows = np.arange(num)
+        num = self.num_worlds
         starts = np.asarray(starts, dtype=np.int64)
-        reach = np.isfinite(self.dist[rows, starts])
+        union = np.zeros(num, dtype=bool) if via is None else np.asarray(via, dtype=bool)
+        searched = np.flatnonzero(~union & self.rows.searched)
+        reach = np.zeros(num, dtype=bool)
+        reach[union] = np.isfinite(self.union.dist[starts[union]])
+        reach[searched] = np.isfinite(self.rows.dist_of(searched, starts[searched]))
         cur = np.where(reach, starts, self.goal).astype(np.int32)
         steps = [cur]
         count = reach.astype(np.int64)
         while True:
-            moving = np.flatnonzero(cur != self.goal)
-            if moving.size == 0:
+            moving = cur != self.goal
+            if not moving.any():
                 break
             nxt = cur.copy()
-            nxt[moving] = self.hop[moving, cur[moving]]
+            on_union = np.flatnonzero(moving & union)
+            nxt[on_union] = self.union.hop[cur[on_union]]
+            on_rows = np.flatnonzero(moving & ~union)
+            nxt[on_rows] = self.rows.hop_of(on_rows, cur[on_rows].astype(np.int64))
             if np.any(nxt[moving] == NO_HOP):  # never: a finite distance has a complete walk
                 raise ProblemError("a reverse shortest-path tree has a broken walk")
             count[moving] += 1
@@ -209,8 +224,23 @@ class GoalTree:
         return np.stack(steps, axis=1), count
 
 
+@dataclass(frozen=True)
+class GoalWalks:
+    """Each search world's shortest free path from a start to a goal, as vertex walks.
+
+    Attributes:
+        table: (W, L) int32 vertex sequences (the start's graph vertex first), the goal repeated after each end.
+        counts: (W,) each walk's vertex count (0: no free path in that world).
+        choice: (W,) the motion a joined start takes in each world (0 for a graph vertex, or where no path).
+    """
+
+    table: npt.NDArray[np.int32]
+    counts: IntArray
+    choice: IntArray
+
+
 class SearchWorlds:
-    """A prior's search worlds and their reversed free arcs as one block-diagonal graph (built once).
+    """A prior's search worlds, their block graph (built once) and the reverse trees of recent goals.
 
     Args:
         arcs: the prior graph's arcs.
@@ -236,41 +266,14 @@ class SearchWorlds:
         order = distinct[np.random.default_rng(seed).permutation(distinct.size)]
         self.worlds: IntArray = np.asarray(order[:count], dtype=np.int64)
         self.arcs = arcs
-        num = self.worlds.size
         v = arcs.num_vertices
-        block = v + 1  # the last vertex of each block stands for an off-graph goal
-        self.block = block
         arc_length = np.asarray(lengths, dtype=np.float64)[arcs.edge]
-        arc_length = np.where(arc_length > 0, arc_length, np.finfo(np.float64).tiny)  # csgraph: 0 = no arc
-        free = x[self.worlds][:, arcs.edge]  # (W, A): arc a is free in world c
-        copies, which = np.nonzero(free)
-        # Reversed arcs (head -> tail), then GOAL_JOIN_SLOTS spare arcs of weight inf per block from its goal
-        # vertex (to its first vertices: distinct, so the CSR keeps them apart; never relaxed).
+        self._arc_length = np.where(arc_length > 0, arc_length, np.finfo(np.float64).tiny)  # csgraph: 0 = no arc
+        self._free = np.ascontiguousarray(x[self.worlds])  # (W, E)
+        self._anywhere: BoolArray = np.asarray(self._free.any(axis=0), dtype=bool)
         self.slots = min(GOAL_JOIN_SLOTS, v)
-        spare_rows = np.repeat(np.arange(num) * block + v, self.slots)
-        spare_cols = (np.arange(num) * block)[:, None] + np.arange(self.slots)[None, :]
-        rows = np.concatenate([arcs.v[which] + copies * block, spare_rows])
-        cols = np.concatenate([arcs.u[which] + copies * block, spare_cols.ravel()])
-        data = np.concatenate([arc_length[which], np.full(num * self.slots, np.inf)])
-        self._graph = _csr32(data, rows, cols, num * block)
-        # The weakly connected parts of each world's free arcs (the spare arcs left out): (W, B) labels.
-        arcs_only = sp.coo_array(
-            (np.ones(which.size, dtype=np.int8), (rows[: which.size], cols[: which.size])),
-            shape=(num * block, num * block),
-        )
-        _, labels = connected_components(arcs_only, directed=True, connection="weak")
-        self._parts = np.asarray(labels, dtype=np.int32).reshape(num, block)
-        # Where each block's spare arcs sit in the CSR arrays (its goal vertex's row: all of that row).
-        goal_rows = np.arange(num) * block + v
-        self._slots = self._graph.indptr[goal_rows][:, None] + np.arange(self.slots)[None, :]
-        # The arcs free in any search world, reversed, in one block with its spare arcs: distances on it bound
-        # every world's from below.
-        anywhere = free.any(axis=0)
-        union_rows = np.concatenate([arcs.v[anywhere], np.full(self.slots, v)])
-        union_cols = np.concatenate([arcs.u[anywhere], np.arange(self.slots)])
-        union_data = np.concatenate([arc_length[anywhere], np.full(self.slots, np.inf)])
-        self._union = _csr32(union_data, union_rows, union_cols, block)
-        self._union_slots = self._union.indptr[v] + np.arange(self.slots)
+        self._blocks = WorldBlocks(arcs, self._arc_length, self._free[:, arcs.edge], self.slots)
+        self.block = self._blocks.block
         self._trees: OrderedDict[int, GoalTree] = OrderedDict()
 
     @property
@@ -289,109 +292,169 @@ class SearchWorlds:
         Args:
             goal: the goal vertex.
             start: the start the trees are read for (a vertex, or the motions joining an off-graph start with
-                ``free`` (W, k)); a new goal is searched as far as it needs (:data:`FIRST_RADIUS`), and the
-                worlds a kept tree does not cover it in are searched again without bound. None: the whole graph.
+                ``free`` (W, k)): each world is covered or follows the union there (:meth:`walks_from`). None:
+                every world searched without bound.
         """
-        goal = int(goal)
-        known = self._trees.get(goal)
-        if known is None:
-            if not 0 <= goal < self.arcs.num_vertices:
-                raise ProblemError(f"goal vertex {goal} outside [0, {self.arcs.num_vertices})")
-            known = self._search(goal, self._graph, limit=self._first_radius(goal, start))
-            self._trees[goal] = known
-            while len(self._trees) > GOAL_TREES_KEPT:
-                self._trees.popitem(last=False)
-        else:
-            self._trees.move_to_end(goal)
-        if start is None:
-            self._widen(known, ~np.isinf(known.radius))
-        else:
-            self._widen(known, ~known.covers(start))
-        return known
+        tree = self._kept(int(goal))
+        self._cover(tree, start)
+        return tree
+
+    def joined_tree(self, joins: JoinMotions, start: int | JoinMotions | None = None) -> GoalTree:
+        """The reverse trees of an off-graph goal joined by ``joins``, covering ``start`` (not kept).
+
+        As :meth:`tree` otherwise.
+        """
+        tree = self._joined(joins)
+        self._cover(tree, start)
+        return tree
+
+    def walks_from(self, goal: int | JoinMotions, start: int | JoinMotions) -> GoalWalks:
+        """Every search world's shortest free path from ``start`` to ``goal`` (a vertex, or an off-graph goal's joins).
+
+        A joined start takes, per world, the free motion with the shortest free path behind it (the first of
+        equally short ones).
+        """
+        tree = self._joined(goal) if isinstance(goal, JoinMotions) else self._kept(int(goal))
+        via, union_choice = self._cover(tree, start)
+        if not isinstance(start, JoinMotions):
+            table, counts = tree.walk_table(np.full(self.num_worlds, int(start)), via)
+            return GoalWalks(table, counts, np.zeros(self.num_worlds, dtype=np.int64))
+        choice, reachable = tree.best_joins(start)
+        choice = np.where(via, union_choice, choice)
+        reachable |= via
+        table, counts = tree.walk_table(np.where(reachable, start.vertices[choice], tree.goal), via)
+        return GoalWalks(table, np.where(reachable, counts, 0), choice)
 
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()
 
-    def joined_tree(self, joins: JoinMotions, start: int | JoinMotions | None = None) -> GoalTree:
-        """The reverse trees of an off-graph goal joined by ``joins``, covering ``start`` (not kept).
+    # ------------------------------------------------------------------------------------------------
 
-        Searched as far as ``start`` needs (:data:`FIRST_RADIUS`), then again without bound in the worlds
-        it does not cover; None: the whole graph.
-        """
+    def _kept(self, goal: int) -> GoalTree:
+        """A graph goal's kept tree (only its union's, when new)."""
+        known = self._trees.get(goal)
+        if known is not None:
+            self._trees.move_to_end(goal)
+            return known
+        if not 0 <= goal < self.arcs.num_vertices:
+            raise ProblemError(f"goal vertex {goal} outside [0, {self.arcs.num_vertices})")
+        known = self._empty(self._blocks.union_tree(goal), self._blocks.parts, None)
+        self._trees[goal] = known
+        while len(self._trees) > GOAL_TREES_KEPT:
+            self._trees.popitem(last=False)
+        return known
+
+    def _joined(self, joins: JoinMotions) -> GoalTree:
+        """An off-graph goal's tree (only its union's). No parts: its vertex is joined only in this search."""
         k = int(joins.vertices.size)
         if k > self.slots:
             raise ProblemError(f"at most {self.slots} motions into a goal can be searched, got {k}")
         if joins.free.shape != (self.num_worlds, k):
             raise ProblemError(f"join outcomes must be ({self.num_worlds}, {k}), got {joins.free.shape}")
-        # A copy of the arrays with the spare arcs filled in (the shared graph is never changed).
-        data, indices = self._graph.data.copy(), self._graph.indices.copy()
-        offsets = (np.arange(self.num_worlds) * self.block)[:, None]
-        slots = self._slots[:, :k]
-        indices[slots] = joins.vertices[None, :] + offsets
-        data[slots] = np.where(joins.free, joins.lengths[None, :], np.inf)
-        graph = sp.csr_array((data, indices, self._graph.indptr), shape=self._graph.shape)
-        goal = self.block - 1
-        # No parts: the goal's own vertex is joined only in this search (a start is never known to be cut off).
-        tree = replace(self._search(goal, graph, limit=self._first_radius(goal, start, joins)), parts=None)
-        if start is not None:
-            self._widen(tree, ~tree.covers(start), graph)
-        return tree
+        return self._empty(self._blocks.union_tree(self.block - 1, joins), None, joins)
 
-    def _first_radius(self, goal: int, start: int | JoinMotions | None, joins: JoinMotions | None = None) -> float:
-        """How far a new goal's first search goes for ``start``: inf for the whole graph."""
-        if start is None:
-            return np.inf
-        union = self._union
-        if joins is not None:  # the goal's motions free in any search world, in the union's spare arcs
-            data, indices = union.data.copy(), union.indices.copy()
-            slots = self._union_slots[: joins.vertices.size]
-            indices[slots] = joins.vertices
-            data[slots] = np.where(joins.free.any(axis=0), joins.lengths, np.inf)
-            union = sp.csr_array((data, indices, union.indptr), shape=union.shape)
-        bound = dijkstra(union, directed=True, indices=goal)
-        if isinstance(start, JoinMotions):
-            near = float(np.min(start.lengths + bound[start.vertices], initial=np.inf))
-        else:
-            near = float(bound[int(start)])
-        return FIRST_RADIUS * near  # inf where no world can reach the goal at all: search everything once
+    def _empty(self, union: UnionTree, parts: npt.NDArray[np.int32] | None, joins: JoinMotions | None) -> GoalTree:
+        """A tree with no world searched yet."""
+        return GoalTree(union.goal, union, TreeRows(self.num_worlds, self.block), parts, joins)
 
-    def _widen(self, tree: GoalTree, worlds: BoolArray, graph: sp.csr_array | None = None) -> None:
-        """Search ``worlds`` (W,) of a tree again without bound, in place (on ``graph``: a joined goal's)."""
-        again = np.flatnonzero(worlds)
-        if again.size == 0:
-            return
-        full = self._search(tree.goal, self._graph if graph is None else graph, limit=np.inf, worlds=again)
-        tree.dist[again] = full.dist
-        tree.hop[again] = full.hop
-        tree.radius[again] = np.inf
+    def _cover(self, tree: GoalTree, start: int | JoinMotions | None) -> tuple[BoolArray, IntArray]:
+        """Search what ``start`` needs: returns (W,) the worlds read off the union and (W,) a joined start's motion.
 
-    def _search(self, goal: int, graph: sp.csr_array, *, limit: float, worlds: IntArray | None = None) -> GoalTree:
-        """Dijkstra from ``goal`` in each of ``worlds`` (all when None) as far as ``limit``.
-
-        Returns the rows of those worlds only, in their order.
+        Worlds that neither follow the union nor are covered by their searched tree are searched in the ellipses of
+        the vertices through which a path of at most each of ``ELLIPSE_FACTORS`` times the start's union distance
+        could pass (:meth:`_search_ellipse`), each only where the one before did not find the path; then, where
+        none did, without bound.
         """
-        block = self.block
-        chosen = np.arange(self.num_worlds) if worlds is None else worlds
-        sources = chosen * block + goal
-        dist, pred, _ = dijkstra(
-            graph, directed=True, indices=sources, min_only=True, return_predecessors=True, limit=limit
-        )
-        if worlds is None:
-            dist_rows = np.asarray(dist, dtype=np.float64).reshape(chosen.size, block)
-            hop = np.asarray(pred, dtype=np.int32).reshape(chosen.size, block)
-        else:  # only the chosen blocks: min_only searches never leave the blocks of their sources
-            cells = (chosen * block)[:, None] + np.arange(block)[None, :]
-            dist_rows = np.asarray(dist[cells], dtype=np.float64)
-            hop = np.asarray(pred[cells], dtype=np.int32)
-        hop -= (chosen * block)[:, None].astype(np.int32)  # in place: a block's own vertex numbers
-        np.maximum(hop, NO_HOP, out=hop)  # no predecessor (scipy's -9999, now shifted): NO_HOP
-        radius = np.full(chosen.size, limit, dtype=np.float64)
-        return GoalTree(goal, dist_rows, hop, radius, None if worlds is not None else self._parts)
+        num = self.num_worlds
+        if start is None:
+            self._search(tree, np.flatnonzero(~np.isinf(tree.world_radius())), np.inf)
+            return np.zeros(num, dtype=bool), np.zeros(num, dtype=np.int64)
+        pending = ~tree.covers(start)
+        if FOLLOW_UNION:
+            via, choice = self._follow(tree.union, start, pending, tree.joins)
+        else:
+            via, choice = np.zeros(num, dtype=bool), np.zeros(num, dtype=np.int64)
+        pending &= ~via
+        fresh = pending.copy()
+        for factor in ELLIPSE_FACTORS:  # each world searched in a wider ellipse until its path is found
+            if not fresh.any():
+                break
+            self._search_ellipse(tree, np.flatnonzero(fresh), start, factor)
+            covered = tree.covers(start)
+            pending &= ~covered
+            fresh &= ~covered
+        self._search(tree, np.flatnonzero(pending), np.inf)
+        return via, choice
+
+    def _follow(
+        self, union: UnionTree, start: int | JoinMotions, among: BoolArray, joins: JoinMotions | None
+    ) -> tuple[BoolArray, IntArray]:
+        """(W,) the worlds of ``among`` whose path from ``start`` is uniquely ``union``'s, (W,) a joined start's motion.
+
+        A vertex start: :func:`follows_union`. A joined start: in a world, the free motion whose length plus
+        union distance is least by a margin, with the union's path behind it being that world's only shortest
+        one, is the world's best join.
+        """
+        num = self.num_worlds
+        if not isinstance(start, JoinMotions):
+            follows = among & self._follows(union, int(start), joins)
+            return follows, np.zeros(num, dtype=np.int64)
+        bound = np.where(start.free, (start.lengths + union.dist[start.vertices])[None, :], np.inf)  # (W, k)
+        choice = np.asarray(np.argmin(bound, axis=1), dtype=np.int64)
+        rows = np.arange(num)
+        best = bound[rows, choice]
+        bound[rows, choice] = np.inf
+        near = _union_distance(union, start)
+        clear = among & np.isfinite(best) & (bound.min(axis=1) > best + TIGHT_TOLERANCE * max(1.0, near))
+        follows = np.zeros(num, dtype=bool)
+        for motion in np.unique(choice[clear]).tolist():
+            these = clear & (choice == motion)
+            follows[these] = self._follows(union, int(start.vertices[motion]), joins)[these]
+        return follows, choice
+
+    def _follows(self, union: UnionTree, vertex: int, joins: JoinMotions | None) -> BoolArray:
+        """(W,) the worlds whose shortest path from ``vertex`` is, uniquely, ``union``'s (``joins``: into the goal)."""
+        return follows_union(union, vertex, self.arcs, self._arc_length, self._free, self._anywhere, joins)
+
+    def _search_ellipse(self, tree: GoalTree, worlds: IntArray, start: int | JoinMotions, factor: float) -> None:
+        """Search ``worlds`` (n,) only where a path from ``start`` of ``factor`` times its union distance can pass.
+
+        That is the vertices v with d(start, v) + d(v, goal) <= L = ``factor`` times the start's union distance.
+
+        A vertex whose distance found there plus its union distance from the start is at most L has its exact
+        distance and next hop (every vertex of its shortest path lies in the ellipse); the others are left
+        unknown. The rows keep radius 0 (no ball around the goal is complete), so other starts read them only
+        where they are known.
+        """
+        near = _union_distance(tree.union, start)
+        limit = factor * near
+        if not np.isfinite(limit):  # no world reaches the goal from the start: search everything once
+            self._search(tree, worlds, np.inf)
+            return
+        if isinstance(start, JoinMotions):
+            ahead = self._blocks.union_from(start.vertices, start.lengths, np.asarray(start.free.any(axis=0)))
+        else:
+            ahead = self._blocks.union_from(np.array([int(start)]), np.zeros(1), np.ones(1, dtype=bool))
+        ahead[tree.goal] = near  # an off-graph goal has no arcs into it in the union's forward graph
+        within = ahead + tree.union.dist <= limit
+        vertices, dist, hop = self._blocks.search(tree.union, worlds, limit=limit, joins=tree.joins, within=within)
+        known = dist + ahead[vertices][None, :] <= limit
+        dist[~known] = np.inf
+        hop[~known] = NO_HOP
+        tree.rows.add(worlds, vertices, dist, hop, 0.0)
+
+    def _search(self, tree: GoalTree, worlds: IntArray, limit: float) -> None:
+        """Search ``worlds`` (n,) of a tree as far as ``limit`` (every vertex within it), writing their rows."""
+        if worlds.size == 0:
+            return
+        vertices, dist, hop = self._blocks.search(tree.union, worlds, limit=limit, joins=tree.joins)
+        tree.rows.add(worlds, vertices, dist, hop, limit)
 
 
-def _csr32(data: FloatArray, rows: npt.ArrayLike, cols: npt.ArrayLike, size: int) -> sp.csr_array:
-    """A (size, size) CSR graph with int32 indices (what csgraph runs on: no conversion per search)."""
-    graph = sp.csr_array((data, (rows, cols)), shape=(size, size))
-    graph.sort_indices()
-    return sp.csr_array((graph.data, graph.indices.astype(np.int32), graph.indptr.astype(np.int32)), shape=(size, size))
+def _union_distance(union: UnionTree, start: int | JoinMotions) -> float:
+    """A start's distance to the goal over a union (a joined start: its best motion free in any world)."""
+    if not isinstance(start, JoinMotions):
+        return float(union.dist[int(start)])
+    behind = np.where(start.free.any(axis=0), start.lengths + union.dist[start.vertices], np.inf)
+    return float(np.min(behind, initial=np.inf))

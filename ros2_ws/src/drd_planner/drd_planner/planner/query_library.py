@@ -28,7 +28,7 @@ from drd_planner.arrays import BoolArray, IntArray
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.goal_trees import GoalTree, JoinMotions, SearchWorlds
+from drd_planner.planner.goal_trees import JoinMotions, SearchWorlds
 from drd_planner.planner.query_graph import Joins
 
 
@@ -83,14 +83,9 @@ def library_paths(search: SearchWorlds, start: int | Joins, goal: int | Joins, *
     if isinstance(start, int) and isinstance(goal, int) and start == goal:
         raise ProblemError(f"start and goal are the same vertex ({start}); no path has an edge to check")
     origin = _motions(search, start)
-    tree, into_goal = _goal_tree(search, origin, goal)
-    if isinstance(origin, JoinMotions):
-        choice, reachable = tree.best_joins(origin)
-        table, counts = tree.walk_table(np.where(reachable, origin.vertices[choice], tree.goal))
-        counts = np.where(reachable, counts, 0)
-    else:
-        choice = np.zeros(search.num_worlds, dtype=np.int64)
-        table, counts = tree.walk_table(np.full(search.num_worlds, origin))
+    target, into_goal = _goal_target(search, goal)
+    walks = search.walks_from(target, origin)
+    choice, table, counts = walks.choice, walks.table, walks.counts
     # The distinct (join, walk) rows in the worlds' order: the first max_paths of them make the library.
     kept = counts > 0
     keyed = np.concatenate([choice[:, None].astype(np.int32), table], axis=1)[kept]
@@ -121,15 +116,17 @@ def _motions(search: SearchWorlds, start: int | Joins) -> int | JoinMotions:
     return JoinMotions(start.vertices, start.lengths, start.free[search.worlds])
 
 
-def _goal_tree(search: SearchWorlds, origin: int | JoinMotions, goal: int | Joins) -> tuple[GoalTree, dict[int, int]]:
-    """The goal's reverse trees (covering ``origin``) and, for a joined goal, its join edge per graph vertex."""
+def _goal_target(search: SearchWorlds, goal: int | Joins) -> tuple[int | JoinMotions, dict[int, int]]:
+    """A goal vertex as it is, or an off-graph goal's first (best) joins in the search worlds; its join edge per vertex.
+
+    The joins carry their outcomes in the search worlds; the map gives the query edge of the join at each vertex.
+    """
     if not isinstance(goal, Joins):
-        return search.tree(goal, origin), {}
+        return int(goal), {}
     assert goal.free is not None
     k = min(goal.vertices.size, search.slots)  # the first (best) joins; any others stay in the graph
-    free = goal.free[search.worlds][:, :k]
-    tree = search.joined_tree(JoinMotions(goal.vertices[:k], goal.lengths[:k], free), origin)
-    return tree, dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
+    joins = JoinMotions(goal.vertices[:k], goal.lengths[:k], goal.free[search.worlds][:, :k])
+    return joins, dict(zip(goal.vertices[:k].tolist(), goal.edges[:k].tolist(), strict=True))
 
 
 def vertex_sequence(edges: npt.NDArray[np.int64], start: int, path: IntArray) -> IntArray:

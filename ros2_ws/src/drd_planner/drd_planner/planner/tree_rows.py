@@ -1,0 +1,88 @@
+"""The searched worlds' reverse-tree rows, each kept over just the vertices its search covered.
+
+A search of n worlds over k of the graph's B vertices (a short query's ellipse is a small part of the graph)
+writes n rows of k distances and next hops: one *segment*. Each world points at its latest row; a vertex a
+world's segment did not cover reads as unknown (distance inf, no next hop), exactly as a vertex beyond a
+search's reach. Rows are stored flat, so a query pays for what it searched, not for n x B.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.planner.union_paths import NO_HOP
+
+__all__ = ["TreeRows"]
+
+
+class TreeRows:
+    """Each search world's latest reverse-tree row, over the vertices its search covered.
+
+    Args:
+        num_worlds: W.
+        block: B, the vertices a row could cover.
+
+    Attributes:
+        segment: (W,) the search that wrote each world's row (-1: not searched).
+        radius: (W,) how far each world was searched: every vertex whose distance is at most this has it known
+            (inf: the whole graph; 0 where not searched, or where only the known vertices are exact).
+    """
+
+    def __init__(self, num_worlds: int, block: int) -> None:
+        self.block = block
+        self.segment = np.full(num_worlds, -1, dtype=np.int64)
+        self.radius = np.zeros(num_worlds)
+        self._base = np.zeros(num_worlds, dtype=np.int64)  # where each world's row starts in the flat arrays
+        self._local = np.zeros((0, block), dtype=np.int64)  # (S, B) each segment's column of a vertex, -1: none
+        # Flat rows after one unknown entry (what an uncovered vertex's lookup reads).
+        self._dist = np.full(1, np.inf)
+        self._hop = np.full(1, NO_HOP, dtype=np.int32)
+
+    @property
+    def searched(self) -> BoolArray:
+        """(W,) whether each world has a row."""
+        return np.asarray(self.segment >= 0, dtype=bool)
+
+    def add(
+        self, worlds: IntArray, vertices: IntArray, dist: FloatArray, hop: npt.NDArray[np.int32], radius: float
+    ) -> None:
+        """New rows of ``worlds`` (n,) over ``vertices`` (k,): ``dist`` (n, k) and ``hop`` (n, k) graph vertices.
+
+        A world's earlier row, if any, is replaced.
+        """
+        n, k = dist.shape
+        local = np.full((1, self.block), -1, dtype=np.int64)
+        local[0, vertices] = np.arange(k)
+        self.segment[worlds] = self._local.shape[0]
+        self._base[worlds] = self._dist.size + k * np.arange(n)
+        self.radius[worlds] = radius
+        self._local = np.concatenate([self._local, local])
+        self._dist = np.concatenate([self._dist, np.asarray(dist, dtype=np.float64).ravel()])
+        self._hop = np.concatenate([self._hop, np.asarray(hop, dtype=np.int32).ravel()])
+
+    def dist_at(self, vertices: IntArray) -> FloatArray:
+        """(W, m) each world's known distance of ``vertices`` (m,) to the goal (inf where not known)."""
+        vertices = np.asarray(vertices, dtype=np.int64)
+        out = np.full((self.segment.size, vertices.size), np.inf)
+        has = np.flatnonzero(self.segment >= 0)
+        if has.size:
+            col = self._local[self.segment[has]][:, vertices]  # (h, m)
+            known = col >= 0
+            at = self._base[has][:, None] + col
+            out[has] = np.where(known, self._dist[np.where(known, at, 0)], np.inf)
+        return out
+
+    def dist_of(self, worlds: IntArray, at: IntArray) -> FloatArray:
+        """(n,) the known distance of vertex ``at[i]`` in world ``worlds[i]`` (each searched; inf if not known)."""
+        col = self._local[self.segment[worlds], at]
+        known = col >= 0
+        return np.where(known, self._dist[np.where(known, self._base[worlds] + col, 0)], np.inf)
+
+    def hop_of(self, worlds: IntArray, at: IntArray) -> npt.NDArray[np.int32]:
+        """(n,) the next hop from vertex ``at[i]`` in world ``worlds[i]`` (:data:`NO_HOP` where not known)."""
+        col = self._local[self.segment[worlds], at]
+        known = col >= 0
+        hop = np.where(known, self._hop[np.where(known, self._base[worlds] + col, 0)], NO_HOP)
+        return np.asarray(hop, dtype=np.int32)
