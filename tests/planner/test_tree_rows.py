@@ -50,3 +50,17 @@ def test_a_world_searched_again_reads_its_new_row() -> None:
     assert rows.dist_at(np.arange(4)).tolist() == [[0.0, 1.0, np.inf, np.inf], [0.0, 2.0, 3.0, 4.0]]
     assert rows.hop_of(np.array([1, 0]), np.array([3, 3])).tolist() == [2, NO_HOP]
     assert rows.radius.tolist() == [1.5, np.inf]
+
+
+def test_a_nan_distance_is_unknown_and_inf_is_known_unreachable() -> None:
+    rows = TreeRows(1, 3)
+    rows.add(
+        np.array([0]),
+        np.array([0, 1, 2]),
+        np.array([[0.0, np.nan, np.inf]]),
+        np.array([[NO_HOP, NO_HOP, NO_HOP]], dtype=np.int32),
+        0.0,
+    )
+    assert rows.known_at(np.array([0, 1, 2])).tolist() == [[True, False, True]]
+    assert rows.dist_at(np.array([0, 1, 2])).tolist() == [[0.0, np.inf, np.inf]]
+    assert rows.dist_of(np.array([0]), np.array([1])).tolist() == [np.inf]

@@ -17,8 +17,9 @@ trees in C, on a graph of just the blocks searched.
 through which a path from the start of at most ``ELLIPSE_FACTORS[0]`` times the start's distance over the union
 (a lower bound of every world's) could pass: on a robot's query a small part of the graph. A vertex whose
 distance found there plus its union distance from the start is within the ellipse's length has its exact
-distance and next hop; a world whose start is not among them (a long detour) is searched again in wider
-ellipses, then without bound. A start in another weakly connected part of a world's free arcs than the goal
+distance and next hop; a world whose start is not among them (a long detour, or no path) is searched again in a
+wider ellipse, then in every vertex the start can reach and the goal be reached from over the union (which
+settles it: a path, or none). A start in another weakly connected part of a world's free arcs than the goal
 (computed once per prior) cannot reach it there, so that world needs no search for it (most of them: a start
 walled in by blocked edges). A later start of the same goal reads what is known, and searches only the worlds
 it is not covered in (:meth:`GoalTree.covers`). So a replan from along the route walks the kept trees, and any
@@ -67,8 +68,9 @@ GOAL_JOIN_SLOTS = 64
 #: Goals whose trees a :class:`SearchWorlds` keeps (least recently used dropped first).
 GOAL_TREES_KEPT = 8
 #: How long a path a world's searches look for, in turn, as multiples of the start's distance over the arcs free in
-#: any search world (each search covers the ellipse such paths could pass through; then the whole graph).
-ELLIPSE_FACTORS = (1.25, 2.5, 5.0)
+#: any search world (each search covers the ellipse such paths could pass through; the last, inf, every vertex a
+#: path from the start can pass through, which settles every world).
+ELLIPSE_FACTORS = (1.25, 2.5, np.inf)
 #: Read a world's path off the union where it is provably that world's only shortest path (False: search every
 #: world; the paths are the same, only slower).
 FOLLOW_UNION = True
@@ -146,24 +148,24 @@ class GoalTree:
     def covers(self, start: int | JoinMotions) -> BoolArray:
         """(W,) whether each world's shortest free path from ``start`` can be read off its searched tree.
 
-        A vertex start is covered where it was reached, lies in another part than the goal or where no world
-        reaches the goal from it (it cannot reach it), or the world was searched without bound. A joined start
-        (``free`` (W, k)) is covered where no free motion's vertex beyond the radius (and in the goal's part)
-        could beat the best one within it (the best free motion is then exactly chosen, :meth:`best_joins`).
+        A vertex start is covered where its distance is known (a path, or none), it lies in another part than
+        the goal or no world reaches the goal from it (it cannot reach it), or the world was searched without
+        bound. A joined start (``free`` (W, k)) is covered where no free motion to a vertex of unknown distance
+        (in the goal's part) could beat the best known one (the best free motion is then exactly chosen,
+        :meth:`best_joins`).
         """
         whole = np.isinf(self.world_radius())
         if not isinstance(start, JoinMotions):
             vertex = int(start)
             cut = np.zeros_like(whole) if self.parts is None else self.parts[:, vertex] != self.parts[:, self.goal]
             nowhere = not np.isfinite(self.union.dist[vertex])
-            return np.asarray(whole | cut | nowhere | np.isfinite(self.dist_at(np.array([vertex]))[:, 0]), dtype=bool)
+            return np.asarray(whole | cut | nowhere | self.rows.known_at(np.array([vertex]))[:, 0], dtype=bool)
         dist = self.dist_at(start.vertices)  # (W, k)
-        reached = np.isfinite(dist)
-        best = np.min(np.where(start.free & reached, start.lengths[None, :] + dist, np.inf), 1)
-        open_ = start.free & ~reached
+        best = np.min(np.where(start.free, start.lengths[None, :] + dist, np.inf), 1)
+        open_ = start.free & ~self.rows.known_at(start.vertices)
         if self.parts is not None:
             open_ &= self.parts[:, start.vertices] == self.parts[:, self.goal][:, None]
-        # A motion to a vertex beyond the radius is at least its length plus the radius (and its union distance).
+        # A motion to a vertex of unknown distance is at least its length plus the radius (and its union distance).
         beyond = np.maximum(self.world_radius()[:, None], self.union.dist[start.vertices][None, :])
         floor = np.where(open_, start.lengths[None, :] + beyond, np.inf)
         return np.asarray(whole | (best <= floor.min(axis=1)), dtype=bool)
@@ -377,10 +379,13 @@ class SearchWorlds:
             via, choice = np.zeros(num, dtype=bool), np.zeros(num, dtype=np.int64)
         pending &= ~via
         fresh = pending.copy()
+        ahead: FloatArray | None = None  # each vertex's distance from the start over the union, once
         for factor in ELLIPSE_FACTORS:  # each world searched in a wider ellipse until its path is found
             if not fresh.any():
                 break
-            self._search_ellipse(tree, np.flatnonzero(fresh), start, factor)
+            if ahead is None:
+                ahead = self._ahead(tree, start)
+            self._search_ellipse(tree, np.flatnonzero(fresh), factor, ahead)
             covered = tree.covers(start)
             pending &= ~covered
             fresh &= ~covered
@@ -417,31 +422,37 @@ class SearchWorlds:
         """(W,) the worlds whose shortest path from ``vertex`` is, uniquely, ``union``'s (``joins``: into the goal)."""
         return follows_union(union, vertex, self.arcs, self._arc_length, self._free, self._anywhere, joins)
 
-    def _search_ellipse(self, tree: GoalTree, worlds: IntArray, start: int | JoinMotions, factor: float) -> None:
-        """Search ``worlds`` (n,) only where a path from ``start`` of ``factor`` times its union distance can pass.
-
-        That is the vertices v with d(start, v) + d(v, goal) <= L = ``factor`` times the start's union distance.
-
-        A vertex whose distance found there plus its union distance from the start is at most L has its exact
-        distance and next hop (every vertex of its shortest path lies in the ellipse); the others are left
-        unknown. The rows keep radius 0 (no ball around the goal is complete), so other starts read them only
-        where they are known.
-        """
-        near = _union_distance(tree.union, start)
-        limit = factor * near
-        if not np.isfinite(limit):  # no world reaches the goal from the start: search everything once
-            self._search(tree, worlds, np.inf)
-            return
+    def _ahead(self, tree: GoalTree, start: int | JoinMotions) -> FloatArray:
+        """(B,) each vertex's distance from ``start`` over the union (the goal's: the start's union distance)."""
         if isinstance(start, JoinMotions):
             ahead = self._blocks.union_from(start.vertices, start.lengths, np.asarray(start.free.any(axis=0)))
         else:
             ahead = self._blocks.union_from(np.array([int(start)]), np.zeros(1), np.ones(1, dtype=bool))
-        ahead[tree.goal] = near  # an off-graph goal has no arcs into it in the union's forward graph
-        within = ahead + tree.union.dist <= limit
+        ahead[tree.goal] = _union_distance(tree.union, start)  # an off-graph goal has no arcs into it forward
+        return ahead
+
+    def _search_ellipse(self, tree: GoalTree, worlds: IntArray, factor: float, ahead: FloatArray) -> None:
+        """Search ``worlds`` (n,) only where a path from the start of ``factor`` times its union distance can pass.
+
+        That is the vertices v with d(start, v) + d(v, goal) <= L = ``factor`` times the start's union distance
+        (d over the union; ``ahead`` (B,) from the start, :meth:`_ahead`). A vertex whose distance found there
+        plus its union distance from the start is at most L has its exact distance and next hop (every vertex of
+        its shortest path lies in the ellipse); the others are left unknown. With ``factor`` inf (or an ellipse
+        that holds it all) the region is every vertex the start can reach and the goal can be reached from over
+        the union: every path from the start lies in it, so every distance found is exact (inf: that vertex
+        cannot reach the goal in that world). The rows keep radius 0 (no ball around the goal is complete), so
+        other starts read them only where they are known.
+        """
+        limit = factor * float(ahead[tree.goal])
+        region = np.isfinite(ahead) & np.isfinite(tree.union.dist)  # every vertex a path from the start can pass
+        within = region if np.isinf(limit) else ahead + tree.union.dist <= limit
+        if np.isinf(limit) or np.count_nonzero(within) == np.count_nonzero(region):
+            limit, within = np.inf, region  # the ellipse is the whole region: search it for good
         vertices, dist, hop = self._blocks.search(tree.union, worlds, limit=limit, joins=tree.joins, within=within)
-        known = dist + ahead[vertices][None, :] <= limit
-        dist[~known] = np.inf
-        hop[~known] = NO_HOP
+        if np.isfinite(limit):
+            unknown = ~(dist + ahead[vertices][None, :] <= limit)
+            dist[unknown] = np.nan
+            hop[unknown] = NO_HOP
         tree.rows.add(worlds, vertices, dist, hop, 0.0)
 
     def _search(self, tree: GoalTree, worlds: IntArray, limit: float) -> None:

@@ -1,9 +1,11 @@
 """The searched worlds' reverse-tree rows, each kept over just the vertices its search covered.
 
 A search of n worlds over k of the graph's B vertices (a short query's ellipse is a small part of the graph)
-writes n rows of k distances and next hops: one *segment*. Each world points at its latest row; a vertex a
-world's segment did not cover reads as unknown (distance inf, no next hop), exactly as a vertex beyond a
-search's reach. Rows are stored flat, so a query pays for what it searched, not for n x B.
+writes n rows of k distances and next hops: one *segment*. Each world points at its latest row. A distance is
+known (finite, or inf: the vertex cannot reach the goal in that world) or unknown (NaN in a row, or a vertex the
+world's segment did not cover): an unknown vertex reads as distance inf with no next hop, and
+:meth:`TreeRows.known_at` tells the two apart. Rows are stored flat, so a query pays for what it searched, not
+for n x B.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ class TreeRows:
         self._base = np.zeros(num_worlds, dtype=np.int64)  # where each world's row starts in the flat arrays
         self._local = np.zeros((0, block), dtype=np.int64)  # (S, B) each segment's column of a vertex, -1: none
         # Flat rows after one unknown entry (what an uncovered vertex's lookup reads).
-        self._dist = np.full(1, np.inf)
+        self._dist = np.full(1, np.nan)
         self._hop = np.full(1, NO_HOP, dtype=np.int32)
 
     @property
@@ -50,7 +52,7 @@ class TreeRows:
     ) -> None:
         """New rows of ``worlds`` (n,) over ``vertices`` (k,): ``dist`` (n, k) and ``hop`` (n, k) graph vertices.
 
-        A world's earlier row, if any, is replaced.
+        ``dist`` is NaN where a distance is not known. A world's earlier row, if any, is replaced.
         """
         n, k = dist.shape
         local = np.full((1, self.block), -1, dtype=np.int64)
@@ -64,21 +66,31 @@ class TreeRows:
 
     def dist_at(self, vertices: IntArray) -> FloatArray:
         """(W, m) each world's known distance of ``vertices`` (m,) to the goal (inf where not known)."""
-        vertices = np.asarray(vertices, dtype=np.int64)
-        out = np.full((self.segment.size, vertices.size), np.inf)
-        has = np.flatnonzero(self.segment >= 0)
-        if has.size:
-            col = self._local[self.segment[has]][:, vertices]  # (h, m)
-            known = col >= 0
-            at = self._base[has][:, None] + col
-            out[has] = np.where(known, self._dist[np.where(known, at, 0)], np.inf)
-        return out
+        stored = self._stored(vertices)
+        return np.where(np.isnan(stored), np.inf, stored)
+
+    def known_at(self, vertices: IntArray) -> BoolArray:
+        """(W, m) whether each world's distance of ``vertices`` (m,) is known (inf included: it cannot reach)."""
+        return np.asarray(~np.isnan(self._stored(vertices)), dtype=bool)
 
     def dist_of(self, worlds: IntArray, at: IntArray) -> FloatArray:
         """(n,) the known distance of vertex ``at[i]`` in world ``worlds[i]`` (each searched; inf if not known)."""
         col = self._local[self.segment[worlds], at]
         known = col >= 0
-        return np.where(known, self._dist[np.where(known, self._base[worlds] + col, 0)], np.inf)
+        stored = np.where(known, self._dist[np.where(known, self._base[worlds] + col, 0)], np.inf)
+        return np.where(np.isnan(stored), np.inf, stored)
+
+    def _stored(self, vertices: IntArray) -> FloatArray:
+        """(W, m) the stored distances of ``vertices`` (m,): NaN where not known."""
+        vertices = np.asarray(vertices, dtype=np.int64)
+        out = np.full((self.segment.size, vertices.size), np.nan)
+        has = np.flatnonzero(self.segment >= 0)
+        if has.size:
+            col = self._local[self.segment[has][:, None], vertices[None, :]]  # (h, m)
+            known = col >= 0
+            at = self._base[has][:, None] + col
+            out[has] = np.where(known, self._dist[np.where(known, at, 0)], np.nan)
+        return out
 
     def hop_of(self, worlds: IntArray, at: IntArray) -> npt.NDArray[np.int32]:
         """(n,) the next hop from vertex ``at[i]`` in world ``worlds[i]`` (:data:`NO_HOP` where not known)."""

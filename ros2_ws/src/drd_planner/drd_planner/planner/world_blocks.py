@@ -54,6 +54,7 @@ class WorldBlocks:
         # a union search writes the weights (inf deletes an arc) and the off-graph goal's motions.
         self._anywhere_forward: BoolArray = np.asarray(free.any(axis=0), dtype=bool)
         self._anywhere = self._anywhere_forward[order]
+        self._union_weights = np.where(self._anywhere, self._length, np.inf)  # the arcs free in no world deleted
         counts = np.bincount(self._head, minlength=block)
         counts[block - 1] += slots
         self._indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
@@ -69,7 +70,10 @@ class WorldBlocks:
 
         ``joins``: the motions into the off-graph goal ``B - 1`` (those free in any of the worlds are arcs).
         """
-        anywhere = self._anywhere if worlds is None else self._free[worlds].any(axis=0)
+        if worlds is None:
+            weights = self._union_weights
+        else:
+            weights = np.where(self._free[worlds].any(axis=0), self._length, np.inf)
         spare = np.full(self.slots, np.inf)
         indices = self._indices
         if joins is not None:
@@ -78,7 +82,7 @@ class WorldBlocks:
             indices[indices.size - self.slots : indices.size - self.slots + k] = joins.vertices
             free = joins.free if worlds is None else joins.free[worlds]
             spare[:k] = np.where(free.any(axis=0), joins.lengths, np.inf)
-        data = np.concatenate([np.where(anywhere, self._length, np.inf), spare])
+        data = np.concatenate([weights, spare])
         union = sp.csr_array((data, indices, self._indptr), shape=(self.block, self.block))
         dist, pred = dijkstra(union, directed=True, indices=goal, return_predecessors=True)
         hop = np.asarray(pred, dtype=np.int32)
@@ -137,7 +141,7 @@ class WorldBlocks:
         size = int(kept.size)
         arcs = np.flatnonzero(within[self._head] & within[self._tail])  # in order of their head
         row, col, length = local[self._head[arcs]], local[self._tail[arcs]], self._length[arcs]
-        free = self._free[worlds][:, arcs]  # (R, a)
+        free = self._free[np.ix_(worlds, arcs)]  # (R, a)
         if joins is not None:  # the goal's motions: its row, the last one (B - 1 is the largest vertex)
             reach = within[joins.vertices]
             row = np.concatenate([row, np.full(int(reach.sum()), local[union.goal])])
