@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from drd_planner.planner import tree_rows
 from drd_planner.planner.tree_rows import TreeRows
 from drd_planner.planner.union_paths import NO_HOP
 
@@ -64,3 +66,21 @@ def test_a_nan_distance_is_unknown_and_inf_is_known_unreachable() -> None:
     assert rows.known_at(np.array([0, 1, 2])).tolist() == [[True, False, True]]
     assert rows.dist_at(np.array([0, 1, 2])).tolist() == [[0.0, np.inf, np.inf]]
     assert rows.dist_of(np.array([0]), np.array([1])).tolist() == [np.inf]
+
+
+def test_rows_replaced_again_and_again_stay_bounded_and_read_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(tree_rows, "COMPACT_SLACK", 0)
+    rows = TreeRows(3, 50)
+    rng = np.random.default_rng(0)
+    latest: dict[int, np.ndarray] = {}
+    for _ in range(200):  # a robot replanning: a world searched again and again
+        world = int(rng.integers(3))
+        vertices = np.sort(rng.choice(50, size=int(rng.integers(1, 50)), replace=False))
+        dist = rng.random((1, vertices.size))
+        rows.add(np.array([world]), vertices, dist, np.zeros((1, vertices.size), dtype=np.int32), 0.0)
+        full = np.full(50, np.inf)
+        full[vertices] = dist[0]
+        latest[world] = full
+    assert rows.stored_entries <= 2 * 3 * 50
+    for world, full in latest.items():
+        assert rows.dist_at(np.arange(50))[world].tolist() == full.tolist()

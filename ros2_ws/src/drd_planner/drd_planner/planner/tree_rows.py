@@ -16,7 +16,12 @@ import numpy.typing as npt
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.planner.union_paths import NO_HOP
 
-__all__ = ["TreeRows"]
+__all__ = ["COMPACT_SEGMENTS", "COMPACT_SLACK", "TreeRows"]
+
+#: Rows are compacted (replaced rows dropped) when the stored entries exceed twice the live ones plus this.
+COMPACT_SLACK = 1 << 16
+#: ... or when there are more segments than this (each holds a (B,) column map).
+COMPACT_SEGMENTS = 64
 
 
 class TreeRows:
@@ -37,7 +42,8 @@ class TreeRows:
         self.segment = np.full(num_worlds, -1, dtype=np.int64)
         self.radius = np.zeros(num_worlds)
         self._base = np.zeros(num_worlds, dtype=np.int64)  # where each world's row starts in the flat arrays
-        self._local = np.zeros((0, block), dtype=np.int64)  # (S, B) each segment's column of a vertex, -1: none
+        self._local = np.zeros((0, block), dtype=np.int32)  # (S, B) each segment's column of a vertex, -1: none
+        self._width = np.zeros(0, dtype=np.int64)  # (S,) each segment's row length
         # Flat rows after one unknown entry (what an uncovered vertex's lookup reads).
         self._dist = np.full(1, np.nan)
         self._hop = np.full(1, NO_HOP, dtype=np.int32)
@@ -55,14 +61,43 @@ class TreeRows:
         ``dist`` is NaN where a distance is not known. A world's earlier row, if any, is replaced.
         """
         n, k = dist.shape
-        local = np.full((1, self.block), -1, dtype=np.int64)
+        local = np.full((1, self.block), -1, dtype=np.int32)
         local[0, vertices] = np.arange(k)
         self.segment[worlds] = self._local.shape[0]
         self._base[worlds] = self._dist.size + k * np.arange(n)
         self.radius[worlds] = radius
         self._local = np.concatenate([self._local, local])
+        self._width = np.append(self._width, k)
         self._dist = np.concatenate([self._dist, np.asarray(dist, dtype=np.float64).ravel()])
         self._hop = np.concatenate([self._hop, np.asarray(hop, dtype=np.int32).ravel()])
+        live = int(self._width[self.segment[self.segment >= 0]].sum())
+        if self._dist.size > 2 * live + COMPACT_SLACK or self._local.shape[0] > COMPACT_SEGMENTS:
+            self._compact()
+
+    @property
+    def stored_entries(self) -> int:
+        """How many distances the rows hold (replaced rows until the next compaction included)."""
+        return int(self._dist.size - 1)
+
+    def _compact(self) -> None:
+        """Keep only the rows worlds read (a replaced row's entries and unreferenced segments dropped)."""
+        live = np.flatnonzero(self.segment >= 0)
+        kept = np.unique(self.segment[live])
+        dist, hop = [self._dist[:1]], [self._hop[:1]]
+        at = 1
+        segment, base = self.segment.copy(), self._base.copy()
+        for new, old in enumerate(kept.tolist()):
+            worlds = live[self.segment[live] == old]
+            k = int(self._width[old])
+            cells = (self._base[worlds][:, None] + np.arange(k)[None, :]).ravel()
+            dist.append(self._dist[cells])
+            hop.append(self._hop[cells])
+            segment[worlds] = new
+            base[worlds] = at + k * np.arange(worlds.size)
+            at += k * worlds.size
+        self.segment, self._base = segment, base
+        self._local, self._width = self._local[kept], self._width[kept]
+        self._dist, self._hop = np.concatenate(dist), np.concatenate(hop)
 
     def dist_at(self, vertices: IntArray) -> FloatArray:
         """(W, m) each world's known distance of ``vertices`` (m,) to the goal (inf where not known)."""
