@@ -215,7 +215,7 @@ class MVoI(BernoulliBaseline):
             first_free = int(gap[0]) if gap.size else through.size
             if first_free < order.size:
                 surviving[j] = logp[order[first_free]]
-        score = self._log_1m_theta[cand] + surviving
+        score = self.edge_log_1m_theta(cand) + surviving
         return int(cand[first_max(score, LOG_TIE_TOL)])
 
 

@@ -58,15 +58,17 @@ class BernoulliLibraryState:
         self._csc = library.incidence_csc
         self._csr = library.incidence
         self._rows = library_rows(library)
-        lib = self._rows.edges
+        k = self._rows.pad
         self._theta = np.minimum(np.maximum(th, THETA_EPS), 1.0 - THETA_EPS)
-        # log theta and log(1 - theta) of the library edges (no path reads the others: 0 there).
-        self._log_theta = np.zeros(th.size)
-        self._log_theta[lib] = np.log(self._theta[lib])
-        self._log_1m_theta = np.zeros(th.size)
-        self._log_1m_theta[lib] = np.log1p(-self._theta[lib])
-        # log theta of the library edges by library-local index, 0 once tested and in the pad slot K.
-        self._untested_log_theta = np.append(self._log_theta[lib], 0.0)
+        # By library-local index (rows.column), plus the pad slot K (0 there): log theta, log(1 - theta), and
+        # log theta while untested (0 once tested); whether each library edge is untested (False in the pad).
+        self._lib_log_theta = np.zeros(k + 1)
+        self._lib_log_1m_theta = np.zeros(k + 1)
+        self._untested_log_theta = np.zeros(k + 1)
+        self._lib_untested = np.ones(k + 1, dtype=bool)
+        self._lib_untested[k] = False
+        self._lib_theta = self._theta[self._rows.edges]  # (K,)
+        self._library_logs()
         self._proof_order: ProofOrder | None = None
         self._tested = np.zeros(library.num_edges, dtype=bool)
         self._alive = np.ones(library.num_paths, dtype=bool)
@@ -77,9 +79,17 @@ class BernoulliLibraryState:
         self._logp = self._path_sums()
         self._differenced = False  # some log p_i was updated by difference since the last sum
         self._alive_through = np.diff(self._csc.indptr).astype(np.int64)
-        self._through: dict[int, IntArray] = {}  # edge -> its alive paths when last asked
+        self._deaths = 0  # outcomes that killed some path so far
+        self._through: dict[int, tuple[int, IntArray]] = {}  # edge -> (deaths then, its alive paths then)
         for edge, free in (observations or {}).items():
             self.observe(edge, free)
+
+    def _library_logs(self) -> None:
+        """Recompute the library-local logs from ``_lib_theta`` (K,), in place."""
+        k = self._rows.pad
+        np.log(self._lib_theta, out=self._lib_log_theta[:k])
+        np.log1p(-self._lib_theta, out=self._lib_log_1m_theta[:k])
+        np.copyto(self._untested_log_theta, self._lib_log_theta, where=self._lib_untested)
 
     @property
     def alive(self) -> BoolArray:
@@ -129,19 +139,31 @@ class BernoulliLibraryState:
             paths: the alive path of each entry (increasing within a candidate).
         """
         cand = np.asarray(candidates, dtype=np.int64)
+        return self._incidence(cand, self._alive_through[cand])
+
+    def _incidence(self, cand: IntArray, counts: IntArray) -> tuple[IntArray, IntArray]:
+        """:meth:`alive_incidence` of the (c,) int64 ``cand`` with their (c,) alive path counts."""
         if cand.size == 0:
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
         paths = np.concatenate([self._alive_paths_through(e) for e in cand.tolist()])
-        return np.arange(cand.size).repeat(self._alive_through[cand]), paths
+        return np.arange(cand.size).repeat(counts), paths
 
     def _alive_paths_through(self, edge: int) -> IntArray:
-        """The alive paths through ``edge``, ascending (kept per edge until one of them dies)."""
-        paths = self._through.get(edge)
-        if paths is None or paths.size != self._alive_through[edge]:  # alive paths only ever die
+        """The alive paths through ``edge``, ascending (kept per edge until some path dies)."""
+        cached = self._through.get(edge)
+        if cached is not None and cached[0] == self._deaths:
+            return cached[1]
+        if cached is None or cached[1].size != self._alive_through[edge]:  # alive paths only ever die
             column = self._csc.indices[self._csc.indptr[edge] : self._csc.indptr[edge + 1]]
             paths = np.asarray(column[self._alive[column]], dtype=np.int64)
-            self._through[edge] = paths
+        else:
+            paths = cached[1]
+        self._through[edge] = (self._deaths, paths)
         return paths
+
+    def edge_log_1m_theta(self, edges: IntArray) -> FloatArray:
+        """(c,) log(1 - theta_e) of ``edges`` (0 for an edge no path uses)."""
+        return np.asarray(self._lib_log_1m_theta[self._rows.column[edges]], dtype=np.float64)
 
     def set_theta(self, theta: npt.ArrayLike, *, edges: npt.ArrayLike | None = None) -> None:
         """Replace the bias and make log p_i of every path the sum over its untested edges again.
@@ -159,19 +181,42 @@ class BernoulliLibraryState:
             raise ProblemError(f"theta must be ({where.size},) values in [0, 1]")
         th = np.minimum(np.maximum(th, THETA_EPS), 1.0 - THETA_EPS)
         if (th != self._theta[where]).any():
-            log_theta = np.log(th)
             self._theta[where] = th
-            self._log_theta[where] = log_theta
-            self._log_1m_theta[where] = np.log1p(-th)
-            self._untested_log_theta[self._rows.column[where]] = np.where(self._tested[where], 0.0, log_theta)
-            self._untested_log_theta[-1] = 0.0  # the pad slot, in case ``edges`` named non-library edges
-            if self._proof_order is not None:
-                self._proof_order.set_theta(self._theta)
+            self._new_library_theta(self._theta[self._rows.edges])
         elif not self._differenced:
             return
+        self._resum()
+
+    @property
+    def library_edges(self) -> IntArray:
+        """(K,) sorted ids of the edges some path uses: the edges :meth:`set_library_theta` takes."""
+        return self._rows.edges
+
+    def set_library_theta(self, theta: FloatArray) -> None:
+        """:meth:`set_theta` with the (K,) bias of the :attr:`library_edges`, already known to be in [0, 1].
+
+        The posterior leaf's path: no validation, and nothing scattered through all E edges but the bias.
+        """
+        th = np.clip(theta, THETA_EPS, 1.0 - THETA_EPS)
+        if (th != self._lib_theta).any():
+            self._theta[self._rows.edges] = th
+            self._new_library_theta(th)
+        elif not self._differenced:
+            return
+        self._resum()
+
+    def _new_library_theta(self, theta: FloatArray) -> None:
+        """Take the (K,) clamped bias of the library edges (owned from now on): logs and proof order."""
+        self._lib_theta = theta
+        self._library_logs()
+        if self._proof_order is not None:
+            self._proof_order.set_library_theta(theta)
+
+    def _resum(self) -> None:
+        """Sum log p_i of every alive path again (the dead paths' log p_i is never read again)."""
         if self._num_alive == self._library.num_paths:
             self._logp = self._path_sums()
-        else:  # the dead paths' log p_i is never read again
+        else:
             self._logp[self._alive_ids] = self._path_sums(self._alive_ids)
         self._differenced = False
 
@@ -190,16 +235,22 @@ class BernoulliLibraryState:
         if self._tested[edge]:
             return
         self._tested[edge] = True
-        self._untested_log_theta[self._rows.column[edge]] = 0.0  # the pad slot for a non-library edge
+        k = int(self._rows.column[edge])  # the pad slot K for a non-library edge
+        self._untested_log_theta[k] = 0.0
+        self._lib_untested[k] = False
         paths = self._csc.indices[self._csc.indptr[edge] : self._csc.indptr[edge + 1]]
+        if paths.size == 0:
+            return
         if self._proof_order is not None:
             self._proof_order.mark_checked(edge, paths)
         if free:
-            self._logp[paths] -= self._log_theta[edge]
-            self._remaining[paths] -= 1
-            proven = paths[self._remaining[paths] == 0]
-            self._logp[proven] = 0.0
-            self._num_proven += int(proven.size)  # every edge checked free: alive
+            self._logp[paths] -= self._lib_log_theta[k]
+            remaining = self._remaining[paths] - 1
+            self._remaining[paths] = remaining
+            proven = paths[remaining == 0]
+            if proven.size:
+                self._logp[proven] = 0.0
+                self._num_proven += int(proven.size)  # every edge checked free: alive
             self._differenced = True
             return
         dying = paths[self._alive[paths]]
@@ -208,4 +259,5 @@ class BernoulliLibraryState:
         self._alive[dying] = False
         self._alive_ids = self._alive_ids[self._alive[self._alive_ids]]
         self._num_alive -= int(dying.size)
+        self._deaths += 1
         self._alive_through[self._rows.edges] -= self._rows.edge_counts(dying)

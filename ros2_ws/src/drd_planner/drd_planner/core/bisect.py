@@ -87,23 +87,22 @@ class Bisect(BernoulliLibraryState):
         The closed form: docs/algorithms.md, "The gain in closed form".
         """
         cand = np.asarray(candidates, dtype=np.int64)
-        seg, paths = self.alive_incidence(cand)
+        col = self._rows.column[cand]  # library-local index of each candidate
+        n = self._alive_through[cand]  # alive paths through each candidate (the entries per segment)
+        seg, paths = self._incidence(cand, n)
         logp = self._logp[paths]
-        lq = self._log_theta[cand]
+        lq = self._lib_log_theta[col]
         log_blocked = log1mexp(logp)  # log(1 - p_i)
         # log(1 - p_i / theta_e); exactly -inf when e is the path's last untested edge.
         log_rest = log1mexp(np.minimum(logp - lq[seg], 0.0))
         log_rest[self._remaining[paths] == 1] = -np.inf
         sum_blocked = np.bincount(seg, weights=log_blocked, minlength=cand.size)
-        rest_neg_inf = log_rest == -np.inf
-        log_rest[rest_neg_inf] = 0.0
-        sum_rest = np.bincount(seg, weights=log_rest, minlength=cand.size)
-        sum_rest[np.bincount(seg[rest_neg_inf], minlength=cand.size) > 0] = -np.inf
-        n = self._alive_through[cand]  # alive paths through each candidate (the entries per segment)
+        sum_rest = np.bincount(seg, weights=log_rest, minlength=cand.size)  # -inf where some term is
         k = self._exponent_factor * n + 1.0
         l1 = k * lq + sum_rest - sum_blocked
-        l0 = k * self._log_1m_theta[cand] - sum_blocked
-        gain = -np.expm1(np.logaddexp(l1, l0))
+        l0 = k * self._lib_log_1m_theta[col] - sum_blocked
+        gain = np.expm1(np.logaddexp(l1, l0))
+        np.negative(gain, out=gain)
         return np.asarray(gain / self._costs[cand], dtype=np.float64)
 
     def select(self) -> int | None:

@@ -165,31 +165,41 @@ class EpisodeResult:
 
 
 class _LibraryProgress:
-    """Per-path bookkeeping of unchecked and blocked edges (independent of any policy)."""
+    """Per-path bookkeeping of unchecked and blocked edges (independent of any policy).
+
+    Attributes:
+        remaining: (m,) int64 edges of each path not yet checked free (a blocked edge stays counted, so a
+            path reaches 0 only when every edge of it was checked free).
+        blocker: (m,) int64 the first checked blocked edge of each path, -1 while it has none.
+    """
 
     def __init__(self, library: PathLibrary) -> None:
         self._library = library
         self.remaining = np.array([p.size for p in library.path_edges], dtype=np.int64)
         self.blocker = np.full(library.num_paths, -1, dtype=np.int64)
+        self._proven: list[int] = np.flatnonzero(self.remaining == 0).tolist()  # paths proven free, as found
+        self._unblocked = library.num_paths  # paths with no checked blocked edge
 
     def record(self, edge: int, free: bool) -> None:
         paths = self._library.paths_through(edge)
         if free:
             self.remaining[paths] -= 1
+            self._proven.extend(paths[self.remaining[paths] == 0].tolist())
         else:
             fresh = paths[self.blocker[paths] < 0]
             self.blocker[fresh] = edge
+            self._unblocked -= int(fresh.size)
 
     def proven_path(self, edge_costs: npt.NDArray[np.float64]) -> int | None:
         """Cheapest (then lowest-index) path whose every edge is checked free."""
-        done = np.flatnonzero((self.remaining == 0) & (self.blocker < 0))
-        if done.size == 0:
+        if not self._proven:
             return None
+        done = np.array(sorted(self._proven), dtype=np.int64)
         costs = np.array([edge_costs[self._library.path_edges[i]].sum() for i in done])
         return int(done[int(np.argmin(costs))])
 
     def all_blocked(self) -> bool:
-        return bool(np.all(self.blocker >= 0))
+        return self._unblocked == 0
 
 
 def run_episode(

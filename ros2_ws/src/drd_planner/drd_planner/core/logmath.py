@@ -14,7 +14,9 @@ def log1mexp(x: npt.ArrayLike) -> FloatArray:
     """log(1 - exp(x)) for x <= 0, elementwise; -inf at x == 0, accurate near 0 and near -inf."""
     xa = np.asarray(x, dtype=np.float64)
     if xa.size and xa.max() <= _LOG_HALF:  # every x takes the second form (the usual case): no masks
-        return np.asarray(np.log1p(-np.exp(xa)), dtype=np.float64)
+        out: FloatArray = np.exp(xa)
+        np.negative(out, out=out)
+        return np.log1p(out, out=out)
     out = np.full(xa.shape, -np.inf)
     neg = xa < 0
     xn = xa[neg]

@@ -142,6 +142,7 @@ class DirectBisectPolicy:
         self._walker = TreeWalker(tree)
         self._observed: dict[int, bool] = {}
         self._bisect: Bisect | None = None
+        self._posterior_aligned = False
         self._switch_node: int | None = None
         if self._should_switch(0):
             self._switch(0)
@@ -184,6 +185,10 @@ class DirectBisectPolicy:
         self._bisect = Bisect(
             self._library, theta, self._costs, observations=self._observed, region_rule=self._region_rule
         )
+        # The posterior's columns are usually the library's own edges: its bias then goes in as it is.
+        self._posterior_aligned = self._posterior is not None and np.array_equal(
+            self._posterior.library_edges, self._bisect.library_edges
+        )
 
     def select(self) -> int | None:
         """Tree edge while in the tree; BiSECt's choice afterwards."""
@@ -202,7 +207,10 @@ class DirectBisectPolicy:
             self._bisect.observe(edge, free)
             if self._posterior is not None:  # the bias of the library edges, updated when worlds drop
                 self._posterior.observe(edge, free)
-                self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)
+                if self._posterior_aligned:
+                    self._bisect.set_library_theta(self._posterior.library_theta())
+                else:
+                    self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)
             return
         if edge != self._walker.edge():
             raise PolicyError(f"{self._name}: observed edge {edge}, but the tree asked for {self._walker.edge()}")
