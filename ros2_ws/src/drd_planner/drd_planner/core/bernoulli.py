@@ -197,7 +197,8 @@ class BernoulliLibraryState:
 
         The posterior leaf's path: no validation, and nothing scattered through all E edges but the bias.
         """
-        th = np.clip(theta, THETA_EPS, 1.0 - THETA_EPS)
+        th = np.maximum(theta, THETA_EPS)
+        np.minimum(th, 1.0 - THETA_EPS, out=th)
         if (th != self._lib_theta).any():
             self._theta[self._rows.edges] = th
             self._new_library_theta(th)

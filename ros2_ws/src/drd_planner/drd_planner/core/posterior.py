@@ -171,19 +171,22 @@ class ConsistentWorldsBias:
         """:meth:`observe` on the packed mask: True when some world was dropped."""
         assert self._columns is not None
         column = self._columns.bits[col]
-        kept = self._mask & (column if free else ~column)
-        if (kept == self._mask).all():
+        kept = np.bitwise_and(self._mask, column) if free else np.bitwise_and(self._mask, ~column)
+        count = int(np.bitwise_count(kept).sum())
+        if count == self._count:  # kept is within the mask: the same count is the same worlds
             return False
         self._mask = kept
-        self._count = int(np.bitwise_count(kept).sum())
+        self._count = count
         if self._count == 0:
             self._mass, self._free_mass = 0.0, np.zeros_like(self._free_mass)
         else:
             self._mass = float(self._count)
             words = np.flatnonzero(kept)  # late in an episode the few worlds left fill few words
-            bits = self._columns.bits if 2 * words.size > kept.size else self._columns.bits[:, words]
-            within = kept if bits.shape[1] == kept.size else kept[words]
-            counts = np.bitwise_count(bits & within).sum(axis=1, dtype=np.int64)
+            if 2 * words.size > kept.size:
+                within = np.bitwise_and(self._columns.bits, kept)
+            else:
+                within = np.bitwise_and(self._columns.bits[:, words], kept[words])
+            counts = np.bitwise_count(within, out=within).sum(axis=1, dtype=np.int64)
             self._free_mass = counts.astype(np.float64)
         return True
 
@@ -209,9 +212,15 @@ class ConsistentWorldsBias:
         """(K,) bias of the :attr:`library_edges` (computed after a change only; do not modify)."""
         if self._library_theta is None:
             mass = max(self._mass, 0.0)
-            free = np.maximum(self._free_mass, 0.0)
-            data = (free + self._kappa_marginal) / (mass + self._kappa)
-            self._library_theta = self._alpha * np.minimum(np.maximum(data, 0.0), 1.0) + (1.0 - self._alpha) * 0.5
+            # Counted free masses are never negative; masses updated by difference may round below 0.
+            free = self._free_mass if self._columns is not None else np.maximum(self._free_mass, 0.0)
+            theta = np.add(free, self._kappa_marginal)
+            np.divide(theta, mass + self._kappa, out=theta)
+            np.maximum(theta, 0.0, out=theta)
+            np.minimum(theta, 1.0, out=theta)
+            np.multiply(theta, self._alpha, out=theta)
+            np.add(theta, (1.0 - self._alpha) * 0.5, out=theta)
+            self._library_theta = theta
         return self._library_theta
 
     def theta(self) -> FloatArray:
