@@ -13,6 +13,26 @@ SHARED_DATA = Path(os.environ.get("DRD_SHARED_DATA", REPO_ROOT.parent / "shared"
 GCCD = SHARED_DATA / "gccd"
 
 
+def libm_numpy() -> bool:
+    """Whether numpy's float64 exp/log1p/expm1/log give the C library's numbers here (no AVX-512 forms).
+
+    Then :mod:`math` (the scalar forms of ``drd_planner.core.logmath``) and numpy agree bit for bit.
+    """
+    import math
+
+    import numpy as np
+
+    x = -np.random.default_rng(0).exponential(3.0, 2000) - 1e-6  # (2000,) values below 0
+    y = -np.exp(x)  # in (-1, 0): where log1p is asked
+    z = -np.expm1(x)  # in (0, 1): where log is asked
+    return (
+        np.exp(x).tolist() == [math.exp(v) for v in x.tolist()]
+        and np.log1p(y).tolist() == [math.log1p(v) for v in y.tolist()]
+        and np.expm1(x).tolist() == [math.expm1(v) for v in x.tolist()]
+        and np.log(z).tolist() == [math.log(v) for v in z.tolist()]
+    )
+
+
 def gccd_folder(name: str) -> Path:
     """Path of an authors' dataset folder, skipping the test with a reason when it is absent."""
     folder = GCCD / name

@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from conftest import gccd_folder
+from conftest import gccd_folder, libm_numpy
 
 from drd_planner.core.bisect import Bisect, bias_from_worlds
 from drd_planner.core.episode import TableOracle, run_episode
@@ -65,6 +65,28 @@ def test_closed_form_gain_matches_explicit_expectation(seed: int) -> None:
     got = bis.gains(cand)
     want = np.array([explicit_gain(paths, theta, obs, int(e)) for e in cand])
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(bis.scalar_gains(cand), want, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_gains_in_python_floats_equal_the_vectorised_gains(seed: int) -> None:
+    """Bit for bit where numpy's float64 exp/log family is the C library's (``libm_numpy``)."""
+    rng = np.random.default_rng(500 + seed)
+    num_edges = 12
+    paths = [sorted(rng.choice(num_edges, size=int(rng.integers(1, 6)), replace=False).tolist()) for _ in range(6)]
+    library = PathLibrary.from_sequences(paths, num_edges)
+    theta = rng.uniform(0.02, 0.999, num_edges)  # p_i above 1/2 too: both forms of log(1 - e^x)
+    bis = Bisect(library, theta, rng.uniform(0.5, 2.0, num_edges), max_prob_region=False)
+    for edge in rng.permutation(num_edges)[:3].tolist():
+        if bis.solved():
+            break
+        cand = bis.alive_candidates()
+        vector, scalar = bis.gains(cand), np.array(bis.scalar_gains(cand))
+        if libm_numpy():
+            assert scalar.tolist() == vector.tolist()
+        else:
+            np.testing.assert_allclose(scalar, vector, rtol=1e-12)
+        bis.observe(edge, bool(rng.random() < 0.8))
 
 
 def test_observations_in_constructor_equal_observing_later() -> None:

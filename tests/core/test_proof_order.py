@@ -8,6 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
+from drd_planner.core import proof_order
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.path_rows import library_rows
 from drd_planner.core.proof_order import ProofOrder
@@ -115,3 +116,22 @@ def test_a_checked_edge_costs_nothing_more_and_a_path_with_nothing_left_costs_ze
     order.mark_checked(1, library.paths_through(1))
     assert order.costs(both).tolist() == [0.0, 4.0 + 0.5 * 8.0]
     assert order.best_path(np.array([0.0, -1.0]), np.array([0, 1])) == 0  # nothing left: +inf
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_few_paths_summed_in_python_floats_equal_the_columns_bit_for_bit(seed: int) -> None:
+    library = _library(seed)
+    rows = library_rows(library)
+    rng = np.random.default_rng(300 + seed)
+    costs = rng.uniform(0.5, 3.0, library.num_edges)
+    costs[rng.choice(library.num_edges, 4, replace=False)] = 1.0  # equal keys: ties by edge id
+    theta = rng.uniform(0.05, 0.95, library.num_edges)
+    checked = rng.random(library.num_edges) < 0.3
+    every = np.ones(library.num_paths, dtype=bool)
+    assert every.sum() > proof_order._SCALAR_PATHS  # all at once: the columns
+    columns = ProofOrder(rows, theta, costs, checked=checked).costs(every)
+    one_by_one = ProofOrder(rows, theta, costs, checked=checked)
+    for i in range(library.num_paths):  # one at a time: Python floats
+        alone = np.zeros(library.num_paths, dtype=bool)
+        alone[i] = True
+        assert one_by_one.costs(alone)[i] == columns[i]

@@ -8,6 +8,7 @@ space and vectorised over all candidate edges at once.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -16,9 +17,12 @@ import numpy.typing as npt
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.bernoulli import BernoulliLibraryState
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.logmath import log1mexp
+from drd_planner.core.logmath import log1mexp, log1mexp_scalar, logaddexp_scalar
 from drd_planner.core.region_rule import DEFAULT_REGION_RULE, check_region_rule
 
+#: Up to this many (candidate, alive path) pairs the gains are summed in Python floats (``numpy``'s cost per
+#: call dominates there); the same operations in the same order as the vectorised form, so the same numbers.
+SCALAR_GAIN_PAIRS = 24
 #: Worlds whose outcomes are turned into floats at a time by a weighted :func:`bias_from_worlds`.
 _ROWS_PER_BLOCK = 64
 
@@ -105,12 +109,52 @@ class Bisect(BernoulliLibraryState):
         np.negative(gain, out=gain)
         return np.asarray(gain / self._costs[cand], dtype=np.float64)
 
+    def scalar_gains(self, candidates: IntArray) -> list[float]:
+        """:meth:`gains` term by term in Python floats, cheaper for a few candidates on a few alive paths.
+
+        The same operations in the same order, so the same numbers where the scalar forms of
+        :mod:`~drd_planner.core.logmath` equal ``numpy``'s elementwise ones.
+
+        Args:
+            candidates: (c,) edge ids.
+
+        Returns:
+            c floats, g(e) / c(e) of each candidate.
+        """
+        cand = np.asarray(candidates, dtype=np.int64)
+        col = self._rows.column[cand]
+        counts = self._alive_through[cand].tolist()
+        lqs = self._lib_log_theta[col].tolist()
+        l1ms = self._lib_log_1m_theta[col].tolist()
+        costs = self._costs[cand].tolist()
+        through = [self._alive_paths_through(e) for e in cand.tolist()]
+        paths = np.concatenate(through) if through else np.zeros(0, dtype=np.int64)
+        logps = self._logp[paths].tolist()
+        lasts = (self._remaining[paths] == 1).tolist()
+        out = []
+        at = 0
+        for n, lq, l1m, cost in zip(counts, lqs, l1ms, costs, strict=True):
+            sum_blocked = 0.0  # np.bincount adds each segment's terms one by one, from 0.0
+            sum_rest = 0.0
+            for lp, last in zip(logps[at : at + n], lasts[at : at + n], strict=True):
+                sum_blocked += log1mexp_scalar(lp)
+                sum_rest += -math.inf if last else log1mexp_scalar(min(lp - lq, 0.0))
+            at += n
+            k = self._exponent_factor * n + 1.0
+            l1 = k * lq + sum_rest - sum_blocked
+            l0 = k * l1m - sum_blocked
+            out.append(-math.expm1(logaddexp_scalar(l1, l0)) / cost)
+        return out
+
     def select(self) -> int | None:
         """The next edge to check, or None when solved."""
         if self.solved():
             return None
         istar = self.region_path(self._region_rule, self._costs)
         own = self.untested_edges_of(istar)
+        if self._max_prob_region and int(self._alive_through[own].sum()) <= SCALAR_GAIN_PAIRS:
+            listed = self.scalar_gains(own)
+            return int(own[max(range(len(listed)), key=listed.__getitem__)])  # the first best, as np.argmax
         own_gain = self.gains(own)
         e_own = int(own[int(np.argmax(own_gain))])
         if self._max_prob_region:

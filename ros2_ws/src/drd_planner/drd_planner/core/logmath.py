@@ -1,6 +1,14 @@
-"""Numerically safe log-space helpers."""
+"""Numerically safe log-space helpers, on arrays and on single floats.
+
+The scalar forms (:func:`log1mexp_scalar`, :func:`logaddexp_scalar`) take the same branches and make the
+same calls as their elementwise ``numpy`` counterparts (:func:`log1mexp`, ``np.logaddexp``), through
+:mod:`math`: where ``numpy``'s float64 ``exp``/``log`` family is the C library's, as on machines without
+AVX-512 (``tests/core/test_logmath.py`` checks it), they give the same numbers bit for bit.
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import numpy.typing as npt
@@ -23,6 +31,29 @@ def log1mexp(x: npt.ArrayLike) -> FloatArray:
     with np.errstate(divide="ignore"):
         out[neg] = np.where(xn > _LOG_HALF, np.log(-np.expm1(xn)), np.log1p(-np.exp(xn)))
     return out
+
+
+def log1mexp_scalar(x: float) -> float:
+    """:func:`log1mexp` of one float: log(1 - exp(x)) for x <= 0, -inf at x >= 0."""
+    if not x < 0.0:
+        return -math.inf
+    if x > _LOG_HALF:
+        return math.log(-math.expm1(x))
+    return math.log1p(-math.exp(x))
+
+
+#: log 2, as ``numpy``'s ``logaddexp`` adds it when both arguments are equal.
+_LOG_2 = math.log(2.0)
+
+
+def logaddexp_scalar(x: float, y: float) -> float:
+    """log(exp(x) + exp(y)) of two floats (not NaN), by the steps of ``np.logaddexp``."""
+    if x == y:  # equal infinities too
+        return x + _LOG_2
+    d = x - y
+    if d > 0:
+        return x + math.log1p(math.exp(-d))
+    return y + math.log1p(math.exp(d))
 
 
 def argmax_first(values: npt.ArrayLike, *, rtol: float = 0.0) -> int:

@@ -17,13 +17,15 @@ through the checked edge, a new bias for every path; nothing is recomputed until
 (c the cheapest edge cost, q_i the smallest theta among the n_i unchecked edges of path i: every term of
 E_i is at least the matching term of L_i), and a path whose bound is below the best exact score so far can
 neither win nor tie. The bound needs no sorting; on the shipped helicopter prior it leaves about 4 of 500
-paths to score exactly.
+paths to score exactly. Among a few dozen paths the bounds cost more calls than they save, and every path
+is scored.
 
 E_i is computed along the path's order: the running product of theta over the edges before each one (a
 checked edge counts 1), times its cost (0 once checked), summed, as ``numpy`` accumulations down each
-path's column (:mod:`~drd_planner.core.path_rows`). So a path's E_i never depends on which other paths
-are computed with it, and any sequence of updates reaches, bit for bit, the numbers a new
-:class:`ProofOrder` computes for the same bias and checked edges.
+path's column (:mod:`~drd_planner.core.path_rows`), or, for a few paths, the same products and sums one
+after the other in Python floats (the same numbers: IEEE products and sums in the same order). So a path's
+E_i never depends on which other paths are computed with it, and any sequence of updates reaches, bit for
+bit, the numbers a new :class:`ProofOrder` computes for the same bias and checked edges.
 """
 
 from __future__ import annotations
@@ -40,6 +42,10 @@ __all__ = ["ProofOrder"]
 _BOUND_MARGIN = 1e-9
 #: :meth:`ProofOrder.best_path` first scores this many of the most probable paths (and the last choice).
 _FIRST_SCORED = 4
+#: Up to this many paths :meth:`ProofOrder.best_path` scores every path: cheaper than the bounds' extra calls.
+_SCORE_ALL = 32
+#: Up to this many paths out of date, E_i is recomputed with Python floats: ``numpy``'s cost per call dominates.
+_SCALAR_PATHS = 8
 
 
 class ProofOrder:
@@ -127,8 +133,9 @@ class ProofOrder:
         """The ``"per_check"`` choice among ``paths``: argmax of log p_i - log E_i, the first path on ties.
 
         The same path as the argmax of :func:`~drd_planner.core.region_rule.region_scores` over
-        :meth:`costs` (a path with nothing left to check scores +inf), with E_i computed only for the
-        paths the bounds of the module docstring leave in: the last choice and the most probable paths
+        :meth:`costs` (a path with nothing left to check scores +inf). Up to :data:`_SCORE_ALL` paths every
+        path is scored; among more, E_i is computed only for the paths the bounds of the module docstring
+        leave in: the last choice and the most probable paths
         are scored first; their best score is the bar. A path can reach the bar only if log p_i - log c
         does (cheap, every path), and then only if log p_i - log L_i does; the best of those is scored.
 
@@ -136,7 +143,7 @@ class ProofOrder:
             log_p: (r,) log p_i of ``paths`` (finite: alive paths).
             paths: (r,) ascending path ids, r >= 1.
         """
-        if paths.size > _FIRST_SCORED + 1:
+        if paths.size > _SCORE_ALL:
             first = log_p.argpartition(paths.size - _FIRST_SCORED)[-_FIRST_SCORED:]
             last = int(np.searchsorted(paths, self._last))
             if last < paths.size and paths[last] == self._last:
@@ -174,7 +181,7 @@ class ProofOrder:
     def _costs_of(self, paths: IntArray) -> FloatArray:
         """(r,) E_i of ``paths``, recomputed for those out of date (and sorted again after a new bias)."""
         todo = paths[self._stale[paths]]
-        if todo.size:
+        if todo.size > _SCALAR_PATHS:
             block = self._order[:, todo]
             if self._unsorted[todo].any():  # a path out of order is out of date too
                 by = np.lexsort((block, self._key[block]), axis=0)  # (key, local index): ties by edge id
@@ -187,4 +194,30 @@ class ProofOrder:
             terms[1:] *= products[:-1]
             self._values[todo] = terms.cumsum(axis=0)[-1]
             self._stale[todo] = False
+        elif todo.size:
+            self._values[todo] = self._scalar_costs(todo)
+            self._stale[todo] = False
         return self._values[paths]
+
+    def _scalar_costs(self, todo: IntArray) -> list[float]:
+        """E_i of the (r,) ``todo`` paths, each sorted and summed term by term in Python floats.
+
+        The same operations in the same order as the columns of :meth:`_costs_of` (a product, then a
+        running sum, both from the first edge on; the pad slots add 0), so the same numbers bit for bit.
+        The order is made from the current keys and not kept (``_order`` keeps what the columns sorted).
+        """
+        block = self._rows.by_path[todo]  # (r, L): each path's slots, padded with K
+        slots = block.tolist()
+        keys = self._key[block].tolist()
+        factors = self._factor[block].tolist()
+        costs = self._cost[block].tolist()
+        out = []
+        for slot, key, factor, cost in zip(slots, keys, factors, costs, strict=True):
+            order = sorted(range(len(slot)), key=lambda j: (key[j], slot[j]))  # (key, local index)
+            total = cost[order[0]]
+            product = factor[order[0]]
+            for j in order[1:]:
+                total += cost[j] * product
+                product *= factor[j]
+            out.append(total)
+        return out
