@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.path_rows import PathRows, library_rows
+from drd_planner.core.path_rows import PathRows, column_sums, library_rows
 
 
 def _random_library(seed: int, num_edges: int = 30, num_paths: int = 12) -> PathLibrary:
@@ -49,3 +50,17 @@ def test_a_librarys_table_is_built_once() -> None:
     assert library_rows(library) is library_rows(library)
     assert library_rows(other) is not library_rows(library)
     assert library_rows(other).table.shape[1] == other.num_paths
+
+
+@pytest.mark.parametrize("rows", [1, 2, 8, 9, 14, 33])
+@pytest.mark.parametrize("columns", [1, 2, 3, 500])
+def test_column_sums_add_term_after_term_as_the_running_sums_do(rows: int, columns: int) -> None:
+    rng = np.random.default_rng(rows * 1000 + columns)
+    block = np.log(rng.random((rows, columns))) * rng.random((rows, columns))
+    block[rng.random((rows, columns)) < 0.3] = 0.0  # the pad slots and checked edges add 0
+    got = column_sums(block)
+    assert got.tolist() == block.cumsum(axis=0)[-1].tolist()  # bit for bit
+    one_by_one = block[0].tolist()
+    for row in block[1:].tolist():
+        one_by_one = [a + b for a, b in zip(one_by_one, row, strict=True)]
+    assert got.tolist() == one_by_one

@@ -128,9 +128,10 @@ def test_a_few_paths_summed_in_python_floats_equal_the_columns_bit_for_bit(seed:
     theta = rng.uniform(0.05, 0.95, library.num_edges)
     checked = rng.random(library.num_edges) < 0.3
     every = np.ones(library.num_paths, dtype=bool)
-    assert every.sum() > proof_order._SCALAR_PATHS  # all at once: the columns
+    assert every.sum() * rows.table.shape[0] > proof_order._SCALAR_SLOTS  # all at once: the columns
     columns = ProofOrder(rows, theta, costs, checked=checked).costs(every)
     one_by_one = ProofOrder(rows, theta, costs, checked=checked)
+    assert rows.table.shape[0] <= proof_order._SCALAR_SLOTS
     for i in range(library.num_paths):  # one at a time: Python floats
         alone = np.zeros(library.num_paths, dtype=bool)
         alone[i] = True

@@ -15,7 +15,7 @@ import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.path_rows import library_rows
+from drd_planner.core.path_rows import column_sums, library_rows
 from drd_planner.core.proof_order import ProofOrder
 from drd_planner.core.region_rule import check_region_rule
 from drd_planner.exceptions import ProblemError
@@ -224,12 +224,13 @@ class BernoulliLibraryState:
     def _path_sums(self, paths: IntArray | None = None) -> FloatArray:
         """(r,) sum of log theta over the untested edges of ``paths`` (None: all m), each in path order.
 
-        Accumulated along the rows of the library's table (:attr:`~drd_planner.core.path_rows.PathRows.by_path`),
-        one term after the other as a sparse row sum adds them (a ``sum`` may add pairwise), so a
-        path's sum does not depend on which paths are summed with it.
+        Added down the columns of the library's table (:attr:`~drd_planner.core.path_rows.PathRows.table`,
+        :func:`~drd_planner.core.path_rows.column_sums`), one term after the other as a sparse row sum adds
+        them (a ``sum`` along a path's own terms may add pairwise), so a path's sum does not depend on which
+        paths are summed with it.
         """
-        table = self._rows.by_path if paths is None else self._rows.by_path[paths]
-        return np.asarray(self._untested_log_theta[table].cumsum(axis=1)[:, -1], dtype=np.float64)
+        table = self._rows.table if paths is None else self._rows.table[:, paths]
+        return column_sums(self._untested_log_theta[table])
 
     def observe(self, edge: int, free: bool) -> None:
         """Clamp ``edge`` to its outcome and update the paths through it."""

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.arrays import IntArray
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.library import PathLibrary
 
-__all__ = ["PathRows", "library_rows"]
+__all__ = ["PathRows", "column_sums", "library_rows"]
 
 
 class PathRows:
@@ -59,6 +59,18 @@ class PathRows:
     def edge_counts(self, paths: IntArray) -> IntArray:
         """(K,) int64: how many of ``paths`` use each library edge."""
         return np.bincount(self.table[:, paths].ravel(), minlength=self.pad + 1)[:-1]
+
+
+def column_sums(block: FloatArray) -> FloatArray:
+    """(r,) the sum down each column of the (L, r) ``block``, term after term from the first row.
+
+    The last row of ``block.cumsum(axis=0)``, bit for bit, without writing the (L, r) running sums: a
+    ``numpy`` sum over the first axis of a C-contiguous array with two or more columns adds row after row
+    into the output (only a sum along the contiguous axis adds pairwise, as it would for one column).
+    """
+    if block.ndim != 2 or block.shape[1] < 2 or not block.flags.c_contiguous:
+        return np.asarray(block.cumsum(axis=0)[-1], dtype=np.float64)
+    return np.asarray(block.sum(axis=0), dtype=np.float64)
 
 
 def library_rows(library: PathLibrary) -> PathRows:

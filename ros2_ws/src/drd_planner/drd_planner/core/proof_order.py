@@ -34,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
-from drd_planner.core.path_rows import PathRows
+from drd_planner.core.path_rows import PathRows, column_sums
 
 __all__ = ["ProofOrder"]
 
@@ -44,8 +44,9 @@ _BOUND_MARGIN = 1e-9
 _FIRST_SCORED = 4
 #: Up to this many paths :meth:`ProofOrder.best_path` scores every path: cheaper than the bounds' extra calls.
 _SCORE_ALL = 32
-#: Up to this many paths out of date, E_i is recomputed with Python floats: ``numpy``'s cost per call dominates.
-_SCALAR_PATHS = 8
+#: Up to this many table slots (paths out of date x the table's depth), E_i is recomputed with Python floats:
+#: ``numpy``'s cost per call dominates there (about 20 us a call of :meth:`ProofOrder._costs_of`, 0.4 us a slot).
+_SCALAR_SLOTS = 48
 
 
 class ProofOrder:
@@ -181,7 +182,7 @@ class ProofOrder:
     def _costs_of(self, paths: IntArray) -> FloatArray:
         """(r,) E_i of ``paths``, recomputed for those out of date (and sorted again after a new bias)."""
         todo = paths[self._stale[paths]]
-        if todo.size > _SCALAR_PATHS:
+        if todo.size * self._rows.table.shape[0] > _SCALAR_SLOTS:
             block = self._order[:, todo]
             if self._unsorted[todo].any():  # a path out of order is out of date too
                 by = np.lexsort((block, self._key[block]), axis=0)  # (key, local index): ties by edge id
@@ -192,7 +193,7 @@ class ProofOrder:
             products = np.multiply.accumulate(self._factor[block], axis=0)
             terms = self._cost[block]
             terms[1:] *= products[:-1]
-            self._values[todo] = terms.cumsum(axis=0)[-1]
+            self._values[todo] = column_sums(terms)
             self._stale[todo] = False
         elif todo.size:
             self._values[todo] = self._scalar_costs(todo)
@@ -207,17 +208,21 @@ class ProofOrder:
         The order is made from the current keys and not kept (``_order`` keeps what the columns sorted).
         """
         block = self._rows.by_path[todo]  # (r, L): each path's slots, padded with K
-        slots = block.tolist()
-        keys = self._key[block].tolist()
-        factors = self._factor[block].tolist()
-        costs = self._cost[block].tolist()
+        rows = zip(
+            self._key[block].tolist(),
+            block.tolist(),
+            self._factor[block].tolist(),
+            self._cost[block].tolist(),
+            strict=True,
+        )
         out = []
-        for slot, key, factor, cost in zip(slots, keys, factors, costs, strict=True):
-            order = sorted(range(len(slot)), key=lambda j: (key[j], slot[j]))  # (key, local index)
-            total = cost[order[0]]
-            product = factor[order[0]]
-            for j in order[1:]:
-                total += cost[j] * product
-                product *= factor[j]
+        for row in rows:
+            # (key, local index) order; the pad slots (key inf, index K, factor 1, cost 0) come last.
+            ordered = sorted(zip(*row, strict=True))
+            total = ordered[0][3]
+            product = ordered[0][2]
+            for _, _, factor, cost in ordered[1:]:
+                total += cost * product
+                product *= factor
             out.append(total)
         return out
