@@ -17,8 +17,8 @@ through the checked edge, a new bias for every path; nothing is recomputed until
 (c the cheapest edge cost, q_i the smallest theta among the n_i unchecked edges of path i: every term of
 E_i is at least the matching term of L_i), and a path whose bound is below the best exact score so far can
 neither win nor tie. The bound needs no sorting; on the shipped helicopter prior it leaves about 4 of 500
-paths to score exactly. Among a few dozen paths the bounds cost more calls than they save, and every path
-is scored.
+paths to score exactly. Among fewer or shorter paths the bounds cost more calls than they save, and every
+path is scored.
 
 E_i is computed along the path's order: the running product of theta over the edges before each one (a
 checked edge counts 1), times its cost (0 once checked), summed, as ``numpy`` accumulations down each
@@ -42,8 +42,10 @@ __all__ = ["ProofOrder"]
 _BOUND_MARGIN = 1e-9
 #: :meth:`ProofOrder.best_path` first scores this many of the most probable paths (and the last choice).
 _FIRST_SCORED = 4
-#: Up to this many paths :meth:`ProofOrder.best_path` scores every path: cheaper than the bounds' extra calls.
-_SCORE_ALL = 32
+#: Up to this many table slots (alive paths x the table's depth) :meth:`ProofOrder.best_path` scores every
+#: path: cheaper than the bounds' extra calls (a call of :meth:`ProofOrder._costs_of` costs about 20 us and
+#: 0.03 us a slot; the bounds about 60 us more).
+_SCORE_ALL_SLOTS = 1024
 #: Up to this many table slots (paths out of date x the table's depth), E_i is recomputed with Python floats:
 #: ``numpy``'s cost per call dominates there (about 20 us a call of :meth:`ProofOrder._costs_of`, 0.4 us a slot).
 _SCALAR_SLOTS = 48
@@ -134,7 +136,7 @@ class ProofOrder:
         """The ``"per_check"`` choice among ``paths``: argmax of log p_i - log E_i, the first path on ties.
 
         The same path as the argmax of :func:`~drd_planner.core.region_rule.region_scores` over
-        :meth:`costs` (a path with nothing left to check scores +inf). Up to :data:`_SCORE_ALL` paths every
+        :meth:`costs` (a path with nothing left to check scores +inf). Up to :data:`_SCORE_ALL_SLOTS` slots every
         path is scored; among more, E_i is computed only for the paths the bounds of the module docstring
         leave in: the last choice and the most probable paths
         are scored first; their best score is the bar. A path can reach the bar only if log p_i - log c
@@ -144,7 +146,7 @@ class ProofOrder:
             log_p: (r,) log p_i of ``paths`` (finite: alive paths).
             paths: (r,) ascending path ids, r >= 1.
         """
-        if paths.size > _SCORE_ALL:
+        if paths.size * self._rows.table.shape[0] > _SCORE_ALL_SLOTS:
             first = log_p.argpartition(paths.size - _FIRST_SCORED)[-_FIRST_SCORED:]
             last = int(np.searchsorted(paths, self._last))
             if last < paths.size and paths[last] == self._last:
