@@ -94,11 +94,16 @@ class Bisect(BernoulliLibraryState):
         col = self._rows.column[cand]  # library-local index of each candidate
         n = self._alive_through[cand]  # alive paths through each candidate (the entries per segment)
         seg, paths = self._incidence(cand, n)
-        logp = self._logp[paths]
+        size = paths.size
+        # log p_i, then log(p_i / theta_e) capped at 0, side by side: one log(1 - e^x) for both.
+        x = np.empty(2 * size)
+        logp = np.take(self._logp, paths, out=x[:size])
         lq = self._lib_log_theta[col]
-        log_blocked = log1mexp(logp)  # log(1 - p_i)
-        # log(1 - p_i / theta_e); exactly -inf when e is the path's last untested edge.
-        log_rest = log1mexp(np.minimum(logp - lq[seg], 0.0))
+        np.subtract(logp, lq[seg], out=x[size:])
+        np.minimum(x[size:], 0.0, out=x[size:])
+        logs = log1mexp(x)
+        log_blocked = logs[:size]  # log(1 - p_i)
+        log_rest = logs[size:]  # log(1 - p_i / theta_e); exactly -inf when e is the path's last untested edge
         log_rest[self._remaining[paths] == 1] = -np.inf
         sum_blocked = np.bincount(seg, weights=log_blocked, minlength=cand.size)
         sum_rest = np.bincount(seg, weights=log_rest, minlength=cand.size)  # -inf where some term is

@@ -183,8 +183,10 @@ class _LibraryProgress:
     def record(self, edge: int, free: bool) -> None:
         paths = self._library.paths_through(edge)
         if free:
-            self.remaining[paths] -= 1
-            self._proven.extend(paths[self.remaining[paths] == 0].tolist())
+            remaining = self.remaining[paths] - 1
+            self.remaining[paths] = remaining
+            if not remaining.all():
+                self._proven.extend(paths[remaining == 0].tolist())
         else:
             fresh = paths[self.blocker[paths] < 0]
             self.blocker[fresh] = edge
