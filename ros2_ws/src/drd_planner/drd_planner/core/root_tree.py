@@ -107,6 +107,12 @@ class RootTree:
     def _valid(self) -> BoolArray:
         """(n, m) whether each library path is free in each world (from the library edges' outcomes only)."""
         blocked = (~self._x).astype(np.float32)
-        counts = self._library.incidence[:, self._lib_edges] @ blocked.T
+        # The (m, K) incidence over the library's own edges, dense (sparse column indexing costs more).
+        paths = self._library.path_edges
+        rows = np.repeat(np.arange(len(paths)), [p.size for p in paths])
+        cols = np.searchsorted(self._lib_edges, np.concatenate(paths))
+        incidence = np.zeros((len(paths), self._lib_edges.size), dtype=np.float32)
+        incidence[rows, cols] = 1.0
+        counts = incidence @ blocked.T
         valid: BoolArray = np.asarray(counts == 0, dtype=bool).T
         return valid
