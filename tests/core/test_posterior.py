@@ -189,3 +189,36 @@ def test_outcomes_and_new_biases_keep_log_p_as_a_fresh_state_sums_it(seed: int) 
             assert moved.log_path_probability[i] == pytest.approx(log_theta[untested].sum(), abs=1e-12)
         if not fresh.solved():
             assert moved.select() == fresh.select()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_library_bias_path_equals_set_theta_bit_for_bit(seed: int) -> None:
+    """``set_library_theta`` (the posterior leaf's path; None: unchanged) keeps what ``set_theta`` keeps."""
+    rng = np.random.default_rng(40 + seed)
+    num_edges = 40
+    paths = tuple(rng.choice(num_edges - 4, size=int(rng.integers(2, 9)), replace=False) for _ in range(25))
+    library = PathLibrary(paths, num_edges)
+    costs = rng.uniform(0.5, 2.0, num_edges)
+    lib = library.library_edges
+    theta = rng.uniform(0.2, 0.95, num_edges)
+    by_library = Bisect(library, theta, costs, region_rule="per_check")
+    by_edges = Bisect(library, theta, costs, region_rule="per_check")
+    assert by_library.library_edges.tolist() == lib.tolist()
+    for edge in rng.permutation(lib)[:12].tolist():
+        if by_edges.solved():
+            break
+        assert by_library.select() == by_edges.select()
+        free = bool(rng.random() < 0.7)
+        by_library.observe(edge, free)
+        by_edges.observe(edge, free)
+        if rng.random() < 0.6:  # a new bias for the library edges, some values at the ends of [0, 1]
+            theta[lib] = np.where(rng.random(lib.size) < 0.8, rng.uniform(0.0, 1.0, lib.size), theta[lib])
+            theta[lib[:2]] = [0.0, 1.0]
+            by_library.set_library_theta(theta[lib].copy())
+        else:
+            by_library.set_library_theta(None)
+        by_edges.set_theta(theta[lib], edges=lib)
+        assert by_library.log_path_probability.tolist() == by_edges.log_path_probability.tolist()
+        if not by_edges.solved():
+            cand = by_edges.alive_candidates()
+            assert by_library.gains(cand).tolist() == by_edges.gains(cand).tolist()

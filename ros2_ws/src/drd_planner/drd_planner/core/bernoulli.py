@@ -192,11 +192,16 @@ class BernoulliLibraryState:
         """(K,) sorted ids of the edges some path uses: the edges :meth:`set_library_theta` takes."""
         return self._rows.edges
 
-    def set_library_theta(self, theta: FloatArray) -> None:
+    def set_library_theta(self, theta: FloatArray | None) -> None:
         """:meth:`set_theta` with the (K,) bias of the :attr:`library_edges`, already known to be in [0, 1].
 
         The posterior leaf's path: no validation, and nothing scattered through all E edges but the bias.
+        None: the bias is known to be unchanged (only log p_i is summed again, if an outcome changed it).
         """
+        if theta is None:
+            if self._differenced:
+                self._resum()
+            return
         th = np.maximum(theta, THETA_EPS)
         np.minimum(th, 1.0 - THETA_EPS, out=th)
         if (th != self._lib_theta).any():
@@ -211,7 +216,7 @@ class BernoulliLibraryState:
         self._lib_theta = theta
         self._library_logs()
         if self._proof_order is not None:
-            self._proof_order.set_library_theta(theta)
+            self._proof_order.set_library_theta(theta, changed=True)
 
     def _resum(self) -> None:
         """Sum log p_i of every alive path again (the dead paths' log p_i is never read again)."""

@@ -127,8 +127,12 @@ class Bisect(BernoulliLibraryState):
             c floats, g(e) / c(e) of each candidate.
         """
         cand = np.asarray(candidates, dtype=np.int64)
+        return self._scalar_gains(cand, self._alive_through[cand])
+
+    def _scalar_gains(self, cand: IntArray, alive_counts: IntArray) -> list[float]:
+        """:meth:`scalar_gains` of the (c,) int64 ``cand`` with their (c,) alive path counts."""
         col = self._rows.column[cand]
-        counts = self._alive_through[cand].tolist()
+        counts = alive_counts.tolist()
         lqs = self._lib_log_theta[col].tolist()
         l1ms = self._lib_log_1m_theta[col].tolist()
         costs = self._costs[cand].tolist()
@@ -157,8 +161,9 @@ class Bisect(BernoulliLibraryState):
             return None
         istar = self.region_path(self._region_rule, self._costs)
         own = self.untested_edges_of(istar)
-        if self._max_prob_region and int(self._alive_through[own].sum()) <= SCALAR_GAIN_PAIRS:
-            listed = self.scalar_gains(own)
+        counts = self._alive_through[own]
+        if self._max_prob_region and int(counts.sum()) <= SCALAR_GAIN_PAIRS:
+            listed = self._scalar_gains(own, counts)
             return int(own[max(range(len(listed)), key=listed.__getitem__)])  # the first best, as np.argmax
         own_gain = self.gains(own)
         e_own = int(own[int(np.argmax(own_gain))])

@@ -206,8 +206,10 @@ class DirectBisectPolicy:
         if self._bisect is not None:
             self._bisect.observe(edge, free)
             if self._posterior is not None:  # the bias of the library edges, updated when worlds drop
-                self._posterior.observe(edge, free)
-                if self._posterior_aligned:
+                dropped = self._posterior.observe(edge, free)
+                if self._posterior_aligned and not dropped:  # the same bias: log p_i summed again if due
+                    self._bisect.set_library_theta(None)
+                elif self._posterior_aligned:
                     self._bisect.set_library_theta(self._posterior.library_theta())
                 else:
                     self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)

@@ -114,10 +114,13 @@ class ProofOrder:
         """A new (E,) bias: new keys; every path's order and E_i are recomputed when it is next asked for."""
         self.set_library_theta(np.asarray(theta, dtype=np.float64)[self._rows.edges])
 
-    def set_library_theta(self, theta: FloatArray) -> None:
-        """:meth:`set_theta` with the (K,) bias of the library edges (``rows.edges``) only."""
+    def set_library_theta(self, theta: FloatArray, *, changed: bool = False) -> None:
+        """:meth:`set_theta` with the (K,) bias of the library edges (``rows.edges``) only.
+
+        ``changed``: the caller knows some value differs from the current bias (no comparison).
+        """
         pad = self._rows.pad
-        if not (theta != self._theta[:pad]).any():
+        if not changed and not (theta != self._theta[:pad]).any():
             return
         self._theta[:pad] = theta
         self._key[:pad] = self._edge_cost / np.maximum(1.0 - theta, 1e-300)
