@@ -33,6 +33,30 @@ def libm_numpy() -> bool:
     )
 
 
+def grid_graph(side: int, rng: Any, *, directed: bool = False, equal_lengths: bool = False) -> Any:
+    """A side x side grid graph (both directions when directed), lengths uniform in [1, 2) drawn from ``rng``.
+
+    ``equal_lengths``: every length 1 (the draw is still made, so what ``rng`` draws next is the same).
+    """
+    import numpy as np
+
+    from drd_planner.core.graph import ExplicitGraph
+
+    edges = []
+    for i in range(side):
+        for j in range(side):
+            v = side * i + j
+            if j < side - 1:
+                edges.append((v, v + 1))
+            if i < side - 1:
+                edges.append((v, v + side))
+    pairs = np.array(edges)
+    if directed:
+        pairs = np.vstack([pairs, pairs[:, ::-1]])
+    lengths = rng.uniform(1.0, 2.0, pairs.shape[0])
+    return ExplicitGraph(pairs, np.ones_like(lengths) if equal_lengths else lengths, side * side, directed)
+
+
 def gccd_folder(name: str) -> Path:
     """Path of an authors' dataset folder, skipping the test with a reason when it is absent."""
     folder = GCCD / name

@@ -156,15 +156,21 @@ def test_updates_per_outcome_equal_the_bias_of_the_consistent_worlds(seed: int, 
             np.testing.assert_array_equal(bias.library_theta(), bias.theta()[lib])
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_outcomes_and_new_biases_keep_log_p_as_a_fresh_state_sums_it(seed: int) -> None:
-    rng = np.random.default_rng(seed)
+def _random_case(
+    rng: np.random.Generator,
+) -> tuple[tuple[np.ndarray, ...], PathLibrary, np.ndarray, np.ndarray, np.ndarray]:
+    """25 random paths over 40 edges: (paths, library, (E,) costs, the library's edges, (E,) theta)."""
     num_edges = 40
     paths = tuple(rng.choice(num_edges - 4, size=int(rng.integers(2, 9)), replace=False) for _ in range(25))
     library = PathLibrary(paths, num_edges)
     costs = rng.uniform(0.5, 2.0, num_edges)
-    lib = library.library_edges
-    theta = rng.uniform(0.2, 0.95, num_edges)
+    return paths, library, costs, library.library_edges, rng.uniform(0.2, 0.95, num_edges)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_outcomes_and_new_biases_keep_log_p_as_a_fresh_state_sums_it(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    paths, library, costs, lib, theta = _random_case(rng)
     moved = Bisect(library, theta, costs, region_rule="per_check")
     observations: dict[int, bool] = {}
     for edge in rng.permutation(lib)[:12].tolist():
@@ -195,12 +201,7 @@ def test_outcomes_and_new_biases_keep_log_p_as_a_fresh_state_sums_it(seed: int) 
 def test_the_library_bias_path_equals_set_theta_bit_for_bit(seed: int) -> None:
     """``set_library_theta`` (the posterior leaf's path; None: unchanged) keeps what ``set_theta`` keeps."""
     rng = np.random.default_rng(40 + seed)
-    num_edges = 40
-    paths = tuple(rng.choice(num_edges - 4, size=int(rng.integers(2, 9)), replace=False) for _ in range(25))
-    library = PathLibrary(paths, num_edges)
-    costs = rng.uniform(0.5, 2.0, num_edges)
-    lib = library.library_edges
-    theta = rng.uniform(0.2, 0.95, num_edges)
+    _, library, costs, lib, theta = _random_case(rng)
     by_library = Bisect(library, theta, costs, region_rule="per_check")
     by_edges = Bisect(library, theta, costs, region_rule="per_check")
     assert by_library.library_edges.tolist() == lib.tolist()

@@ -10,7 +10,7 @@ import pytest
 
 from drd_planner.core import proof_order
 from drd_planner.core.library import PathLibrary
-from drd_planner.core.path_rows import library_rows
+from drd_planner.core.path_rows import PathRows, library_rows
 from drd_planner.core.proof_order import ProofOrder
 from drd_planner.core.region_rule import region_scores
 
@@ -34,14 +34,18 @@ def _best_order_cost(todo: list[int], theta: np.ndarray, costs: np.ndarray) -> f
     return float(best)
 
 
-@pytest.mark.parametrize("seed", range(6))
-def test_updates_reach_what_a_new_order_computes(seed: int) -> None:
+def _case(seed: int, offset: int) -> tuple[PathLibrary, PathRows, np.random.Generator, np.ndarray, np.ndarray]:
+    """A random library, its rows, a generator seeded ``offset + seed``, (E,) costs with ties and (E,) theta."""
     library = _library(seed)
-    rows = library_rows(library)
-    rng = np.random.default_rng(100 + seed)
+    rng = np.random.default_rng(offset + seed)
     costs = rng.uniform(0.5, 3.0, library.num_edges)
     costs[rng.choice(library.num_edges, 4, replace=False)] = 1.0  # equal keys: ties by edge id
-    theta = rng.uniform(0.05, 0.95, library.num_edges)
+    return library, library_rows(library), rng, costs, rng.uniform(0.05, 0.95, library.num_edges)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_updates_reach_what_a_new_order_computes(seed: int) -> None:
+    library, rows, rng, costs, theta = _case(seed, 100)
     kept = ProofOrder(rows, theta, costs)
     checked = np.zeros(library.num_edges, dtype=bool)
     alive = np.ones(library.num_paths, dtype=bool)
@@ -126,12 +130,7 @@ def test_a_checked_edge_costs_nothing_more_and_a_path_with_nothing_left_costs_ze
 
 @pytest.mark.parametrize("seed", range(4))
 def test_a_few_paths_summed_in_python_floats_equal_the_columns_bit_for_bit(seed: int) -> None:
-    library = _library(seed)
-    rows = library_rows(library)
-    rng = np.random.default_rng(300 + seed)
-    costs = rng.uniform(0.5, 3.0, library.num_edges)
-    costs[rng.choice(library.num_edges, 4, replace=False)] = 1.0  # equal keys: ties by edge id
-    theta = rng.uniform(0.05, 0.95, library.num_edges)
+    library, rows, rng, costs, theta = _case(seed, 300)
     checked = rng.random(library.num_edges) < 0.3
     every = np.ones(library.num_paths, dtype=bool)
     assert every.sum() * rows.table.shape[0] > proof_order._SCALAR_SLOTS  # all at once: the columns

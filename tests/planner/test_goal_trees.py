@@ -12,25 +12,14 @@ from drd_planner.planner import goal_trees
 from drd_planner.planner.goal_trees import GOAL_TREES_KEPT, JoinMotions, SearchWorlds, distinct_rows
 from drd_planner.planner.query_graph import Joins
 from drd_planner.planner.query_library import ShortestPaths, library_paths
+from tests.conftest import grid_graph
 
 
 def _grid(directed: bool) -> tuple[ExplicitGraph, np.ndarray]:
     """A 6 x 6 grid (both directions when directed) and 40 random worlds over its edges."""
-    edges = []
-    for i in range(6):
-        for j in range(6):
-            v = 6 * i + j
-            if j < 5:
-                edges.append((v, v + 1))
-            if i < 5:
-                edges.append((v, v + 6))
-    pairs = np.array(edges)
-    if directed:
-        pairs = np.vstack([pairs, pairs[:, ::-1]])
     rng = np.random.default_rng(3)
-    lengths = rng.uniform(1.0, 2.0, pairs.shape[0])
-    graph = ExplicitGraph(pairs, lengths, 36, directed)
-    return graph, rng.random((40, pairs.shape[0])) < 0.75
+    graph = grid_graph(6, rng, directed=directed)
+    return graph, rng.random((40, graph.num_edges)) < 0.75
 
 
 @pytest.mark.parametrize("directed", [False, True])

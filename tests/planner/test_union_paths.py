@@ -10,22 +10,14 @@ from drd_planner.core.lazysp import GraphArcs
 from drd_planner.planner.query_library import ShortestPaths
 from drd_planner.planner.union_paths import NO_HOP, JoinMotions, UnionTree, follows_union
 from drd_planner.planner.world_blocks import WorldBlocks
+from tests.conftest import grid_graph
 
 
 def _grid(lengths: str) -> tuple[ExplicitGraph, np.ndarray]:
     """A 5 x 5 grid with random or equal edge lengths, and 30 random worlds."""
-    edges = []
-    for i in range(5):
-        for j in range(5):
-            v = 5 * i + j
-            if j < 4:
-                edges.append((v, v + 1))
-            if i < 4:
-                edges.append((v, v + 5))
-    pairs = np.array(edges)
     rng = np.random.default_rng(5)
-    length = rng.uniform(1.0, 2.0, len(pairs)) if lengths == "random" else np.ones(len(pairs))
-    return ExplicitGraph(pairs, length, 25, False), rng.random((30, len(pairs))) < 0.8
+    graph = grid_graph(5, rng, equal_lengths=lengths == "equal")
+    return graph, rng.random((30, graph.num_edges)) < 0.8
 
 
 def _setup(graph: ExplicitGraph, x: np.ndarray) -> tuple[GraphArcs, np.ndarray, WorldBlocks]:
