@@ -71,3 +71,22 @@ def test_problem_and_worlds_validate_shapes() -> None:
         WorldDatabase(X, lib.valid_paths(X), np.array([0, 1]), np.array([1]))
     with pytest.raises(ProblemError, match="no world database"):
         Problem("p", lib, np.ones(2)).require_worlds()
+
+
+def test_the_incidences_are_the_sorted_path_by_edge_matrix_in_both_orders() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        num_edges = int(rng.integers(5, 200))
+        paths = tuple(
+            rng.choice(num_edges, size=int(rng.integers(1, min(num_edges, 12) + 1)), replace=False)
+            for _ in range(int(rng.integers(1, 30)))
+        )
+        library = PathLibrary(paths, num_edges)
+        dense = np.zeros((len(paths), num_edges))
+        for i, p in enumerate(paths):
+            dense[i, p] = 1.0
+        for matrix in (library.incidence, library.incidence_csc):
+            assert matrix.has_sorted_indices
+            assert np.array_equal(matrix.toarray(), dense)
+        assert library.incidence.indptr.tolist() == np.concatenate([[0], np.cumsum([p.size for p in paths])]).tolist()
+        assert library.library_edges.tolist() == np.unique(np.concatenate(paths)).tolist()

@@ -33,22 +33,29 @@ class PathLibrary:
         paths = tuple(np.asarray(p, dtype=np.int64).ravel() for p in self.path_edges)
         if not paths:
             raise ProblemError("a path library needs at least one path")
-        for i, p in enumerate(paths):
-            if p.size == 0:
-                raise ProblemError(f"library path {i} has no edges")
-            if p.min() < 0 or p.max() >= self.num_edges:
-                raise ProblemError(f"library path {i} names an edge outside [0, {self.num_edges})")
-            if np.unique(p).size != p.size:
-                raise ProblemError(f"library path {i} uses an edge twice")
-        object.__setattr__(self, "path_edges", paths)
-        rows = np.repeat(np.arange(len(paths)), [p.size for p in paths])
+        sizes = np.array([p.size for p in paths], dtype=np.int64)
+        if (sizes == 0).any():
+            raise ProblemError(f"library path {int(np.argmax(sizes == 0))} has no edges")
+        rows = np.repeat(np.arange(len(paths)), sizes)
         cols = np.concatenate(paths)
-        data = np.ones(cols.size, dtype=np.float64)
-        csr = sp.csr_array((data, (rows, cols)), shape=(len(paths), self.num_edges))
-        csr.sort_indices()
+        outside = (cols < 0) | (cols >= self.num_edges)
+        if outside.any():
+            raise ProblemError(
+                f"library path {int(rows[np.argmax(outside)])} names an edge outside [0, {self.num_edges})"
+            )
+        # Both incidences built directly in their sorted order (a path's edges, a column's paths).
+        by_row = np.lexsort((cols, rows))
+        repeated = np.flatnonzero((np.diff(rows[by_row]) == 0) & (np.diff(cols[by_row]) == 0))
+        if repeated.size:
+            raise ProblemError(f"library path {int(rows[by_row][repeated[0]])} uses an edge twice")
+        object.__setattr__(self, "path_edges", paths)
+        shape = (len(paths), self.num_edges)
+        csr_indptr = np.concatenate([[0], np.cumsum(sizes)])
+        csr = sp.csr_array((np.ones(cols.size), cols[by_row], csr_indptr), shape=shape)
         object.__setattr__(self, "_csr", csr)
-        csc = csr.tocsc()
-        csc.sort_indices()
+        by_col = np.lexsort((rows, cols))
+        csc_indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.num_edges))])
+        csc = sp.csc_array((np.ones(cols.size), rows[by_col], csc_indptr), shape=shape)
         object.__setattr__(self, "_csc", csc)
 
     @classmethod
