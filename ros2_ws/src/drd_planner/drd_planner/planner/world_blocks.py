@@ -65,24 +65,19 @@ class WorldBlocks:
         self._forward_indptr = np.concatenate([arcs.indptr, [arcs.indptr[-1]]]).astype(np.int64)
         self._forward_indices = arcs.v.astype(np.int32)
 
-    def union_tree(self, goal: int, joins: JoinMotions | None = None, worlds: IntArray | None = None) -> UnionTree:
-        """The goal's reverse shortest-path tree over the arcs free in any of ``worlds`` (None: all).
+    def union_tree(self, goal: int, joins: JoinMotions | None = None) -> UnionTree:
+        """The goal's reverse shortest-path tree over the arcs free in any world.
 
-        ``joins``: the motions into the off-graph goal ``B - 1`` (those free in any of the worlds are arcs).
+        ``joins``: the motions into the off-graph goal ``B - 1`` (those free in any world are arcs).
         """
-        if worlds is None:
-            weights = self._union_weights
-        else:
-            weights = np.where(self._free[worlds].any(axis=0), self._length, np.inf)
         spare = np.full(self.slots, np.inf)
         indices = self._indices
         if joins is not None:
             k = int(joins.vertices.size)
             indices = indices.copy()
             indices[indices.size - self.slots : indices.size - self.slots + k] = joins.vertices
-            free = joins.free if worlds is None else joins.free[worlds]
-            spare[:k] = np.where(free.any(axis=0), joins.lengths, np.inf)
-        data = np.concatenate([weights, spare])
+            spare[:k] = np.where(joins.free.any(axis=0), joins.lengths, np.inf)
+        data = np.concatenate([self._union_weights, spare])
         union = sp.csr_array((data, indices, self._indptr), shape=(self.block, self.block))
         dist, pred = dijkstra(union, directed=True, indices=goal, return_predecessors=True)
         hop = np.asarray(pred, dtype=np.int32)
