@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from drd_planner.bounded_files import read_bounded_text
 from drd_planner.exceptions import SiteFileError
 
 __all__ = ["MAX_GEOJSON_BYTES", "MAX_ZONE_VERTICES", "GeoZone", "GeoZones", "read_zones"]
@@ -168,15 +168,7 @@ def read_zones(path: str | Path) -> GeoZones:
             MultiPolygon features, with no features, too many vertices, duplicate names or bad properties.
     """
     file = Path(path).resolve()
-    try:
-        size = os.stat(file).st_size
-        if not file.is_file():
-            raise SiteFileError(f"GeoJSON {file} is not a regular file")
-        if size > MAX_GEOJSON_BYTES:
-            raise SiteFileError(f"GeoJSON {file} has {size} bytes; at most {MAX_GEOJSON_BYTES} are read")
-        text = file.read_bytes()[: MAX_GEOJSON_BYTES + 1].decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SiteFileError(f"cannot read GeoJSON {file}: {exc}") from None
+    text = read_bounded_text(file, MAX_GEOJSON_BYTES, f"GeoJSON {file}", SiteFileError)
     try:
         data = json.loads(text)
     except (json.JSONDecodeError, RecursionError) as exc:

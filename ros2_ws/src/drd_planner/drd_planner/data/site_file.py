@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from drd_planner.bounded_files import read_bounded_text
 from drd_planner.data.geo_dem import SiteDem, check_covers, check_known_heights, open_dem
 from drd_planner.data.geo_frame import SiteFrame
 from drd_planner.data.geo_power import read_power
@@ -173,11 +174,10 @@ def _spec(data: Mapping[str, Any], base: Path, files: list[str]) -> dict[str, An
     spec: dict[str, Any] = {}
     if value is not None:
         path = _file(value, base, "lattice" if not inline else "lattice.file")
-        if path.stat().st_size > 1 << 20:
-            raise SiteFileError(f"lattice spec {path} has more than {1 << 20} bytes")
+        text = read_bounded_text(path, 1 << 20, f"lattice spec {path}", SiteFileError)
         try:
-            spec = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+            spec = json.loads(text)
+        except (json.JSONDecodeError, RecursionError) as exc:
             raise SiteFileError(f"lattice spec {path} is not readable JSON ({exc})") from None
         if not isinstance(spec, dict):
             raise SiteFileError(f"lattice spec {path} must hold a JSON object")

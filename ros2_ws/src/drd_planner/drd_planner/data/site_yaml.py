@@ -9,13 +9,13 @@ name the key (``dem.path``) and what it must be; :func:`check_keys` names the va
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from drd_planner.bounded_files import read_bounded_text
 from drd_planner.exceptions import SiteFileError
 
 __all__ = [
@@ -44,16 +44,7 @@ def read_yaml_mapping(path: Path, what: str = "site file") -> dict[str, Any]:
         SiteFileError: missing, too large, not UTF-8, not YAML, with anchors/aliases, nested too deeply, or
             not a mapping at the top.
     """
-    try:
-        size = os.stat(path).st_size
-        if not path.is_file():
-            raise SiteFileError(f"{what} {path} is not a regular file")
-        if size > MAX_SITE_BYTES:
-            raise SiteFileError(f"{what} {path} has {size} bytes; at most {MAX_SITE_BYTES} are read")
-        with open(path, "rb") as handle:
-            text = handle.read(MAX_SITE_BYTES + 1).decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SiteFileError(f"cannot read {what} {path}: {exc}") from None
+    text = read_bounded_text(path, MAX_SITE_BYTES, f"{what} {path}", SiteFileError)
     try:
         depth = 0
         for event in yaml.parse(text, Loader=yaml.SafeLoader):

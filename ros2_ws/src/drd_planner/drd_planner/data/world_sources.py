@@ -31,11 +31,11 @@ import hashlib
 import importlib
 import json
 import os
-import stat
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
+from drd_planner.bounded_files import read_bounded
 from drd_planner.domains.base import Domain, EdgeChecker
 from drd_planner.exceptions import DatasetError
 
@@ -81,20 +81,7 @@ def _bounded_bytes(where: str, what: str, max_bytes: int) -> bytes:
     Raises:
         DatasetError: unreadable, not a regular file, or larger than ``max_bytes``.
     """
-    label = f"{what} {where}" if what else where
-    try:
-        info = os.stat(where)
-        if not stat.S_ISREG(info.st_mode):
-            raise DatasetError(f"cannot read {label}: not a regular file")
-        if info.st_size > max_bytes:
-            raise DatasetError(f"{label} has {info.st_size} bytes; at most {max_bytes} are read")
-        with open(where, "rb") as handle:
-            data = handle.read(max_bytes + 1)
-    except OSError as exc:
-        raise DatasetError(f"cannot read {label}: {exc.strerror or exc}") from exc
-    if len(data) > max_bytes:
-        raise DatasetError(f"{label} has more than {max_bytes} bytes")
-    return data
+    return read_bounded(where, max_bytes, f"{what} {where}" if what else where, DatasetError)
 
 
 def _absolute(path: str | os.PathLike[str]) -> str:

@@ -15,13 +15,13 @@ Every refusal is one :class:`~drd_planner.exceptions.GeometryError` naming the f
 from __future__ import annotations
 
 import reprlib
-import stat
 from pathlib import Path
 from typing import Any
 
 import yaml
 from yaml.composer import ComposerError
 
+from drd_planner.bounded_files import read_bounded_text
 from drd_planner.exceptions import GeometryError
 
 __all__ = ["MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_NODES", "load_yaml", "quoted", "read_yaml_text"]
@@ -97,22 +97,8 @@ def read_yaml_text(path: str | Path, what: str, *, max_bytes: int = MAX_YAML_BYT
         GeometryError: not a regular file, larger than ``max_bytes`` (checked before reading), unreadable,
             or not UTF-8.
     """
-    p = Path(path)
-    try:
-        info = p.stat()
-        if not stat.S_ISREG(info.st_mode):
-            raise GeometryError(f"cannot read {what} {p}: not a regular file")
-        if info.st_size > max_bytes:
-            raise GeometryError(
-                f"{what} {p} has {info.st_size} bytes; at most {max_bytes} are read (a MoveIt YAML file is a few KiB)"
-            )
-        with p.open("rb") as handle:
-            data = handle.read(max_bytes + 1)
-        if len(data) > max_bytes:  # it grew after the size was looked at
-            raise GeometryError(f"{what} {p} has more than {max_bytes} bytes")
-        return data.decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise GeometryError(f"cannot read {what} {p}: {_one_line(exc)}") from None
+    hint = " (a MoveIt YAML file is a few KiB)"
+    return read_bounded_text(path, max_bytes, f"{what} {Path(path)}", GeometryError, hint=hint)
 
 
 def _one_line(exc: BaseException) -> str:
