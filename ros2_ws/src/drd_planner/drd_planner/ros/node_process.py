@@ -29,17 +29,29 @@ SPIN_TIMEOUT_S = 0.25
 def main(args: list[str] | None = None) -> int:
     """Run the lifecycle node until SIGINT / SIGTERM (``autostart:=true`` configures and activates it).
 
-    Returns the exit status: 0, or 2 when the parameters given on the command line are refused.
+    Returns the exit status: 0, 2 when the parameters given on the command line are refused, or 130 when a
+    signal shut rclpy down while the node was being made.
     """
     rclpy.init(args=args)
+    node: PlannerNode | None = None
     try:
+        executor = SingleThreadedExecutor()
         node = PlannerNode()
-    except (ParameterException, ValueError, TypeError) as exc:  # an override outside its range or type
+        executor.add_node(node)
+    except Exception as exc:
+        if not rclpy.ok():
+            # rclpy's own signal handler shuts the context down before Python's handler runs: making the node
+            # or its executor on that context then fails (an RCLError, rclpy's NotInitializedException, ...).
+            # That is the end a signal asked for, not an error.
+            if node is not None:
+                node.destroy_node()
+            return 130
+        if node is not None or not isinstance(exc, (ParameterException, ValueError, TypeError)):
+            raise
+        # an override outside its range or type
         print(f"planner_node: error: {shorten(str(exc))}", file=sys.stderr)
         try_shutdown()
         return 2
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
     try:
         if bool(node.get_parameter("autostart").value):
             if node.trigger_configure() == TransitionCallbackReturn.SUCCESS:
