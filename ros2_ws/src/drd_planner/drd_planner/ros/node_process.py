@@ -15,7 +15,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.lifecycle import TransitionCallbackReturn
-from rclpy.utilities import try_shutdown
+from rclpy.utilities import ok, try_shutdown
 
 from drd_planner.ros.guard import shorten
 from drd_planner.ros.node import PlannerNode
@@ -39,7 +39,7 @@ def main(args: list[str] | None = None) -> int:
         node = PlannerNode()
         executor.add_node(node)
     except Exception as exc:
-        if not rclpy.ok():
+        if not ok():
             # rclpy's own signal handler shuts the context down before Python's handler runs: making the node
             # or its executor on that context then fails (an RCLError, rclpy's NotInitializedException, ...).
             # That is the end a signal asked for, not an error.
