@@ -33,8 +33,8 @@ import numpy as np
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.status import PlanCause
-from drd_planner.domains.dubins import DubinsPath, dubins_lengths, dubins_path, path_to_point, point_lengths
-from drd_planner.domains.dubins_batch import dubins_sketches
+from drd_planner.domains.dubins import dubins_lengths, path_to_point, point_lengths
+from drd_planner.domains.dubins_batch import dubins_samples, dubins_sketches
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.connect import Motion, vertex_states_of
 from drd_planner.planner.endpoints import QueryError
@@ -186,10 +186,21 @@ class DubinsConnector:
         when they do not suffice (:mod:`~drd_planner.planner.join_growth`).
         """
         states = vertex_states_of(graph)
-        free_heading = not math.isfinite(float(state[3]))
+        ids = np.asarray(vertices, dtype=np.int64)
+        if not math.isfinite(float(state[3])):  # a goal's free heading: turn-then-straight paths, one by one
+            if outgoing:
+                raise QueryError("a start state needs a heading (the vehicle's yaw), got NaN")
+            found = (self._motion_to_point(states[v], state, int(v)) for v in ids.tolist())
+            return [motion for motion in found if motion is not None]
+        targets = states[ids]
+        own = np.broadcast_to(np.asarray(state, dtype=np.float64), targets.shape)
+        tails, heads = (own, targets) if outgoing else (targets, own)
+        horizontal, poses = dubins_samples(
+            tails[:, [0, 1, 3]], heads[:, [0, 1, 3]], radius=self._radius, spacing=self._spacing
+        )
         out: list[Motion] = []
-        for v in np.asarray(vertices, dtype=np.int64).tolist():
-            motion = self._motion(state, states[v], int(v), outgoing=outgoing, free_heading=free_heading)
+        for i, v in enumerate(ids.tolist()):
+            motion = self._sampled(tails[i], heads[i], int(v), float(horizontal[i]), poses[i], keep_heading=True)
             if motion is not None:
                 out.append(motion)
         return out
@@ -265,30 +276,41 @@ class DubinsConnector:
         z = tail[:, None, 2] + frac[None, :] * dz[:, None]
         return np.hypot(horizontal, dz), np.concatenate([xy, z[..., None]], axis=-1)
 
-    def _motion(
-        self, state: FloatArray, vertex_state: FloatArray, vertex: int, *, outgoing: bool, free_heading: bool
-    ) -> Motion | None:
-        """The sampled motion between ``state`` and one vertex (None if its sampled end misses, never expected)."""
-        tail, head = (state, vertex_state) if outgoing else (vertex_state, state)
-        path: DubinsPath | None
-        if free_heading:
-            path = path_to_point((tail[0], tail[1], tail[3]), (head[0], head[1]), radius=self._radius)
-        else:
-            path = dubins_path((tail[0], tail[1], tail[3]), (head[0], head[1], head[3]), radius=self._radius)
+    def _motion_to_point(self, vertex_state: FloatArray, state: FloatArray, vertex: int) -> Motion | None:
+        """The motion from a vertex to a goal ``state`` whose arrival heading is free (None: none exists)."""
+        tail, head = vertex_state, state
+        path = path_to_point((tail[0], tail[1], tail[3]), (head[0], head[1]), radius=self._radius)
         if path is None:
             return None
-        horizontal = path.length
+        n = max(2, math.ceil(path.length / self._spacing - 1e-9) + 1)
+        pose = path.sample(np.linspace(0.0, path.length, n))
+        return self._sampled(tail, head, vertex, path.length, pose, keep_heading=False)
+
+    def _sampled(
+        self,
+        tail: FloatArray,
+        head: FloatArray,
+        vertex: int,
+        horizontal: float,
+        pose: FloatArray,
+        *,
+        keep_heading: bool,
+    ) -> Motion | None:
+        """The motion from its (K, 3) planar ``pose`` samples, climbing evenly from ``tail`` to ``head``.
+
+        None when the sampled end misses the head (never expected: the paths are verified). The first and
+        last samples are the two states themselves; the last keeps the head's heading unless it is free.
+        """
+        n = pose.shape[0]
         dz = float(head[2] - tail[2])
-        n = max(2, math.ceil(horizontal / self._spacing - 1e-9) + 1)
         s = np.linspace(0.0, horizontal, n)
-        pose = path.sample(s)
         climb = dz * s / horizontal if horizontal > 0 else np.zeros(n)
         samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + climb, pose[:, 2]])
         if math.hypot(samples[-1, 0] - head[0], samples[-1, 1] - head[1]) > END_TOLERANCE * max(1.0, self._radius):
             return None
         samples[0, :3] = tail[:3]
         samples[-1, :3] = head[:3]
-        if not free_heading or outgoing:
+        if keep_heading:
             samples[-1, 3] = head[3]
         samples[0, 3] = tail[3]
         return Motion(vertex, samples, math.hypot(horizontal, dz))
