@@ -41,3 +41,21 @@ def test_a_mask_of_another_size_is_refused() -> None:
     columns = WorldColumns(np.ones((70, 3), dtype=bool))
     with pytest.raises(ProblemError, match="70 worlds"):
         columns.free_counts(np.ones(200, dtype=bool))
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(1, 150), e=st.integers(1, 12), p=st.integers(1, 11), seed=st.integers(0, 2**31))
+def test_at_least_marks_the_worlds_where_enough_of_a_rows_edges_are_free(n: int, e: int, p: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    x = rng.random((n, e)) < rng.random()
+    columns = WorldColumns(x)
+    edges = rng.integers(0, e, size=(9, p))  # repeats count once per occurrence
+    counts = x[:, edges].sum(axis=2).T  # (9, n)
+    for needed in (-1, 0, 1, (p + 1) // 2, p, p + 1):
+        words = columns.at_least(edges, needed)
+        assert words.shape == (9, columns.bits.shape[1])
+        unpacked = np.unpackbits(words.view(np.uint8), axis=1, bitorder="little")
+        assert np.array_equal(unpacked[:, :n].astype(bool), counts >= needed)
+        assert not unpacked[:, n:].any()  # padding stays 0
+    with pytest.raises(ProblemError, match=r"\(M, P\)"):
+        columns.at_least(edges.ravel(), 1)

@@ -10,6 +10,7 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.world_columns import WorldColumns
 from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
 from drd_planner.domains.planar import PlanarChecker
+from drd_planner.exceptions import ProblemError
 from drd_planner.planner import WorldPrior
 from drd_planner.planner.connect import (
     EdgeSampleIndex,
@@ -17,6 +18,7 @@ from drd_planner.planner.connect import (
     connector_for,
     imputed_columns,
     imputed_outcomes,
+    imputed_shares,
 )
 from drd_planner.planner.straight_connector import StraightConnector
 
@@ -186,3 +188,33 @@ def test_imputed_columns_are_the_majority_vote_of_the_motions_samples() -> None:
     assert imputed_columns(index, WorldColumns(worlds), []).shape == (3, 0)
     long = np.linspace([0.0, 0.1], [0.0, 0.9], 50)  # 50 samples voted through 8 evenly spread ones
     assert imputed_columns(index, worlds, [long]).shape == (3, 1)
+
+
+def test_imputed_shares_are_the_imputed_columns_averaged() -> None:
+    from drd_planner.core.graph import ExplicitGraph
+
+    rng = np.random.default_rng(3)
+    side = 6
+    xy = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(-1, 2).astype(float)
+    ids = np.arange(side * side).reshape(side, side)
+    pairs = np.concatenate(
+        [
+            np.column_stack([ids[:, :-1].ravel(), ids[:, 1:].ravel()]),
+            np.column_stack([ids[:-1].ravel(), ids[1:].ravel()]),
+        ]
+    )
+    graph = ExplicitGraph(pairs, np.ones(len(pairs)), side * side, vertex_states=xy)
+    worlds = rng.random((97, len(pairs))) < 0.55
+    index = EdgeSampleIndex(graph, None, position_dims=2)
+    columns = WorldColumns(worlds)
+    for k in (1, 3, 8, 20):
+        ends = rng.uniform(0, side - 1, (40, 2, 2))
+        points = np.linspace(ends[:, 0], ends[:, 1], k, axis=1)  # (40, k, 2)
+        expected = np.average(imputed_columns(index, worlds, list(points)), axis=0)
+        np.testing.assert_array_equal(imputed_shares(index, columns, points), expected)
+        weights = rng.uniform(0.1, 2.0, 97)
+        weighted = np.average(imputed_columns(index, worlds, list(points)), axis=0, weights=weights)
+        np.testing.assert_array_equal(imputed_shares(index, columns, points, weights), weighted)
+    assert imputed_shares(index, columns, np.zeros((0, 4, 2))).shape == (0,)
+    with pytest.raises(ProblemError, match="M, K, D"):
+        imputed_shares(index, columns, np.zeros((4, 2)))

@@ -98,9 +98,10 @@ def test_join_growth_is_only_for_queries_with_off_graph_states(prior: WorldPrior
     planner = Planner(prior, snap_tolerance=1e-6)
     model = planner.query_model(0, int(prior.trees[0].goal))
     assert not model.query.connected
-    assert planner._growth(model) is None
+    assert planner._growth_kind(model) is None
     connected = planner.query_model(START, int(prior.trees[0].goal))
-    assert isinstance(planner._growth(connected), JoinGrowth)
+    assert planner._growth_kind(connected) is JoinGrowth
+    assert isinstance(planner._growth(connected, JoinGrowth), JoinGrowth)
 
 
 def test_joins_go_only_where_the_other_end_can_still_be_reached(prior: WorldPrior) -> None:
@@ -207,3 +208,49 @@ def test_hard_states_of_the_real_scale_prior_plan_within_a_few_hundred_checks(
     joins = [result.motions[int(e)] for e in result.edges if int(e) in result.motions]
     assert joins
     assert all(checker.check_motion(m) for m in joins)
+
+
+class Pocket(JoinWall):
+    """Joins free; every lattice edge out of the ``pocket`` vertices blocked: the first joins lead nowhere."""
+
+    def __init__(self, prior: WorldPrior, pocket: set[int]) -> None:
+        super().__init__(prior, set())
+        self.leaving = {int(e) for e in np.flatnonzero(np.isin(prior.graph.edges[:, 0], sorted(pocket)))}
+
+    def check(self, edge: int) -> bool:
+        return edge not in self.leaving
+
+
+def test_more_joins_begin_before_the_graph_stage_proves_the_first_ones_lead_nowhere(prior: WorldPrior) -> None:
+    goal = int(prior.trees[0].goal)
+    first = _first_joins(Planner(prior, snap_tolerance=1e-6), 16)
+    late = Planner(prior, snap_tolerance=1e-6, growth=GrowthSettings(graph_checks_first=None))
+    early = Planner(prior, snap_tolerance=1e-6, growth=GrowthSettings(graph_checks_first=4))
+    proved, cut = late.plan(START, goal, Pocket(prior, first)), early.plan(START, goal, Pocket(prior, first))
+    for result in (proved, cut):
+        assert result.status is PlanStatus.FOUND, result.reason
+        assert result.stage is PlanStage.GROW
+        known = result.outcomes()
+        assert all(known.get(int(e)) is True for e in result.edges)
+    assert int(cut.edges[0]) in cut.motions
+    assert cut.motions[int(cut.edges[0])][-1, :3].tolist() not in [
+        prior.graph.vertex_states[v, :3].tolist() for v in first
+    ]
+    graph_checks = [c for c in cut.checks if c.stage == "graph"]
+    assert len(graph_checks) <= 4 + 1  # the library's last word aside, the graph stage stopped at 4
+    assert cut.num_checks < proved.num_checks
+
+
+def test_a_graph_stage_cut_short_still_proves_no_path_when_growth_finds_none(prior: WorldPrior) -> None:
+    goal = int(prior.trees[0].goal)
+    first = _first_joins(Planner(prior, snap_tolerance=1e-6), 16)
+    results = []
+    for checks_first in (None, 4):
+        settings = GrowthSettings(max_joins=16, graph_checks_first=checks_first)  # no join beyond the first
+        planner = Planner(prior, snap_tolerance=1e-6, growth=settings)
+        results.append(planner.plan(START, goal, Pocket(prior, first)))
+    proved, cut = results
+    assert proved.status is PlanStatus.NO_PATH
+    assert cut.status is PlanStatus.NO_PATH
+    assert cut.cause == proved.cause
+    assert sorted(c.edge for c in cut.checks if not c.free) == sorted(c.edge for c in proved.checks if not c.free)

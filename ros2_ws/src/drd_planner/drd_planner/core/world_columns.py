@@ -59,6 +59,43 @@ class WorldColumns:
         chosen = self.bits[np.asarray(edges, dtype=np.int64)].view(np.uint8)
         return np.unpackbits(chosen, axis=1, bitorder="little", count=self.num_worlds).astype(bool)
 
+    def at_least(self, edges: npt.ArrayLike, needed: int) -> npt.NDArray[np.uint64]:
+        """(M, W) packed words: per row of the (M, P) ``edges``, the worlds in which ``needed`` or more are free.
+
+        Counted bit-parallel (a ripple-carry adder over bit planes, then a comparison with ``needed``): P x
+        log2(P) word operations per row instead of unpacking P x n outcomes. Padding bits are 0.
+
+        Args:
+            edges: (M, P) edge ids (a row may repeat an edge; each occurrence counts).
+            needed: how many of a row's P edges must be free (an int; <= 0: every world).
+        """
+        ids = np.asarray(edges, dtype=np.int64)
+        if ids.ndim != 2:
+            raise ProblemError(f"edges of shape (M, P) expected, got {ids.shape}")
+        words = self.bits.shape[1]
+        valid = np.zeros(words * 64, dtype=bool)
+        valid[: self.num_worlds] = True
+        full = np.packbits(valid, bitorder="little").view(np.uint64)
+        if needed <= 0:
+            return np.asarray(np.broadcast_to(full, (ids.shape[0], words)).copy(), dtype=np.uint64)
+        if needed > ids.shape[1]:
+            return np.zeros((ids.shape[0], words), dtype=np.uint64)
+        # planes[k]: bit k of each world's count of free edges (a count <= P fits in P.bit_length() bits)
+        planes = [np.zeros((ids.shape[0], words), dtype=np.uint64) for _ in range(ids.shape[1].bit_length())]
+        for column in ids.T:
+            carry = self.bits[column]
+            for k, plane in enumerate(planes):
+                planes[k], carry = plane ^ carry, plane & carry
+        greater = np.zeros((ids.shape[0], words), dtype=np.uint64)
+        equal = np.broadcast_to(full, (ids.shape[0], words)).copy()
+        for k in range(len(planes) - 1, -1, -1):  # from the top bit: count > needed, or equal so far
+            if (needed >> k) & 1:
+                equal &= planes[k]
+            else:
+                greater |= equal & planes[k]
+                equal &= ~planes[k]
+        return np.asarray((greater | equal) & full, dtype=np.uint64)
+
     def free_counts(self, rows: BoolArray) -> IntArray:
         """(E,) int64: in how many of the (n,) ``rows`` worlds each edge is free."""
         mask = pack_rows(rows)

@@ -218,6 +218,37 @@ def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, mo
     return np.asarray(free >= 0.5 * counts, dtype=bool)
 
 
+def imputed_shares(
+    index: EdgeSampleIndex, columns: WorldColumns, points: FloatArray, weights: FloatArray | None = None
+) -> FloatArray:
+    """(M,) the (weighted) share of training worlds in which each of M motions is imputed free.
+
+    The same numbers as ``np.average(imputed_columns(index, columns, list(points)), axis=0, weights=weights)``
+    for motions sampled at the same number of points (K), counted bit-parallel on the packed columns
+    (:meth:`~drd_planner.core.world_columns.WorldColumns.at_least`) instead of through an (M, n) matrix: the
+    ranking of every join of a lattice state (thousands of motions, 2700 worlds) in tens of milliseconds.
+
+    Args:
+        index: points along the prior's graph edges.
+        columns: the training worlds, packed.
+        points: (M, K, D) samples of each motion.
+        weights: (n,) the worlds' weights (None: uniform).
+    """
+    samples = np.asarray(points, dtype=np.float64)
+    if samples.ndim != 3:
+        raise ProblemError(f"motion samples of shape (M, K, D) expected, got {samples.shape}")
+    m, k = samples.shape[0], samples.shape[1]
+    if m == 0:
+        return np.zeros(0)
+    chosen = np.unique(np.linspace(0, k - 1, POINTS_PER_EDGE).round().astype(np.int64))
+    nearest = index.nearest_edges(samples[:, chosen].reshape(-1, samples.shape[2])).reshape(m, chosen.size)
+    free = columns.at_least(nearest, -(-chosen.size // 2))  # free >= 0.5 * count, count an integer
+    if weights is None:
+        return np.asarray(np.bitwise_count(free).sum(axis=1, dtype=np.int64) / columns.num_worlds, dtype=np.float64)
+    rows = np.unpackbits(free.view(np.uint8), axis=1, bitorder="little", count=columns.num_worlds).astype(bool)
+    return np.asarray(np.average(rows.T, axis=0, weights=weights), dtype=np.float64)
+
+
 def _straight(prior: WorldPrior) -> QueryConnector | None:
     from drd_planner.planner.straight_connector import straight_connector
 

@@ -17,7 +17,9 @@ checked free in this plan:
    vertices and edges where the blocked region cuts the graph (:mod:`~drd_planner.planner.roadmap_growth`);
    an off-graph start or goal whose connector ranks more joins (the helicopter) gets more of them
    (:mod:`~drd_planner.planner.join_growth`); each checked lazily, the graph search again, until a path is
-   verified or the growth budget ends.
+   verified or the growth budget ends. More joins begin already when the graph stage has made
+   ``graph_checks_first`` checks (64) without a path; the graph stage's proof is finished after them when they
+   found none.
 
 With ``improve_budget`` a plan then seeks shorter verified paths (:mod:`~drd_planner.planner.anytime`).
 So the planner says "no path" only when the graph has none given the checks made (and growth found none
@@ -355,21 +357,13 @@ class Planner:
     ) -> PlanResult:
         """The graph stage after the library, then roadmap growth: its result, or why no path was proven."""
         t_model, t_begin = times
-        budget = None if limits.max_checks is None else limits.max_checks - len(checks)
-        if budget is not None and budget <= 0:
-            return exhausted_result(model, PlanCause.CHECK_BUDGET, checks, t_model, t_begin)
-        graph_episode = lazy_search(
-            self.prior, model.query, oracle, known, budget=budget, deadline=limits.deadline, stage="graph"
-        )
-        offset = len(checks)
-        checks.extend(dataclasses.replace(c, step=c.step + offset) for c in graph_episode.checks)
-        known.update({c.edge: c.free for c in graph_episode.checks})
-        if graph_episode.success and graph_episode.path_edges is not None:
-            return found_result(model, graph_episode.path_edges, checks, PlanStage.GRAPH, times)
-        if graph_episode.ran_out is not None:
-            return exhausted_result(model, graph_episode.ran_out, checks, t_model, t_begin)
         raw, report = _unwrapped(oracle), None
-        growth = self._growth(model)
+        kind = self._growth_kind(model) if isinstance(raw, MotionOracle) else None
+        first = None if kind is None or not kind.starts_early or self.growth is None else self.growth.graph_checks_first
+        stage = self._graph_stage(model, oracle, known, checks, limits, times, first)
+        if isinstance(stage, PlanResult):
+            return stage
+        growth = None if kind is None else self._growth(model, kind)
         if growth is not None and isinstance(raw, MotionOracle):
             grown = growth.run(
                 raw, known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
@@ -379,13 +373,63 @@ class Planner:
                 return found_result(model, grown.path_edges, checks, PlanStage.GROW, times, report)
             if grown.cause is not None and grown.cause.is_budget:
                 return exhausted_result(model, grown.cause, checks, t_model, t_begin, report)
+        if stage:  # growth began before the graph stage's proof: finish it (every outcome reused)
+            finished = self._graph_stage(model, oracle, known, checks, limits, times, None)
+            if isinstance(finished, PlanResult):
+                return finished
         query = model.query if report is None else report.query
         along = edge_states_of(self.prior, query, getattr(self._connector, "segment", None))
         reason = no_path_reason(query, checks, raw, along, report)
         result = unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
         return dataclasses.replace(result, cause=blocked_end(query, checks))
 
-    def _growth(self, model: QueryModel) -> GraphGrowth | None:
+    def _graph_stage(
+        self,
+        model: QueryModel,
+        oracle: EdgeOracle,
+        known: dict[int, bool],
+        checks: list[CheckRecord],
+        limits: PlanLimits,
+        times: tuple[float, float],
+        first: int | None,
+    ) -> PlanResult | bool:
+        """The lazy search over the query's whole graph, reusing and extending ``known`` and ``checks``.
+
+        Args:
+            model: the query's model (its graph is searched).
+            oracle: the plan's oracle.
+            known: every outcome of the plan so far (edge id -> free), extended.
+            checks: the plan's check log, extended.
+            limits: the plan's seed and budgets.
+            times: when the query's model was ready and when the plan began (``time.perf_counter()``).
+            first: checks at most before the stage stops for growth to begin (None: until it ends).
+
+        Returns:
+            The plan's result when it found a path or one of the plan's budgets ended; True when it stopped
+            after ``first`` checks without either; False when it proved that the graph has no free path.
+        """
+        t_model, t_begin = times
+        budget = None if limits.max_checks is None else limits.max_checks - len(checks)
+        if budget is not None and budget <= 0:
+            return exhausted_result(model, PlanCause.CHECK_BUDGET, checks, t_model, t_begin)
+        stage_budget = budget if first is None else (first if budget is None else min(first, budget))
+        edges = model.query.graph.num_edges  # outcomes of a growth's new edges (ids from E on) are not this graph's
+        usable = known if all(e < edges for e in known) else {e: f for e, f in known.items() if e < edges}
+        episode = lazy_search(
+            self.prior, model.query, oracle, usable, budget=stage_budget, deadline=limits.deadline, stage="graph"
+        )
+        offset = len(checks)
+        checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
+        known.update({c.edge: c.free for c in episode.checks})
+        if episode.success and episode.path_edges is not None:
+            return found_result(model, episode.path_edges, checks, PlanStage.GRAPH, times)
+        if episode.ran_out is PlanCause.CHECK_BUDGET and stage_budget != budget:
+            return True
+        if episode.ran_out is not None:
+            return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
+        return False
+
+    def _growth_kind(self, model: QueryModel) -> type[GraphGrowth] | None:
         """How the query's graph grows when it has no free path (None: it does not, or growth is off).
 
         A domain that samples valid states grows its roadmap (the arm); a connector that can join a state to
@@ -393,15 +437,22 @@ class Planner:
         """
         if self.growth is None or model.query.graph.vertex_states is None:
             return None
-        sampler = sampler_of(self._connector)
-        if sampler is not None and isinstance(self._connector, SegmentMaker):
-            return RoadmapGrowth(
-                self.prior, model.query, self._connector, sampler, self._models.sample_index(), self.growth
-            )
-        joins = more_joins_of(self._connector)
-        if joins is not None and model.query.connected:
-            index = self._models.sample_index()
-            return JoinGrowth(self.prior, model.query, joins, index, self.growth, self._models.columns)
+        if sampler_of(self._connector) is not None and isinstance(self._connector, SegmentMaker):
+            return RoadmapGrowth
+        if more_joins_of(self._connector) is not None and model.query.connected:
+            return JoinGrowth
+        return None
+
+    def _growth(self, model: QueryModel, kind: type[GraphGrowth]) -> GraphGrowth | None:
+        """The growth of ``kind`` (:meth:`_growth_kind`) for the query."""
+        sampler, joins, settings = sampler_of(self._connector), more_joins_of(self._connector), self.growth
+        if settings is None:
+            return None
+        index = self._models.sample_index()
+        if kind is RoadmapGrowth and sampler is not None and isinstance(self._connector, SegmentMaker):
+            return RoadmapGrowth(self.prior, model.query, self._connector, sampler, index, settings)
+        if kind is JoinGrowth and joins is not None:
+            return JoinGrowth(self.prior, model.query, joins, index, settings, self._models.columns)
         return None
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:

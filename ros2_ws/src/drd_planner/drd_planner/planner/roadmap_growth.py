@@ -29,6 +29,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -104,6 +105,10 @@ class GrowthSettings:
             already has, at least this many, in the order of their weight under the prior (a vectorised sketch
             of each motion, :func:`~drd_planner.planner.join_growth.prior_ranking`); None: every join left at
             once (a flyable motion to each lattice vertex is built and imputed: seconds on ``heli_lines``).
+        graph_checks_first: checks the graph stage makes before a growth that may begin early (more joins of
+            an off-graph start or goal, :attr:`GraphGrowth.starts_early`) begins, when the graph stage has
+            not verified a path by then (count; None: the graph stage first proves that the graph has no free
+            path, which can take hundreds of checks when every path through the first joins is blocked).
     """
 
     max_rounds: int = 40
@@ -120,6 +125,7 @@ class GrowthSettings:
     bridges: int = 8
     max_joins: int | None = None
     join_batch: int | None = 64
+    graph_checks_first: int | None = 64
 
     def __post_init__(self) -> None:
         counts = (self.max_rounds, self.max_vertices, self.samples_per_round, self.neighbours)
@@ -130,9 +136,13 @@ class GrowthSettings:
             or self.bridges < 0
             or (self.max_joins is not None and self.max_joins < 1)
             or (self.join_batch is not None and self.join_batch < 1)
+            or (self.graph_checks_first is not None and self.graph_checks_first < 1)
             or (self.max_checks is not None and self.max_checks < 1)
         ):
-            raise ProblemError(f"growth counts must be at least 1, got {counts} and max_checks {self.max_checks}")
+            raise ProblemError(
+                f"growth counts must be at least 1, got {counts}, max_checks {self.max_checks}, max_joins "
+                f"{self.max_joins}, join_batch {self.join_batch} and graph_checks_first {self.graph_checks_first}"
+            )
         if self.seconds is not None and not (math.isfinite(self.seconds) and self.seconds > 0):
             raise ProblemError(f"growth seconds must be positive, got {self.seconds}")
         if min(shares) < 0 or sum(shares) > 1 + 1e-9:
@@ -223,6 +233,12 @@ class GraphGrowth(ABC):
         index: points along the prior's graph edges (for the imputation).
         settings: the growth's budget (and a subclass's shape).
     """
+
+    #: Whether growth may begin before the graph stage has proved that the query's graph has no free path
+    #: (after :attr:`GrowthSettings.graph_checks_first` checks); the planner then finishes that proof after
+    #: a growth that found no path. A growth whose new parts are placed by where the blocked region is known
+    #: to cut the graph (a roadmap's) waits for the proof.
+    starts_early: ClassVar[bool] = False
 
     def __init__(
         self,
