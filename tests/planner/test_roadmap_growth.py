@@ -132,9 +132,15 @@ def test_growth_settings_are_checked() -> None:
         {"reach_fraction": 2.0},
         {"bridges": -1},
         {"max_checks": 0},
+        {"max_joins": 0},
+        {"join_batch": 0},
+        {"graph_checks_first": 0},
     ):
         with pytest.raises(ProblemError):
             GrowthSettings(**bad)
+    with pytest.raises(ProblemError, match="graph_checks_first 0"):
+        GrowthSettings(graph_checks_first=0)
+    assert GrowthSettings(graph_checks_first=None).graph_checks_first is None
 
 
 def test_a_domain_without_a_sampler_does_not_grow() -> None:

@@ -8,9 +8,10 @@ after round (the loop of :class:`~drd_planner.planner.roadmap_growth.GraphGrowth
 their next joins (as many again as they have, at least ``join_batch``: 64, 128, 256, ...), each new motion an
 ordinary lazy edge with its imputed prior, and the lazy graph search runs again reusing every outcome. The
 rounds begin once the graph stage has made ``graph_checks_first`` checks (64) without a verified path, not only
-after it has proved that no path through the first joins is free: on ``heli_lines`` a start 150 m off the
-lattice whose first joins lead into a part of the lattice walled off from the goal took 180-3500 checks
-(0.7-10 s) to that proof, while a join further down the ranking (often straight to the goal) was free.
+after it has proved that no path through the first joins is free: on ``heli_lines`` starts 150 m off the
+lattice whose first joins lead into parts of the lattice walled off from the goal made 171-1569 checks (0.6-3.3 s)
+before more joins began, while a join further down the ranking (often straight to the goal) was free; with the
+rounds begun after 64 checks most of them needed 67-83.
 
 Which joins come next is decided by the prior, not by length alone: when the connector can sketch its motions
 in bulk (:class:`SketchedJoins`: a few points along each, vectorised), every candidate join is imputed from the
