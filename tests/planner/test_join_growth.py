@@ -64,9 +64,10 @@ def _first_joins(planner: Planner, count: int) -> set[int]:
 def test_blocked_first_joins_grow_to_a_free_one(prior: WorldPrior) -> None:
     planner = Planner(prior, snap_tolerance=1e-6)
     assert more_joins_of(planner.connector) is not None
-    wall = JoinWall(prior, _first_joins(planner, 40))  # more than the first 16 and the next 16
-    result = planner.plan(START, int(prior.trees[0].goal), wall)
-    # 16 joins, then 64 more by the prior
+    goal = int(prior.trees[0].goal)
+    wall = JoinWall(prior, _first_joins(planner, 40) | {goal})  # more than the first 16, and the one to the goal
+    result = planner.plan(START, goal, wall)
+    # 16 joins and the one straight to the goal, then 64 more by the prior
     assert result.status is PlanStatus.FOUND
     assert result.stage is PlanStage.GROW
     assert result.growth is not None
@@ -89,7 +90,7 @@ def test_when_every_join_is_blocked_the_reason_says_what_was_tried(prior: WorldP
     assert result.status is PlanStatus.NO_PATH
     assert result.growth is not None
     assert result.growth.stop == "exhausted"
-    assert result.growth.edges_added == 64 - 16
+    assert result.growth.edges_added == 64 - 17  # beside the 16 nearest joins, the one straight to the goal
     assert "blocked" in result.reason
     assert "64" in result.reason
 
@@ -142,7 +143,7 @@ def test_a_goal_without_heading_grows_its_joins_too(prior: WorldPrior) -> None:
     connector = planner.connector
     assert isinstance(connector, DubinsConnector)
     first = set(connector.ranked(np.append(goal, np.nan), prior.graph, outgoing=False)[:20].tolist())
-    result = planner.plan(0, goal, JoinWall(prior, first))
+    result = planner.plan(0, goal, JoinWall(prior, first | {0}))  # nor the motion straight from the start
     assert result.status is PlanStatus.FOUND
     assert result.stage is PlanStage.GROW
     last = result.motions[int(result.edges[-1])]
@@ -211,10 +212,10 @@ def test_hard_states_of_the_real_scale_prior_plan_within_a_few_hundred_checks(
 
 
 class Pocket(JoinWall):
-    """Joins free; every lattice edge out of the ``pocket`` vertices blocked: the first joins lead nowhere."""
+    """Joins free but the one straight to the goal; every edge out of the ``pocket`` vertices blocked."""
 
     def __init__(self, prior: WorldPrior, pocket: set[int]) -> None:
-        super().__init__(prior, set())
+        super().__init__(prior, {int(prior.trees[0].goal)})
         self.leaving = {int(e) for e in np.flatnonzero(np.isin(prior.graph.edges[:, 0], sorted(pocket)))}
 
     def check(self, edge: int) -> bool:
@@ -254,3 +255,40 @@ def test_a_graph_stage_cut_short_still_proves_no_path_when_growth_finds_none(pri
     assert cut.status is PlanStatus.NO_PATH
     assert cut.cause == proved.cause
     assert sorted(c.edge for c in cut.checks if not c.free) == sorted(c.edge for c in proved.checks if not c.free)
+
+
+class OnlyMotions(JoinWall):
+    """Every lattice edge blocked; a motion is blocked when it joins a ``blocked`` vertex."""
+
+    def check(self, edge: int) -> bool:
+        return False
+
+
+def test_an_off_graph_end_is_also_joined_straight_to_the_other_end(prior: WorldPrior) -> None:
+    planner = Planner(prior, snap_tolerance=1e-6, growth=None)
+    goal = int(prior.trees[0].goal)
+    query = planner.query_graph(START, goal)
+    assert query.start_joins is not None
+    nearest = _first_joins(planner, 16)
+    assert goal not in nearest
+    assert set(query.start_joins.vertices.tolist()) == nearest | {goal}  # once: the 16 nearest and the goal
+    result = planner.plan(START, goal, OnlyMotions(prior, set()))  # no lattice edge is free: only that motion
+    assert result.status is PlanStatus.FOUND
+    assert result.num_checks == 1
+    (edge,) = result.edges.tolist()
+    motion = result.motions[int(edge)]
+    assert np.allclose(motion[0], START)
+    assert prior.graph.vertex_states is not None
+    assert np.allclose(motion[-1], prior.graph.vertex_states[goal])
+    # an off-graph goal from a start vertex: the same, the other way
+    start = int(query.start_joins.vertices[0])
+    state = prior.graph.vertex_states[goal] + np.array([-30.0, 20.0, 0.0, 0.0])
+    back = planner.query_graph(start, state)
+    assert back.goal_joins is not None
+    assert start in back.goal_joins.vertices.tolist()
+    # a vertex no flyable motion reaches (a climb steeper than the gradient) gets no straight join
+    steep = START.copy()
+    steep[2] = prior.graph.vertex_states[goal, 2] + 5000.0
+    connector = planner.connector
+    assert isinstance(connector, DubinsConnector)
+    assert connector.motions_to(steep, prior.graph, np.array([goal]), outgoing=True) == []

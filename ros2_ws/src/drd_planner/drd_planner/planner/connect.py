@@ -7,7 +7,10 @@ edges, the domain's own kind of motion (:data:`CONNECTORS`, by domain name):
 - helicopter lattice ((x, y, z, heading) states): a Dubins curve of the lattice's turning radius in the
   plane with the altitude changing linearly along it.
 
-A state with no vertex within the connector's reach is refused.
+A state with no vertex within the connector's reach is refused. A connector that can join a state to any
+vertex it names (:class:`VertexJoins`: the helicopter's) also joins an off-graph start straight to a goal
+vertex, and a start vertex straight to an off-graph goal, when such a motion exists: for a robot a few metres
+off the lattice with its goal in reach, that one motion is often the whole plan.
 
 **Free probability of a new edge.** The training worlds never checked it, so its outcome in each training
 world is imputed from the graph edges it overlaps: every sample along the motion is matched to the
@@ -124,6 +127,20 @@ class QueryConnector(Protocol):
 
     def connect(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> list[Motion]:
         """Motions from ``state`` to vertices (``outgoing``) or from vertices to ``state``; [] if none."""
+        ...
+
+
+@runtime_checkable
+class VertexJoins(Protocol):
+    """A connector that joins a state to any vertices it is given (not only its nearest ones)."""
+
+    def motions_to(
+        self, state: FloatArray, graph: ExplicitGraph, vertices: IntArray, *, outgoing: bool
+    ) -> list[Motion]:
+        """The motions joining ``state`` and those of ``vertices`` it can join (in their order).
+
+        From the state if ``outgoing``, else into it; a vertex no motion of the domain joins is left out.
+        """
         ...
 
 

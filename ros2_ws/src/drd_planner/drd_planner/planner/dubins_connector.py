@@ -182,8 +182,10 @@ class DubinsConnector:
     ) -> list[Motion]:
         """The motions joining ``state`` and each of ``vertices`` (in that order; from the state if ``outgoing``).
 
-        :meth:`connect` joins the first ``neighbours`` of :meth:`ranked`; the planner asks for more of the ranking
-        when they do not suffice (:mod:`~drd_planner.planner.join_growth`).
+        A vertex no flyable motion joins (a climb steeper than the gradient, a goal inside both turning circles
+        of a free-heading path) is left out. :meth:`connect` joins the first ``neighbours`` of :meth:`ranked`;
+        the planner asks for more of the ranking when they do not suffice
+        (:mod:`~drd_planner.planner.join_growth`) and for the motion straight to the query's other end.
         """
         states = vertex_states_of(graph)
         ids = np.asarray(vertices, dtype=np.int64)
@@ -298,11 +300,14 @@ class DubinsConnector:
     ) -> Motion | None:
         """The motion from its (K, 3) planar ``pose`` samples, climbing evenly from ``tail`` to ``head``.
 
-        None when the sampled end misses the head (never expected: the paths are verified). The first and
-        last samples are the two states themselves; the last keeps the head's heading unless it is free.
+        None when the climb is steeper than the climb gradient allows (as :meth:`ranked` decides), or when the
+        sampled end misses the head (never expected: the paths are verified). The first and last samples are
+        the two states themselves; the last keeps the head's heading unless it is free.
         """
         n = pose.shape[0]
         dz = float(head[2] - tail[2])
+        if abs(dz) > self._climb * horizontal + 1e-9:
+            return None
         s = np.linspace(0.0, horizontal, n)
         climb = dz * s / horizontal if horizontal > 0 else np.zeros(n)
         samples = np.column_stack([pose[:, 0], pose[:, 1], tail[2] + climb, pose[:, 2]])

@@ -44,8 +44,8 @@ from drd_planner.core.world_columns import WorldColumns
 from drd_planner.planner.connect import (
     POINTS_PER_EDGE,
     EdgeSampleIndex,
-    Motion,
     MotionOracle,
+    VertexJoins,
     imputed_columns,
     imputed_shares,
 )
@@ -58,7 +58,7 @@ __all__ = ["JoinGrowth", "MoreJoins", "SketchedJoins", "more_joins_of", "prior_r
 
 
 @runtime_checkable
-class MoreJoins(Protocol):
+class MoreJoins(VertexJoins, Protocol):
     """A connector that ranks every vertex it could join a state to, and joins any of them."""
 
     @property
@@ -68,12 +68,6 @@ class MoreJoins(Protocol):
 
     def ranked(self, state: FloatArray, graph: ExplicitGraph, *, outgoing: bool) -> IntArray:
         """(M,) the vertices a motion joins to ``state``, best first."""
-        ...
-
-    def motions_to(
-        self, state: FloatArray, graph: ExplicitGraph, vertices: IntArray, *, outgoing: bool
-    ) -> list[Motion]:
-        """The motions joining ``state`` and each of ``vertices``."""
         ...
 
 

@@ -11,7 +11,14 @@ from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.status import PlanCause
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.planner.connect import EdgeSampleIndex, Motion, MotionOracle, QueryConnector, imputed_columns
+from drd_planner.planner.connect import (
+    EdgeSampleIndex,
+    Motion,
+    MotionOracle,
+    QueryConnector,
+    VertexJoins,
+    imputed_columns,
+)
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.query_worlds import QueryWorlds
@@ -84,6 +91,10 @@ def connected_query(
 ) -> QueryGraph:
     """Join the off-graph start and/or goal state to the graph with the connector's motions.
 
+    With a connector that joins any vertex (:class:`~drd_planner.planner.connect.VertexJoins`), an off-graph
+    state whose other end is a vertex is also joined straight to that vertex when a motion can (once: not
+    again when it is among the state's nearest joins).
+
     Raises:
         QueryError: no vertex within the connector's reach of a state.
     """
@@ -101,6 +112,10 @@ def connected_query(
             ends[label] = value
             continue
         found = connector.connect(value, graph, outgoing=label == "start")
+        other = goal if label == "start" else start
+        if isinstance(other, int) and isinstance(connector, VertexJoins) and other not in {m.vertex for m in found}:
+            # the motion straight to (from) the query's other end: often the whole plan of a robot off the graph
+            found = found + connector.motions_to(value, graph, np.array([other]), outgoing=label == "start")
         if not found:
             raise QueryError(
                 f"{label} state {np.round(value, 4).tolist()} has no graph vertex within the connection reach "
