@@ -33,6 +33,7 @@ def main(args: list[str] | None = None) -> int:
     signal shut rclpy down while the node was being made.
     """
     rclpy.init(args=args)
+    executor: SingleThreadedExecutor | None = None
     node: PlannerNode | None = None
     try:
         executor = SingleThreadedExecutor()
@@ -42,14 +43,14 @@ def main(args: list[str] | None = None) -> int:
         if not ok():
             # rclpy's own signal handler shuts the context down before Python's handler runs: making the node
             # or its executor on that context then fails (an RCLError, rclpy's NotInitializedException, ...).
-            # That is the end a signal asked for, not an error.
-            if node is not None:
-                node.destroy_node()
+            # That is the end a signal asked for, not an error; what was made goes with the process.
             return 130
         if node is not None or not isinstance(exc, (ParameterException, ValueError, TypeError)):
             raise
         # an override outside its range or type
         print(f"planner_node: error: {shorten(str(exc))}", file=sys.stderr)
+        if executor is not None:
+            executor.shutdown()
         try_shutdown()
         return 2
     try:
