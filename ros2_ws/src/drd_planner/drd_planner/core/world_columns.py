@@ -73,9 +73,7 @@ class WorldColumns:
         if ids.ndim != 2:
             raise ProblemError(f"edges of shape (M, P) expected, got {ids.shape}")
         words = self.bits.shape[1]
-        valid = np.zeros(words * 64, dtype=bool)
-        valid[: self.num_worlds] = True
-        full = np.packbits(valid, bitorder="little").view(np.uint64)
+        full = pack_rows(np.ones(self.num_worlds, dtype=bool))
         if needed <= 0:
             return np.asarray(np.broadcast_to(full, (ids.shape[0], words)).copy(), dtype=np.uint64)
         if needed > ids.shape[1]:

@@ -209,6 +209,11 @@ def imputed_outcomes(index: EdgeSampleIndex, worlds: BoolArray, states: FloatArr
     return np.asarray(worlds[:, nearest].mean(axis=1) >= 0.5, dtype=bool)
 
 
+def _voting_samples(count: int) -> IntArray:
+    """(<= POINTS_PER_EDGE,) the indices of the evenly spread samples, of a motion's ``count``, that vote."""
+    return np.asarray(np.unique(np.linspace(0, count - 1, POINTS_PER_EDGE).round().astype(np.int64)), dtype=np.int64)
+
+
 def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, motions: list[FloatArray]) -> BoolArray:
     """(n, M) imputed outcomes of M motions in the n training worlds, all motions' samples matched at once.
 
@@ -220,7 +225,7 @@ def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, mo
     if not motions:
         n = worlds.num_worlds if isinstance(worlds, WorldColumns) else worlds.shape[0]
         return np.zeros((n, 0), dtype=bool)
-    points = [m[np.unique(np.linspace(0, m.shape[0] - 1, POINTS_PER_EDGE).round().astype(np.int64))] for m in motions]
+    points = [m[_voting_samples(m.shape[0])] for m in motions]
     counts = np.array([m.shape[0] for m in points])
     nearest = index.nearest_edges(np.concatenate(points))
     # Per motion, the number of its samples whose nearest edge is free in each world: a sparse (M, U) count
@@ -257,7 +262,7 @@ def imputed_shares(
     m, k = samples.shape[0], samples.shape[1]
     if m == 0:
         return np.zeros(0)
-    chosen = np.unique(np.linspace(0, k - 1, POINTS_PER_EDGE).round().astype(np.int64))
+    chosen = _voting_samples(k)
     nearest = index.nearest_edges(samples[:, chosen].reshape(-1, samples.shape[2])).reshape(m, chosen.size)
     free = columns.at_least(nearest, -(-chosen.size // 2))  # free >= 0.5 * count, count an integer
     if weights is None:
