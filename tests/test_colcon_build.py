@@ -170,7 +170,19 @@ ROSDEP_KEY = {
     "trimesh": "python3-trimesh-pip",
 }
 #: Imports without a rosdep key: setup.py's install_requires / extras (pip; the Docker image's venv).
-PIP_ONLY = {"fcl", "rosbags", "yourdfpy", "dask", "distributed", "ompl", "rasterio", "pyproj", "shapely", "osmium"}
+PIP_ONLY = {
+    "fcl",
+    "rosbags",
+    "yourdfpy",
+    "dask",
+    "distributed",
+    "ompl",
+    "rasterio",
+    "pyproj",
+    "shapely",
+    "osmium",
+    "threadpoolctl",
+}
 
 
 def _imports(folder: Path) -> set[str]:

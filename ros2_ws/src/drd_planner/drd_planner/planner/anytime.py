@@ -419,3 +419,16 @@ class _Improvement:
             improvements=tuple(self.found),
             improve_stop=stop,
         )
+
+
+def check_budgets(max_checks: int | None, time_budget_s: float | None) -> None:
+    """ProblemError for a plan budget that is not positive (None: no budget of that kind).
+
+    Args:
+        max_checks: cap on a plan's checks (count).
+        time_budget_s: cap on a plan's time (s).
+    """
+    if max_checks is not None and max_checks < 1:
+        raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
+    if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
+        raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")

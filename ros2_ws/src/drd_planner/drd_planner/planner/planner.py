@@ -34,8 +34,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from drd_planner.arrays import FloatArray
 from drd_planner.core.episode import CheckRecord, EdgeOracle, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
@@ -45,7 +43,8 @@ from drd_planner.core.region_rule import check_region_rule
 from drd_planner.core.status import PlanCause
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
-from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, improve_path
+from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, check_budgets, improve_path
+from drd_planner.planner.blas_threads import one_blas_thread
 from drd_planner.planner.connect import MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.growth_samples import SegmentMaker
@@ -188,6 +187,7 @@ class Planner:
         """
         self._models.forget_queries()
 
+    @one_blas_thread
     def query_graph(self, start: Endpoint, goal: Endpoint) -> QueryGraph:
         """The graph a query plans over, without its library or imputed training outcomes.
 
@@ -238,6 +238,7 @@ class Planner:
             )
         return self._connector
 
+    @one_blas_thread
     def plan(
         self,
         start: Endpoint,
@@ -484,16 +485,3 @@ def _check_plan_arguments(policy: str, max_checks: int | None, time_budget_s: fl
     if policy not in PLAN_POLICIES:
         raise ProblemError(f"unknown planning policy {policy!r}; known: {', '.join(PLAN_POLICIES)}")
     check_budgets(max_checks, time_budget_s)
-
-
-def check_budgets(max_checks: int | None, time_budget_s: float | None) -> None:
-    """ProblemError for a plan budget that is not positive (None: no budget of that kind).
-
-    Args:
-        max_checks: cap on a plan's checks (count).
-        time_budget_s: cap on a plan's time (s).
-    """
-    if max_checks is not None and max_checks < 1:
-        raise ProblemError(f"max_checks must be at least 1, got {max_checks}")
-    if time_budget_s is not None and not (np.isfinite(time_budget_s) and time_budget_s > 0):
-        raise ProblemError(f"time_budget_s must be a positive number of seconds, got {time_budget_s}")

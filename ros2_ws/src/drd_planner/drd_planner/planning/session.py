@@ -37,9 +37,9 @@ from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.status import PlanStatus
 from drd_planner.exceptions import PlanningError, UnverifiedPathError
 from drd_planner.geometry.robot import RobotModel
-from drd_planner.planner.anytime import ImproveBudget, as_improve_budget
+from drd_planner.planner.anytime import ImproveBudget, as_improve_budget, check_budgets
 from drd_planner.planner.endpoints import Endpoint
-from drd_planner.planner.planner import Planner, check_budgets
+from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanResult as PlannerResult
 from drd_planner.planning.cancel import Cancel
