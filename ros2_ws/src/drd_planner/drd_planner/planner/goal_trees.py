@@ -327,6 +327,14 @@ class SearchWorlds:
         table, counts = tree.walk_table(np.where(reachable, start.vertices[choice], tree.goal), via)
         return GoalWalks(table, np.where(reachable, counts, 0), choice)
 
+    def union_walk(self, goal: int, start: int) -> IntArray:
+        """The shortest path from ``start`` to ``goal`` over the arcs free in any search world, as vertices.
+
+        Start first, goal last; empty when no search world reaches the goal from ``start``. The goal's union tree
+        is kept with its reverse trees.
+        """
+        return self._kept(int(goal)).union.walk(int(start))
+
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()

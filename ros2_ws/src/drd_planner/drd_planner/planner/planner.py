@@ -4,6 +4,10 @@ A plan runs in up to two stages, all checks going through the one episode runner
 (:func:`~drd_planner.core.episode.run_episode`), which returns a path only when every edge of it was
 checked free in this plan:
 
+0. **the probe**, on a new query between graph vertices whose online stage is BiSECt: its union path (the
+   shortest over the edges free in any training world), checked first when the training worlds say it is free
+   with probability at least ``probe_probability`` (one half); the library is built only if an edge of it is
+   blocked, and the library stage then knows that outcome (:mod:`~drd_planner.planner.probe`).
 1. **the library stage**: the query's path library with a policy (default ``direct_bisect``: the
    DiRECt tree, then BiSECt). A query with a precomputed tree uses that tree and its library unchanged;
    any other query gets a library built online from the prior's training worlds
@@ -37,7 +41,6 @@ from typing import Any
 from drd_planner.arrays import FloatArray
 from drd_planner.core.episode import CheckRecord, EdgeOracle, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
-from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
 from drd_planner.core.status import PlanCause
@@ -51,6 +54,7 @@ from drd_planner.planner.growth_samples import SegmentMaker
 from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
 from drd_planner.planner.no_path import blocked_end, edge_states_of, no_path_reason
 from drd_planner.planner.prior import LeafSetting, WorldPrior
+from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, PROBE_POLICIES, check_probe_probability, probe_episode
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.query_models import DEFAULT_CACHE_SIZE, QueryModels
@@ -92,6 +96,8 @@ class Planner:
         connect_states: False refuses off-graph states (no connector).
         growth: how far the graph grows when it has no free path (None: never); only with a connector that
             has a sampler of valid states (the arm's) and an oracle that checks motions.
+        probe_probability: a new vertex query first checks its union path when that is free with at least this
+            probability over the training worlds (:mod:`~drd_planner.planner.probe`); None: never.
     """
 
     def __init__(
@@ -104,12 +110,14 @@ class Planner:
         connector: QueryConnector | None = None,
         connect_states: bool = True,
         growth: GrowthSettings | None = DEFAULT_GROWTH,
+        probe_probability: float | None = DEFAULT_PROBE_PROBABILITY,
     ) -> None:
         self.prior = prior
         self._connector = (connector or connector_for(prior)) if connect_states else None
         free = getattr(self._connector, "free_goal_dims", ())
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
-        self._models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
+        models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
+        self._models, models.probe_probability = models, check_probe_probability(probe_probability)
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
 
@@ -210,14 +218,7 @@ class Planner:
         worlds = 0 if prior.worlds is None else int(prior.worlds.nbytes)
         graph = int(prior.graph.edges.nbytes + prior.graph.lengths.nbytes)
         trees = sum(int(qt.tree.free_fraction.nbytes + qt.tree.edge.nbytes * 6) for qt in prior.trees)
-        libraries = 0
-        for model in self._models.cached_models():
-            if model.library is not None:
-                libraries += sum(int(p.nbytes) * 2 for p in model.library.path_edges)
-                libraries += int(model.library.incidence.data.nbytes) * 3
-            if isinstance(model.tree, LazyDirectTree):
-                libraries += model.tree.num_worlds * (model.library.num_paths if model.library else 0) * 8
-        return {"worlds": worlds, "graph": graph, "trees": trees, "query_cache": libraries}
+        return {"worlds": worlds, "graph": graph, "trees": trees, "query_cache": self._models.cached_bytes()}
 
     def query_model(self, start: int | FloatArray, goal: int | FloatArray) -> QueryModel:
         """The library and tree of the query (from the cache, a precomputed tree, or built now).
@@ -308,17 +309,26 @@ class Planner:
         t_model, t_begin = times
         checks: list[CheckRecord] = []
         known: dict[int, bool] = {}
+        costs, deadline = model.query.edge_costs, limits.deadline
+        if model.probe is not None and policy in PROBE_POLICIES:
+            probed = probe_episode(model.probe, costs, oracle, max_checks=limits.max_checks, deadline=deadline)
+            checks.extend(probed.checks)
+            known.update({c.edge: c.free for c in probed.checks})
+            if probed.success and probed.path_edges is not None:
+                return found_result(model, probed.path_edges, checks, PlanStage.PROBE, times)
+            if probed.ran_out is not None:
+                return exhausted_result(model, probed.ran_out, checks, t_model, t_begin)
+        model = self._models.with_library(model)  # a blocked probe (or another policy): the library now
         if model.library is not None:
             lib_policy = POLICIES[policy](self._context(model, policy, limits.seed))
+            for edge, free in known.items():  # the probe's outcomes
+                lib_policy.observe(edge, free)
+            budget = None if limits.max_checks is None else limits.max_checks - len(checks)
             episode = run_episode(
-                model.library,
-                model.query.edge_costs,
-                lib_policy,
-                oracle,
-                max_checks=limits.max_checks,
-                deadline=limits.deadline,
+                model.library, costs, lib_policy, oracle, max_checks=budget, deadline=deadline, known=known
             )
-            checks.extend(episode.checks)
+            offset = len(checks)
+            checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
             known.update({c.edge: c.free for c in episode.checks})
             if episode.success and episode.path_edges is not None:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)

@@ -8,6 +8,7 @@ from drd_planner.arrays import FloatArray
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.tree import TreeNodes
 from drd_planner.planner.prior import QueryTree
+from drd_planner.planner.probe import Probe
 from drd_planner.planner.query_graph import QueryGraph
 
 __all__ = ["QueryModel"]
@@ -20,13 +21,14 @@ class QueryModel:
     Attributes:
         query: the graph, worlds and costs it plans over (the prior's, or with motions to off-graph states).
         library: its path library, or None when no training world has a free path (then the graph
-            stage starts at once).
+            stage starts at once) or when it is not built yet (``probe``: the probe comes first).
         tree: the precomputed tree, or one grown online; None without a library.
         theta: (E,) BiSECt's training bias.
         label: ``tree:<name>`` or ``online``.
         build_s: seconds it took to build.
         precomputed: the prior's tree it uses, or None for a model built online.
         reused: handed out from the planner's query cache (built by an earlier plan of the query).
+        probe: the union path checked before the library is built (:mod:`~drd_planner.planner.probe`), or None.
     """
 
     query: QueryGraph
@@ -37,6 +39,7 @@ class QueryModel:
     build_s: float
     precomputed: QueryTree | None = None
     reused: bool = False
+    probe: Probe | None = None
 
     @property
     def start(self) -> int:

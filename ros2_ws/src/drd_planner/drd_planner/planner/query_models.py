@@ -35,6 +35,7 @@ from drd_planner.planner.connect import EdgeSampleIndex, QueryConnector
 from drd_planner.planner.endpoints import QueryError
 from drd_planner.planner.goal_trees import SearchWorlds
 from drd_planner.planner.prior import WorldPrior
+from drd_planner.planner.probe import Probe, union_probe
 from drd_planner.planner.query_graph import QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_library import query_library
 from drd_planner.planner.query_model import QueryModel
@@ -65,6 +66,9 @@ class QueryModels:
     ) -> None:
         if cache_size < 1:
             raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
+        #: A new vertex query whose union path is free with at least this probability gets a probe, and its
+        #: library only when the probe needs it (:mod:`~drd_planner.planner.probe`); None: never.
+        self.probe_probability: float | None = None
         self.prior = prior
         self.connector = connector
         self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
@@ -158,6 +162,17 @@ class QueryModels:
         """The cached models, least recently used first."""
         return list(self._cache.values())
 
+    def cached_bytes(self) -> int:
+        """Approximate memory of the cached libraries and online trees, in bytes."""
+        total = 0
+        for model in self._cache.values():
+            if model.library is not None:
+                total += sum(int(p.nbytes) * 2 for p in model.library.path_edges)
+                total += int(model.library.incidence.data.nbytes) * 3
+            if isinstance(model.tree, LazyDirectTree):
+                total += model.tree.num_worlds * (model.library.num_paths if model.library else 0) * 8
+        return total
+
     def forget_queries(self) -> None:
         """Drop the online models and the goal trees kept for past goals: every next query is new."""
         self.drop_online()
@@ -185,10 +200,39 @@ class QueryModels:
             )
         if isinstance(start, int) and isinstance(goal, int):
             query = prior_query(prior, start, goal, self.columns)
+            probe = self._probe(query)
+            if probe is not None:  # the library waits until the probe needs it
+                return QueryModel(
+                    query, None, None, self._theta(query), "online", time.perf_counter() - t0, probe=probe
+                )
         else:
             if self.connector is None:
                 raise QueryError("this planner has no connector: states off the graph are refused")
             query = connected_query(prior, start, goal, self.connector, self.sample_index(), self.columns)
+        return self._library_model(query, t0)
+
+    def with_library(self, model: QueryModel) -> QueryModel:
+        """A probed query's model with its library and tree built (in its place in the cache); others as they are."""
+        if model.probe is None:
+            return model
+        built = self._library_model(model.query, time.perf_counter())
+        key = (model.query.start, model.query.goal)  # a probe's query is between graph vertices
+        if key in self._cache:
+            self._cache[key] = built
+        return built
+
+    def _probe(self, query: QueryGraph) -> Probe | None:
+        """The union path of a vertex query whose online stage is BiSECt from the root, if likely enough free."""
+        prior = self.prior
+        if self.probe_probability is None or prior.eta < 1.0 or prior.worlds is None:
+            return None
+        return union_probe(
+            self.search, prior.worlds, prior.world_weights, query.start, query.goal, probability=self.probe_probability
+        )
+
+    def _library_model(self, query: QueryGraph, t0: float) -> QueryModel:
+        """The query's model with its library (and tree) built now; ``t0``: when its build began."""
+        prior = self.prior
         library = query_library(
             self.search,
             query.graph.edges,

@@ -44,6 +44,8 @@ if TYPE_CHECKING:
 class PlanStage(str, Enum):
     """Which stage proved the path."""
 
+    #: The probe: a new query's union path, checked before its library is built (:mod:`drd_planner.planner.probe`).
+    PROBE = "probe"
     #: The DiRECt tree (precomputed, or grown online for a new query).
     TREE = "tree"
     #: BiSECt on the query's path library (after the tree).
