@@ -9,7 +9,9 @@ from drd_planner import Planner, PlanStage, PlanStatus, TableOracle, prior_from_
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.problem import Problem
 from drd_planner.core.status import PlanCause
-from drd_planner.data.planar_problem import make_planar_problem
+from drd_planner.core.world_columns import WorldColumns
+from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
+from drd_planner.domains.planar import PlanarChecker
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import WorldPrior
 from drd_planner.planner.goal_trees import SearchWorlds
@@ -20,6 +22,7 @@ from drd_planner.planner.probe import (
     check_probe_probability,
     union_probe,
 )
+from drd_planner.planner.query_graph import prior_query
 from drd_planner.planner.query_library import ShortestPaths
 
 
@@ -61,10 +64,12 @@ def test_the_probe_is_the_union_shortest_path_with_its_training_probability(prio
     assert prior.worlds is not None
     search = SearchWorlds(GraphArcs(prior.graph), prior.graph.lengths, prior.worlds, seed=prior.library_seed)
     anywhere = prior.worlds[search.worlds].any(axis=0)
+    columns = WorldColumns(prior.worlds)
     shortest = ShortestPaths(GraphArcs(prior.graph), prior.graph.lengths)
     seen = 0
     for s, g in _queries(prior, 30, seed=2):
-        probe = union_probe(search, prior.worlds, None, s, g, probability=0.0)
+        query = prior_query(prior, s, g, columns)
+        probe = union_probe(search, query, None, probability=0.0)
         union = shortest.path(s, g, anywhere)
         if union is None:
             assert probe is None
@@ -79,7 +84,7 @@ def test_the_probe_is_the_union_shortest_path_with_its_training_probability(prio
         assert sorted(probe.order.tolist()) == sorted(probe.edges.tolist())
         share = prior.worlds[:, probe.order].mean(axis=0)
         assert np.all(np.diff(share) >= 0), "least often free first"
-        higher = union_probe(search, prior.worlds, None, s, g, probability=min(1.0, expected + 1e-9))
+        higher = union_probe(search, query, None, probability=min(1.0, expected + 1e-9))
         assert (higher is None) == (expected + 1e-9 <= 1.0)
     assert seen > 10
 
@@ -87,12 +92,13 @@ def test_the_probe_is_the_union_shortest_path_with_its_training_probability(prio
 def test_weights_weigh_the_probability(prior: WorldPrior) -> None:
     assert prior.worlds is not None
     search = SearchWorlds(GraphArcs(prior.graph), prior.graph.lengths, prior.worlds, seed=prior.library_seed)
-    s, g = next((s, g) for s, g in _queries(prior, 50, seed=3) if search.union_walk(g, s).size > 1)
-    plain = union_probe(search, prior.worlds, None, s, g, probability=0.0)
+    s, g = next((s, g) for s, g in _queries(prior, 50, seed=3) if search.union_walk(g, s)[0].size > 1)
+    query = prior_query(prior, s, g, WorldColumns(prior.worlds))
+    plain = union_probe(search, query, None, probability=0.0)
     assert plain is not None
     free = prior.worlds[:, plain.edges].all(axis=1)
     weights = np.where(free, 3.0, 1.0)
-    weighted = union_probe(search, prior.worlds, weights, s, g, probability=0.0)
+    weighted = union_probe(search, query, weights, probability=0.0)
     assert weighted is not None
     assert weighted.free_probability == pytest.approx(float(np.average(free, weights=weights)))
     if 0 < free.mean() < 1:
@@ -164,7 +170,9 @@ def test_a_blocked_probe_hands_its_outcomes_to_the_library_and_nothing_is_checke
             if result.found:
                 assert row[result.edges].all()
                 assert all(result.outcomes()[int(e)] for e in result.edges)
-            assert planner.query_model(s, g).library is not None  # built for the library stage
+            built = planner.query_model(s, g)
+            assert built.library is not None  # built for the library stage
+            assert result.timings.library_s >= built.build_s  # and its time counted as the library's
             break
         if blocked >= 4:
             break
@@ -206,3 +214,60 @@ def test_a_probability_outside_0_1_is_refused(prior: WorldPrior, bad: float) -> 
         check_probe_probability(bad)
     with pytest.raises(ProblemError, match="probe_probability must lie in"):
         Planner(prior, probe_probability=bad)
+
+
+class _MotionTable(TableOracle):
+    """Graph edges from a row of X, joined motions against the world's boxes."""
+
+    def __init__(self, row: np.ndarray, checker: PlanarChecker) -> None:
+        super().__init__(row)
+        self.checker = checker
+
+    def check_motion(self, states: np.ndarray) -> bool:
+        return self.checker.check_motion(states)
+
+
+def _between(prior: WorldPrior, rng: np.random.Generator, tolerance: float) -> np.ndarray:
+    """A state midway along a random edge, farther than ``tolerance`` from every vertex."""
+    states = prior.graph.vertex_states
+    assert states is not None
+    while True:
+        a, b = states[prior.graph.edges[int(rng.integers(prior.graph.num_edges))]]
+        point = a + rng.uniform(0.3, 0.7) * (b - a)
+        if np.min(np.linalg.norm(states - point, axis=1)) > tolerance:
+            return point
+
+
+def test_off_graph_queries_probe_through_their_motions(problem: Problem, prior: WorldPrior) -> None:
+    boxes = planar_problem_worlds(problem)
+    planner = Planner(prior)
+    worlds = problem.require_worlds()
+    rng = np.random.default_rng(4)
+    big_e = prior.graph.num_edges
+    kinds: dict[str, int] = {}
+    for k in range(60):
+        start = _between(prior, rng, planner.snap_tolerance)
+        goal = _between(prior, rng, planner.snap_tolerance) if k % 2 else int(rng.integers(prior.graph.num_vertices))
+        model = planner.query_model(start, goal)
+        if model.probe is None:
+            continue
+        assert model.probe.edges[0] >= big_e  # the start's motion first
+        if k % 2:
+            assert model.probe.edges[-1] >= big_e  # and the goal's last
+        world = int(worlds.test_ids[k % worlds.test_ids.size])
+        oracle = _MotionTable(worlds.X[world], PlanarChecker(prior.graph, boxes[world]))
+        result = planner.plan(start, goal, oracle)
+        if result.stage is PlanStage.PROBE:
+            assert result.edges.tolist() == model.probe.edges.tolist()
+            assert [c.edge for c in result.checks] == model.probe.order.tolist()
+            for e in result.edges.tolist():
+                if e >= big_e:
+                    assert oracle.checker.check_motion(result.motions[e])
+                else:
+                    assert worlds.X[world, e]
+            kinds["probe"] = kinds.get("probe", 0) + 1
+        elif result.found:
+            assert all(result.outcomes()[int(e)] for e in result.edges)
+            assert any(c.stage == "probe" and not c.free for c in result.checks)
+            kinds["after"] = kinds.get("after", 0) + 1
+    assert kinds.get("probe", 0) >= 3

@@ -327,13 +327,23 @@ class SearchWorlds:
         table, counts = tree.walk_table(np.where(reachable, start.vertices[choice], tree.goal), via)
         return GoalWalks(table, np.where(reachable, counts, 0), choice)
 
-    def union_walk(self, goal: int, start: int) -> IntArray:
-        """The shortest path from ``start`` to ``goal`` over the arcs free in any search world, as vertices.
+    def union_walk(self, goal: int | JoinMotions, start: int | JoinMotions) -> tuple[IntArray, int]:
+        """The shortest path from ``start`` to ``goal`` over the arcs (and motions) free in any search world.
 
-        Start first, goal last; empty when no search world reaches the goal from ``start``. The goal's union tree
-        is kept with its reverse trees.
+        Returns its vertices, start first (a joined start: the vertex its motion reaches) and goal last (a joined
+        goal: ``B - 1``), empty when no search world has a path; and the joined start's motion (-1 for a vertex).
+        A graph goal's union tree is kept with its reverse trees.
         """
-        return self._kept(int(goal)).union.walk(int(start))
+        union = (
+            self._blocks.union_tree(self.block - 1, goal) if isinstance(goal, JoinMotions) else self._kept(goal).union
+        )
+        if not isinstance(start, JoinMotions):
+            return union.walk(int(start)), -1
+        bound = np.where(start.free.any(axis=0), start.lengths + union.dist[start.vertices], np.inf)
+        if bound.size == 0 or not np.isfinite(bound.min()):
+            return np.zeros(0, dtype=np.int64), -1
+        choice = int(np.argmin(bound))
+        return union.walk(int(start.vertices[choice])), choice
 
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""

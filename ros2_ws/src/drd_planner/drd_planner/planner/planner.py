@@ -318,7 +318,9 @@ class Planner:
                 return found_result(model, probed.path_edges, checks, PlanStage.PROBE, times)
             if probed.ran_out is not None:
                 return exhausted_result(model, probed.ran_out, checks, t_model, t_begin)
-        model = self._models.with_library(model)  # a blocked probe (or another policy): the library now
+        if model.probe is not None:  # a blocked probe (or another policy): the library now, timed as the library
+            model = self._models.with_library(model)
+            t_model, times = t_model + model.build_s, (t_model + model.build_s, t_begin)
         if model.library is not None:
             lib_policy = POLICIES[policy](self._context(model, policy, limits.seed))
             for edge, free in known.items():  # the probe's outcomes

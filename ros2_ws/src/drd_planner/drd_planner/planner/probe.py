@@ -15,9 +15,10 @@ The threshold was chosen on held-out worlds and queries other than the reported 
 priors, 40 random vertex queries each): there the union path was free in 27 of 29 (heli_wires) and in every one
 (heli_terrain 39, the arm 33, heli_lines 39) of the queries whose probability was at least one half.
 
-The probe is used by the method's policy (``direct_bisect``) on queries between graph vertices without a
-precomputed tree, when the online stage would be BiSECt from the root (switch threshold 1); a DiRECt tree grown
-online, a stored query's tree, an off-graph query and the baselines are unchanged.
+The probe is used by the method's policy (``direct_bisect``) on queries without a precomputed tree, between
+vertices or with a start or goal off the graph (its motions' outcomes imputed in the training worlds), when the
+online stage would be BiSECt from the root (switch threshold 1); a DiRECt tree grown online, a stored query's
+tree and the baselines are unchanged.
 """
 
 from __future__ import annotations
@@ -25,13 +26,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import numpy.typing as npt
 
-from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import EdgeOracle, EpisodeResult, run_episode
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.goal_trees import SearchWorlds
+from drd_planner.planner.query_graph import QueryGraph
+from drd_planner.planner.query_library import union_path
 
 __all__ = [
     "DEFAULT_PROBE_PROBABILITY",
@@ -72,30 +74,25 @@ def check_probe_probability(probability: float | None) -> float | None:
 
 
 def union_probe(
-    search: SearchWorlds,
-    worlds: npt.ArrayLike,
-    weights: FloatArray | None,
-    start: int,
-    goal: int,
-    *,
-    probability: float,
+    search: SearchWorlds, query: QueryGraph, weights: FloatArray | None, *, probability: float
 ) -> Probe | None:
     """The query's probe, or None when its union path is less likely free than ``probability`` (or absent).
 
     Args:
-        search: the prior's search worlds (the goal's union tree is kept per goal).
-        worlds: (n, E) bool training worlds (True = free).
-        weights: (n,) their prior weights, or None for uniform.
-        start: the start vertex.
-        goal: the goal vertex.
+        search: the prior's search worlds (a graph goal's union tree is kept per goal).
+        query: the query's graph and training outcomes (an off-graph state's motions imputed).
+        weights: (n,) the training worlds' prior weights, or None for uniform.
         probability: the least probability of being free, in [0, 1].
     """
     check_probe_probability(probability)
-    walk = search.union_walk(goal, start)
-    if walk.size < 2:
+    if query.worlds is None:
         return None
-    edges = search.arcs.edge_of(walk[:-1], walk[1:])
-    columns: BoolArray = np.asarray(worlds, dtype=bool)[:, edges]  # (n, L)
+    start = query.start if query.start_joins is None else query.start_joins
+    goal = query.goal if query.goal_joins is None else query.goal_joins
+    edges = union_path(search, start, goal)
+    if edges.size == 0:
+        return None
+    columns = query.worlds.columns(edges)  # (n, L)
     free = float(np.average(columns.all(axis=1), weights=weights))
     if free < probability:
         return None

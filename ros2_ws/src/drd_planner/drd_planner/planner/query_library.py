@@ -96,16 +96,36 @@ def library_paths(search: SearchWorlds, start: int | Joins, goal: int | Joins, *
     found: dict[tuple[int, ...], IntArray] = {}
     for row in np.sort(first)[:max_paths]:
         walk = keyed[row, 1 : 1 + int(lengths[row])].astype(np.int64)
-        hops = walk if not into_goal else walk[:-1]  # the last hop of a joined goal is its motion
-        edges = [search.arcs.edge_of(hops[:-1], hops[1:])] if hops.size > 1 else []
-        if into_goal:
-            edges.append(np.array([into_goal[int(hops[-1])]], dtype=np.int64))
-        if isinstance(start, Joins):
-            edges.insert(0, np.array([int(start.edges[chosen[row]])], dtype=np.int64))
-        path = np.concatenate(edges) if edges else np.zeros(0, dtype=np.int64)
+        path = _walk_edges(search, walk, start, int(chosen[row]), into_goal)
         if path.size:
             found.setdefault(tuple(path.tolist()), path)
     return [found[k] for k in sorted(found)]
+
+
+def union_path(search: SearchWorlds, start: int | Joins, goal: int | Joins) -> IntArray:
+    """The query's shortest path over the edges (and motions) free in any search world, as query edge ids.
+
+    Start to goal; empty when no search world has a path. It is every search world's shortest free path in
+    which all its edges are free (no shorter path exists over edges free in some world).
+    """
+    target, into_goal = _goal_target(search, goal)
+    walk, chosen = search.union_walk(target, _motions(search, start))
+    if walk.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    return _walk_edges(search, walk, start, chosen, into_goal)
+
+
+def _walk_edges(
+    search: SearchWorlds, walk: IntArray, start: int | Joins, chosen: int, into_goal: dict[int, int]
+) -> IntArray:
+    """A search's walk (vertices; a joined goal's ends at ``B - 1``) as query edge ids, the start's motion first."""
+    hops = walk if not into_goal else walk[:-1]  # the last hop of a joined goal is its motion
+    edges = [search.arcs.edge_of(hops[:-1], hops[1:])] if hops.size > 1 else []
+    if into_goal:
+        edges.append(np.array([into_goal[int(hops[-1])]], dtype=np.int64))
+    if isinstance(start, Joins):
+        edges.insert(0, np.array([int(start.edges[chosen])], dtype=np.int64))
+    return np.concatenate(edges) if edges else np.zeros(0, dtype=np.int64)
 
 
 def _motions(search: SearchWorlds, start: int | Joins) -> int | JoinMotions:

@@ -200,15 +200,14 @@ class QueryModels:
             )
         if isinstance(start, int) and isinstance(goal, int):
             query = prior_query(prior, start, goal, self.columns)
-            probe = self._probe(query)
-            if probe is not None:  # the library waits until the probe needs it
-                return QueryModel(
-                    query, None, None, self._theta(query), "online", time.perf_counter() - t0, probe=probe
-                )
         else:
             if self.connector is None:
                 raise QueryError("this planner has no connector: states off the graph are refused")
             query = connected_query(prior, start, goal, self.connector, self.sample_index(), self.columns)
+        probe = self._probe(query)
+        if probe is not None:  # the library waits until the probe needs it
+            label = "connected" if query.connected else "online"
+            return QueryModel(query, None, None, self._theta(query), label, time.perf_counter() - t0, probe=probe)
         return self._library_model(query, t0)
 
     def with_library(self, model: QueryModel) -> QueryModel:
@@ -216,19 +215,18 @@ class QueryModels:
         if model.probe is None:
             return model
         built = self._library_model(model.query, time.perf_counter())
-        key = (model.query.start, model.query.goal)  # a probe's query is between graph vertices
-        if key in self._cache:
-            self._cache[key] = built
+        for key, cached in self._cache.items():
+            if cached.query is model.query:
+                self._cache[key] = built
+                break
         return built
 
     def _probe(self, query: QueryGraph) -> Probe | None:
-        """The union path of a vertex query whose online stage is BiSECt from the root, if likely enough free."""
+        """The union path of a query whose online stage is BiSECt from the root, if likely enough free."""
         prior = self.prior
         if self.probe_probability is None or prior.eta < 1.0 or prior.worlds is None:
             return None
-        return union_probe(
-            self.search, prior.worlds, prior.world_weights, query.start, query.goal, probability=self.probe_probability
-        )
+        return union_probe(self.search, query, prior.world_weights, probability=self.probe_probability)
 
     def _library_model(self, query: QueryGraph, t0: float) -> QueryModel:
         """The query's model with its library (and tree) built now; ``t0``: when its build began."""
