@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from drd_planner import Planner, PlanStage, PlanStatus, TableOracle, prior_from_problem
+from drd_planner.core.episode import GraphPathPolicy
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.problem import Problem
 from drd_planner.core.status import PlanCause
@@ -109,11 +110,15 @@ def test_the_probe_policy_asks_in_order_and_stops_at_a_blocked_edge() -> None:
     probe = Probe(np.array([4, 7, 9]), 0.8, np.array([9, 4, 7]))
     policy = ProbePolicy(probe)
     assert (policy.name, policy.stage) == ("probe", "probe")
+    assert isinstance(policy, GraphPathPolicy)
+    assert (policy.stops_on_library_path, policy.max_checks) == (False, None)
     assert policy.select() == 9
     policy.observe(9, True)
+    assert policy.proposed_path() is probe.edges
     assert policy.select() == 4
     policy.observe(4, False)
     assert policy.select() is None
+    assert policy.proposed_path() is None
     done = ProbePolicy(probe)
     for edge in (9, 4, 7):
         assert done.select() == edge

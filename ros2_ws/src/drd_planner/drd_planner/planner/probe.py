@@ -29,7 +29,6 @@ import numpy as np
 
 from drd_planner.arrays import FloatArray, IntArray
 from drd_planner.core.episode import EdgeOracle, EpisodeResult, run_episode
-from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.goal_trees import SearchWorlds
 from drd_planner.planner.query_graph import QueryGraph
@@ -104,10 +103,12 @@ def union_probe(
 class ProbePolicy:
     """Checks a probe's edges in its order, and nothing once one is blocked.
 
-    A :class:`~drd_planner.core.episode.Policy` (name and stage ``probe``).
+    A :class:`~drd_planner.core.episode.GraphPathPolicy` (name and stage ``probe``): its path is the probe's, so
+    the runner ends its episode with FOUND once every edge was checked free and NO_PATH once one is blocked.
     """
 
     def __init__(self, probe: Probe) -> None:
+        self._path = probe.edges
         self._order = probe.order.tolist()
         self._next = 0
         self._blocked = False
@@ -121,6 +122,20 @@ class ProbePolicy:
     def stage(self) -> str:
         """``probe``."""
         return "probe"
+
+    @property
+    def stops_on_library_path(self) -> bool:
+        """False: the probe's episode has no library."""
+        return False
+
+    @property
+    def max_checks(self) -> int | None:
+        """None: the plan's budget only."""
+        return None
+
+    def proposed_path(self) -> IntArray | None:
+        """The probe's path until one of its edges is blocked, then None."""
+        return None if self._blocked else self._path
 
     def select(self) -> int | None:
         """The next edge of the path in the probe's order; None after a blocked one or the last."""
@@ -152,5 +167,4 @@ def probe_episode(
         max_checks: the plan's check budget (None: none).
         deadline: the plan's deadline on ``time.perf_counter()`` (None: none).
     """
-    library = PathLibrary((probe.edges,), int(np.asarray(edge_costs).size))
-    return run_episode(library, edge_costs, ProbePolicy(probe), oracle, max_checks=max_checks, deadline=deadline)
+    return run_episode(None, edge_costs, ProbePolicy(probe), oracle, max_checks=max_checks, deadline=deadline)
