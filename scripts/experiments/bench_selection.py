@@ -16,7 +16,9 @@ query's library is free, answered from the table (``TableOracle``). Each setting
 * ``tree``: eta 0.2, kappa 5 and the per-check rule: the DiRECt tree (grown online for new queries), then
   the posterior leaf.
 
-Every episode runs twice: a warm-up pass builds each query's library and grows its online tree along the
+The planners run without the probe (``probe_probability=None``): a new query whose union path is likely free
+would otherwise often be planned without a library stage, and it is the library stage's selection that is
+measured. Every episode runs twice: a warm-up pass builds each query's library and grows its online tree along the
 branches taken (building is another measurement), then the measured pass. Per check it reports, from the
 second check of the library stage on (stages ``tree`` and ``bisect``):
 
@@ -212,7 +214,7 @@ def run_prior(path: Path, args: argparse.Namespace, logs: dict[str, Any]) -> dic
     name = path.stem
     report: dict[str, Any] = {}
     for setting in args.settings:
-        planner = Planner(load_prior(path), cache_size=args.queries + 4)
+        planner = Planner(load_prior(path), cache_size=args.queries + 4, probe_probability=None)
         leaf = SETTINGS[setting]
         if leaf is not None:
             planner.set_leaf(leaf[0], leaf[1], region_rule=leaf[2])
