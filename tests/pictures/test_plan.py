@@ -342,6 +342,8 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
         "served from cache: all 1 checks answered from map v4's check cache; the precomputed DiRECt tree 'heli_wires'"
     )
     assert served_by(tree, query_cached=True) == served_by(tree)  # a precomputed tree is never rebuilt
+    probed = SessionPlan(**common, checks=(dataclasses.replace(fresh, stage="probe"),), query="online", stage="probe")
+    assert served_by(probed) == "served by the probe (the union path checked first; no library built)"
 
 
 def test_helicopter_files_are_valid_and_deterministic(heli: Case, tmp_path: Path) -> None:

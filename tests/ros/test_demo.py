@@ -15,6 +15,7 @@ from harness import use_domain
 
 from drd_msgs_py.bags import open_bag
 from drd_planner.cli.planner_demo import main
+from drd_planner.ros.demo import _served_by
 
 pytestmark = pytest.mark.slow  # nodes in child processes; several seconds each
 
@@ -108,3 +109,11 @@ def test_two_demos_at_once_beside_a_cpu_hog_tell_the_same_story_on_private_domai
         "plan 3: goal_pose",
         "plan 4: goal_pose",
     ]
+
+
+def test_served_by_names_the_probe_a_new_tree_and_a_joined_query() -> None:
+    assert "probe" in _served_by("online", "probe")
+    assert "no library" in _served_by("connected", "probe")
+    assert "built online" in _served_by("online", "bisect")
+    assert "off the graph" in _served_by("connected", "graph")
+    assert "'heli_lines'" in _served_by("tree:heli_lines", "tree")

@@ -29,6 +29,7 @@ than the motions, so it is far too pessimistic). The vote still errs on the bloc
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -209,9 +210,15 @@ def imputed_outcomes(index: EdgeSampleIndex, worlds: BoolArray, states: FloatArr
     return np.asarray(worlds[:, nearest].mean(axis=1) >= 0.5, dtype=bool)
 
 
+@functools.lru_cache(maxsize=4096)
 def _voting_samples(count: int) -> IntArray:
-    """(<= POINTS_PER_EDGE,) the indices of the evenly spread samples, of a motion's ``count``, that vote."""
-    return np.asarray(np.unique(np.linspace(0, count - 1, POINTS_PER_EDGE).round().astype(np.int64)), dtype=np.int64)
+    """(<= POINTS_PER_EDGE,) the indices of the evenly spread samples, of a motion's ``count``, that vote.
+
+    Kept per count (read-only): a query's motions ask for a few dozen counts again and again.
+    """
+    chosen = np.asarray(np.unique(np.linspace(0, count - 1, POINTS_PER_EDGE).round().astype(np.int64)), dtype=np.int64)
+    chosen.setflags(write=False)
+    return chosen
 
 
 def imputed_columns(index: EdgeSampleIndex, worlds: BoolArray | WorldColumns, motions: list[FloatArray]) -> BoolArray:

@@ -4,10 +4,10 @@ A plan runs in up to two stages, all checks going through the one episode runner
 (:func:`~drd_planner.core.episode.run_episode`), which returns a path only when every edge of it was
 checked free in this plan:
 
-0. **the probe**, on a new query between graph vertices whose online stage is BiSECt: its union path (the
-   shortest over the edges free in any training world), checked first when the training worlds say it is free
-   with probability at least ``probe_probability`` (one half); the library is built only if an edge of it is
-   blocked, and the library stage then knows that outcome (:mod:`~drd_planner.planner.probe`).
+0. **the probe**, on a new query (vertices, or states joined by motions) whose online stage is BiSECt: its
+   union path (the shortest over the edges free in any training world), checked first when the training worlds
+   say it is free with probability at least ``probe_probability`` (one half); the library is built only if an
+   edge of it is blocked, and the library stage then knows that outcome (:mod:`~drd_planner.planner.probe`).
 1. **the library stage**: the query's path library with a policy (default ``direct_bisect``: the
    DiRECt tree, then BiSECt). A query with a precomputed tree uses that tree and its library unchanged;
    any other query gets a library built online from the prior's training worlds
@@ -96,7 +96,7 @@ class Planner:
         connect_states: False refuses off-graph states (no connector).
         growth: how far the graph grows when it has no free path (None: never); only with a connector that
             has a sampler of valid states (the arm's) and an oracle that checks motions.
-        probe_probability: a new vertex query first checks its union path when that is free with at least this
+        probe_probability: a new query first checks its union path when that is free with at least this
             probability over the training worlds (:mod:`~drd_planner.planner.probe`); None: never.
     """
 
@@ -116,8 +116,8 @@ class Planner:
         self._connector = (connector or connector_for(prior)) if connect_states else None
         free = getattr(self._connector, "free_goal_dims", ())
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
-        models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
-        self._models, models.probe_probability = models, check_probe_probability(probe_probability)
+        self._models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
+        self._models.probe_probability = check_probe_probability(probe_probability)
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
 

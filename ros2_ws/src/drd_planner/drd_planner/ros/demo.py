@@ -87,7 +87,8 @@ def print_record(number: int, record: PlanRecord) -> None:
     if "replan_reason" in record.request:
         print(f"  why: {record.request['replan_reason']}")
     cached = " (reused from the query cache)" if result.query_cached and not result.query.startswith("tree:") else ""
-    print(f"  served by: {_served_by(result.query)}{cached} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)")
+    served = _served_by(result.query, result.stage)
+    print(f"  served by: {served}{cached} ({result.seconds.get('library', 0.0) * 1e3:.1f} ms)")
     for check in result.checks:
         state = "free   " if check.free else "BLOCKED"
         source = "cache" if check.cached else f"{check.check_ms:7.3f} ms"
@@ -108,10 +109,12 @@ def print_record(number: int, record: PlanRecord) -> None:
         print(f"    {label} ({row[0]:9.3f}, {row[1]:9.3f}, {row[2]:8.3f}) m")
 
 
-def _served_by(query: str) -> str:
-    """What the summary's ``query`` label means, for people."""
+def _served_by(query: str, stage: str) -> str:
+    """What the summary's ``query`` label (and a ``probe`` stage) means, for people."""
     if query.startswith("tree:"):
         return f"the precomputed DiRECt tree {query[5:]!r} of this query"
+    if stage == "probe":
+        return "a new query: the probe, its union path checked first; no library needed"
     if query == "online":
         return "a new query: its path library and DiRECt tree built online from the prior"
     if query == "connected":
