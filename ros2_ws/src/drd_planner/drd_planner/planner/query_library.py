@@ -105,8 +105,8 @@ def library_paths(search: SearchWorlds, start: int | Joins, goal: int | Joins, *
 def union_path(search: SearchWorlds, start: int | Joins, goal: int | Joins) -> IntArray:
     """The query's shortest path over the edges (and motions) free in any search world, as query edge ids.
 
-    Start to goal; empty when no search world has a path. It is every search world's shortest free path in
-    which all its edges are free (no shorter path exists over edges free in some world).
+    Start to goal; empty when no search world has a path. In every search world where all its edges are free it
+    is that world's shortest free path (no shorter path exists over the edges free in some world).
     """
     target, into_goal = _goal_target(search, goal)
     walk, chosen = search.union_walk(target, _motions(search, start))

@@ -66,7 +66,7 @@ class QueryModels:
     ) -> None:
         if cache_size < 1:
             raise ProblemError(f"cache_size must be at least 1, got {cache_size}")
-        #: A new vertex query whose union path is free with at least this probability gets a probe, and its
+        #: A new query whose union path is free with at least this probability gets a probe, and its
         #: library only when the probe needs it (:mod:`~drd_planner.planner.probe`); None: never.
         self.probe_probability: float | None = None
         self.prior = prior
