@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from threadpoolctl import threadpool_limits
+from threadpoolctl import OpenBLASController, ThreadpoolController
 
 from drd_planner import Planner, TableOracle, prior_from_problem
 from drd_planner.data.planar_problem import make_planar_problem
@@ -14,14 +15,21 @@ from drd_planner.planner.blas_threads import blas_threads, one_blas_thread
 
 
 @pytest.fixture
-def two_threads() -> object:
-    """Every loaded BLAS library at two threads for the test (so that 'one' is a change that could fail)."""
+def two_threads() -> Iterator[None]:
+    """Every loaded BLAS library at two threads for the test (so that 'one' is a change that could fail).
+
+    The limit is set and then given up (threadpoolctl lets one Python thread at a time hold it), so that the
+    test's own threads can take it as a plan would.
+    """
     np.ones((4, 4)) @ np.ones((4, 4))  # numpy's BLAS is loaded
     before = blas_threads()
     assert before, "no BLAS library found in this process"
-    with threadpool_limits(2, user_api="blas") as limiter:
-        assert set(blas_threads().values()) == {2}
-        yield limiter
+    limiter = ThreadpoolController().limit(limits=2, user_api="blas")
+    OpenBLASController.clear_controlling_thread(force=True)
+    assert set(blas_threads().values()) == {2}
+    yield
+    limiter.restore_original_limits()
+    OpenBLASController.clear_controlling_thread(force=True)
     assert blas_threads() == before
 
 
@@ -51,31 +59,51 @@ def test_an_error_inside_still_restores_the_limits() -> None:
 
 
 @pytest.mark.usefixtures("two_threads")
-def test_overlapping_calls_from_two_threads_keep_one_until_the_last_ends() -> None:
-    first_in, second_in, first_out = threading.Event(), threading.Event(), threading.Event()
+def test_a_call_in_another_thread_limits_and_restores() -> None:
+    seen: list[set[int]] = []
+
+    @one_blas_thread
+    def work() -> None:
+        seen.append(set(blas_threads().values()))
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join(5)
+    assert seen == [{1}]
+    assert set(blas_threads().values()) == {2}
+
+
+@pytest.mark.parametrize("last", ["owner", "other"])
+@pytest.mark.usefixtures("two_threads")
+def test_overlapping_calls_in_two_threads_never_leave_one_thread_behind(last: str) -> None:
+    owner_in, other_in, owner_go, other_go = (threading.Event() for _ in range(4))
     seen: dict[str, set[int]] = {}
 
     @one_blas_thread
-    def first() -> None:
-        first_in.set()
-        assert second_in.wait(5)
+    def owner() -> None:
+        seen["owner"] = set(blas_threads().values())
+        owner_in.set()
+        assert owner_go.wait(5)
 
     @one_blas_thread
-    def second() -> None:
-        second_in.set()
-        assert first_out.wait(5)  # the first call has ended: this one still runs with one thread
-        seen["second, after the first ended"] = set(blas_threads().values())
+    def other() -> None:  # starts while the owner runs: it runs under the owner's limit and changes nothing
+        seen["other"] = set(blas_threads().values())
+        other_in.set()
+        assert other_go.wait(5)
 
-    a = threading.Thread(target=first)
-    b = threading.Thread(target=second)
+    a, b = threading.Thread(target=owner), threading.Thread(target=other)
     a.start()
-    assert first_in.wait(5)
+    assert owner_in.wait(5)
     b.start()
+    assert other_in.wait(5)
+    first, second = (owner_go, other_go) if last == "other" else (other_go, owner_go)
+    first.set()
+    (a if last == "other" else b).join(5)
+    second.set()
     a.join(5)
-    first_out.set()
     b.join(5)
-    assert seen["second, after the first ended"] == {1}
-    assert set(blas_threads().values()) == {2}
+    assert seen == {"owner": {1}, "other": {1}}
+    assert set(blas_threads().values()) == {2}, "the process was left at one BLAS thread"
 
 
 @pytest.mark.usefixtures("two_threads")

@@ -40,7 +40,7 @@ setup(
         "pyproj>=3.7.2,<4",
         "shapely>=2.0,<3",
         "osmium>=4.3.2,<5",
-        "threadpoolctl>=3.1",
+        "threadpoolctl>=3.8",
         "typing_extensions>=4.6",
         "drd_msgs_py",
     ],

@@ -6,8 +6,13 @@ which then busy-wait for more work for a while after it. That spinning is CPU th
 charged for and takes from everything else on the robot: measured on ``heli_wires`` new queries, a plan
 with two BLAS threads cost 8.0 ms of process CPU (median), the same plan with one 3.7 ms, with the same
 checks. :func:`one_blas_thread` runs a function with the BLAS libraries loaded in the process limited to
-one thread (through `threadpoolctl`), and restores their limits when the last such call running ends, so
-nested and concurrent plans are safe and code outside a plan keeps its threads.
+one thread (through `threadpoolctl`), and restores their limits when it ends.
+
+A BLAS library's thread count is one setting for the whole process, and `threadpoolctl` lets only one
+Python thread at a time change it. So one call at a time owns the limit: the first to start sets it and
+restores it when it ends, in its own thread; calls that start while it runs (nested in it, or in other
+threads) run under its limit and change nothing. Overlapping plans therefore never leave the process at one
+thread, and code outside a plan keeps its threads.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ from __future__ import annotations
 import functools
 import threading
 from collections.abc import Callable
-from typing import Any, ParamSpec, TypeVar
+from typing import ParamSpec, TypeVar
 
 from threadpoolctl import ThreadpoolController
 
@@ -23,40 +28,41 @@ P = ParamSpec("P")
 R = TypeVar("R")
 
 _lock = threading.Lock()
-_controller: ThreadpoolController | None = None
-_limiter: Any = None  # threadpoolctl's limiter of the outermost call (restores the former limits)
-_depth = 0
+_owner: list[threading.Thread] = []  # the thread whose call holds the limit now (none or one)
 
 
-def _enter() -> None:
-    global _controller, _limiter, _depth
+@functools.lru_cache(maxsize=1)
+def _controller() -> ThreadpoolController:
+    """The process's BLAS libraries, found on first use (they are loaded by then)."""
+    return ThreadpoolController()
+
+
+def _take() -> bool:
+    """Whether this call owns the limit (no other call holds it)."""
     with _lock:
-        if _depth == 0:
-            if _controller is None:  # made on first use: the BLAS libraries are loaded by then
-                _controller = ThreadpoolController()
-            _limiter = _controller.limit(limits=1, user_api="blas")
-        _depth += 1
+        if _owner:
+            return False
+        _owner.append(threading.current_thread())
+        return True
 
 
-def _leave() -> None:
-    global _limiter, _depth
+def _release() -> None:
     with _lock:
-        _depth -= 1
-        if _depth == 0 and _limiter is not None:
-            _limiter.restore_original_limits()
-            _limiter = None
+        _owner.clear()
 
 
 def one_blas_thread(func: Callable[P, R]) -> Callable[P, R]:
-    """``func`` run with one BLAS thread (the former limits restored after the last such call ends)."""
+    """``func`` run with one BLAS thread (the former limits restored when the call that set them ends)."""
 
     @functools.wraps(func)
     def limited(*args: P.args, **kwargs: P.kwargs) -> R:
-        _enter()
-        try:
+        if not _take():
             return func(*args, **kwargs)
+        try:
+            with _controller().limit(limits=1, user_api="blas"):
+                return func(*args, **kwargs)
         finally:
-            _leave()
+            _release()
 
     return limited
 
