@@ -62,6 +62,29 @@ def test_trees_are_kept_per_goal_and_a_joined_goal_leaves_the_graph_as_it_was() 
         search.joined_tree(JoinMotions(np.array([14]), np.array([1.0]), np.ones((w + 1, 1), dtype=bool)))
 
 
+def test_a_joined_goals_union_is_searched_once_for_its_probe_and_its_library(monkeypatch: pytest.MonkeyPatch) -> None:
+    graph, x = _grid(False)
+    search = SearchWorlds(GraphArcs(graph), graph.lengths, x, seed=1)
+    w = search.num_worlds
+    joins = JoinMotions(np.array([14, 21]), np.array([0.5, 0.25]), np.tile([True, False], (w, 1)))
+    made = []
+    union_tree = search._blocks.union_tree
+    monkeypatch.setattr(search._blocks, "union_tree", lambda *a: made.append(a) or union_tree(*a))
+    walk, _ = search.union_walk(joins, 0)
+    same = JoinMotions(joins.vertices.copy(), joins.lengths.copy(), joins.free.copy())
+    walks = search.walks_from(same, 0)
+    assert len(made) == 1  # the probe's union path, then the library: one search
+    assert walk[-1] == 36
+    assert walks.counts.max() > 0
+    other = JoinMotions(joins.vertices, joins.lengths, np.ones((w, 2), dtype=bool))
+    assert not other.same_as(joins)
+    search.union_walk(other, 0)
+    assert len(made) == 2
+    search.forget_trees()
+    search.union_walk(other, 0)
+    assert len(made) == 3
+
+
 def test_distinct_rows_are_found_exactly() -> None:
     rng = np.random.default_rng(0)
     base = rng.random((30, 100)) < 0.5

@@ -277,6 +277,7 @@ class SearchWorlds:
         self._blocks = WorldBlocks(arcs, self._arc_length, self._free[:, arcs.edge], self.slots)
         self.block = self._blocks.block
         self._trees: OrderedDict[int, GoalTree] = OrderedDict()
+        self._last_joined: tuple[JoinMotions, UnionTree] | None = None
 
     @property
     def num_worlds(self) -> int:
@@ -334,9 +335,7 @@ class SearchWorlds:
         goal: ``B - 1``), empty when no search world has a path; and the joined start's motion (-1 for a vertex).
         A graph goal's union tree is kept with its reverse trees.
         """
-        union = (
-            self._blocks.union_tree(self.block - 1, goal) if isinstance(goal, JoinMotions) else self._kept(goal).union
-        )
+        union = self._joined_union(goal) if isinstance(goal, JoinMotions) else self._kept(goal).union
         if not isinstance(start, JoinMotions):
             return union.walk(int(start)), -1
         bound = np.where(start.free.any(axis=0), start.lengths + union.dist[start.vertices], np.inf)
@@ -348,6 +347,7 @@ class SearchWorlds:
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()
+        self._last_joined = None
 
     # ------------------------------------------------------------------------------------------------
 
@@ -367,12 +367,21 @@ class SearchWorlds:
 
     def _joined(self, joins: JoinMotions) -> GoalTree:
         """An off-graph goal's tree (only its union's). No parts: its vertex is joined only in this search."""
+        return self._empty(self._joined_union(joins), None, joins)
+
+    def _joined_union(self, joins: JoinMotions) -> UnionTree:
+        """An off-graph goal's union tree; the last one is kept (a query's probe, then its library, asks for it)."""
         k = int(joins.vertices.size)
         if k > self.slots:
             raise ProblemError(f"at most {self.slots} motions into a goal can be searched, got {k}")
         if joins.free.shape != (self.num_worlds, k):
             raise ProblemError(f"join outcomes must be ({self.num_worlds}, {k}), got {joins.free.shape}")
-        return self._empty(self._blocks.union_tree(self.block - 1, joins), None, joins)
+        last = self._last_joined
+        if last is not None and last[0].same_as(joins):
+            return last[1]
+        union = self._blocks.union_tree(self.block - 1, joins)
+        self._last_joined = (joins, union)
+        return union
 
     def _empty(self, union: UnionTree, parts: npt.NDArray[np.int32] | None, joins: JoinMotions | None) -> GoalTree:
         """A tree with no world searched yet."""

@@ -73,6 +73,11 @@ class JoinMotions:
     lengths: FloatArray
     free: BoolArray
 
+    def same_as(self, other: JoinMotions) -> bool:
+        """Whether ``other`` holds the same motions with the same outcomes."""
+        pairs = ((self.vertices, other.vertices), (self.lengths, other.lengths), (self.free, other.free))
+        return all(np.array_equal(a, b) for a, b in pairs)
+
 
 def follows_union(
     union: UnionTree,
