@@ -81,6 +81,29 @@ def test_same_seed_same_checks() -> None:
         assert runs[0] == runs[1]
 
 
+@pytest.mark.parametrize("heard", [2, 5])
+def test_direct_bisect_follows_outcomes_heard_before_the_tree_asks(heard: int) -> None:
+    """Outcomes known before the episode (a probe's), in any order, are walked through and never asked."""
+    problem = load_gccd_folder(gccd_folder("dataset_2d_4"))
+    worlds = problem.require_worlds()
+    tree = build_tree(problem, progress=False)
+    compared = 0
+    for world in worlds.test_ids[:12].tolist():
+        oracle = TableOracle(worlds.X[world])
+        plain = policies.DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.05)
+        full = run_episode(problem.library, problem.edge_costs, plain, oracle).checks
+        if len(full) <= heard:
+            continue
+        known = {c.edge: c.free for c in reversed(full[:heard])}  # heard in the reverse order
+        told = policies.DirectBisectPolicy(tree, problem.library, problem.edge_costs, eta=0.05)
+        for edge, free in known.items():
+            told.observe(edge, free)
+        rest = run_episode(problem.library, problem.edge_costs, told, oracle, known=known).checks
+        assert [(c.edge, c.free) for c in rest] == [(c.edge, c.free) for c in full[heard:]]
+        compared += 1
+    assert compared >= 5
+
+
 def test_combined_method_beats_bisect_on_baffle() -> None:
     """The paper's headline on a hard set: the tree + BiSECt needs clearly fewer checks than BiSECt."""
     problem = load_gccd_folder(gccd_folder("dataset_2d_6"))

@@ -285,7 +285,8 @@ def test_a_precomputed_tree_uses_its_own_leaf_setting_and_other_queries_the_prio
 
 
 def test_new_queries_use_the_priors_region_rule(problem: Problem, prior: WorldPrior) -> None:
-    planner = Planner(dataclasses.replace(prior, region_rule="per_check"))
+    # Without the probe, so that a new query's model has its tree at once.
+    planner = Planner(dataclasses.replace(prior, region_rule="per_check"), probe_probability=None)
     model = planner.query_model(3, 40)
     assert model.tree is not None
     assert model.tree.region_rule == "per_check"

@@ -196,7 +196,7 @@ def test_budgets_stop_the_probe(problem: Problem, prior: WorldPrior) -> None:
     assert (result.checks[0].edge, result.checks[0].stage) == (int(probe.order[0]), "probe")
 
 
-def test_other_policies_an_online_tree_and_no_threshold_make_no_probe(problem: Problem, prior: WorldPrior) -> None:
+def test_other_policies_and_no_threshold_make_no_probe(problem: Problem, prior: WorldPrior) -> None:
     planner = Planner(prior)
     worlds = problem.require_worlds()
     s, g, _ = _probed(planner, prior, 1)[0]
@@ -207,10 +207,34 @@ def test_other_policies_an_online_tree_and_no_threshold_make_no_probe(problem: P
     off = Planner(prior, probe_probability=None)
     assert off.query_model(s, g).probe is None
     assert all(c.stage != "probe" for c in off.plan(s, g, TableOracle(row)).checks)
-    tree = Planner(prior)
-    tree.set_leaf(0.2, None)
-    assert tree.query_model(s, g).probe is None
     assert DEFAULT_PROBE_PROBABILITY == 0.5
+
+
+def test_an_online_tree_goes_on_from_a_blocked_probe(problem: Problem, prior: WorldPrior) -> None:
+    """A query whose tree is grown online probes too; after a blocked edge the tree walks on the outcomes."""
+    planner = Planner(prior)
+    planner.set_leaf(0.05, None)
+    plain = Planner(prior, probe_probability=None)
+    plain.set_leaf(0.05, None)
+    worlds = problem.require_worlds()
+    free = tree_checks = 0
+    for s, g, probe in _probed(planner, prior, 40):
+        row = worlds.X[int(worlds.test_ids[(s + g) % worlds.test_ids.size])]
+        result = planner.plan(s, g, TableOracle(row))
+        edges = [c.edge for c in result.checks]
+        assert len(set(edges)) == len(edges)  # nothing checked twice
+        assert result.status is plain.plan(s, g, TableOracle(row)).status
+        if row[probe.edges].all():
+            free += 1
+            assert result.stage is PlanStage.PROBE
+            assert edges == probe.order.tolist()
+            continue
+        first_blocked = next(i for i, e in enumerate(probe.order.tolist()) if not row[e])
+        assert edges[: first_blocked + 1] == probe.order[: first_blocked + 1].tolist()
+        tree_checks += sum(c.stage == "tree" for c in result.checks)
+        assert planner.query_model(s, g).tree is not None
+    assert free >= 3
+    assert tree_checks >= 3  # the tree asked edges after the probe
 
 
 @pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan")])

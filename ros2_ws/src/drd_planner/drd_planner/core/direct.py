@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
 
-from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray, unique_bool_rows
 from drd_planner.exceptions import ProblemError
 
 #: Relative tolerance for ties between test scores (first test wins).
@@ -155,9 +155,7 @@ class DirectSelector:
         # Every edge a candidate: a view, not a copy (online trees share the prior's X across queries).
         self._Xc = self._X if candidate_edges is None else self._X[:, self._candidates]
         # Atoms: worlds with identical region-membership rows.
-        atoms, self._atom_of = np.unique(self._R, axis=0, return_inverse=True)
-        self._atom_of = self._atom_of.ravel().astype(np.int64)
-        self._atom_regions = atoms.astype(bool)  # (S, m)
+        self._atom_regions, self._atom_of = unique_bool_rows(self._R)  # (S, m), (n,)
         self._null_ecd = bool((~self._R.any(axis=1)).any())
         self._colour = greedy_region_colouring(self._R) if colouring else None
         self._exact = self._uniform and n < _FLOAT32_EXACT_WORLDS
@@ -254,7 +252,7 @@ class DirectSelector:
             if self._colour is not None:
                 raise ProblemError("region subsets (IncDRD) cannot be combined with colouring")
             cols = np.asarray(regions, dtype=np.int64)
-            members, local = np.unique(self._R[np.ix_(act, cols)], axis=0, return_inverse=True)
+            members, local = unique_bool_rows(self._R[np.ix_(act, cols)])
             null_ecd = bool((~members.any(axis=1)).any())
         return members, np.asarray(local).ravel(), null_ecd
 

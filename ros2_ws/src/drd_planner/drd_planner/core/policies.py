@@ -191,14 +191,21 @@ class DirectBisectPolicy:
         )
 
     def select(self) -> int | None:
-        """Tree edge while in the tree; BiSECt's choice afterwards."""
-        if self._bisect is not None:
-            return self._bisect.select()
-        edge = self._walker.edge()
-        if edge is None or edge in self._observed:  # defensive: a tree never repeats an edge
-            self._switch(self._walker.node)
-            return self.select()
-        return edge
+        """Tree edge while in the tree; BiSECt's choice afterwards.
+
+        A tree edge whose outcome is already known (heard before the tree asked, e.g. from the probe) is not
+        asked again: the walk follows the known outcome to the child, switching to BiSECt where it would.
+        """
+        while self._bisect is None:
+            edge = self._walker.edge()
+            if edge is None:
+                self._switch(self._walker.node)
+            elif edge not in self._observed:
+                return edge
+            else:
+                self._descend(self._observed[edge])
+        bisect: Bisect = self._bisect
+        return bisect.select()
 
     def observe(self, edge: int, free: bool) -> None:
         """Record the outcome, step down the tree, and switch to BiSECt when due."""
@@ -214,8 +221,13 @@ class DirectBisectPolicy:
                 else:
                     self._bisect.set_theta(self._posterior.library_theta(), edges=self._posterior.library_edges)
             return
-        if edge != self._walker.edge():
-            raise PolicyError(f"{self._name}: observed edge {edge}, but the tree asked for {self._walker.edge()}")
+        if edge == self._walker.edge():
+            self._descend(free)
+        # Another edge's outcome (checked before the tree asked for it): kept in ``_observed``, followed when
+        # the tree asks for that edge, and given to BiSECt at the switch.
+
+    def _descend(self, free: bool) -> None:
+        """Step from the current node to its child for ``free``; switch to BiSECt when there is none or due."""
         node = self._walker.node
         if not self._walker.advance(free):
             self._switch(node)

@@ -16,9 +16,12 @@ priors, 40 random vertex queries each): there the union path was free in 27 of 2
 (heli_terrain 39, the arm 33, heli_lines 39) of the queries whose probability was at least one half.
 
 The probe is used by the method's policy (``direct_bisect``) on queries without a precomputed tree, between
-vertices or with a start or goal off the graph (its motions' outcomes imputed in the training worlds), when the
-online stage would be BiSECt from the root (switch threshold 1); a DiRECt tree grown online, a stored query's
-tree and the baselines are unchanged.
+vertices or with a start or goal off the graph (its motions' outcomes imputed in the training worlds), whether
+the online stage is BiSECt from the root (switch threshold 1) or a DiRECt tree grown online (below 1): after a
+blocked edge that tree is walked on the probe's outcomes (a test whose outcome is known is followed, not asked
+again) and BiSECt gets them all at the switch. On held-out random queries of the three authors' sets where
+validation grows deep trees (60 queries, seed 3, eta 0.01) the mean checks went from 17.88 to 17.48 (Baffle),
+16.50 to 16.30 (SE(2) Baffle) and stayed at 85.90 (Maze). A stored query's tree and the baselines are unchanged.
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ import numpy.typing as npt
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from drd_planner.arrays import BoolArray, IntArray
+from drd_planner.arrays import BoolArray, IntArray, first_distinct_rows
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.library import PathLibrary
 from drd_planner.exceptions import ProblemError
@@ -92,9 +92,8 @@ def library_paths(search: SearchWorlds, start: int | Joins, goal: int | Joins, *
     if keyed.shape[0] == 0:
         return []
     lengths, chosen = counts[kept], choice[kept]
-    _, first = np.unique(keyed, axis=0, return_index=True)
     found: dict[tuple[int, ...], IntArray] = {}
-    for row in np.sort(first)[:max_paths]:
+    for row in first_distinct_rows(keyed)[:max_paths]:
         walk = keyed[row, 1 : 1 + int(lengths[row])].astype(np.int64)
         path = _walk_edges(search, walk, start, int(chosen[row]), into_goal)
         if path.size:

@@ -222,9 +222,9 @@ class QueryModels:
         return built
 
     def _probe(self, query: QueryGraph) -> Probe | None:
-        """The union path of a query whose online stage is BiSECt from the root, if likely enough free."""
+        """The union path of a query without a precomputed tree, if likely enough free."""
         prior = self.prior
-        if self.probe_probability is None or prior.eta < 1.0 or prior.worlds is None:
+        if self.probe_probability is None or prior.worlds is None:
             return None
         return union_probe(self.search, query, prior.world_weights, probability=self.probe_probability)
 

@@ -1,0 +1,41 @@
+"""The distinct rows of a matrix: the same answer as ``np.unique(axis=0)``, from packed bytes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drd_planner.arrays import first_distinct_rows, unique_bool_rows
+
+
+@pytest.mark.parametrize("shape", [(900, 500), (40, 3), (12, 9), (7, 1), (1, 17), (0, 4), (5, 0)])
+def test_unique_bool_rows_is_numpys_unique_over_rows(shape: tuple[int, int]) -> None:
+    rng = np.random.default_rng(shape[0] + shape[1])
+    rows = rng.random(shape) < 0.3
+    if shape[0] > 4:
+        rows[4] = rows[0]  # a repeated row
+    distinct, inverse = unique_bool_rows(rows)
+    expected, expected_inverse = np.unique(rows, axis=0, return_inverse=True)
+    assert distinct.dtype == bool
+    assert inverse.dtype == np.int64
+    assert np.array_equal(distinct, expected)
+    assert np.array_equal(inverse, np.asarray(expected_inverse).ravel())
+    assert np.array_equal(distinct[inverse], rows)
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64, np.bool_])
+def test_first_distinct_rows_are_numpys_first_indices(dtype: type) -> None:
+    rng = np.random.default_rng(3)
+    rows = rng.integers(0, 3, size=(60, 5)).astype(dtype)
+    first = first_distinct_rows(rows[:, ::2])  # a non-contiguous view too
+    _, expected = np.unique(rows[:, ::2], axis=0, return_index=True)
+    assert first.tolist() == np.sort(expected).tolist()
+    assert first_distinct_rows(np.zeros((0, 3))).size == 0
+    assert first_distinct_rows(np.zeros((4, 0))).tolist() == [0]
+
+
+def test_a_matrix_is_required() -> None:
+    with pytest.raises(ValueError, match="matrix"):
+        unique_bool_rows(np.zeros(3, dtype=bool))
+    with pytest.raises(ValueError, match="matrix"):
+        first_distinct_rows(np.zeros(3))
