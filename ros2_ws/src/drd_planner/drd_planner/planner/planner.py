@@ -4,7 +4,7 @@ A plan runs in up to two stages, all checks going through the one episode runner
 (:func:`~drd_planner.core.episode.run_episode`), which returns a path only when every edge of it was
 checked free in this plan:
 
-0. **the probe**, on a new query (vertices, or states joined by motions) whose online stage is BiSECt: its
+0. **the probe**, on a new query (vertices, or states joined by motions; no precomputed tree): its
    union path (the shortest over the edges free in any training world), checked first when the training worlds
    say it is free with probability at least ``probe_probability`` (one half); the library is built only if an
    edge of it is blocked, and the library stage then knows that outcome (:mod:`~drd_planner.planner.probe`).
