@@ -39,3 +39,15 @@ def test_a_matrix_is_required() -> None:
         unique_bool_rows(np.zeros(3, dtype=bool))
     with pytest.raises(ValueError, match="matrix"):
         first_distinct_rows(np.zeros(3))
+
+
+def test_distinct_bool_rows_are_found_exactly() -> None:
+    """Bool rows (the training worlds) are compared on their packed bits, never merged when they differ."""
+    rng = np.random.default_rng(0)
+    base = rng.random((30, 100)) < 0.5
+    rows = base[rng.integers(0, 30, size=200)]
+    _, reference = np.unique(rows, axis=0, return_index=True)
+    assert first_distinct_rows(rows).tolist() == np.sort(reference).tolist()
+    close = np.zeros((3, 9), dtype=bool)
+    close[1, 8] = True  # differs from row 0 only in the last bit, past the first byte
+    assert first_distinct_rows(close).tolist() == [0, 1]

