@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drd_planner.arrays import first_distinct_rows, unique_bool_rows
+from drd_planner.arrays import first_distinct_rows, row_groups, unique_bool_rows
 
 
 @pytest.mark.parametrize("shape", [(900, 500), (40, 3), (12, 9), (7, 1), (1, 17), (0, 4), (5, 0)])
@@ -38,7 +38,7 @@ def test_a_matrix_is_required() -> None:
     with pytest.raises(ValueError, match="matrix"):
         unique_bool_rows(np.zeros(3, dtype=bool))
     with pytest.raises(ValueError, match="matrix"):
-        first_distinct_rows(np.zeros(3))
+        row_groups(np.zeros(3))
 
 
 def test_distinct_bool_rows_are_found_exactly() -> None:
@@ -51,3 +51,16 @@ def test_distinct_bool_rows_are_found_exactly() -> None:
     close = np.zeros((3, 9), dtype=bool)
     close[1, 8] = True  # differs from row 0 only in the last bit, past the first byte
     assert first_distinct_rows(close).tolist() == [0, 1]
+
+
+def test_row_groups_number_the_groups_in_order_of_their_first_row() -> None:
+    rows = np.array([[2, 1], [0, 0], [2, 1], [1, 5], [0, 0], [0, 0]], dtype=np.int32)
+    first, group = row_groups(rows)
+    assert first.tolist() == [0, 1, 3]
+    assert group.tolist() == [0, 1, 0, 2, 1, 1]
+    rng = np.random.default_rng(5)
+    worlds = rng.random((50, 12)) < 0.2
+    first, group = row_groups(worlds)
+    assert np.array_equal(worlds[first][group], worlds)
+    assert np.all(np.diff(first) > 0)
+    assert group[first].tolist() == list(range(first.size))

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.lazysp import GraphArcs
+from drd_planner.planner import world_blocks
 from drd_planner.planner.query_library import ShortestPaths
 from drd_planner.planner.union_paths import NO_HOP, JoinMotions
 from drd_planner.planner.world_blocks import WorldBlocks
@@ -95,3 +97,32 @@ def test_an_off_graph_goal_is_searched_through_its_motions_and_distances_from_a_
     two = blocks.union_from(np.array([2, 9]), np.array([1.0, 0.5]), np.array([True, False]))
     assert two[2] == pytest.approx(1.0)
     assert two[9] == pytest.approx(1.0 + ahead[9])
+
+
+@pytest.mark.parametrize("directed", [False, True])
+def test_worlds_alike_on_the_searched_arcs_are_searched_once_and_get_their_own_rows(
+    directed: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Repeated worlds share one block of the search, and each still gets the rows of its own search."""
+    sources: list[int] = []
+
+    def counting(*args: object, **kwargs: object) -> object:
+        sources.append(np.size(kwargs["indices"]))
+        return dijkstra(*args, **kwargs)
+
+    monkeypatch.setattr(world_blocks, "dijkstra", counting)
+    graph, x, arcs, _ = _setup(directed)
+    x = x[[0, 1, 0, 2, 1, 0]].copy()
+    x[5, 0] = not x[5, 0]  # world 5 differs from world 0 in one edge only
+    blocks = WorldBlocks(arcs, np.asarray(graph.lengths)[arcs.edge], x[:, arcs.edge], 4)
+    union = blocks.union_tree(3)
+    sources.clear()  # the union's own search
+    together = blocks.search(union, np.arange(6), limit=np.inf)
+    assert sources == [4]  # worlds 0, 1, 3 and 5 (2 is 0, 4 is 1)
+    for w in range(6):
+        alone = blocks.search(union, np.array([w]), limit=np.inf)
+        assert np.array_equal(alone[0], together[0])
+        assert np.array_equal(alone[1][0], together[1][w])
+        assert np.array_equal(alone[2][0], together[2][w])
+    assert np.array_equal(together[1][0], together[1][2])
+    assert not np.array_equal(together[1][0], together[1][1])
