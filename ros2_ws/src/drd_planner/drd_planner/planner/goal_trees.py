@@ -302,10 +302,9 @@ class SearchWorlds:
         union = self._joined_union(goal) if isinstance(goal, JoinMotions) else self._kept(goal).union
         if not isinstance(start, JoinMotions):
             return union.walk(int(start)), -1
-        bound = np.where(start.free.any(axis=0), start.lengths + union.dist[start.vertices], np.inf)
-        if bound.size == 0 or not np.isfinite(bound.min()):
+        choice, _ = _best_join(union, start)
+        if choice < 0:
             return np.zeros(0, dtype=np.int64), -1
-        choice = int(np.argmin(bound))
         return union.walk(int(start.vertices[choice])), choice
 
     def forget_trees(self) -> None:
@@ -458,5 +457,16 @@ def _union_distance(union: UnionTree, start: int | JoinMotions) -> float:
     """A start's distance to the goal over a union (a joined start: its best motion free in any world)."""
     if not isinstance(start, JoinMotions):
         return float(union.dist[int(start)])
+    return _best_join(union, start)[1]
+
+
+def _best_join(union: UnionTree, start: JoinMotions) -> tuple[int, float]:
+    """A joined start's motion, free in some world, of least length plus union distance, and that sum.
+
+    The first such motion on ties; (-1, inf) when no motion free in some world reaches the goal.
+    """
     behind = np.where(start.free.any(axis=0), start.lengths + union.dist[start.vertices], np.inf)
-    return float(np.min(behind, initial=np.inf))
+    if behind.size == 0 or not np.isfinite(behind.min()):
+        return -1, float("inf")
+    choice = int(np.argmin(behind))
+    return choice, float(behind[choice])

@@ -8,8 +8,8 @@ every world's) is within the search's limit: no world can reach another one with
 search is small whatever the graph's size. Worlds alike on every arc of the search (common for a short query,
 whose few arcs few obstacles touch) share one block, and their rows are copied from it: the same distances and
 next hops (on the shipped priors and three authors' sets, 1 422 planned episodes gave the same checks), in
-fewer blocks. The vertex ``B - 1`` (``B = V + 1``) stands for an off-graph goal,
-whose motions are its arcs for that search only.
+fewer blocks. The vertex ``B - 1`` (``B = V + 1``) stands for an off-graph goal, whose motions are its arcs
+for that search only.
 """
 
 from __future__ import annotations
