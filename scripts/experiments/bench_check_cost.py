@@ -15,7 +15,9 @@ checker):
   vertex states, heading included; kept when the state itself is free in the world, the Planner can join
   it and the query has a free path), planned through the Planner's public API, which joins them;
 
-with ``direct_bisect`` and ``bisect`` (``Planner.plan``), ``lazysp`` and ``check_all`` on the query's
+with ``direct_bisect`` and ``bisect`` (``Planner.plan``, the check cost unknown to it), ``direct_bisect_lead``
+(``direct_bisect`` with the planner told C: a new query's lead, ``drd_planner.planner.lead``), ``lazysp`` and
+``check_all`` on the query's
 graph (``drd_planner.bench.cost_episodes``), and OMPL's LazyPRM on the prior's graph with the same live
 checker and the same per-check cost in its worker (vertex queries only: its roadmap cannot join an off-graph
 state). Query i runs against world i mod W. Times are CPU ms of the process that plans (the OMPL worker's
@@ -40,7 +42,7 @@ import numpy as np
 
 from drd_planner.bench.check_cost import Timed, cost_key, parse_check_costs
 from drd_planner.bench.cost_bench import cost_markdown, run_cost_episodes, summarize_costs
-from drd_planner.bench.cost_episodes import CostQuery, EpisodeTime
+from drd_planner.bench.cost_episodes import LEAD_POLICY, CostQuery, EpisodeTime
 from drd_planner.bench.held_out import WORLD_MODELS, held_out_worlds, new_queries, off_graph_queries
 from drd_planner.bench.ompl_peer import LiveWorlds, ompl_available, run_ompl_lazyprm_live
 from drd_planner.bench.world_recipes import WorldRecipe
@@ -50,7 +52,7 @@ from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.prior_file import load_prior
 
 REPO = Path(__file__).resolve().parents[2]
-POLICIES = ("direct_bisect", "bisect", "lazysp", "check_all")
+POLICIES = ("direct_bisect", LEAD_POLICY, "bisect", "lazysp", "check_all")
 
 
 def ompl_episodes(
@@ -117,8 +119,8 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
     }
 
 
-def ratio_lines(results: dict[str, Any], costs: tuple[float, ...]) -> list[str]:
-    """The 'done when' check: direct_bisect / lazysp median CPU per prior, kind and C."""
+def ratio_lines(results: dict[str, Any], costs: tuple[float, ...], policy: str = "direct_bisect") -> list[str]:
+    """The 'done when' check: ``policy`` / lazysp median CPU per prior, kind and C."""
     lines = [
         "| prior | kind | " + " | ".join(f"C = {cost_key(c)}" for c in costs) + " |",
         "|" + "---|" * (len(costs) + 2),
@@ -128,7 +130,7 @@ def ratio_lines(results: dict[str, Any], costs: tuple[float, ...]) -> list[str]:
         for kind in ("stored", "new", "off_graph"):
             cells = []
             for c in costs:
-                a = s["direct_bisect"]["time_ms"][cost_key(c)]["kinds"].get(kind)
+                a = s[policy]["time_ms"][cost_key(c)]["kinds"].get(kind)
                 b = s["lazysp"]["time_ms"][cost_key(c)]["kinds"].get(kind)
                 ok = a and b and a["median"] is not None and b["median"]
                 cells.append(f"{a['median'] / b['median']:.2f}" if ok else "-")
@@ -160,7 +162,9 @@ def main(argv: list[str] | None = None) -> int:
         print(ompl_available()[1], file=sys.stderr)
     results = {name: run_prior(name, args, costs, ompl) for name in names}
     text = "\n".join(r["markdown"] for r in results.values())
-    text += "\n## direct_bisect / lazysp, median CPU ms to a verified plan\n\n" + "\n".join(ratio_lines(results, costs))
+    for policy in ("direct_bisect", LEAD_POLICY):
+        text += f"\n## {policy} / lazysp, median CPU ms to a verified plan\n\n"
+        text += "\n".join(ratio_lines(results, costs, policy)) + "\n"
     text += "\n"
     print(text)
     if args.markdown:

@@ -17,7 +17,7 @@ from drd_planner.cli.main import main
 def _argv(folder: Path, out: Path, costs: str) -> list[str]:
     return [
         "bench", "--gccd", str(folder), "--queries", "4", "--eta", "1", "--kappa", "none",
-        "--region-rule", "probability", "--policies", "direct_bisect,lazysp,check_all",
+        "--region-rule", "probability", "--policies", "direct_bisect,direct_bisect_lead,lazysp,check_all",
         "--check-cost-ms", costs, "--json", str(out),
     ]  # fmt: skip
 
@@ -31,7 +31,7 @@ def test_time_keys_and_the_cost_paid(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert "off-graph queries do not apply" in report
     doc = json.loads(out.read_text())
     assert doc["check_cost"]["costs_ms"] == ["0", "2"]
-    for name in ("direct_bisect", "lazysp", "check_all"):
+    for name in ("direct_bisect", "direct_bisect_lead", "lazysp", "check_all"):
         entry = doc["policies"][name]
         for key in ("0", "2"):
             t = entry["time_ms"][key]
@@ -41,9 +41,13 @@ def test_time_keys_and_the_cost_paid(tmp_path: Path, capsys: pytest.CaptureFixtu
             assert t["mean"] > 0
             assert set(t["kinds"]) == {"stored", "new"}
         # CPU at 2 ms per check is at least checks x 2 ms (the median query's checks bound it below)
-        checks = min(entry["time_checks"].values())
+        checks = min(entry["time_checks_at"]["2"].values())
         assert entry["time_ms"]["2"]["median"] >= 2.0 * checks
         assert entry["time_ms"]["2"]["median"] > entry["time_ms"]["0"]["median"]
+    assert "direct_bisect_lead / lazysp" in report
+    lead = doc["policies"]["direct_bisect_lead"]
+    assert set(lead["time_ms"]) == {"0", "2"}
+    assert "checks" not in lead  # no check-count episodes of its own: its checks are timed ones
     edges = doc["policies"]["check_all"]["checks"][0]
     assert doc["policies"]["check_all"]["time_ms"]["2"]["median"] >= 2.0 * edges
 
@@ -62,6 +66,9 @@ def test_malformed_costs_and_missing_queries_are_one_clear_error(
     argv[argv.index("--policies") + 1] = "direct_only"
     assert main(argv) == 2
     assert "known:" in capsys.readouterr().err
+    no_cost = ["bench", "--gccd", str(folder), "--queries", "2", "--policies", "direct_bisect_lead,lazysp"]
+    assert main(no_cost) == 2
+    assert "give --check-cost-ms too" in capsys.readouterr().err
 
 
 def test_medians_compare_the_queries_every_policy_verified() -> None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from conftest import gccd_folder
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import breadth_first_order, dijkstra
 
 from drd_planner.core.bisect import bias_from_worlds
 from drd_planner.core.episode import EpisodeResult, GraphPathPolicy, TableOracle, run_episode
@@ -274,6 +274,31 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
             assert problem.graph.lengths[path].sum() == pytest.approx(
                 shortest_feasible_length(problem.graph, x, problem.start, problem.goal)
             )
+
+
+@pytest.mark.parametrize("directed", [False, True])
+def test_the_known_free_reach_is_a_search_over_the_checked_free_edges(directed: bool) -> None:
+    """The balanced selector's regions equal a breadth-first search of the whole graph's checked-free arcs."""
+    rng = np.random.default_rng(3)
+    n = 60
+    drawn = rng.integers(n, size=(600, 2))  # self-loops kept: they reach nothing new
+    keys = drawn if directed else np.sort(drawn, axis=1)
+    pairs = drawn[np.unique(keys, axis=0, return_index=True)[1]][:400]
+    graph = ExplicitGraph(pairs, np.ones(len(pairs)), num_vertices=n, directed=directed)
+    policy = LazySP(graph, 0, n - 1, LazySPSettings(selector="balanced"))
+    outcomes: dict[int, bool] = {}
+    for edge in rng.permutation(len(pairs))[:150].tolist():
+        free = bool(rng.random() < 0.7)
+        policy.observe(edge, free)
+        outcomes[edge] = free
+        arcs = [(int(pairs[e, 0]), int(pairs[e, 1])) for e, f in outcomes.items() if f]
+        if not directed:
+            arcs += [(v, u) for u, v in arcs]
+        rows, cols = (np.array([a[i] for a in arcs], dtype=np.int64) for i in (0, 1))
+        adjacency = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(n, n))
+        ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
+        behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
+        assert policy.known_free_reach() == (ahead.size, behind.size)
 
 
 def test_balanced_checks_from_the_walled_in_end() -> None:

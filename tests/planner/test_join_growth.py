@@ -12,7 +12,6 @@ from drd_planner.planner import load_prior
 from drd_planner.planner.connect import POINTS_PER_EDGE, imputed_columns
 from drd_planner.planner.dubins_connector import DubinsConnector
 from drd_planner.planner.join_growth import (
-    JoinGrowth,
     SketchedJoins,
     more_joins_of,
     prior_ranking,
@@ -93,16 +92,6 @@ def test_when_every_join_is_blocked_the_reason_says_what_was_tried(prior: WorldP
     assert result.growth.edges_added == 64 - 17  # beside the 16 nearest joins, the one straight to the goal
     assert "blocked" in result.reason
     assert "64" in result.reason
-
-
-def test_join_growth_is_only_for_queries_with_off_graph_states(prior: WorldPrior) -> None:
-    planner = Planner(prior, snap_tolerance=1e-6)
-    model = planner.query_model(0, int(prior.trees[0].goal))
-    assert not model.query.connected
-    assert planner._growth_kind(model) is None
-    connected = planner.query_model(START, int(prior.trees[0].goal))
-    assert planner._growth_kind(connected) is JoinGrowth
-    assert isinstance(planner._growth(connected, JoinGrowth), JoinGrowth)
 
 
 def test_joins_go_only_where_the_other_end_can_still_be_reached(prior: WorldPrior) -> None:

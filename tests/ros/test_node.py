@@ -490,6 +490,25 @@ def test_map_updates_keep_a_plan_they_cannot_block_and_replan_one_they_block(con
         assert second.map_version == node.snapshot.version
 
 
+def test_a_stated_check_cost_reaches_the_planners_and_its_price_is_measured_at_configure(context: Any) -> None:
+    node = _node(context, [str(TREE)], check_cost_ms=0.4)
+    peer = Peer(context)
+    with active_planner(context, node, peer):
+        planner = node.sessions[0].planner
+        assert planner.check_cost_ms == 0.4
+        measured = planner._models._library_cost_ms  # both prices measured at configure, not in a request
+        assert set(measured) == {False, True}
+        assert all(ms > 0 for ms in measured.values())
+        assert planner.lead_checks(joined=True) == math.floor(round(measured[True] / 0.4, 9))
+        (result,) = node.set_parameters([Parameter("check_cost_ms", value=-1.0)])
+        assert not result.successful
+        assert "check_cost_ms" in result.reason
+    assert "check_cost_ms must be finite" in parameter_problems({"check_cost_ms": math.inf})[0]
+    plain = _node(context, [str(TREE)])
+    with active_planner(context, plain, Peer(context)):
+        assert plain.sessions[0].planner.check_cost_ms is None  # 0, the default: not stated
+
+
 def test_improve_parameters_publish_a_shorter_verified_path_and_refuse_bad_values(context: Any) -> None:
     """improve_checks > 0: the published plan is the best verified one, no longer than the first path."""
     node = _node(context, [str(TREE)], improve_checks=40)

@@ -16,6 +16,7 @@ import numpy as np
 
 from drd_planner.bench.check_cost import cost_key, time_summary
 from drd_planner.bench.cost_episodes import (
+    LEAD_POLICY,
     QUERY_KINDS,
     CostQuery,
     EpisodeTime,
@@ -41,8 +42,10 @@ __all__ = [
 
 #: The graph baselines of the benchmark beside the Planner's library policies.
 GRAPH_POLICIES = ("lazysp", "check_all")
-COST_POLICIES = tuple(PLAN_POLICIES) + GRAPH_POLICIES
-DEFAULT_COST_POLICIES = ("direct_bisect", "bisect", "lazysp", "check_all")
+COST_POLICIES = (*PLAN_POLICIES, LEAD_POLICY, *GRAPH_POLICIES)
+DEFAULT_COST_POLICIES = ("direct_bisect", LEAD_POLICY, "bisect", "lazysp", "check_all")
+#: The policies whose ratio to ``lazysp`` the markdown table shows.
+RATIO_POLICIES = ("direct_bisect", LEAD_POLICY)
 
 OracleOf = Callable[[int], EdgeOracle]
 
@@ -75,6 +78,9 @@ def run_cost_episodes(
     """
     check_cost_policies(policies)
     planner.warm_up()
+    if LEAD_POLICY in policies:  # the lead's price, measured before anything is timed
+        planner.library_cost_ms()
+        planner.library_cost_ms(joined=True)
     rows = dict(rows or {})
     out: list[EpisodeTime] = []
     if queries:  # first use of every code path (imports, caches) before anything is timed
@@ -117,13 +123,15 @@ def summarize_costs(episodes: Sequence[EpisodeTime], costs: Sequence[float]) -> 
 
     Returns:
         ``{policy: {"time_ms": {C: {"n", "median", "mean", "wall_median", "wall_mean", "kinds": {kind: {the
-        same}}}}, "checks": {kind: median checks}, "verified": {kind: count}, "queries": {kind: count}}}``.
+        same}}}}, "checks": {kind: median checks}, "checks_at": {C: {kind: median checks}}, "verified":
+        {kind: count}, "queries": {kind: count}}}``; ``checks``, ``verified`` and ``queries`` at the first C
+        (a planner told the check cost, :data:`LEAD_POLICY`, may check differently at each C: ``checks_at``).
     """
     common = {kind: _common(episodes, kind) for kind in QUERY_KINDS}
     out: dict[str, Any] = {}
     for name in dict.fromkeys(e.policy for e in episodes):
         mine = [e for e in episodes if e.policy == name]
-        block: dict[str, Any] = {"time_ms": {}, "checks": {}, "verified": {}, "queries": {}}
+        block: dict[str, Any] = {"time_ms": {}, "checks": {}, "checks_at": {}, "verified": {}, "queries": {}}
         for cost in costs:
             at = [e for e in mine if e.cost_ms == cost]
             shared = [e for e in at if e.query in common[e.kind][1]]
@@ -134,6 +142,11 @@ def summarize_costs(episodes: Sequence[EpisodeTime], costs: Sequence[float]) -> 
                 if any(e.kind == kind for e in at)
             }
             block["time_ms"][cost_key(cost)] = entry
+            block["checks_at"][cost_key(cost)] = {
+                kind: float(np.median([e.checks for e in at if e.kind == kind]))
+                for kind in QUERY_KINDS
+                if any(e.kind == kind for e in at)
+            }
         first = [e for e in mine if e.cost_ms == costs[0]]
         for kind in QUERY_KINDS:
             of_kind = [e for e in first if e.kind == kind]
@@ -152,12 +165,13 @@ def _ms(value: float | None) -> str:
 def cost_markdown(summary: dict[str, Any], costs: Sequence[float], *, title: str, notes: Sequence[str] = ()) -> str:
     """A markdown table of a :func:`summarize_costs` summary.
 
-    Per query kind and C, each policy's median CPU ms (n = queries compared) and the ratio
-    ``direct_bisect / lazysp``; then median checks and verified counts per kind.
+    Per query kind and C, each policy's median CPU ms (n = queries compared) and the ratios
+    ``direct_bisect / lazysp`` and ``direct_bisect_lead / lazysp``; then median checks (at the first C) and
+    verified counts per kind.
     """
     names = list(summary)
-    ratio = "direct_bisect" in summary and "lazysp" in summary
-    head = ["kind", "C ms/check", "n", *names] + (["direct_bisect / lazysp"] if ratio else [])
+    ratios = [n for n in RATIO_POLICIES if n in summary] if "lazysp" in summary else []
+    head = ["kind", "C ms/check", "n", *names] + [f"{n} / lazysp" for n in ratios]
     lines = [f"## {title}", "", "Median CPU ms to a verified plan:", ""]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for kind in QUERY_KINDS:
@@ -167,8 +181,8 @@ def cost_markdown(summary: dict[str, Any], costs: Sequence[float], *, title: str
                 continue
             n = max(c["n"] for c in cells if c is not None)
             row = [kind, cost_key(cost), str(n)] + ["-" if c is None else _ms(c["median"]) for c in cells]
-            if ratio:
-                a = summary["direct_bisect"]["time_ms"][cost_key(cost)]["kinds"].get(kind)
+            for name in ratios:
+                a = summary[name]["time_ms"][cost_key(cost)]["kinds"].get(kind)
                 b = summary["lazysp"]["time_ms"][cost_key(cost)]["kinds"].get(kind)
                 ok = a and b and a["median"] is not None and b["median"]
                 row.append(f"{a['median'] / b['median']:.2f}" if ok else "-")  # type: ignore[index]

@@ -35,6 +35,7 @@ from drd_planner.planner.query_graph import MotionDispatch, QueryGraph
 from drd_planner.planner.query_library import ShortestPaths
 
 __all__ = [
+    "LEAD_POLICY",
     "QUERY_KINDS",
     "CostQuery",
     "EpisodeTime",
@@ -45,6 +46,8 @@ __all__ = [
     "plan_episode",
 ]
 
+#: ``direct_bisect`` with the planner told each episode's check cost (:meth:`Planner.check_cost_ms`).
+LEAD_POLICY = "direct_bisect_lead"
 #: The query kinds, in report order.
 QUERY_KINDS: tuple[str, ...] = ("stored", "new", "off_graph")
 
@@ -121,10 +124,20 @@ def _checked_free(edges: list[int], log: dict[int, bool]) -> bool:
 def plan_episode(
     planner: Planner, query: CostQuery, index: int, oracle: EdgeOracle, cost_ms: float, policy: str, seed: int
 ) -> EpisodeTime:
-    """``policy`` through :meth:`Planner.plan` (the query new to the planner)."""
+    """``policy`` through :meth:`Planner.plan` (the query new to the planner).
+
+    :data:`LEAD_POLICY` is ``direct_bisect`` with the planner told the check cost (``check_cost_ms = C``: a
+    new query's lead, :mod:`~drd_planner.planner.lead`); every other policy plans with it unknown.
+    """
     planner.forget_queries()
     costly = with_check_cost(oracle, cost_ms)
-    result, spent = timed(lambda: planner.plan(query.start, query.goal, costly, seed=seed, policy=policy))
+    told = policy == LEAD_POLICY
+    planner.check_cost_ms = cost_ms if told else None
+    plan_policy = "direct_bisect" if told else policy
+    try:
+        result, spent = timed(lambda: planner.plan(query.start, query.goal, costly, seed=seed, policy=plan_policy))
+    finally:
+        planner.check_cost_ms = None
     edges = [int(e) for e in result.edges] if result.found else []
     verified = result.found and _checked_free(edges, result.outcomes())
     return EpisodeTime(policy, index, query.kind, cost_ms, verified, costly.checks, spent)

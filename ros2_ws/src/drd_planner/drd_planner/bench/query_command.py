@@ -15,7 +15,7 @@ from drd_planner.bench.cost_bench import (
     run_cost_episodes,
     summarize_costs,
 )
-from drd_planner.bench.cost_episodes import CostQuery
+from drd_planner.bench.cost_episodes import LEAD_POLICY, CostQuery
 from drd_planner.bench.queries import (
     DEFAULT_QUERY_POLICIES,
     query_markdown,
@@ -102,6 +102,8 @@ def run_query_bench(options: QueryBenchOptions) -> int:
     policies = options.policies or DEFAULT_QUERY_POLICIES
     if costs:
         check_cost_policies(policies)
+    elif LEAD_POLICY in policies:
+        raise DrdError(f"{LEAD_POLICY} is direct_bisect told the check cost: give --check-cost-ms too")
     t0 = time.perf_counter()
     problem = options.source.load()
     require_test_worlds(problem)
@@ -109,8 +111,9 @@ def run_query_bench(options: QueryBenchOptions) -> int:
     prepare_s = time.perf_counter() - t0
     planner = Planner(prior)
     queries = draw_queries(problem, options.queries, seed=options.seed)
+    checked = tuple(p for p in policies if p != LEAD_POLICY)  # its checks are direct_bisect's but for the lead
     doc = run_query_benchmark(
-        problem, planner, queries, policies=policies, seed=options.seed, max_checks=options.max_checks
+        problem, planner, queries, policies=checked, seed=options.seed, max_checks=options.max_checks
     )
     doc["settings"]["leaf"] = note
     doc["memory_bytes"] = planner.memory_bytes()
@@ -165,6 +168,7 @@ def time_at_check_costs(
         entry = doc["policies"].setdefault(name, {})
         entry["time_ms"] = block["time_ms"]
         entry["time_checks"] = block["checks"]
+        entry["time_checks_at"] = block["checks_at"]
         entry["time_verified"] = block["verified"]
     doc["check_cost"] = {
         "costs_ms": [cost_key(c) for c in costs],

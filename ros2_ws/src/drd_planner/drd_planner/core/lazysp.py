@@ -31,7 +31,7 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, dijkstra
+from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.graph import ExplicitGraph
@@ -285,6 +285,8 @@ class LazySP:
         self._stale = True
         self._forward_next = True
         self._batch: tuple[int, IntArray, IntArray] | None = None  # WeightSamp's block-graph structure
+        self._edge_ends, self._directed = graph.edges, graph.directed
+        self._free_edges: list[int] = []  # checked free, in order (the balanced selector's known-free region)
         for edge, free in (observations or {}).items():
             self.observe(int(edge), bool(free))
 
@@ -330,7 +332,9 @@ class LazySP:
     def observe(self, edge: int, free: bool) -> None:
         """Record the outcome; a blocked edge is deleted and the path re-planned on the next call."""
         self._outcome[edge] = _FREE if free else _BLOCKED
-        if not free:
+        if free:
+            self._free_edges.append(edge)
+        else:
             self._weights[edge] = np.inf
             self._stale = True
 
@@ -356,14 +360,20 @@ class LazySP:
         return int(open_pos[open_pos.size - 1 - int(np.argmax(counts[::-1]))])  # last maximum
 
     def known_free_reach(self) -> tuple[int, int]:
-        """(vertices reachable from the start, vertices that reach the goal) over checked-free edges."""
-        arcs = self._arcs
-        n = arcs.num_vertices
-        free = self._outcome[arcs.edge] == _FREE
-        adjacency = sp.csr_array((np.ones(int(free.sum())), (arcs.u[free], arcs.v[free])), shape=(n, n))
-        ahead = breadth_first_order(adjacency, self._start, directed=True, return_predecessors=False)
-        behind = breadth_first_order(adjacency.T.tocsr(), self._goal, directed=True, return_predecessors=False)
-        return int(ahead.size), int(behind.size)
+        """(vertices reachable from the start, vertices that reach the goal) over checked-free edges.
+
+        A search over the checked-free edges only (a few per check), not over the whole graph.
+        """
+        ahead: dict[int, list[int]] = {}
+        behind: dict[int, list[int]] = {}
+        for edge in dict.fromkeys(self._free_edges):
+            u, v = (int(x) for x in self._edge_ends[edge])
+            ahead.setdefault(u, []).append(v)
+            behind.setdefault(v, []).append(u)
+            if not self._directed:
+                ahead.setdefault(v, []).append(u)
+                behind.setdefault(u, []).append(v)
+        return _reached(ahead, self._start), _reached(behind, self._goal)
 
     def shortest_path_counts(self) -> IntArray:
         """WeightSamp: how often each edge lies on the shortest path of ``nsamps`` sampled graphs.
@@ -402,3 +412,15 @@ class LazySP:
                 more = tails != starts
                 heads, starts = tails[more], starts[more]
         return counts
+
+
+def _reached(adjacency: Mapping[int, list[int]], source: int) -> int:
+    """How many vertices ``source`` reaches over ``adjacency`` (itself included)."""
+    seen = {source}
+    todo = [source]
+    while todo:
+        for nxt in adjacency.get(todo.pop(), ()):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    return len(seen)

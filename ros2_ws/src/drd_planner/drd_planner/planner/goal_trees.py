@@ -307,6 +307,10 @@ class SearchWorlds:
             return np.zeros(0, dtype=np.int64), -1
         return union.walk(int(start.vertices[choice])), choice
 
+    def drop_tree(self, goal: int) -> None:
+        """Drop the reverse trees kept for one graph goal (none kept: nothing happens)."""
+        self._trees.pop(goal, None)
+
     def forget_trees(self) -> None:
         """Drop the reverse trees kept for past goals (the next query to any goal searches anew)."""
         self._trees.clear()

@@ -39,42 +39,35 @@ from pathlib import Path
 from typing import Any
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.episode import CheckRecord, EdgeOracle, run_episode
+from drd_planner.core.episode import EdgeOracle, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
-from drd_planner.core.status import PlanCause
 from drd_planner.core.tree import DEFAULT_EXPAND_THRESHOLD
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_budget, check_budgets, improve_path
 from drd_planner.planner.blas_threads import one_blas_thread
 from drd_planner.planner.connect import MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
-from drd_planner.planner.growth_samples import SegmentMaker
-from drd_planner.planner.join_growth import JoinGrowth, more_joins_of
-from drd_planner.planner.no_path import blocked_end, edge_states_of, no_path_reason
+from drd_planner.planner.graph_stage import GraphStage, unwrapped_oracle
+from drd_planner.planner.lead import before_library, check_cost, lead_checks
 from drd_planner.planner.prior import LeafSetting, WorldPrior
-from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, PROBE_POLICIES, check_probe_probability, probe_episode
+from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, check_probe_probability
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.query_models import DEFAULT_CACHE_SIZE, QueryModels
 from drd_planner.planner.result import (
     PlanResult,
-    PlanStage,
     PlanStatus,
     exhausted_result,
     found_result,
     library_stage,
     plan_timings,
     trivial_result,
-    unproven_result,
 )
 from drd_planner.planner.roadmap_growth import (
     DEFAULT_GROWTH,
-    GraphGrowth,
     GrowthSettings,
-    RoadmapGrowth,
-    lazy_search,
 )
 from drd_planner.planner.state_sampler import sampler_of
 
@@ -98,6 +91,9 @@ class Planner:
             has a sampler of valid states (the arm's) and an oracle that checks motions.
         probe_probability: a new query first checks its union path when that is free with at least this
             probability over the training worlds (:mod:`~drd_planner.planner.probe`); None: never.
+
+    Set :attr:`check_cost_ms` when you know what one check costs: a new query then first runs a lazy search
+    for as many checks as its library would cost (:mod:`~drd_planner.planner.lead`).
     """
 
     def __init__(
@@ -118,6 +114,7 @@ class Planner:
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
         self._models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
         self._models.probe_probability = check_probe_probability(probe_probability)
+        self._check_cost_ms: float | None = None
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
 
@@ -130,6 +127,47 @@ class Planner:
         from drd_planner.planner.prior_file import load_prior
 
         return cls(load_prior(path, expected_domain=expected_domain), **options)
+
+    @property
+    def check_cost_ms(self) -> float | None:
+        """What one check costs in CPU milliseconds (None, the default: unknown, so no lead).
+
+        Set it (a finite number >= 0; ProblemError otherwise) and a new query first runs a lazy search for at
+        most :meth:`lead_checks` checks before its library is built (:mod:`~drd_planner.planner.lead`).
+        """
+        return self._check_cost_ms
+
+    @check_cost_ms.setter
+    def check_cost_ms(self, value: float | None) -> None:
+        self._check_cost_ms = check_cost(value, "check_cost_ms")
+        self._models.library_waits = self._check_cost_ms is not None
+
+    def library_cost_ms(self, *, joined: bool = False) -> float:
+        """What a new query's library and tree cost in CPU milliseconds: the lead's price.
+
+        Measured once per kind of query on this machine (between vertices, or ``joined``: a start or goal off
+        the graph; at :meth:`warm_up` when :attr:`check_cost_ms` is set, else on first need) unless fixed by
+        :meth:`set_library_cost_ms`.
+        """
+        return self._models.library_cost_ms(joined=joined)
+
+    def set_library_cost_ms(self, value: float | None) -> None:
+        """Fix the lead's price for every query (None: measure it); the same budget on every machine and run.
+
+        Raises:
+            ProblemError: a value that is not a finite number >= 0.
+        """
+        self._models.fixed_library_cost_ms = check_cost(value, "library_cost_ms")
+
+    def lead_checks(self, *, joined: bool = False) -> int | None:
+        """A new query's lead budget in checks (0: no lead; None: no limit).
+
+        0 while :attr:`check_cost_ms` is None, else ``floor(library_cost_ms(joined) / check_cost_ms)`` (no
+        limit when checks cost 0).
+        """
+        if self._check_cost_ms is None:
+            return 0
+        return lead_checks(self._check_cost_ms, self._models.library_cost_ms(joined=joined))
 
     @property
     def snap_tolerance(self) -> float:
@@ -292,7 +330,7 @@ class Planner:
             return result
         if result.growth is not None:  # improve on the grown graph
             model = dataclasses.replace(model, query=result.growth.query)
-            raw = _unwrapped(oracle)
+            raw = unwrapped_oracle(oracle)
             assert isinstance(raw, MotionOracle)  # growth checks its edges with check_motion
             oracle = MotionDispatch(raw, result.growth.query.motions)
         return improve_path(result, model, oracle, improve, prior=self.prior, limits=limits)
@@ -307,18 +345,17 @@ class Planner:
     ) -> PlanResult:
         """The library stage, then the graph stage when every library path is blocked (then growth)."""
         t_model, t_begin = times
-        checks: list[CheckRecord] = []
-        known: dict[int, bool] = {}
         costs, deadline = model.query.edge_costs, limits.deadline
-        if model.probe is not None and policy in PROBE_POLICIES:
-            probed = probe_episode(model.probe, costs, oracle, max_checks=limits.max_checks, deadline=deadline)
-            checks.extend(probed.checks)
-            known.update({c.edge: c.free for c in probed.checks})
-            if probed.success and probed.path_edges is not None:
-                return found_result(model, probed.path_edges, checks, PlanStage.PROBE, times)
-            if probed.ran_out is not None:
-                return exhausted_result(model, probed.ran_out, checks, t_model, t_begin)
-        if model.probe is not None:  # a blocked probe (or another policy): the library now, timed as the library
+        lead = self.lead_checks(joined=model.query.connected)
+        ahead = before_library(self.prior, model, oracle, policy, limits, lead)
+        checks, known = ahead.checks, ahead.known
+        if ahead.stage is not None and ahead.path_edges is not None:
+            return found_result(model, ahead.path_edges, checks, ahead.stage, times)
+        if ahead.ran_out is not None:
+            return exhausted_result(model, ahead.ran_out, checks, t_model, t_begin)
+        if ahead.no_path:  # the lead proved it: no library can find a path either
+            return self._graph_stage().run(model, oracle, known, checks, limits, times)
+        if model.library_pending:  # after the probe and lead (or another policy): the library now, timed as such
             model = self._models.with_library(model)
             t_model, times = t_model + model.build_s, (t_model + model.build_s, t_begin)
         if model.library is not None:
@@ -336,7 +373,7 @@ class Planner:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)
             if episode.ran_out is not None:  # a policy that gave up goes on to the graph, as a blocked library
                 return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
-        return self._plan_on_graph(model, oracle, known, checks, limits, times)
+        return self._graph_stage().run(model, oracle, known, checks, limits, times)
 
     def _resolve(self, start: Endpoint, goal: Endpoint, oracle: EdgeOracle) -> QueryModel | int:
         """The query's model, or the one vertex when start and goal snap to it (QueryError: refused)."""
@@ -359,114 +396,9 @@ class Planner:
                     raise QueryError(why)
         return self.query_model(s, g)
 
-    def _plan_on_graph(
-        self,
-        model: QueryModel,
-        oracle: EdgeOracle,
-        known: dict[int, bool],
-        checks: list[CheckRecord],
-        limits: PlanLimits,
-        times: tuple[float, float],
-    ) -> PlanResult:
-        """The graph stage after the library, then roadmap growth: its result, or why no path was proven."""
-        t_model, t_begin = times
-        raw, report = _unwrapped(oracle), None
-        kind = self._growth_kind(model) if isinstance(raw, MotionOracle) else None
-        first = None if kind is None or not kind.starts_early or self.growth is None else self.growth.graph_checks_first
-        stage = self._graph_stage(model, oracle, known, checks, limits, times, first)
-        if isinstance(stage, PlanResult):
-            return stage
-        growth = None if kind is None else self._growth(model, kind)
-        if growth is not None and isinstance(raw, MotionOracle):
-            grown = growth.run(
-                raw, known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
-            )
-            report = grown.report
-            if grown.status is PlanStatus.FOUND and grown.path_edges is not None:
-                return found_result(model, grown.path_edges, checks, PlanStage.GROW, times, report)
-            if grown.cause is not None and grown.cause.is_budget:
-                return exhausted_result(model, grown.cause, checks, t_model, t_begin, report)
-        if stage:  # growth began before the graph stage's proof: finish it (every outcome reused)
-            finished = self._graph_stage(model, oracle, known, checks, limits, times, None)
-            if isinstance(finished, PlanResult):
-                return finished
-        query = model.query if report is None else report.query
-        along = edge_states_of(self.prior, query, getattr(self._connector, "segment", None))
-        reason = no_path_reason(query, checks, raw, along, report)
-        result = unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
-        return dataclasses.replace(result, cause=blocked_end(query, checks))
-
-    def _graph_stage(
-        self,
-        model: QueryModel,
-        oracle: EdgeOracle,
-        known: dict[int, bool],
-        checks: list[CheckRecord],
-        limits: PlanLimits,
-        times: tuple[float, float],
-        first: int | None,
-    ) -> PlanResult | bool:
-        """The lazy search over the query's whole graph, reusing and extending ``known`` and ``checks``.
-
-        Args:
-            model: the query's model (its graph is searched).
-            oracle: the plan's oracle.
-            known: every outcome of the plan so far (edge id -> free), extended.
-            checks: the plan's check log, extended.
-            limits: the plan's seed and budgets.
-            times: when the query's model was ready and when the plan began (``time.perf_counter()``).
-            first: checks at most before the stage stops for growth to begin (None: until it ends).
-
-        Returns:
-            The plan's result when it found a path or one of the plan's budgets ended; True when it stopped
-            after ``first`` checks without either; False when it proved that the graph has no free path.
-        """
-        t_model, t_begin = times
-        budget = None if limits.max_checks is None else limits.max_checks - len(checks)
-        if budget is not None and budget <= 0:
-            return exhausted_result(model, PlanCause.CHECK_BUDGET, checks, t_model, t_begin)
-        stage_budget = budget if first is None else (first if budget is None else min(first, budget))
-        edges = model.query.graph.num_edges  # outcomes of a growth's new edges (ids from E on) are not this graph's
-        usable = known if all(e < edges for e in known) else {e: f for e, f in known.items() if e < edges}
-        episode = lazy_search(
-            self.prior, model.query, oracle, usable, budget=stage_budget, deadline=limits.deadline, stage="graph"
-        )
-        offset = len(checks)
-        checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
-        known.update({c.edge: c.free for c in episode.checks})
-        if episode.success and episode.path_edges is not None:
-            return found_result(model, episode.path_edges, checks, PlanStage.GRAPH, times)
-        if episode.ran_out is PlanCause.CHECK_BUDGET and stage_budget != budget:
-            return True
-        if episode.ran_out is not None:
-            return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
-        return False
-
-    def _growth_kind(self, model: QueryModel) -> type[GraphGrowth] | None:
-        """How the query's graph grows when it has no free path (None: it does not, or growth is off).
-
-        A domain that samples valid states grows its roadmap (the arm); a connector that can join a state to
-        more vertices gives an off-graph start or goal more joins (the helicopter).
-        """
-        if self.growth is None or model.query.graph.vertex_states is None:
-            return None
-        if sampler_of(self._connector) is not None and isinstance(self._connector, SegmentMaker):
-            return RoadmapGrowth
-        if more_joins_of(self._connector) is not None and model.query.connected:
-            return JoinGrowth
-        return None
-
-    def _growth(self, model: QueryModel, kind: type[GraphGrowth]) -> GraphGrowth | None:
-        """The growth of ``kind`` (:meth:`_growth_kind`) for the query."""
-        sampler, joins, settings = sampler_of(self._connector), more_joins_of(self._connector), self.growth
-        if settings is None:
-            return None
-        index = self._models.sample_index()
-        if kind is RoadmapGrowth and sampler is not None and isinstance(self._connector, SegmentMaker):
-            return RoadmapGrowth(self.prior, model.query, self._connector, sampler, index, settings)
-        if kind is JoinGrowth and joins is not None:
-            return JoinGrowth(self.prior, model.query, joins, index, settings, self._models.columns)
-        return None
+    def _graph_stage(self) -> GraphStage:
+        """The graph stage and growth of a plan, with the planner's current prior and growth budget."""
+        return GraphStage(self.prior, self._connector, self.growth, self._models)
 
     def _context(self, model: QueryModel, policy: str, seed: int) -> PolicyContext:
         assert model.library is not None
@@ -485,11 +417,6 @@ class Planner:
             start=model.start,
             goal=model.goal,
         )
-
-
-def _unwrapped(oracle: EdgeOracle) -> EdgeOracle:
-    """The oracle a connected query's :class:`MotionDispatch` wraps (the oracle itself otherwise)."""
-    return oracle.oracle if isinstance(oracle, MotionDispatch) else oracle
 
 
 def _check_plan_arguments(policy: str, max_checks: int | None, time_budget_s: float | None) -> None:

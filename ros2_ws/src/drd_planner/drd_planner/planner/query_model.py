@@ -21,7 +21,7 @@ class QueryModel:
     Attributes:
         query: the graph, worlds and costs it plans over (the prior's, or with motions to off-graph states).
         library: its path library, or None when no training world has a free path (then the graph
-            stage starts at once) or when it is not built yet (``probe``: the probe comes first).
+            stage starts at once) or when it is not built yet (``library_pending``).
         tree: the precomputed tree, or one grown online; None without a library.
         theta: (E,) BiSECt's training bias.
         label: ``tree:<name>`` or ``online``.
@@ -29,6 +29,8 @@ class QueryModel:
         precomputed: the prior's tree it uses, or None for a model built online.
         reused: handed out from the planner's query cache (built by an earlier plan of the query).
         probe: the union path checked before the library is built (:mod:`~drd_planner.planner.probe`), or None.
+        library_pending: the library is built only when a plan needs it, after the probe or the lead
+            (:mod:`~drd_planner.planner.lead`).
     """
 
     query: QueryGraph
@@ -40,6 +42,7 @@ class QueryModel:
     precomputed: QueryTree | None = None
     reused: bool = False
     probe: Probe | None = None
+    library_pending: bool = False
 
     @property
     def start(self) -> int:

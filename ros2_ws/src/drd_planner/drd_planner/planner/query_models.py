@@ -44,6 +44,8 @@ __all__ = ["DEFAULT_CACHE_SIZE", "QueryModels"]
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
+#: Random vertex queries whose library is timed for :meth:`QueryModels.library_cost_ms`.
+LIBRARY_COST_QUERIES = 5
 
 
 class QueryModels:
@@ -69,6 +71,11 @@ class QueryModels:
         #: A new query whose union path is free with at least this probability gets a probe, and its
         #: library only when the probe needs it (:mod:`~drd_planner.planner.probe`); None: never.
         self.probe_probability: float | None = None
+        #: A new query's library waits until a plan needs it (after the lead: :mod:`~drd_planner.planner.lead`).
+        self.library_waits = False
+        #: The lead's library price in CPU ms when given (None: :meth:`library_cost_ms` measures it).
+        self.fixed_library_cost_ms: float | None = None
+        self._library_cost_ms: dict[bool, float] = {}
         self.prior = prior
         self.connector = connector
         self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
@@ -129,6 +136,9 @@ class QueryModels:
         _ = self.arcs, self.columns
         if self.prior.worlds is not None:
             _ = self.search, self.prior.edge_marginal
+            if self.library_waits:
+                self.library_cost_ms()
+                self.library_cost_ms(joined=True)
             for qt in self.prior.trees:
                 self.search.tree(qt.goal)
         if self.connector is not None and self.prior.graph.vertex_states is not None:
@@ -205,14 +215,68 @@ class QueryModels:
                 raise QueryError("this planner has no connector: states off the graph are refused")
             query = connected_query(prior, start, goal, self.connector, self.sample_index(), self.columns)
         probe = self._probe(query)
-        if probe is not None:  # the library waits until the probe needs it
+        if probe is not None or self.library_waits:  # the library waits until a plan needs it
             label = "connected" if query.connected else "online"
-            return QueryModel(query, None, None, self._theta(query), label, time.perf_counter() - t0, probe=probe)
+            theta, spent = self._theta(query), time.perf_counter() - t0
+            return QueryModel(query, None, None, theta, label, spent, probe=probe, library_pending=True)
         return self._library_model(query, t0)
 
+    def library_cost_ms(self, *, joined: bool = False) -> float:
+        """What a new query's library and tree cost in CPU milliseconds (the lead's price; measured once).
+
+        :attr:`fixed_library_cost_ms` when set; else the median CPU time of building them for
+        :data:`LIBRARY_COST_QUERIES` random queries that some training world joins (seeded by the prior's
+        library seed) on this machine,
+        measured on first need (:meth:`warm_up`): between random vertices, or (``joined``) between random
+        states in the box of the vertex states joined to the graph by the connector (their joins are not
+        timed: any planner makes them). The searches they leave for their goals are dropped.
+        """
+        if self.fixed_library_cost_ms is not None:
+            return self.fixed_library_cost_ms
+        joined = joined and self.connector is not None and self.prior.graph.vertex_states is not None
+        if joined not in self._library_cost_ms:
+            self._library_cost_ms[joined] = self._measure_library_cost(joined)
+        return self._library_cost_ms[joined]
+
+    def _measure_library_cost(self, joined: bool) -> float:
+        prior = self.prior
+        graph = prior.graph
+        if prior.worlds is None or graph.num_vertices < 2:
+            return 0.0
+        rng = np.random.default_rng(prior.library_seed)
+        kept = set(self.search.goals_kept)
+        spent: list[float] = []
+        for _ in range(LIBRARY_COST_QUERIES * 20):
+            if len(spent) == LIBRARY_COST_QUERIES:
+                break
+            try:
+                query = self._random_query(rng, joined)
+            except QueryError:
+                continue
+            t0 = time.process_time()
+            model = self._library_model(query, time.perf_counter())
+            if model.library is not None:  # a query no training world joins costs little and says nothing
+                spent.append(time.process_time() - t0)
+            if query.goal < graph.num_vertices and query.goal not in kept:
+                self.search.drop_tree(query.goal)
+        return 1e3 * float(np.median(spent)) if spent else 0.0
+
+    def _random_query(self, rng: np.random.Generator, joined: bool) -> QueryGraph:
+        """A random query between two vertices, or (``joined``) two states joined to the graph."""
+        prior = self.prior
+        graph = prior.graph
+        if not joined:
+            start, goal = (int(v) for v in rng.choice(graph.num_vertices, size=2, replace=False))
+            return prior_query(prior, start, goal, self.columns)
+        states = graph.vertex_states
+        assert states is not None and self.connector is not None
+        low, high = states.min(axis=0), states.max(axis=0)
+        ends = [rng.uniform(low, high) for _ in range(2)]
+        return connected_query(prior, ends[0], ends[1], self.connector, self.sample_index(), self.columns)
+
     def with_library(self, model: QueryModel) -> QueryModel:
-        """A probed query's model with its library and tree built (in its place in the cache); others as they are."""
-        if model.probe is None:
+        """A query's model with its pending library and tree built (in its place in the cache); others as they are."""
+        if not model.library_pending:
             return model
         built = self._library_model(model.query, time.perf_counter())
         for key, cached in self._cache.items():

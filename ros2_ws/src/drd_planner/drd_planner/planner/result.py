@@ -46,6 +46,9 @@ class PlanStage(str, Enum):
 
     #: The probe: a new query's union path, checked before its library is built (:mod:`drd_planner.planner.probe`).
     PROBE = "probe"
+    #: The lead: a new query's lazy search before its library, for as many checks as the library costs
+    #: (:mod:`drd_planner.planner.lead`; only when the planner is told what a check costs).
+    LEAD = "lead"
     #: The DiRECt tree (precomputed, or grown online for a new query).
     TREE = "tree"
     #: BiSECt on the query's path library (after the tree).

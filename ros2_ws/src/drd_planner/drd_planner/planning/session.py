@@ -115,6 +115,15 @@ class QuerySession(DomainSession):
             self._planner.query_model(qt.start, qt.goal)
         self._planner.warm_up()  # the per-prior work of new queries, here rather than in the first one
 
+    def set_check_cost_ms(self, cost_ms: float | None) -> None:
+        """Tell the planner what one check costs (None: not stated) and measure the lead's price now.
+
+        See :attr:`drd_planner.planner.Planner.check_cost_ms`; ProblemError for a value that is not a finite
+        number >= 0.
+        """
+        self._planner.check_cost_ms = cost_ms
+        self._planner.warm_up()  # the library's price is measured here, not in the first request
+
     # ------------------------------------------------------------------------------------------------
     # What the node reads
 

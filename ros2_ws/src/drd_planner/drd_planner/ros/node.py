@@ -73,6 +73,7 @@ from drd_planner.ros.nav2_host import Nav2Host
 from drd_planner.ros.outputs import LATCHED, PlannerOutputs
 from drd_planner.ros.parameters import (
     PARAMETERS,
+    check_cost_of,
     declare_parameters,
     goal_tolerances_of,
     map_limits_of,
@@ -219,10 +220,14 @@ class PlannerNode(LifecycleNode):
         if not names:
             raise DrdError("parameter prior_paths names no prior file")
         budgets = plan_budgets_of(values)  # max_checks, time_budget_s, improve_budget
+        check_cost = check_cost_of(values)
         sessions = []
         for name in names:
             path = resolve_tree_path(name)
-            sessions.append(QuerySession(load_prior(path), name=path.stem, **budgets))
+            session = QuerySession(load_prior(path), name=path.stem, **budgets)
+            if check_cost is not None:
+                session.set_check_cost_ms(check_cost)
+            sessions.append(session)
         ambiguous = ambiguity(sessions)
         if ambiguous is not None:
             raise DrdError(ambiguous)

@@ -28,6 +28,7 @@ __all__ = [
     "MAP_LIMIT_PARAMETERS",
     "PARAMETERS",
     "ParameterSpec",
+    "check_cost_of",
     "declare_parameters",
     "map_limits_of",
     "parameter_problems",
@@ -40,6 +41,8 @@ __all__ = [
 MAX_GOAL_TOLERANCE_M = 100.0
 #: Largest joint tolerance (radians).
 MAX_JOINT_TOLERANCE_RAD = math.pi
+#: Largest stated check cost (ms of CPU per check).
+MAX_CHECK_COST_MS = 10_000.0
 
 
 def _positive_at_most(limit: float, unit: str) -> Callable[[Any], str | None]:
@@ -75,6 +78,19 @@ def _one_of(*choices: str) -> Callable[[Any], str | None]:
         return None if str(value) in choices else f"must be one of {', '.join(choices)}, got {str(value)[:40]!r}"
 
     return check
+
+
+def _check_cost(value: Any) -> str | None:
+    v = float(value)
+    if math.isfinite(v) and 0.0 <= v <= MAX_CHECK_COST_MS:
+        return None
+    return f"must be finite, >= 0 and <= {MAX_CHECK_COST_MS:g} ms, got {v}"
+
+
+def check_cost_of(values: Mapping[str, Any]) -> float | None:
+    """The planners' ``check_cost_ms`` from the checked parameter value (missing or 0: not stated, None)."""
+    cost = float(values.get("check_cost_ms", 0.0))
+    return cost if cost > 0.0 else None
 
 
 def _non_negative_seconds(value: Any) -> str | None:
@@ -221,6 +237,16 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
         "read at configure.",
         _non_negative_seconds,
         float_range=(0.0, 3600.0),
+    ),
+    ParameterSpec(
+        "check_cost_ms",
+        0.0,
+        "What one collision check costs on this robot, in ms of CPU (0: not stated). Stated, a query without a "
+        "precomputed tree first runs a lazy search for at most as many checks as building its path library "
+        "would cost (that cost is measured at configure) and builds the library only if the search verified no "
+        "path: faster where checks are cheap. Read at configure.",
+        _check_cost,
+        float_range=(0.0, MAX_CHECK_COST_MS),
     ),
     ParameterSpec(
         "improve_checks",
