@@ -344,6 +344,9 @@ def test_title_says_what_served_the_plan(heli: Case) -> None:
     assert served_by(tree, query_cached=True) == served_by(tree)  # a precomputed tree is never rebuilt
     probed = SessionPlan(**common, checks=(dataclasses.replace(fresh, stage="probe"),), query="online", stage="probe")
     assert served_by(probed) == "served by the probe (the union path checked first; no library built)"
+    led = SessionPlan(**common, checks=(dataclasses.replace(fresh, stage="lead"),), query="connected", stage="lead")
+    assert served_by(led).startswith("served by the lead (a lazy search")
+    assert served_by(led).endswith("(joined by new motions)")
 
 
 def test_helicopter_files_are_valid_and_deterministic(heli: Case, tmp_path: Path) -> None:

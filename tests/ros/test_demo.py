@@ -114,6 +114,7 @@ def test_two_demos_at_once_beside_a_cpu_hog_tell_the_same_story_on_private_domai
 def test_served_by_names_the_probe_a_new_tree_and_a_joined_query() -> None:
     assert "probe" in _served_by("online", "probe")
     assert "no library" in _served_by("connected", "probe")
+    assert "lazy search" in _served_by("online", "lead")
     assert "built online" in _served_by("online", "bisect")
     assert "off the graph" in _served_by("connected", "graph")
     assert "'heli_lines'" in _served_by("tree:heli_lines", "tree")

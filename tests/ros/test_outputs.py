@@ -140,7 +140,13 @@ def test_the_check_log_and_statuses_go_out_as_bytes_of_their_messages() -> None:
 
 
 def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() -> None:
-    checks = (_check(0, False, "probe"), _check(1, True, "tree"), _check(2, False, "tree"), _check(3, True, "bisect"))
+    checks = (
+        _check(0, False, "probe"),
+        _check(1, False, "lead"),
+        _check(2, True, "tree"),
+        _check(3, False, "tree"),
+        _check(4, True, "bisect"),
+    )
     result = SessionPlan(
         status=PlanStatus.FOUND,
         message="found",
@@ -155,8 +161,13 @@ def test_summary_counts_checks_by_outcome_and_stage_and_gives_planning_time() ->
     values = plan_summary_values(
         result, {"request": "goal_pose"}, wait_s=0.01, plan_messaging_s=0.002, messaging_s=0.003
     )
-    assert (values["checks"], values["free"], values["blocked"]) == (4, 2, 2)
-    assert (values["probe_checks"], values["tree_checks"], values["bisect_checks"]) == (1, 2, 1)
+    assert (values["checks"], values["free"], values["blocked"]) == (5, 2, 3)
+    assert (values["probe_checks"], values["lead_checks"], values["tree_checks"], values["bisect_checks"]) == (
+        1,
+        1,
+        2,
+        1,
+    )
     assert values["planning_time"] == values["total_s"] == "0.250000"
     assert (values["query"], values["stage"], values["library_s"]) == ("online", "bisect", "0.125000")
     assert values["result"] == "found"

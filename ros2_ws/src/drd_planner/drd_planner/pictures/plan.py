@@ -80,6 +80,8 @@ def served_by(result: SessionPlan, *, query_cached: bool = False) -> str:
         source = f"the precomputed DiRECt tree {query[5:]!r}"
     elif online and result.stage == "probe":
         source = "the probe (the union path checked first; no library built)"
+    elif online and result.stage == "lead":
+        source = "the lead (a lazy search within the library's cost in checks; no library built)"
     elif online and query_cached:
         source = "the library and DiRECt tree built online for this query earlier"
     elif online:

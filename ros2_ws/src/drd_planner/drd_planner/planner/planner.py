@@ -8,6 +8,9 @@ checked free in this plan:
    union path (the shortest over the edges free in any training world), checked first when the training worlds
    say it is free with probability at least ``probe_probability`` (one half); the library is built only if an
    edge of it is blocked, and the library stage then knows that outcome (:mod:`~drd_planner.planner.probe`).
+   Told what one check costs (:attr:`Planner.check_cost_ms`), such a query then runs **the lead**: the lazy
+   search of stage 2 for at most as many checks as its library would cost, and builds the library only if
+   that verified no path (:mod:`~drd_planner.planner.lead`).
 1. **the library stage**: the query's path library with a policy (default ``direct_bisect``: the
    DiRECt tree, then BiSECt). A query with a precomputed tree uses that tree and its library unchanged;
    any other query gets a library built online from the prior's training worlds
@@ -16,7 +19,8 @@ checked free in this plan:
    1). Both are cached per query (LRU), and what does not depend on the query is built once per prior
    (:mod:`~drd_planner.planner.query_models`).
 2. **the graph stage**, when every library path is blocked: lazy search over the whole graph with the
-   prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made.
+   prior's edge probabilities (:mod:`~drd_planner.planner.graph_fallback`), reusing every check made
+   (:mod:`~drd_planner.planner.graph_stage`, with growth).
 3. **growth**, when the graph has no free path: a domain that samples its valid states (the arm) gets new
    vertices and edges where the blocked region cuts the graph (:mod:`~drd_planner.planner.roadmap_growth`);
    an off-graph start or goal whose connector ranks more joins (the helicopter) gets more of them

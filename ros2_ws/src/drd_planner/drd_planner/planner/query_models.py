@@ -9,7 +9,9 @@ prior, on first need (or at :meth:`QueryModels.warm_up`):
   posterior's counts in milliseconds);
 - the search worlds and their block graph (:class:`~drd_planner.planner.goal_trees.SearchWorlds`: distinct
   worlds found once, the libraries' searches batched and their trees kept per goal);
-- the graph's arcs and the points along its edges that impute the outcomes of new motions.
+- the graph's arcs and the points along its edges that impute the outcomes of new motions;
+- when the planner is told what a check costs, what a new query's library costs
+  (:meth:`QueryModels.library_cost_ms`, the price of :mod:`~drd_planner.planner.lead`).
 
 A query whose switch threshold is 1 (validation picks it for new queries on every shipped prior: BiSECt from
 the root) gets a :class:`~drd_planner.core.root_tree.RootTree` instead of a DiRECt tree grown online.
@@ -44,7 +46,7 @@ __all__ = ["DEFAULT_CACHE_SIZE", "QueryModels"]
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
-#: Random vertex queries whose library is timed for :meth:`QueryModels.library_cost_ms`.
+#: Random queries (of each kind) whose library is timed for :meth:`QueryModels.library_cost_ms`.
 LIBRARY_COST_QUERIES = 5
 
 
@@ -226,10 +228,10 @@ class QueryModels:
 
         :attr:`fixed_library_cost_ms` when set; else the median CPU time of building them for
         :data:`LIBRARY_COST_QUERIES` random queries that some training world joins (seeded by the prior's
-        library seed) on this machine,
-        measured on first need (:meth:`warm_up`): between random vertices, or (``joined``) between random
-        states in the box of the vertex states joined to the graph by the connector (their joins are not
-        timed: any planner makes them). The searches they leave for their goals are dropped.
+        library seed), measured on this machine on first need (:meth:`warm_up`): between random vertices, or
+        (``joined``) between random states in the box of the vertex states, joined to the graph by the
+        connector (the joins are not timed: any planner makes them). The searches they leave for their goals
+        are dropped.
         """
         if self.fixed_library_cost_ms is not None:
             return self.fixed_library_cost_ms

@@ -110,11 +110,13 @@ def print_record(number: int, record: PlanRecord) -> None:
 
 
 def _served_by(query: str, stage: str) -> str:
-    """What the summary's ``query`` label (and a ``probe`` stage) means, for people."""
+    """What the summary's ``query`` label (and a ``probe`` or ``lead`` stage) means, for people."""
     if query.startswith("tree:"):
         return f"the precomputed DiRECt tree {query[5:]!r} of this query"
     if stage == "probe":
         return "a new query: the probe, its union path checked first; no library needed"
+    if stage == "lead":
+        return "a new query: the lead, a lazy search cheaper than its library at the stated check cost"
     if query == "online":
         return "a new query: its path library and DiRECt tree built online from the prior"
     if query == "connected":

@@ -98,11 +98,11 @@ def plan_summary_values(
     ``prior`` names the prior that planned it (``tree``: the same, a deprecated key kept for one release).
     ``query`` says what served it (``tree:<name>`` a precomputed tree, ``online`` a library and tree
     built for a new query, ``connected`` the same with new motions to off-graph states) and ``stage``
-    what proved the path (``probe``, ``tree``, ``bisect``, ``graph``, ...; ``probe_checks``, ``tree_checks``
-    and ``bisect_checks`` count the checks each stage chose); ``result`` is the plan's status (``found``,
-    ``no_path``, ``budget_exhausted``, ``refused``) and ``cause`` why it failed where the planner can tell
-    (``start_blocked``, ``check_budget``,
-    ...; "" otherwise); ``library_s`` is the time spent finding or building the query's library.
+    what proved the path (``probe``, ``lead``, ``tree``, ``bisect``, ``graph``, ...; ``probe_checks``,
+    ``lead_checks``, ``tree_checks`` and ``bisect_checks`` count the checks each stage chose); ``result`` is
+    the plan's status (``found``, ``no_path``, ``budget_exhausted``, ``refused``) and ``cause`` why it failed
+    where the planner can tell (``start_blocked``, ``check_budget``, ...; "" otherwise); ``library_s`` is the
+    time spent finding or building the query's library.
     A plan that ran the anytime improvement (``improve_stop`` set) adds ``improvements`` (shorter verified
     paths after the first), ``improve_stop`` (why it stopped), ``improve_checks`` (its checks),
     ``first_cost`` and ``cost`` (path lengths, the first and the published one, in the domain's unit).
@@ -118,6 +118,7 @@ def plan_summary_values(
         "free": len(result.checks) - result.num_blocked,
         "blocked": result.num_blocked,
         "probe_checks": sum(c.stage == "probe" for c in result.checks),
+        "lead_checks": sum(c.stage == "lead" for c in result.checks),
         "tree_checks": sum(c.stage == "tree" for c in result.checks),
         "bisect_checks": sum(c.stage == "bisect" for c in result.checks),
         "check_s": f"{seconds.get('checks', 0.0):.6f}",
