@@ -134,3 +134,19 @@ def small_arm_meshes() -> Any:
     built = domain_from_spec("arm", {**SMALL_ARM_SPEC, "collision_model": "meshes"})
     assert isinstance(built, ArmDomain)
     return built
+
+
+@pytest.fixture(scope="module")
+def forest_problem() -> Any:
+    """A planar Forest problem of 200 worlds (seed 11): new queries between its vertices, with test worlds."""
+    from drd_planner.data.planar_problem import make_planar_problem
+
+    return make_planar_problem(model="forest", num_worlds=200, seed=11)
+
+
+@pytest.fixture(scope="module")
+def forest_prior(forest_problem: Any) -> Any:
+    """The world prior of :func:`forest_problem`'s training worlds, BiSECt from the root (eta 1), no trees."""
+    from drd_planner import prior_from_problem
+
+    return prior_from_problem(forest_problem, domain="planar", trees=(), eta=1.0)

@@ -12,7 +12,6 @@ from drd_planner.core.problem import Problem
 from drd_planner.core.status import PlanCause
 from drd_planner.core.tree import build_tree
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.data.planar_problem import make_planar_problem
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import QueryTree, WorldPrior
 from drd_planner.planner.lead import check_cost, lead_checks
@@ -20,32 +19,24 @@ from drd_planner.planner.query_graph import prior_query
 from drd_planner.planner.roadmap_growth import lazy_search
 
 
-@pytest.fixture(scope="module")
-def problem() -> Problem:
-    return make_planar_problem(model="forest", num_worlds=200, seed=11)
-
-
-@pytest.fixture(scope="module")
-def prior(problem: Problem) -> WorldPrior:
-    return prior_from_problem(problem, domain="planar", trees=(), eta=1.0)
-
-
-def _planner(prior: WorldPrior, check_ms: float | None, library_ms: float | None) -> Planner:
+def _planner(forest_prior: WorldPrior, check_ms: float | None, library_ms: float | None) -> Planner:
     """A planner without the probe (so every check before the library is the lead's)."""
-    planner = Planner(prior, probe_probability=None)
+    planner = Planner(forest_prior, probe_probability=None)
     planner.check_cost_ms = check_ms
     planner.set_library_cost_ms(library_ms)
     return planner
 
 
-def _cases(problem: Problem, prior: WorldPrior, count: int, seed: int) -> list[tuple[int, int, np.ndarray]]:
+def _cases(
+    forest_problem: Problem, forest_prior: WorldPrior, count: int, seed: int
+) -> list[tuple[int, int, np.ndarray]]:
     """Random vertex queries with a test world in which they have a free path."""
-    worlds = problem.require_worlds()
-    plain = Planner(prior, probe_probability=None)
+    worlds = forest_problem.require_worlds()
+    plain = Planner(forest_prior, probe_probability=None)
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(40 * count):
-        s, g = (int(v) for v in rng.choice(prior.graph.num_vertices, size=2, replace=False))
+        s, g = (int(v) for v in rng.choice(forest_prior.graph.num_vertices, size=2, replace=False))
         row = worlds.X[int(rng.choice(worlds.test_ids))]
         if plain.plan(s, g, TableOracle(row)).found:
             out.append((s, g, row))
@@ -55,11 +46,11 @@ def _cases(problem: Problem, prior: WorldPrior, count: int, seed: int) -> list[t
     return out
 
 
-def _pure_lazy_search(prior: WorldPrior, s: int, g: int, row: np.ndarray, budget: int | None) -> list[int]:
+def _pure_lazy_search(forest_prior: WorldPrior, s: int, g: int, row: np.ndarray, budget: int | None) -> list[int]:
     """The edges the graph stage's lazy search checks on the query from nothing known."""
-    assert prior.worlds is not None
-    query = prior_query(prior, s, g, WorldColumns(prior.worlds))
-    episode = lazy_search(prior, query, TableOracle(row), {}, budget=budget, deadline=None, stage="x")
+    assert forest_prior.worlds is not None
+    query = prior_query(forest_prior, s, g, WorldColumns(forest_prior.worlds))
+    episode = lazy_search(forest_prior, query, TableOracle(row), {}, budget=budget, deadline=None, stage="x")
     return [c.edge for c in episode.checks]
 
 
@@ -74,8 +65,8 @@ def test_the_lead_budget_is_the_library_price_in_checks() -> None:
 
 
 @pytest.mark.parametrize("bad", [-0.1, math.nan, math.inf])
-def test_a_cost_that_is_not_a_finite_non_negative_number_is_refused(prior: WorldPrior, bad: float) -> None:
-    planner = Planner(prior)
+def test_a_cost_that_is_not_a_finite_non_negative_number_is_refused(forest_prior: WorldPrior, bad: float) -> None:
+    planner = Planner(forest_prior)
     with pytest.raises(ProblemError, match="check_cost_ms must be a finite number"):
         planner.check_cost_ms = bad
     with pytest.raises(ProblemError, match="library_cost_ms must be a finite number"):
@@ -84,34 +75,36 @@ def test_a_cost_that_is_not_a_finite_non_negative_number_is_refused(prior: World
     assert planner.lead_checks() == 0
 
 
-def test_a_lead_that_verifies_a_path_builds_no_library(problem: Problem, prior: WorldPrior) -> None:
-    planner = _planner(prior, check_ms=1.0, library_ms=1000.0)
+def test_a_lead_that_verifies_a_path_builds_no_library(forest_problem: Problem, forest_prior: WorldPrior) -> None:
+    planner = _planner(forest_prior, check_ms=1.0, library_ms=1000.0)
     assert planner.lead_checks() == 1000
-    for s, g, row in _cases(problem, prior, 6, seed=1):
+    for s, g, row in _cases(forest_problem, forest_prior, 6, seed=1):
         result = planner.plan(s, g, TableOracle(row))
         assert result.status is PlanStatus.FOUND
         assert result.stage is PlanStage.LEAD
         assert {c.stage for c in result.checks} == {"lead"}
-        assert [c.edge for c in result.checks] == _pure_lazy_search(prior, s, g, row, None)
+        assert [c.edge for c in result.checks] == _pure_lazy_search(forest_prior, s, g, row, None)
         assert row[result.edges].all()
         model = planner.query_model(s, g)
         assert model.library is None
         assert model.library_pending  # never needed, never built
 
 
-def test_a_lead_that_runs_out_hands_its_outcomes_to_the_library(problem: Problem, prior: WorldPrior) -> None:
-    planner = _planner(prior, check_ms=1.0, library_ms=2.5)
-    plain = Planner(prior, probe_probability=None)
+def test_a_lead_that_runs_out_hands_its_outcomes_to_the_library(
+    forest_problem: Problem, forest_prior: WorldPrior
+) -> None:
+    planner = _planner(forest_prior, check_ms=1.0, library_ms=2.5)
+    plain = Planner(forest_prior, probe_probability=None)
     assert planner.lead_checks() == 2
     handed = 0
-    for s, g, row in _cases(problem, prior, 30, seed=2):
-        if len(_pure_lazy_search(prior, s, g, row, None)) <= 2:
+    for s, g, row in _cases(forest_problem, forest_prior, 30, seed=2):
+        if len(_pure_lazy_search(forest_prior, s, g, row, None)) <= 2:
             continue
         handed += 1
         result = planner.plan(s, g, TableOracle(row))
         edges = [c.edge for c in result.checks]
         assert len(set(edges)) == len(edges)  # nothing checked twice
-        assert edges[:2] == _pure_lazy_search(prior, s, g, row, 2)
+        assert edges[:2] == _pure_lazy_search(forest_prior, s, g, row, 2)
         assert [c.stage for c in result.checks[:2]] == ["lead", "lead"]
         assert all(c.stage != "lead" for c in result.checks[2:])
         assert [c.step for c in result.checks] == list(range(len(edges)))
@@ -127,23 +120,29 @@ def test_a_lead_that_runs_out_hands_its_outcomes_to_the_library(problem: Problem
     assert handed >= 5
 
 
-def test_a_lead_that_proves_no_path_ends_the_plan_without_a_library(prior: WorldPrior) -> None:
-    planner = _planner(prior, check_ms=0.0, library_ms=None)
+def test_a_lead_that_proves_no_path_ends_the_plan_without_a_library(forest_prior: WorldPrior) -> None:
+    planner = _planner(forest_prior, check_ms=0.0, library_ms=None)
     assert planner.lead_checks() is None  # checks cost nothing: the lead runs until it ends
-    s, g = 0, prior.graph.num_vertices - 1
-    result = planner.plan(s, g, TableOracle(np.zeros(prior.graph.num_edges, dtype=bool)))
+    s, g = 0, forest_prior.graph.num_vertices - 1
+    result = planner.plan(s, g, TableOracle(np.zeros(forest_prior.graph.num_edges, dtype=bool)))
     assert result.status is PlanStatus.NO_PATH
     assert result.num_checks >= 1
     assert {c.stage for c in result.checks} == {"lead"}
     assert planner.query_model(s, g).library is None
 
 
-def test_no_lead_without_a_check_cost_for_other_policies_or_a_stored_query(problem: Problem) -> None:
-    assert problem.start is not None
-    assert problem.goal is not None
-    qt = QueryTree("own", problem.start, problem.goal, problem.library, build_tree(problem, progress=False))
-    stored = prior_from_problem(problem, domain="planar", trees=(qt,), eta=1.0)
-    worlds = problem.require_worlds()
+def test_no_lead_without_a_check_cost_for_other_policies_or_a_stored_query(forest_problem: Problem) -> None:
+    assert forest_problem.start is not None
+    assert forest_problem.goal is not None
+    qt = QueryTree(
+        "own",
+        forest_problem.start,
+        forest_problem.goal,
+        forest_problem.library,
+        build_tree(forest_problem, progress=False),
+    )
+    stored = prior_from_problem(forest_problem, domain="planar", trees=(qt,), eta=1.0)
+    worlds = forest_problem.require_worlds()
     row = worlds.X[int(worlds.test_ids[0])]
     unknown = Planner(stored, probe_probability=None)
     told = _planner(stored, check_ms=0.5, library_ms=1000.0)
@@ -164,17 +163,21 @@ def test_no_lead_without_a_check_cost_for_other_policies_or_a_stored_query(probl
     ]
 
 
-def test_budgets_stop_the_lead(problem: Problem, prior: WorldPrior) -> None:
-    planner = _planner(prior, check_ms=1.0, library_ms=1000.0)
-    s, g, row = next(c for c in _cases(problem, prior, 10, seed=3) if len(_pure_lazy_search(prior, *c, None)) >= 2)
+def test_budgets_stop_the_lead(forest_problem: Problem, forest_prior: WorldPrior) -> None:
+    planner = _planner(forest_prior, check_ms=1.0, library_ms=1000.0)
+    s, g, row = next(
+        c
+        for c in _cases(forest_problem, forest_prior, 10, seed=3)
+        if len(_pure_lazy_search(forest_prior, *c, None)) >= 2
+    )
     result = planner.plan(s, g, TableOracle(row), max_checks=1)
     assert result.status is PlanStatus.BUDGET_EXHAUSTED
     assert result.cause is PlanCause.CHECK_BUDGET
-    assert [(c.stage, c.edge) for c in result.checks] == [("lead", _pure_lazy_search(prior, s, g, row, 1)[0])]
+    assert [(c.stage, c.edge) for c in result.checks] == [("lead", _pure_lazy_search(forest_prior, s, g, row, 1)[0])]
 
 
-def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(prior: WorldPrior) -> None:
-    planner = Planner(prior)
+def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(forest_prior: WorldPrior) -> None:
+    planner = Planner(forest_prior)
     planner.warm_up()
     kept = planner._models.search.goals_kept
     measured = planner.library_cost_ms()
@@ -189,9 +192,9 @@ def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(prior: Wor
     assert planner.library_cost_ms() == measured
 
 
-def test_same_price_same_checks(problem: Problem, prior: WorldPrior) -> None:
-    first, second = (_planner(prior, check_ms=1.0, library_ms=3.0) for _ in range(2))
-    for s, g, row in _cases(problem, prior, 8, seed=4):
+def test_same_price_same_checks(forest_problem: Problem, forest_prior: WorldPrior) -> None:
+    first, second = (_planner(forest_prior, check_ms=1.0, library_ms=3.0) for _ in range(2))
+    for s, g, row in _cases(forest_problem, forest_prior, 8, seed=4):
         a, b = first.plan(s, g, TableOracle(row), seed=3), second.plan(s, g, TableOracle(row), seed=3)
         assert [c.edge for c in a.checks] == [c.edge for c in b.checks]
         assert a.edges.tolist() == b.edges.tolist()

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drd_planner import Planner, PlanStage, PlanStatus, TableOracle, prior_from_problem
+from drd_planner import Planner, PlanStage, PlanStatus, TableOracle
 from drd_planner.core.episode import GraphPathPolicy
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.problem import Problem
 from drd_planner.core.status import PlanCause
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.data.planar_problem import make_planar_problem, planar_problem_worlds
+from drd_planner.data.planar_problem import planar_problem_worlds
 from drd_planner.domains.planar import PlanarChecker
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner import WorldPrior
@@ -28,13 +28,13 @@ from drd_planner.planner.query_library import ShortestPaths
 
 
 @pytest.fixture(scope="module")
-def problem() -> Problem:
-    return make_planar_problem(model="forest", num_worlds=200, seed=11)
+def problem(forest_problem: Problem) -> Problem:
+    return forest_problem
 
 
 @pytest.fixture(scope="module")
-def prior(problem: Problem) -> WorldPrior:
-    return prior_from_problem(problem, domain="planar", trees=(), eta=1.0)
+def prior(forest_prior: WorldPrior) -> WorldPrior:
+    return forest_prior
 
 
 def _queries(prior: WorldPrior, count: int, seed: int) -> list[tuple[int, int]]:
