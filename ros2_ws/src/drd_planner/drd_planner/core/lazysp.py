@@ -367,6 +367,8 @@ class LazySP:
         ahead: dict[int, list[int]] = {}
         behind: dict[int, list[int]] = {}
         for edge in dict.fromkeys(self._free_edges):
+            if self._outcome[edge] != _FREE:  # observed free, then blocked (a later outcome wins)
+                continue
             u, v = (int(x) for x in self._edge_ends[edge])
             ahead.setdefault(u, []).append(v)
             behind.setdefault(v, []).append(u)

@@ -56,7 +56,7 @@ from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
 from drd_planner.planner.graph_stage import GraphStage, unwrapped_oracle
 from drd_planner.planner.lead import before_library, check_cost, lead_checks
 from drd_planner.planner.prior import LeafSetting, WorldPrior
-from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, check_probe_probability
+from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, PROBE_POLICIES, check_probe_probability
 from drd_planner.planner.query_graph import MotionDispatch, QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_model import QueryModel
 from drd_planner.planner.query_models import DEFAULT_CACHE_SIZE, QueryModels
@@ -350,7 +350,7 @@ class Planner:
         """The library stage, then the graph stage when every library path is blocked (then growth)."""
         t_model, t_begin = times
         costs, deadline = model.query.edge_costs, limits.deadline
-        lead = self.lead_checks(joined=model.query.connected)
+        lead = self.lead_checks(joined=model.query.connected) if policy in PROBE_POLICIES else 0
         ahead = before_library(self.prior, model, oracle, policy, limits, lead)
         checks, known = ahead.checks, ahead.known
         if ahead.stage is not None and ahead.path_edges is not None:
