@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drd_planner.core.episode import GraphPathPolicy, TableOracle, run_episode, verify_path
+from drd_planner.core.episode import (
+    CheckRecord,
+    EpisodeResult,
+    GraphPathPolicy,
+    TableOracle,
+    append_episode,
+    run_episode,
+    verify_path,
+)
 from drd_planner.core.library import PathLibrary
 from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import PolicyError, UnverifiedPathError
@@ -198,3 +206,20 @@ def test_a_passed_deadline_ends_with_the_time_budget() -> None:
     assert (late.status, late.cause, late.num_checks) == (PlanStatus.BUDGET_EXHAUSTED, PlanCause.TIME_BUDGET, 0)
     assert late.ran_out is PlanCause.TIME_BUDGET
     assert late.path_edges is None
+
+
+def test_a_plans_log_numbers_each_episodes_checks_on_and_keeps_their_outcomes() -> None:
+    def episode(*checks: tuple[int, bool, str]) -> EpisodeResult:
+        records = tuple(CheckRecord(i, e, f, stage, 0.1, 0.2) for i, (e, f, stage) in enumerate(checks))
+        return EpisodeResult(records, PlanStatus.NO_PATH, None, None)
+
+    log: list[CheckRecord] = []
+    known: dict[int, bool] = {}
+    append_episode(log, known, episode((4, True, "probe"), (7, False, "probe")))
+    append_episode(log, known, episode((2, True, "bisect")))
+    assert [(c.step, c.edge, c.free, c.stage) for c in log] == [
+        (0, 4, True, "probe"),
+        (1, 7, False, "probe"),
+        (2, 2, True, "bisect"),
+    ]
+    assert known == {4: True, 7: False, 2: True}

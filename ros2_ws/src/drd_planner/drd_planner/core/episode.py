@@ -7,6 +7,7 @@ of its edges was checked free in this episode: that is the planner's safety inva
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -202,6 +203,16 @@ class _LibraryProgress:
 
     def all_blocked(self) -> bool:
         return self._unblocked == 0
+
+
+def append_episode(checks: list[CheckRecord], known: dict[int, bool], episode: EpisodeResult) -> None:
+    """Append an episode's checks to a plan's log (steps numbered on after it) and their outcomes to ``known``.
+
+    A plan runs its stages as episodes, each numbering its checks from 0; the plan's log numbers them on.
+    """
+    offset = len(checks)
+    checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
+    known.update({c.edge: c.free for c in episode.checks})
 
 
 def run_episode(

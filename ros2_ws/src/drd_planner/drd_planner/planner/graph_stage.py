@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from drd_planner.core.episode import CheckRecord, EdgeOracle
+from drd_planner.core.episode import CheckRecord, EdgeOracle, append_episode
 from drd_planner.core.status import PlanCause
 from drd_planner.planner.anytime import PlanLimits
 from drd_planner.planner.connect import MotionOracle, QueryConnector
@@ -134,9 +134,7 @@ class GraphStage:
         episode = lazy_search(
             self.prior, model.query, oracle, usable, budget=stage_budget, deadline=limits.deadline, stage="graph"
         )
-        offset = len(checks)
-        checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
-        known.update({c.edge: c.free for c in episode.checks})
+        append_episode(checks, known, episode)
         if episode.success and episode.path_edges is not None:
             return found_result(model, episode.path_edges, checks, PlanStage.GRAPH, times)
         if episode.ran_out is PlanCause.CHECK_BUDGET and stage_budget != budget:

@@ -37,7 +37,7 @@ import math
 from dataclasses import dataclass, field
 
 from drd_planner.arrays import IntArray
-from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult
+from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, append_episode
 from drd_planner.core.status import PlanCause
 from drd_planner.exceptions import ProblemError
 from drd_planner.planner.anytime import PlanLimits
@@ -96,11 +96,7 @@ class BeforeLibrary:
 
     def add(self, episode: EpisodeResult) -> None:
         """Append an episode's checks (renumbered after those before) and outcomes."""
-        offset = len(self.checks)
-        self.checks.extend(
-            CheckRecord(c.step + offset, c.edge, c.free, c.stage, c.select_ms, c.check_ms) for c in episode.checks
-        )
-        self.known.update({c.edge: c.free for c in episode.checks})
+        append_episode(self.checks, self.known, episode)
 
 
 def before_library(

@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.episode import EdgeOracle, run_episode
+from drd_planner.core.episode import EdgeOracle, append_episode, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
@@ -370,9 +370,7 @@ class Planner:
             episode = run_episode(
                 model.library, costs, lib_policy, oracle, max_checks=budget, deadline=deadline, known=known
             )
-            offset = len(checks)
-            checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
-            known.update({c.edge: c.free for c in episode.checks})
+            append_episode(checks, known, episode)
             if episode.success and episode.path_edges is not None:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)
             if episode.ran_out is not None:  # a policy that gave up goes on to the graph, as a blocked library

@@ -280,7 +280,7 @@ class QueryModels:
         """A query's model with its pending library and tree built (in its place in the cache); others as they are."""
         if not model.library_pending:
             return model
-        built = self._library_model(model.query, time.perf_counter())
+        built = self._library_model(model.query, time.perf_counter(), model.theta)
         for key, cached in self._cache.items():
             if cached.query is model.query:
                 self._cache[key] = built
@@ -294,8 +294,11 @@ class QueryModels:
             return None
         return union_probe(self.search, query, prior.world_weights, probability=self.probe_probability)
 
-    def _library_model(self, query: QueryGraph, t0: float) -> QueryModel:
-        """The query's model with its library (and tree) built now; ``t0``: when its build began."""
+    def _library_model(self, query: QueryGraph, t0: float, theta: FloatArray | None = None) -> QueryModel:
+        """The query's model with its library (and tree) built now; ``t0``: when its build began.
+
+        ``theta``: BiSECt's training bias when already computed for the query (a pending model's), else None.
+        """
         prior = self.prior
         library = query_library(
             self.search,
@@ -307,7 +310,8 @@ class QueryModels:
         )
         tree = None if library is None else self._tree(query, library)
         label = "connected" if query.connected else "online"
-        return QueryModel(query, library, tree, self._theta(query), label, time.perf_counter() - t0)
+        bias = self._theta(query) if theta is None else theta
+        return QueryModel(query, library, tree, bias, label, time.perf_counter() - t0)
 
     def _theta(self, query: QueryGraph) -> FloatArray:
         """(E',) BiSECt's training bias over the query's edges."""

@@ -23,7 +23,6 @@ seed only: the same seed gives the same checks and the same path (unless a time 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from abc import ABC, abstractmethod
@@ -34,7 +33,7 @@ from typing import ClassVar
 import numpy as np
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
-from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, run_episode
+from drd_planner.core.episode import CheckRecord, EdgeOracle, EpisodeResult, append_episode, run_episode
 from drd_planner.core.lazysp import LazySP, LazySPSettings
 from drd_planner.core.status import PlanCause, PlanStatus
 from drd_planner.exceptions import ProblemError
@@ -310,9 +309,7 @@ class GraphGrowth(ABC):
                 deadline=limits.deadline,
                 stage=GROWTH_STAGE,
             )
-            offset = len(checks)
-            checks.extend(dataclasses.replace(c, step=c.step + offset) for c in episode.checks)
-            known.update({c.edge: c.free for c in episode.checks})
+            append_episode(checks, known, episode)
             if episode.success and episode.path_edges is not None:
                 return GrowthOutcome(PlanStatus.FOUND, episode.path_edges, self._report("path", checks))
             if episode.ran_out is not None:
