@@ -299,6 +299,17 @@ def test_the_known_free_reach_is_a_search_over_the_checked_free_edges(directed: 
         ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
         behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
         assert policy.known_free_reach() == (ahead.size, behind.size)
+    # an edge checked free and then blocked (a later outcome wins) leaves the regions
+    edge = next(e for e, f in outcomes.items() if f)
+    policy.observe(edge, False)
+    outcomes[edge] = False
+    arcs = [(int(pairs[e, 0]), int(pairs[e, 1])) for e, f in outcomes.items() if f]
+    arcs += [] if directed else [(v, u) for u, v in arcs]
+    rows, cols = (np.array([a[i] for a in arcs], dtype=np.int64) for i in (0, 1))
+    adjacency = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(n, n))
+    ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
+    behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
+    assert policy.known_free_reach() == (ahead.size, behind.size)
 
 
 def test_balanced_checks_from_the_walled_in_end() -> None:

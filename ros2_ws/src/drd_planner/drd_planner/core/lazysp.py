@@ -34,6 +34,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from drd_planner.arrays import BoolArray, FloatArray, IntArray
+from drd_planner.core.free_reach import FreeReach
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.exceptions import ProblemError
 
@@ -286,7 +287,7 @@ class LazySP:
         self._forward_next = True
         self._batch: tuple[int, IntArray, IntArray] | None = None  # WeightSamp's block-graph structure
         self._edge_ends, self._directed = graph.edges, graph.directed
-        self._free_edges: list[int] = []  # checked free, in order (the balanced selector's known-free region)
+        self._reach = FreeReach(self._start, self._goal, directed=graph.directed)  # the balanced selector's
         for edge, free in (observations or {}).items():
             self.observe(int(edge), bool(free))
 
@@ -331,10 +332,15 @@ class LazySP:
 
     def observe(self, edge: int, free: bool) -> None:
         """Record the outcome; a blocked edge is deleted and the path re-planned on the next call."""
+        before = self._outcome[edge]
         self._outcome[edge] = _FREE if free else _BLOCKED
+        u, v = (int(x) for x in self._edge_ends[edge])
         if free:
-            self._free_edges.append(edge)
+            if before != _FREE:
+                self._reach.add(u, v)
         else:
+            if before == _FREE:  # observed free, then blocked (a later outcome wins)
+                self._reach.remove(u, v)
             self._weights[edge] = np.inf
             self._stale = True
 
@@ -362,20 +368,9 @@ class LazySP:
     def known_free_reach(self) -> tuple[int, int]:
         """(vertices reachable from the start, vertices that reach the goal) over checked-free edges.
 
-        A search over the checked-free edges only (a few per check), not over the whole graph.
+        Grown with each free outcome (:class:`~drd_planner.core.free_reach.FreeReach`), not searched per check.
         """
-        ahead: dict[int, list[int]] = {}
-        behind: dict[int, list[int]] = {}
-        for edge in dict.fromkeys(self._free_edges):
-            if self._outcome[edge] != _FREE:  # observed free, then blocked (a later outcome wins)
-                continue
-            u, v = (int(x) for x in self._edge_ends[edge])
-            ahead.setdefault(u, []).append(v)
-            behind.setdefault(v, []).append(u)
-            if not self._directed:
-                ahead.setdefault(v, []).append(u)
-                behind.setdefault(u, []).append(v)
-        return _reached(ahead, self._start), _reached(behind, self._goal)
+        return self._reach.sizes
 
     def shortest_path_counts(self) -> IntArray:
         """WeightSamp: how often each edge lies on the shortest path of ``nsamps`` sampled graphs.
@@ -414,15 +409,3 @@ class LazySP:
                 more = tails != starts
                 heads, starts = tails[more], starts[more]
         return counts
-
-
-def _reached(adjacency: Mapping[int, list[int]], source: int) -> int:
-    """How many vertices ``source`` reaches over ``adjacency`` (itself included)."""
-    seen = {source}
-    todo = [source]
-    while todo:
-        for nxt in adjacency.get(todo.pop(), ()):
-            if nxt not in seen:
-                seen.add(nxt)
-                todo.append(nxt)
-    return len(seen)
