@@ -21,6 +21,10 @@ def test_counts_equal_the_sums_over_the_rows(n: int, e: int, seed: int) -> None:
         rows = rng.random(n) < rng.random()
         assert np.array_equal(columns.free_counts(rows), x[rows].sum(axis=0))
     assert np.array_equal(columns.free_totals, x.sum(axis=0))
+    every = columns.free_counts(np.ones(n, dtype=bool))  # every world: the kept totals, as a copy
+    assert np.array_equal(every, x.sum(axis=0))
+    every[:] = -1
+    assert np.array_equal(columns.free_totals, x.sum(axis=0))
     assert columns.num_worlds == n
     assert columns.num_edges == e
     edges = rng.integers(0, e, size=7)  # repeats allowed

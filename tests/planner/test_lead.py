@@ -58,6 +58,9 @@ def test_the_lead_budget_is_the_library_price_in_checks() -> None:
     assert lead_checks(None, 10.0) == 0
     assert lead_checks(0.0, 10.0) is None
     assert lead_checks(0.2, 10.0) == 50
+    assert lead_checks(0.2, 10.0, 0.3) == 20  # each check costs the lead its own search too
+    assert lead_checks(0.0, 10.0, 0.5) == 20  # free checks: the lead's own time alone limits it
+    assert lead_checks(None, 10.0, 0.5) == 0
     assert lead_checks(3.0, 10.0) == 3
     assert lead_checks(20.0, 10.0) == 0
     assert check_cost(None, "x") is None
@@ -121,8 +124,8 @@ def test_a_lead_that_runs_out_hands_its_outcomes_to_the_library(
 
 
 def test_a_lead_that_proves_no_path_ends_the_plan_without_a_library(forest_prior: WorldPrior) -> None:
-    planner = _planner(forest_prior, check_ms=0.0, library_ms=None)
-    assert planner.lead_checks() is None  # checks cost nothing: the lead runs until it ends
+    planner = _planner(forest_prior, check_ms=0.0, library_ms=1.0)
+    assert planner.lead_checks() is None  # checks and the lead's own search cost nothing: it runs until it ends
     s, g = 0, forest_prior.graph.num_vertices - 1
     result = planner.plan(s, g, TableOracle(np.zeros(forest_prior.graph.num_edges, dtype=bool)))
     assert result.status is PlanStatus.NO_PATH
@@ -180,16 +183,23 @@ def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(forest_pri
     planner = Planner(forest_prior)
     planner.warm_up()
     kept = planner._models.search.goals_kept
-    measured = planner.library_cost_ms()
+    measured, own = planner.library_cost_ms(), planner.lead_check_ms()
     assert measured > 0.0
-    assert planner.library_cost_ms() == measured  # once
+    assert own > 0.0  # the lead's searches were timed on the same queries
+    assert (planner.library_cost_ms(), planner.lead_check_ms()) == (measured, own)  # once
     assert planner._models.search.goals_kept == kept  # its searches leave nothing behind
     planner.set_library_cost_ms(7.0)
     assert planner.library_cost_ms() == planner.library_cost_ms(joined=True) == 7.0
+    assert planner.lead_check_ms() == 0.0  # a fixed price: nothing measured
     planner.check_cost_ms = 2.0
     assert planner.lead_checks() == 3
+    planner.set_library_cost_ms(7.0, lead_check_ms=1.5)
+    assert planner.lead_checks() == 2  # 7 / (2 + 1.5)
+    with pytest.raises(ProblemError, match="lead_check_ms must be a finite number"):
+        planner.set_library_cost_ms(7.0, lead_check_ms=-1.0)
     planner.set_library_cost_ms(None)
-    assert planner.library_cost_ms() == measured
+    assert (planner.library_cost_ms(), planner.lead_check_ms()) == (measured, own)
+    assert planner.lead_checks() == math.floor(round(measured / (2.0 + own), 9))
 
 
 def test_same_price_same_checks(forest_problem: Problem, forest_prior: WorldPrior) -> None:

@@ -498,8 +498,9 @@ def test_a_stated_check_cost_reaches_the_planners_and_its_price_is_measured_at_c
         assert planner.check_cost_ms == 0.4
         measured = planner._models._library_cost_ms  # both prices measured at configure, not in a request
         assert set(measured) == {False, True}
-        assert all(ms > 0 for ms in measured.values())
-        assert planner.lead_checks(joined=True) == math.floor(round(measured[True] / 0.4, 9))
+        assert all(library > 0 and own > 0 for library, own in measured.values())
+        library, own = measured[True]
+        assert planner.lead_checks(joined=True) == math.floor(round(library / (0.4 + own), 9))
         (result,) = node.set_parameters([Parameter("check_cost_ms", value=-1.0)])
         assert not result.successful
         assert "check_cost_ms" in result.reason

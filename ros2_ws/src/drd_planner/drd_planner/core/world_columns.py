@@ -95,7 +95,10 @@ class WorldColumns:
         return np.asarray((greater | equal) & full, dtype=np.uint64)
 
     def free_counts(self, rows: BoolArray) -> IntArray:
-        """(E,) int64: in how many of the (n,) ``rows`` worlds each edge is free."""
+        """(E,) int64: in how many of the (n,) ``rows`` worlds each edge is free (every world: the totals, kept)."""
+        rows = np.asarray(rows, dtype=bool)
+        if rows.size == self.num_worlds and rows.all():  # nothing ruled out yet (a search's first posterior)
+            return np.asarray(self.free_totals.copy(), dtype=np.int64)
         mask = pack_rows(rows)
         if mask.size != self.bits.shape[1]:
             raise ProblemError(f"a row mask of {self.num_worlds} worlds expected, got {np.asarray(rows).size}")

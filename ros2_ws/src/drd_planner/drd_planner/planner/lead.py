@@ -8,19 +8,23 @@ advance which query is which, so when it is told what one check costs (``check_c
 
 1. the probe, when the query has one (:mod:`~drd_planner.planner.probe`);
 2. the **lead**: the graph stage's lazy search (LazySP with the prior's edge probabilities,
-   :func:`~drd_planner.planner.roadmap_growth.lazy_search`) for at most ``floor(L / C)`` checks, where L is
-   the CPU milliseconds a new query's library and tree cost on this prior, measured once per prior on seeded
-   random queries of the same kind: between vertices, or between states off the graph, whose library costs
-   several times more (:meth:`~drd_planner.planner.query_models.QueryModels.library_cost_ms`; on heli_wires
-   about 3 and 9 ms);
+   :func:`~drd_planner.planner.roadmap_growth.lazy_search`) for at most ``floor(L / (C + o))`` checks. L is
+   what *buying* costs: a new query's library and tree built, and the library stage's own CPU (BiSECt's
+   selections) to its plan; o is the lead's own CPU per check (its searches). Both are measured once per prior
+   on seeded random queries of the same kind, each planned in one training world's outcomes: between vertices,
+   or between states off the graph, whose library costs more
+   (:meth:`~drd_planner.planner.query_models.QueryModels.library_cost_ms`,
+   :meth:`~drd_planner.planner.query_models.QueryModels.lead_check_ms`);
 3. the library, only when the lead did not verify a path: built then, its policy told every outcome so far.
 
-This is the rent-or-buy rule: the checks the lead spends cost at most what the library would, so a plan costs at
-most about twice what the cheaper of "lazy search only" and "library at once" would have cost, and far less
-than the library where a short lazy search suffices (a robot's easy queries). The lead's checks are not lost:
-the library stage and the graph stage after it reuse every outcome. A lead that proves the graph has no free path
-ends the plan there (the library could not find one either). With C = 0 the lead runs until it ends; with C
-unknown (the default) there is no lead: every new query builds its library at once, as the method alone does.
+This is the rent-or-buy rule: the lead spends (in checks and its own searches) at most what buying would, so a
+plan costs at most about twice what the cheaper of "lazy search only" and "library at once" would have cost, and
+far less than the library where a short lazy search suffices (a robot's easy queries). The lead's checks are not
+lost: the library stage and the graph stage after it reuse every outcome. A lead that proves the graph has no free
+path ends the plan there (the library could not find one either). With C = 0 the lead's own time alone limits it
+(``floor(L / o)``; no limit when that is 0 too, as with a price fixed by
+:meth:`~drd_planner.planner.Planner.set_library_cost_ms`); with C unknown (the default) there is no lead: every
+new query builds its library at once, as the method alone does.
 
 The lead searches as the graph stage does (the most probable path under the prior, not the shortest): chosen on
 held-out data (the authors' Baffle set, 30 random queries of seed 2) where it took 0.37 / 0.52 of plain LazySP's
@@ -60,18 +64,20 @@ def check_cost(value: float | None, name: str) -> float | None:
     return number
 
 
-def lead_checks(check_cost_ms: float | None, library_cost_ms: float) -> int | None:
-    """The lead's check budget: ``floor(L / C)``; 0 (no lead) when C is None, None (no limit) when C is 0.
+def lead_checks(check_cost_ms: float | None, library_cost_ms: float, own_ms: float = 0.0) -> int | None:
+    """The lead's check budget: ``floor(L / (C + o))``; 0 (no lead) when C is None, None (no limit) when C + o is 0.
 
     Args:
         check_cost_ms: C, what one check costs in CPU milliseconds (None: unknown).
-        library_cost_ms: L, what a new query's library and tree cost in CPU milliseconds.
+        library_cost_ms: L, what buying a new query's library costs in CPU milliseconds.
+        own_ms: o, the lead's own CPU per check in milliseconds (its searches), spent beside the check's C.
     """
     if check_cost_ms is None:
         return 0
-    if check_cost_ms == 0.0:
+    per_check = check_cost_ms + own_ms
+    if per_check == 0.0:
         return None
-    return math.floor(round(library_cost_ms / check_cost_ms, 9))  # 10 / 0.2 is 50 checks, not 49.99...
+    return math.floor(round(library_cost_ms / per_check, 9))  # 10 / 0.2 is 50 checks, not 49.99...
 
 
 @dataclass

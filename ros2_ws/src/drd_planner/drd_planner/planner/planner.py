@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from drd_planner.arrays import FloatArray
-from drd_planner.core.episode import EdgeOracle, append_episode, run_episode
+from drd_planner.core.episode import EdgeOracle, EpisodeResult, append_episode, run_episode
 from drd_planner.core.lazysp import SELECTORS, lazysp_name
 from drd_planner.core.policies import CORE_POLICIES, POLICIES, TREE_POLICIES, PolicyContext
 from drd_planner.core.region_rule import check_region_rule
@@ -118,6 +118,7 @@ class Planner:
         self._endpoints = EndpointResolver(prior.graph, snap_tolerance=snap_tolerance, free_goal_dims=free)
         self._models = QueryModels(prior, self._connector, cache_size=cache_size, expand_threshold=expand_threshold)
         self._models.probe_probability = check_probe_probability(probe_probability)
+        self._models.price_stage = self._price_stage
         self._check_cost_ms: float | None = None
         self._leaf_override: LeafSetting | None = None
         self.growth = growth
@@ -147,7 +148,7 @@ class Planner:
         self._models.library_waits = self._check_cost_ms is not None
 
     def library_cost_ms(self, *, joined: bool = False) -> float:
-        """What a new query's library and tree cost in CPU milliseconds: the lead's price.
+        """What buying a new query's library costs in CPU ms (built, and its stage's selections): the lead's price.
 
         Measured once per kind of query on this machine (between vertices, or ``joined``: a start or goal off
         the graph; at :meth:`warm_up` when :attr:`check_cost_ms` is set, else on first need) unless fixed by
@@ -155,23 +156,37 @@ class Planner:
         """
         return self._models.library_cost_ms(joined=joined)
 
-    def set_library_cost_ms(self, value: float | None) -> None:
+    def lead_check_ms(self, *, joined: bool = False) -> float:
+        """The lead's own CPU per check in milliseconds, beside the check's cost (measured with its price)."""
+        return self._models.lead_check_ms(joined=joined)
+
+    def set_library_cost_ms(self, value: float | None, *, lead_check_ms: float = 0.0) -> None:
         """Fix the lead's price for every query (None: measure it); the same budget on every machine and run.
+
+        Args:
+            value: what a new query's library costs in CPU ms (:meth:`library_cost_ms`), or None.
+            lead_check_ms: the lead's own CPU per check in ms while the price is fixed (:meth:`lead_check_ms`).
 
         Raises:
             ProblemError: a value that is not a finite number >= 0.
         """
+        own = check_cost(lead_check_ms, "lead_check_ms")
         self._models.fixed_library_cost_ms = check_cost(value, "library_cost_ms")
+        self._models.fixed_lead_check_ms = 0.0 if own is None else own
 
     def lead_checks(self, *, joined: bool = False) -> int | None:
         """A new query's lead budget in checks (0: no lead; None: no limit).
 
-        0 while :attr:`check_cost_ms` is None, else ``floor(library_cost_ms(joined) / check_cost_ms)`` (no
-        limit when checks cost 0).
+        0 while :attr:`check_cost_ms` is None, else ``floor(library_cost_ms(joined) / (check_cost_ms +
+        lead_check_ms(joined)))``: the checks the lead can make, each costing C and its own search, for what the
+        library would cost (no limit when both are 0).
         """
         if self._check_cost_ms is None:
             return 0
-        return lead_checks(self._check_cost_ms, self._models.library_cost_ms(joined=joined))
+        models = self._models
+        return lead_checks(
+            self._check_cost_ms, models.library_cost_ms(joined=joined), models.lead_check_ms(joined=joined)
+        )
 
     @property
     def snap_tolerance(self) -> float:
@@ -349,7 +364,6 @@ class Planner:
     ) -> PlanResult:
         """The library stage, then the graph stage when every library path is blocked (then growth)."""
         t_model, t_begin = times
-        costs, deadline = model.query.edge_costs, limits.deadline
         lead = self.lead_checks(joined=model.query.connected) if policy in PROBE_POLICIES else 0
         ahead = before_library(self.prior, model, oracle, policy, limits, lead)
         checks, known = ahead.checks, ahead.known
@@ -363,19 +377,31 @@ class Planner:
             model = self._models.with_library(model)
             t_model, times = t_model + model.build_s, (t_model + model.build_s, t_begin)
         if model.library is not None:
-            lib_policy = POLICIES[policy](self._context(model, policy, limits.seed))
-            for edge, free in known.items():  # the probe's outcomes
-                lib_policy.observe(edge, free)
-            budget = None if limits.max_checks is None else limits.max_checks - len(checks)
-            episode = run_episode(
-                model.library, costs, lib_policy, oracle, max_checks=budget, deadline=deadline, known=known
-            )
+            episode = self._library_episode(model, oracle, policy, limits, known, len(checks))
             append_episode(checks, known, episode)
             if episode.success and episode.path_edges is not None:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)
             if episode.ran_out is not None:  # a policy that gave up goes on to the graph, as a blocked library
                 return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
         return self._graph_stage().run(model, oracle, known, checks, limits, times)
+
+    def _library_episode(
+        self, model: QueryModel, oracle: EdgeOracle, policy: str, limits: PlanLimits, known: dict[int, bool], used: int
+    ) -> EpisodeResult:
+        """The library stage's episode (the library built), told ``known`` (the ``used`` checks before it)."""
+        assert model.library is not None
+        lib_policy = POLICIES[policy](self._context(model, policy, limits.seed))
+        for edge, free in known.items():  # the probe's and the lead's outcomes
+            lib_policy.observe(edge, free)
+        budget = None if limits.max_checks is None else limits.max_checks - used
+        costs = model.query.edge_costs
+        return run_episode(
+            model.library, costs, lib_policy, oracle, max_checks=budget, deadline=limits.deadline, known=known
+        )
+
+    def _price_stage(self, model: QueryModel, oracle: EdgeOracle) -> None:
+        """The library stage of the method's policy, to a path or its end (what the lead's price times)."""
+        self._library_episode(model, oracle, "direct_bisect", PlanLimits(0, None, None), {}, 0)
 
     def _resolve(self, start: Endpoint, goal: Endpoint, oracle: EdgeOracle) -> QueryModel | int:
         """The query's model, or the one vertex when start and goal snap to it (QueryError: refused)."""

@@ -10,8 +10,9 @@ prior, on first need (or at :meth:`QueryModels.warm_up`):
 - the search worlds and their block graph (:class:`~drd_planner.planner.goal_trees.SearchWorlds`: distinct
   worlds found once, the libraries' searches batched and their trees kept per goal);
 - the graph's arcs and the points along its edges that impute the outcomes of new motions;
-- when the planner is told what a check costs, what a new query's library costs
-  (:meth:`QueryModels.library_cost_ms`, the price of :mod:`~drd_planner.planner.lead`).
+- when the planner is told what a check costs, what a new query's library costs and what each check of the lead
+  costs it (:meth:`QueryModels.library_cost_ms`, :meth:`QueryModels.lead_check_ms`: the price of
+  :mod:`~drd_planner.planner.lead`).
 
 A query whose switch threshold is 1 (validation picks it for new queries on every shipped prior: BiSECt from
 the root) gets a :class:`~drd_planner.core.root_tree.RootTree` instead of a DiRECt tree grown online.
@@ -22,11 +23,13 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 
 import numpy as np
 
 from drd_planner.arrays import FloatArray
 from drd_planner.core.bisect import bias_from_worlds
+from drd_planner.core.episode import EdgeOracle, TableOracle
 from drd_planner.core.lazysp import GraphArcs
 from drd_planner.core.online_tree import LazyDirectTree
 from drd_planner.core.root_tree import RootTree
@@ -41,13 +44,16 @@ from drd_planner.planner.probe import Probe, union_probe
 from drd_planner.planner.query_graph import QueryGraph, connected_query, prior_query
 from drd_planner.planner.query_library import query_library
 from drd_planner.planner.query_model import QueryModel
+from drd_planner.planner.roadmap_growth import lazy_search
 
 __all__ = ["DEFAULT_CACHE_SIZE", "QueryModels"]
 
 #: Queries whose library and tree are kept (least recently used dropped first).
 DEFAULT_CACHE_SIZE = 16
 #: Random queries (of each kind) whose library is timed for :meth:`QueryModels.library_cost_ms`.
-LIBRARY_COST_QUERIES = 5
+LIBRARY_COST_QUERIES = 9
+#: The most checks of the lead timed on each of them (:meth:`QueryModels.lead_check_ms`).
+LEAD_COST_CHECKS = 50
 
 
 class QueryModels:
@@ -77,7 +83,11 @@ class QueryModels:
         self.library_waits = False
         #: The lead's library price in CPU ms when given (None: :meth:`library_cost_ms` measures it).
         self.fixed_library_cost_ms: float | None = None
-        self._library_cost_ms: dict[bool, float] = {}
+        #: The lead's own CPU per check in ms while the price is fixed (:meth:`lead_check_ms`).
+        self.fixed_lead_check_ms = 0.0
+        self._library_cost_ms: dict[bool, tuple[float, float]] = {}
+        #: Runs a built model's library stage to its end (the planner's; timed in the lead's price), or None.
+        self.price_stage: Callable[[QueryModel, EdgeOracle], None] | None = None
         self.prior = prior
         self.connector = connector
         self._cache: OrderedDict[tuple[object, object], QueryModel] = OrderedDict()
@@ -224,30 +234,47 @@ class QueryModels:
         return self._library_model(query, t0)
 
     def library_cost_ms(self, *, joined: bool = False) -> float:
-        """What a new query's library and tree cost in CPU milliseconds (the lead's price; measured once).
+        """What buying a new query's library costs in CPU milliseconds (the lead's price; measured once).
 
-        :attr:`fixed_library_cost_ms` when set; else the median CPU time of building them for
-        :data:`LIBRARY_COST_QUERIES` random queries that some training world joins (seeded by the prior's
-        library seed), measured on this machine on first need (:meth:`warm_up`): between random vertices, or
-        (``joined``) between random states in the box of the vertex states, joined to the graph by the
-        connector (the joins are not timed: any planner makes them). The searches they leave for their goals
-        are dropped.
+        :attr:`fixed_library_cost_ms` when set; else the median CPU time, over :data:`LIBRARY_COST_QUERIES` random
+        queries that some training world joins (seeded by the prior's library seed), of building the library and
+        tree and running the library stage (:attr:`price_stage`: the method's selections; the checks are table
+        look-ups) to its end in one training world's outcomes, measured on this machine on first need
+        (:meth:`warm_up`): between random vertices, or (``joined``) between random states in the box of the
+        vertex states, joined to the graph by the connector (the joins are not timed: any planner makes them).
+        The searches they leave for their goals are dropped.
         """
         if self.fixed_library_cost_ms is not None:
             return self.fixed_library_cost_ms
+        return self._measured(joined)[0]
+
+    def lead_check_ms(self, *, joined: bool = False) -> float:
+        """The lead's own CPU per check in milliseconds (its searches and bookkeeping, the check itself not counted).
+
+        :attr:`fixed_lead_check_ms` while the price is fixed; else measured with :meth:`library_cost_ms` on
+        the same random queries: the lead run on each against one training world's outcomes (at most
+        :data:`LEAD_COST_CHECKS` checks), its CPU time over all its checks.
+        """
+        if self.fixed_library_cost_ms is not None:
+            return self.fixed_lead_check_ms
+        return self._measured(joined)[1]
+
+    def _measured(self, joined: bool) -> tuple[float, float]:
         joined = joined and self.connector is not None and self.prior.graph.vertex_states is not None
         if joined not in self._library_cost_ms:
             self._library_cost_ms[joined] = self._measure_library_cost(joined)
         return self._library_cost_ms[joined]
 
-    def _measure_library_cost(self, joined: bool) -> float:
+    def _measure_library_cost(self, joined: bool) -> tuple[float, float]:
+        """(median library CPU ms, the lead's CPU ms per check) on random queries of one kind."""
         prior = self.prior
         graph = prior.graph
         if prior.worlds is None or graph.num_vertices < 2:
-            return 0.0
+            return 0.0, 0.0
         rng = np.random.default_rng(prior.library_seed)
         kept = set(self.search.goals_kept)
         spent: list[float] = []
+        lead_s, lead_checks = 0.0, 0
         for _ in range(LIBRARY_COST_QUERIES * 20):
             if len(spent) == LIBRARY_COST_QUERIES:
                 break
@@ -255,13 +282,19 @@ class QueryModels:
                 query = self._random_query(rng, joined)
             except QueryError:
                 continue
+            oracle = _training_oracle(query, int(rng.integers(prior.worlds.shape[0])))
             t0 = time.process_time()
             model = self._library_model(query, time.perf_counter())
+            if model.library is not None and self.price_stage is not None:
+                self.price_stage(model, oracle)
             if model.library is not None:  # a query no training world joins costs little and says nothing
                 spent.append(time.process_time() - t0)
+                seconds, checks = _lead_time(prior, query, oracle)
+                lead_s, lead_checks = lead_s + seconds, lead_checks + checks
             if query.goal < graph.num_vertices and query.goal not in kept:
                 self.search.drop_tree(query.goal)
-        return 1e3 * float(np.median(spent)) if spent else 0.0
+        library_ms = 1e3 * float(np.median(spent)) if spent else 0.0
+        return library_ms, 1e3 * lead_s / lead_checks if lead_checks else 0.0
 
     def _random_query(self, rng: np.random.Generator, joined: bool) -> QueryGraph:
         """A random query between two vertices, or (``joined``) two states joined to the graph."""
@@ -346,3 +379,17 @@ class QueryModels:
 def _cache_key(endpoint: int | FloatArray) -> object:
     """A hashable key of a vertex id or a state (its exact float64 bytes)."""
     return endpoint if isinstance(endpoint, int) else np.asarray(endpoint, dtype=np.float64).tobytes()
+
+
+def _training_oracle(query: QueryGraph, world: int) -> TableOracle:
+    """The outcomes of training world ``world`` over the query's edges (its joins' imputed)."""
+    worlds = query.worlds
+    assert worlds is not None
+    return TableOracle(np.concatenate([worlds.base[world], worlds.extra[world]]))
+
+
+def _lead_time(prior: WorldPrior, query: QueryGraph, oracle: TableOracle) -> tuple[float, int]:
+    """(CPU seconds, checks) of the lead on ``query`` against ``oracle`` (a table: the lead's own time)."""
+    t0 = time.process_time()
+    episode = lazy_search(prior, query, oracle, {}, budget=LEAD_COST_CHECKS, deadline=None, stage="lead")
+    return time.process_time() - t0, len(episode.checks)
