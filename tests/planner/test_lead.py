@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from drd_planner import Planner, PlanStage, PlanStatus, TableOracle, prior_from_problem
+from drd_planner.core.episode import EdgeOracle
 from drd_planner.core.problem import Problem
 from drd_planner.core.status import PlanCause
 from drd_planner.core.tree import build_tree
@@ -16,6 +17,8 @@ from drd_planner.exceptions import ProblemError
 from drd_planner.planner import QueryTree, WorldPrior
 from drd_planner.planner.lead import check_cost, lead_checks
 from drd_planner.planner.query_graph import prior_query
+from drd_planner.planner.query_model import QueryModel
+from drd_planner.planner.query_models import LIBRARY_COST_QUERIES
 from drd_planner.planner.roadmap_growth import lazy_search
 
 
@@ -181,6 +184,16 @@ def test_budgets_stop_the_lead(forest_problem: Problem, forest_prior: WorldPrior
 
 def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(forest_prior: WorldPrior) -> None:
     planner = Planner(forest_prior)
+    staged = planner._models.price_stage
+    assert staged is not None
+    timed: list[int] = []
+
+    def stage(model: QueryModel, oracle: EdgeOracle) -> None:  # the buy side: the library stage to its plan
+        assert model.library is not None
+        timed.append(model.query.goal)
+        staged(model, oracle)
+
+    planner._models.price_stage = stage
     planner.warm_up()
     kept = planner._models.search.goals_kept
     measured, own = planner.library_cost_ms(), planner.lead_check_ms()
@@ -188,6 +201,7 @@ def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(forest_pri
     assert own > 0.0  # the lead's searches were timed on the same queries
     assert (planner.library_cost_ms(), planner.lead_check_ms()) == (measured, own)  # once
     assert planner._models.search.goals_kept == kept  # its searches leave nothing behind
+    assert len(timed) == LIBRARY_COST_QUERIES  # each sample query's library stage is part of the price
     planner.set_library_cost_ms(7.0)
     assert planner.library_cost_ms() == planner.library_cost_ms(joined=True) == 7.0
     assert planner.lead_check_ms() == 0.0  # a fixed price: nothing measured
