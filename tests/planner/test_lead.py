@@ -211,6 +211,9 @@ def test_the_library_price_is_measured_once_per_kind_and_can_be_fixed(forest_pri
     assert planner.lead_checks() == 2  # 7 / (2 + 1.5)
     with pytest.raises(ProblemError, match="lead_check_ms must be a finite number"):
         planner.set_library_cost_ms(7.0, lead_check_ms=-1.0)
+    with pytest.raises(ProblemError, match="give value too"):
+        planner.set_library_cost_ms(None, lead_check_ms=1.0)
+    assert planner.lead_checks() == 2  # a refused call changes nothing
     planner.set_library_cost_ms(None)
     assert (planner.library_cost_ms(), planner.lead_check_ms()) == (measured, own)
     assert planner.lead_checks() == math.floor(round(measured / (2.0 + own), 9))

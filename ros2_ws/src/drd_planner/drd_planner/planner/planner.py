@@ -168,9 +168,11 @@ class Planner:
             lead_check_ms: the lead's own CPU per check in ms while the price is fixed (:meth:`lead_check_ms`).
 
         Raises:
-            ProblemError: a value that is not a finite number >= 0.
+            ProblemError: a value that is not a finite number >= 0, or a ``lead_check_ms`` without a ``value``.
         """
         own = check_cost(lead_check_ms, "lead_check_ms")
+        if value is None and own:
+            raise ProblemError("lead_check_ms is fixed with the library cost: give value too (None measures both)")
         self._models.fixed_library_cost_ms = check_cost(value, "library_cost_ms")
         self._models.fixed_lead_check_ms = 0.0 if own is None else own
 
