@@ -276,6 +276,18 @@ def test_dataset_smoke_lazysp_returns_the_shortest_feasible_path() -> None:
             )
 
 
+def _searched_reach(pairs: np.ndarray, outcomes: dict[int, bool], n: int, directed: bool) -> tuple[int, int]:
+    """The two known-free regions' sizes by a breadth-first search of the whole graph's checked-free arcs."""
+    arcs = [(int(pairs[e, 0]), int(pairs[e, 1])) for e, f in outcomes.items() if f]
+    if not directed:
+        arcs += [(v, u) for u, v in arcs]
+    rows, cols = (np.array([a[i] for a in arcs], dtype=np.int64) for i in (0, 1))
+    adjacency = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(n, n))
+    ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
+    behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
+    return int(ahead.size), int(behind.size)
+
+
 @pytest.mark.parametrize("directed", [False, True])
 def test_the_known_free_reach_is_a_search_over_the_checked_free_edges(directed: bool) -> None:
     """The balanced selector's regions equal a breadth-first search of the whole graph's checked-free arcs."""
@@ -291,25 +303,12 @@ def test_the_known_free_reach_is_a_search_over_the_checked_free_edges(directed: 
         free = bool(rng.random() < 0.7)
         policy.observe(edge, free)
         outcomes[edge] = free
-        arcs = [(int(pairs[e, 0]), int(pairs[e, 1])) for e, f in outcomes.items() if f]
-        if not directed:
-            arcs += [(v, u) for u, v in arcs]
-        rows, cols = (np.array([a[i] for a in arcs], dtype=np.int64) for i in (0, 1))
-        adjacency = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(n, n))
-        ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
-        behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
-        assert policy.known_free_reach() == (ahead.size, behind.size)
+        assert policy.known_free_reach() == _searched_reach(pairs, outcomes, n, directed)
     # an edge checked free and then blocked (a later outcome wins) leaves the regions
     edge = next(e for e, f in outcomes.items() if f)
     policy.observe(edge, False)
     outcomes[edge] = False
-    arcs = [(int(pairs[e, 0]), int(pairs[e, 1])) for e, f in outcomes.items() if f]
-    arcs += [] if directed else [(v, u) for u, v in arcs]
-    rows, cols = (np.array([a[i] for a in arcs], dtype=np.int64) for i in (0, 1))
-    adjacency = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(n, n))
-    ahead = breadth_first_order(adjacency, 0, directed=True, return_predecessors=False)
-    behind = breadth_first_order(adjacency.T.tocsr(), n - 1, directed=True, return_predecessors=False)
-    assert policy.known_free_reach() == (ahead.size, behind.size)
+    assert policy.known_free_reach() == _searched_reach(pairs, outcomes, n, directed)
 
 
 def test_balanced_checks_from_the_walled_in_end() -> None:

@@ -286,8 +286,9 @@ class LazySP:
         self._stale = True
         self._forward_next = True
         self._batch: tuple[int, IntArray, IntArray] | None = None  # WeightSamp's block-graph structure
-        self._edge_ends, self._directed = graph.edges, graph.directed
-        self._reach = FreeReach(self._start, self._goal, directed=graph.directed)  # the balanced selector's
+        self._edge_ends = graph.edges
+        # the balanced selector's known-free regions, grown with each free outcome
+        self._reach = FreeReach(self._start, self._goal, directed=graph.directed)
         for edge, free in (observations or {}).items():
             self.observe(int(edge), bool(free))
 
