@@ -274,7 +274,7 @@ class QueryModels:
         rng = np.random.default_rng(prior.library_seed)
         kept = set(self.search.goals_kept)
         spent: list[float] = []
-        lead_s, lead_checks = 0.0, 0
+        lead_s, lead_count = 0.0, 0
         for _ in range(LIBRARY_COST_QUERIES * 20):
             if len(spent) == LIBRARY_COST_QUERIES:
                 break
@@ -285,16 +285,16 @@ class QueryModels:
             oracle = _training_oracle(query, int(rng.integers(prior.worlds.shape[0])))
             t0 = time.process_time()
             model = self._library_model(query, time.perf_counter())
-            if model.library is not None and self.price_stage is not None:
-                self.price_stage(model, oracle)
             if model.library is not None:  # a query no training world joins costs little and says nothing
+                if self.price_stage is not None:
+                    self.price_stage(model, oracle)
                 spent.append(time.process_time() - t0)
                 seconds, checks = _lead_time(prior, query, oracle)
-                lead_s, lead_checks = lead_s + seconds, lead_checks + checks
+                lead_s, lead_count = lead_s + seconds, lead_count + checks
             if query.goal < graph.num_vertices and query.goal not in kept:
                 self.search.drop_tree(query.goal)
         library_ms = 1e3 * float(np.median(spent)) if spent else 0.0
-        return library_ms, 1e3 * lead_s / lead_checks if lead_checks else 0.0
+        return library_ms, 1e3 * lead_s / lead_count if lead_count else 0.0
 
     def _random_query(self, rng: np.random.Generator, joined: bool) -> QueryGraph:
         """A random query between two vertices, or (``joined``) two states joined to the graph."""
