@@ -126,3 +126,21 @@ def test_worlds_alike_on_the_searched_arcs_are_searched_once_and_get_their_own_r
         assert np.array_equal(alone[2][0], together[2][w])
     assert np.array_equal(together[1][0], together[1][2])
     assert not np.array_equal(together[1][0], together[1][1])
+
+
+def test_the_block_graph_holds_each_blocks_free_arcs_in_its_own_rows_and_columns() -> None:
+    rng = np.random.default_rng(5)
+    size = 7
+    row = np.sort(rng.integers(1, size - 1, 40))  # rows 0 and size - 1 have no arcs
+    col = rng.integers(0, size, 40)
+    length = rng.uniform(0.5, 2.0, 40)
+    free = rng.random((3, 40)) < 0.6
+    free[1] = False  # a block with no free arc
+    graph = world_blocks._block_graph(free, row, col, length, size)
+    blocks, arcs = np.nonzero(free)
+    # Duplicate arcs (the same head and tail twice) are both kept in the CSR; the dense form sums them.
+    dense = np.zeros((3 * size, 3 * size))
+    np.add.at(dense, (row[arcs] + blocks * size, col[arcs] + blocks * size), length[arcs])
+    assert np.allclose(graph.toarray(), dense)
+    assert graph.nnz == int(free.sum())
+    assert graph.indptr[size : 2 * size + 1].tolist() == [graph.indptr[size]] * (size + 1)  # block 1: empty rows
