@@ -11,12 +11,8 @@ from conftest import SHARED_DATA
 from drd_planner.planner import load_prior
 from drd_planner.planner.connect import POINTS_PER_EDGE, imputed_columns
 from drd_planner.planner.dubins_connector import DubinsConnector
-from drd_planner.planner.join_growth import (
-    SketchedJoins,
-    more_joins_of,
-    prior_ranking,
-    still_open,
-)
+from drd_planner.planner.join_growth import SketchedJoins, more_joins_of, still_open
+from drd_planner.planner.join_ranking import prior_ranking
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanStage, PlanStatus

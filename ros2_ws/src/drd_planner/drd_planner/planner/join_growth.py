@@ -14,9 +14,10 @@ before more joins began, while a join further down the ranking (often straight t
 rounds begun after 64 checks most of them needed 67-83.
 
 Which joins come next is decided by the prior, not by length alone: when the connector can sketch its motions
-in bulk (:class:`SketchedJoins`: a few points along each, vectorised), every candidate join is imputed from the
-training worlds at once and the ranking is reordered by the lazy search's own weight, -log theta + lambda *
-length (:func:`prior_ranking`). On ``heli_lines`` a start low in a valley (every join among the 600 shortest
+in bulk (:class:`SketchedJoins`: a few points along each, vectorised), candidate joins are imputed from the
+training worlds and the ranking is reordered by the lazy search's own weight, -log theta + lambda * length
+(:class:`~drd_planner.planner.join_ranking.PriorRanking`: imputed in the connector's order only as far as a round
+needs, the order the same as imputing all). On ``heli_lines`` a start low in a valley (every join among the 600 shortest
 blocked) and a goal whose short joins lead into a blocked part of the lattice needed 1071 and 2100 checks
 (7-13 s) with joins offered by length in rounds of 16, 32, 64, ...; ordered by the prior, 44 and 33.
 
@@ -41,20 +42,13 @@ from drd_planner.arrays import BoolArray, FloatArray, IntArray
 from drd_planner.core.episode import CheckRecord
 from drd_planner.core.graph import ExplicitGraph
 from drd_planner.core.world_columns import WorldColumns
-from drd_planner.planner.connect import (
-    POINTS_PER_EDGE,
-    EdgeSampleIndex,
-    MotionOracle,
-    VertexJoins,
-    imputed_columns,
-    imputed_shares,
-)
-from drd_planner.planner.graph_fallback import LENGTH_WEIGHT
+from drd_planner.planner.connect import POINTS_PER_EDGE, EdgeSampleIndex, MotionOracle, VertexJoins
+from drd_planner.planner.join_ranking import PriorRanking
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.query_graph import QueryGraph
 from drd_planner.planner.roadmap_growth import DEFAULT_GROWTH, GraphGrowth, GrowthLimits, GrowthSettings
 
-__all__ = ["JoinGrowth", "MoreJoins", "SketchedJoins", "more_joins_of", "prior_ranking", "still_open"]
+__all__ = ["JoinGrowth", "MoreJoins", "SketchedJoins", "more_joins_of", "still_open"]
 
 
 @runtime_checkable
@@ -86,40 +80,6 @@ class SketchedJoins(Protocol):
     ) -> tuple[FloatArray, FloatArray]:
         """(M,) lengths and (M, P, D') positions at the arc-length ``fractions`` (P,) of each joining motion."""
         ...
-
-
-def prior_ranking(
-    ranking: IntArray,
-    lengths: FloatArray,
-    points: FloatArray,
-    index: EdgeSampleIndex,
-    prior: WorldPrior,
-    columns: WorldColumns | None = None,
-) -> IntArray:
-    """(M,) the ranked vertices reordered by the lazy search's weight of their joining motion under the prior.
-
-    The weight is the graph fallback's: -log theta + lambda * length / mean edge length, with theta the
-    share of training worlds (weighted as the prior weights them) in which the sketched motion's imputed
-    outcome is free (:func:`~drd_planner.planner.connect.imputed_columns`; at least 1e-3). Ties keep the
-    connector's order; a prior without training worlds keeps the connector's order.
-
-    Args:
-        ranking: (M,) vertex ids in the connector's order.
-        lengths: (M,) the motions' lengths (the graph's unit).
-        points: (M, P, D') positions along each motion.
-        index: points along the prior's graph edges.
-        prior: its training worlds, weights and graph lengths.
-        columns: the same worlds as packed columns (read faster than the worlds' rows), when at hand.
-    """
-    if ranking.size == 0 or prior.worlds is None:  # no training worlds: the connector's order
-        return ranking
-    if columns is None:
-        theta = np.average(imputed_columns(index, prior.worlds, list(points)), axis=0, weights=prior.world_weights)
-    else:  # the same numbers, counted on the packed columns
-        theta = imputed_shares(index, columns, points, prior.world_weights)
-    mean = float(np.mean(prior.graph.lengths)) if prior.graph.num_edges else 1.0
-    weight = -np.log(np.clip(theta, 1e-3, 1.0)) + LENGTH_WEIGHT * lengths / (mean if mean > 0 else 1.0)
-    return np.asarray(ranking[np.argsort(weight, kind="stable")], dtype=np.int64)
 
 
 def more_joins_of(connector: object) -> MoreJoins | None:
@@ -181,7 +141,7 @@ class JoinGrowth(GraphGrowth):
         super().__init__(prior, query, index, settings)
         self.connector = connector
         #: Per off-graph endpoint (its query vertex): its state, whether it is the start, and its ranking.
-        self.ends: dict[int, tuple[FloatArray, bool, IntArray]] = {}
+        self.ends: dict[int, tuple[FloatArray, bool, PriorRanking]] = {}
         #: Per off-graph endpoint: the prior's vertices it is joined to so far.
         self.joined: dict[int, set[int]] = {}
         for vertex, state in sorted(query.new_states.items()):
@@ -189,16 +149,17 @@ class JoinGrowth(GraphGrowth):
                 continue
             outgoing = vertex == query.start
             array = np.asarray(state, dtype=np.float64)
-            ranking = connector.ranked(array, prior.graph, outgoing=outgoing)
+            given = connector.ranked(array, prior.graph, outgoing=outgoing)
+            ranking = PriorRanking.as_given(given)
             if isinstance(connector, SketchedJoins):
                 lengths, points = connector.sketches(
                     array,
                     prior.graph,
-                    ranking,
+                    given,
                     outgoing=outgoing,
                     fractions=np.linspace(0, 1, POINTS_PER_EDGE),
                 )
-                ranking = prior_ranking(ranking, lengths, points, index, prior, columns)
+                ranking = PriorRanking.of_prior(given, lengths, points, index, prior, columns)
             self.ends[vertex] = (array, outgoing, ranking)
             edges = query.graph.edges
             mine = edges[:, 0] == vertex if outgoing else edges[:, 1] == vertex
@@ -235,9 +196,8 @@ class JoinGrowth(GraphGrowth):
                 directed=base.graph.directed,
                 reverse=outgoing,
             )
-            fresh = np.array([v for v in ranking.tolist() if useful[v] and v not in joined], dtype=np.int64)
-            batch = fresh.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
-            take = fresh[: min(batch, room)]
+            batch = ranking.size if self.settings.join_batch is None else max(len(joined), self.settings.join_batch)
+            take = _next_joins(ranking, min(batch, room), useful, joined)
             if take.size == 0:
                 continue
             motions = self.connector.motions_to(state, self.prior.graph, take, outgoing=outgoing)
@@ -249,3 +209,17 @@ class JoinGrowth(GraphGrowth):
             grown.add_edges(pairs, [m.states for m in motions], lengths)
             added = True
         return added
+
+
+def _next_joins(ranking: PriorRanking, count: int, useful: BoolArray, joined: set[int]) -> IntArray:
+    """(k <= count,) the first ``count`` vertices of ``ranking`` that are ``useful`` (V,) and not ``joined`` yet.
+
+    The ranking is imputed no further than they need.
+    """
+    asked = count
+    while True:
+        head = ranking.first(asked)
+        fresh = [v for v in head.tolist() if useful[v] and v not in joined]
+        if len(fresh) >= count or head.size >= ranking.size:
+            return np.array(fresh[:count], dtype=np.int64)
+        asked = head.size + count - len(fresh)
