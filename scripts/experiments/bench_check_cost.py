@@ -21,11 +21,12 @@ with ``direct_bisect`` and ``bisect`` (``Planner.plan``, the check cost unknown 
 graph (``drd_planner.bench.cost_episodes``), and OMPL's LazyPRM on the prior's graph with the same live
 checker and the same per-check cost in its worker (vertex queries only: its roadmap cannot join an off-graph
 state). Query i runs against world i mod W. Times are CPU ms of the process that plans (the OMPL worker's
-own for LazyPRM); medians over the queries of a kind that every method verified at every C.
+own for LazyPRM); medians over the queries of a kind that every method verified at every C. With ``--repeat R``
+every episode (OMPL's too) runs R times and keeps its median time.
 
 Usage: python scripts/experiments/bench_check_cost.py [--priors heli_wires,heli_terrain,heli_lines,arm_table_clutter]
     [--costs 0,0.2,1,5] [--worlds 4] [--new 8] [--off-graph 8] [--seed 0] [--world-seed 0] [--no-ompl]
-    [--json FILE] [--markdown FILE]
+    [--repeat 1] [--json FILE] [--markdown FILE]
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from drd_planner.bench.check_cost import Timed, cost_key, parse_check_costs
-from drd_planner.bench.cost_bench import cost_markdown, run_cost_episodes, summarize_costs
+from drd_planner.bench.cost_bench import CostRun, cost_markdown, median_episode, run_cost_episodes, summarize_costs
 from drd_planner.bench.cost_episodes import LEAD_POLICY, CostQuery, EpisodeTime
 from drd_planner.bench.held_out import WORLD_MODELS, held_out_worlds, new_queries, off_graph_queries
 from drd_planner.bench.ompl_peer import LiveWorlds, ompl_available, run_ompl_lazyprm_live
@@ -56,26 +57,28 @@ POLICIES = ("direct_bisect", LEAD_POLICY, "bisect", "lazysp", "check_all")
 
 
 def ompl_episodes(
-    prior: WorldPrior, queries: list[CostQuery], recipes: list[WorldRecipe], costs: tuple[float, ...]
+    prior: WorldPrior, queries: list[CostQuery], recipes: list[WorldRecipe], costs: tuple[float, ...], repeat: int
 ) -> list[EpisodeTime]:
-    """LazyPRM on every vertex query (one worker per (start, goal): its worlds and costs)."""
+    """LazyPRM on every vertex query (one worker per (start, goal) and run: its worlds and costs)."""
     by_pair: dict[tuple[int, int], list[int]] = {}
     for i, q in enumerate(queries):
         if q.kind != "off_graph":
             by_pair.setdefault((int(q.start), int(q.goal)), []).append(i)  # type: ignore[arg-type]
-    out: list[EpisodeTime] = []
+    runs: dict[tuple[int, float], list[EpisodeTime]] = {}
     for (start, goal), indices in by_pair.items():
         live = LiveWorlds(prior.domain, dict(prior.domain_spec), tuple(recipes[queries[i].world] for i in indices))
-        result = run_ompl_lazyprm_live(prior.graph, start, goal, live, check_costs_ms=costs)
-        blocks = iter(result["worlds"])
-        for i in indices:
-            for cost in costs:
-                b = next(blocks)
-                spent = Timed(1e3 * float(b["cpu_s"]), 1e3 * float(b["wall_s"]))
-                out.append(
-                    EpisodeTime("ompl_lazyprm", i, queries[i].kind, cost, bool(b["success"]), int(b["checks"]), spent)
-                )
-    return out
+        for _ in range(repeat):
+            result = run_ompl_lazyprm_live(prior.graph, start, goal, live, check_costs_ms=costs)
+            blocks = iter(result["worlds"])
+            for i in indices:
+                for cost in costs:
+                    b = next(blocks)
+                    spent = Timed(1e3 * float(b["cpu_s"]), 1e3 * float(b["wall_s"]))
+                    episode = EpisodeTime(
+                        "ompl_lazyprm", i, queries[i].kind, cost, bool(b["success"]), int(b["checks"]), spent
+                    )
+                    runs.setdefault((i, cost), []).append(episode)
+    return [median_episode(r) for r in runs.values()]
 
 
 def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], ompl: bool) -> dict[str, Any]:
@@ -98,9 +101,10 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
     def oracle_of(world: int) -> Any:
         return domain.checker(worlds[world])
 
-    episodes = run_cost_episodes(planner, queries, oracle_of, costs, policies=POLICIES, seed=args.seed, rows=rows)
+    run = CostRun(policies=POLICIES, seed=args.seed, repeat=args.repeat)
+    episodes = run_cost_episodes(planner, queries, oracle_of, costs, run, rows=rows)
     if ompl:
-        episodes += ompl_episodes(prior, queries, recipes, costs)
+        episodes += ompl_episodes(prior, queries, recipes, costs, args.repeat)
     summary = summarize_costs(episodes, costs)
     notes = [
         f"held-out worlds of the {model!r} model, seeds {[r.seed for r in recipes]}; queries {kinds}",
@@ -149,6 +153,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reach", type=float, default=0.5, help="new queries: training fraction connected")
     parser.add_argument("--world-seed", type=int, default=0, help="first world seed (held out: see above)")
     parser.add_argument("--no-ompl", action="store_true", help="skip ompl_lazyprm")
+    parser.add_argument(
+        "--repeat", type=int, default=1, help="runs of each episode (OMPL's too), their median times kept"
+    )
     parser.add_argument("--json", type=Path, default=None)
     parser.add_argument("--markdown", type=Path, default=None)
     args = parser.parse_args(argv)

@@ -9,9 +9,10 @@ import pytest
 from conftest import gccd_folder
 
 from drd_planner.bench.check_cost import Timed
-from drd_planner.bench.cost_bench import cost_markdown, summarize_costs
+from drd_planner.bench.cost_bench import cost_markdown, median_episode, summarize_costs
 from drd_planner.bench.cost_episodes import EpisodeTime
 from drd_planner.cli.main import main
+from drd_planner.exceptions import DrdError
 
 
 def _argv(folder: Path, out: Path, costs: str) -> list[str]:
@@ -69,6 +70,46 @@ def test_malformed_costs_and_missing_queries_are_one_clear_error(
     no_cost = ["bench", "--gccd", str(folder), "--queries", "2", "--policies", "direct_bisect_lead,lazysp"]
     assert main(no_cost) == 2
     assert "give --check-cost-ms too" in capsys.readouterr().err
+    assert main(["bench", "--gccd", str(folder), "--queries", "2", "--repeat", "3"]) == 2
+    assert "--repeat repeats the episodes timed at check costs" in capsys.readouterr().err
+    assert main([*_argv(folder, tmp_path / "q.json", "1"), "--repeat", "0"]) == 2
+    assert "--repeat must be at least 1, got 0" in capsys.readouterr().err
+
+
+def test_repeated_episodes_keep_their_median_times_and_the_same_checks(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = gccd_folder("dataset_2d_1")
+    once, thrice = tmp_path / "1.json", tmp_path / "3.json"
+    assert main(_argv(folder, once, "0,1")) == 0
+    assert main([*_argv(folder, thrice, "0,1"), "--repeat", "3"]) == 0
+    capsys.readouterr()
+    a, b = (json.loads(f.read_text())["policies"] for f in (once, thrice))
+    for name in ("direct_bisect", "direct_bisect_lead", "lazysp", "check_all"):
+        assert a[name]["time_checks_at"] == b[name]["time_checks_at"]  # one episode per query and cost, as before
+        assert a[name]["time_ms"]["1"]["n"] == b[name]["time_ms"]["1"]["n"]
+        assert b[name]["time_ms"]["1"]["median"] > b[name]["time_ms"]["0"]["median"]
+
+
+def test_an_episodes_runs_give_their_median_times_and_must_agree_on_the_checks() -> None:
+    def run(ms: float, ok: bool = True, checks: int = 3) -> EpisodeTime:
+        return EpisodeTime("lazysp", 2, "new", 0.2, ok, checks, Timed(ms, 10 * ms))
+
+    one = median_episode([run(5.0), run(1.0), run(2.0)])
+    assert one.time == Timed(2.0, 20.0)
+    assert (one.policy, one.query, one.kind, one.cost_ms, one.checks, one.verified) == (
+        "lazysp",
+        2,
+        "new",
+        0.2,
+        3,
+        True,
+    )
+    assert not median_episode([run(1.0), run(1.0, ok=False)]).verified
+    with pytest.raises(DrdError, match=r"lazysp on query 2 at 0.2 ms/check made different checks .*\[3, 4\]"):
+        median_episode([run(1.0), run(1.0, checks=4)])
+    with pytest.raises(DrdError, match="at least one run"):
+        median_episode([])
 
 
 def test_medians_compare_the_queries_every_policy_verified() -> None:

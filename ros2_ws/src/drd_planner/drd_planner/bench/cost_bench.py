@@ -1,7 +1,11 @@
 """The time-to-a-verified-plan benchmark at stated check costs: run every policy, summarize, tabulate.
 
 Each query runs once per check cost C and policy (:mod:`~drd_planner.bench.cost_episodes`), each episode
-with a fresh oracle (a live checker may cache its answers). The summary keeps, per policy and C, the median
+with a fresh oracle (a live checker may cache its answers); with ``repeat`` R > 1 each episode runs R times in
+a row and keeps the median of its CPU times (and of its wall times): the same checks each time (the same
+seed), so only the clock's noise differs, and a policy's median over the queries then moves less between runs
+of the benchmark where two policies are within a few per cent of each other. The summary keeps, per policy and
+C, the median
 and mean CPU time (and the wall time beside) over the queries of each kind that **every** policy timed on
 that kind verified at every C (so the medians compare the same queries), and over all such queries of all
 kinds; the verified counts say how many each policy verified on its own.
@@ -9,12 +13,14 @@ kinds; the verified counts say how many each policy verified on its own.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from drd_planner.bench.check_cost import cost_key, time_summary
+from drd_planner.bench.check_cost import Timed, cost_key, time_summary
 from drd_planner.bench.cost_episodes import (
     LEAD_POLICY,
     QUERY_KINDS,
@@ -34,8 +40,10 @@ from drd_planner.progress import Progress
 __all__ = [
     "COST_POLICIES",
     "DEFAULT_COST_POLICIES",
+    "CostRun",
     "check_cost_policies",
     "cost_markdown",
+    "median_episode",
     "run_cost_episodes",
     "summarize_costs",
 ]
@@ -60,51 +68,101 @@ def check_cost_policies(policies: Sequence[str]) -> None:
         )
 
 
+@dataclass(frozen=True)
+class CostRun:
+    """How :func:`run_cost_episodes` runs.
+
+    Attributes:
+        policies: the policies timed (:data:`COST_POLICIES`).
+        seed: query i's library policies use seed ``seed + i`` (the same checks at every cost).
+        repeat: runs of each episode, their median times kept (:func:`median_episode`; at least 1).
+        progress: show a progress bar (None: when stderr is a terminal).
+    """
+
+    policies: Sequence[str] = DEFAULT_COST_POLICIES
+    seed: int = 0
+    repeat: int = 1
+    progress: bool | None = None
+
+
 def run_cost_episodes(
     planner: Planner,
     queries: Sequence[CostQuery],
     oracle_of: OracleOf,
     costs: Sequence[float],
-    *,
-    policies: Sequence[str] = DEFAULT_COST_POLICIES,
-    seed: int = 0,
-    progress: bool | None = None,
+    run: CostRun = CostRun(),
     rows: dict[int, FullRow] | None = None,
 ) -> list[EpisodeTime]:
     """Every policy on every query at every cost; ``oracle_of(world)`` makes a fresh oracle of a world.
 
-    Query i's library policies use seed ``seed + i`` (same seed, same checks at every cost). ``rows``: the
-    worlds' :class:`FullRow` already made (``check_all`` makes the others).
+    ``rows``: the worlds' :class:`FullRow` already made (``check_all`` makes the others).
     """
-    check_cost_policies(policies)
+    check_cost_policies(run.policies)
+    if run.repeat < 1:
+        raise DrdError(f"repeat must be at least 1, got {run.repeat}")
     planner.warm_up()
-    if LEAD_POLICY in policies:  # the lead's price, measured before anything is timed
+    if LEAD_POLICY in run.policies:  # the lead's price, measured before anything is timed
         planner.library_cost_ms()
         planner.library_cost_ms(joined=True)
-    rows = dict(rows or {})
-    out: list[EpisodeTime] = []
+    episodes = _Episodes(planner, oracle_of, dict(rows or {}), run.seed)
     if queries:  # first use of every code path (imports, caches) before anything is timed
         first = queries[0]
-        for name in policies:
+        for name in run.policies:
             if name not in GRAPH_POLICIES:
-                plan_episode(planner, first, 0, oracle_of(first.world), 0.0, name, seed)
+                plan_episode(planner, first, 0, oracle_of(first.world), 0.0, name, run.seed)
         lazysp_episode(planner, first, 0, oracle_of(first.world), 0.0)
-    bar = Progress(len(queries) * len(costs) * len(policies), "check-cost episodes", unit="episode", enabled=progress)
+    total = len(queries) * len(costs) * len(run.policies) * run.repeat
+    bar = Progress(total, "check-cost episodes", unit="episode", enabled=run.progress)
+    out: list[EpisodeTime] = []
     for i, query in enumerate(queries):
         for cost in costs:
-            for name in policies:
-                oracle = oracle_of(query.world)
-                if name == "check_all":
-                    if query.world not in rows:
-                        rows[query.world] = full_row(oracle_of(query.world), planner.prior.graph.num_edges)
-                    out.append(check_all_episode(planner, query, i, oracle, cost, rows[query.world]))
-                elif name == "lazysp":
-                    out.append(lazysp_episode(planner, query, i, oracle, cost))
-                else:
-                    out.append(plan_episode(planner, query, i, oracle, cost, name, seed + i))
-                bar.update(1)
+            for name in run.policies:
+                runs = []
+                for _ in range(run.repeat):
+                    runs.append(episodes.run(name, query, i, cost))
+                    bar.update(1)
+                out.append(median_episode(runs))
     bar.close()
     return out
+
+
+@dataclass
+class _Episodes:
+    """One episode of any policy: a fresh oracle of the query's world each time."""
+
+    planner: Planner
+    oracle_of: OracleOf
+    rows: dict[int, FullRow]
+    seed: int
+
+    def run(self, name: str, query: CostQuery, index: int, cost: float) -> EpisodeTime:
+        oracle = self.oracle_of(query.world)
+        if name == "check_all":
+            if query.world not in self.rows:
+                self.rows[query.world] = full_row(self.oracle_of(query.world), self.planner.prior.graph.num_edges)
+            return check_all_episode(self.planner, query, index, oracle, cost, self.rows[query.world])
+        if name == "lazysp":
+            return lazysp_episode(self.planner, query, index, oracle, cost)
+        return plan_episode(self.planner, query, index, oracle, cost, name, self.seed + index)
+
+
+def median_episode(runs: Sequence[EpisodeTime]) -> EpisodeTime:
+    """One episode of several runs of it: the median CPU and the median wall time (ms) of the runs.
+
+    Verified only when every run was; DrdError when the runs differ in their checks (the same episode, the
+    same seed: a difference is a determinism bug, not noise to average away).
+    """
+    if not runs:
+        raise DrdError("an episode needs at least one run")
+    first = runs[0]
+    if any(r.checks != first.checks for r in runs):
+        raise DrdError(
+            f"{first.policy} on query {first.query} at {first.cost_ms:g} ms/check made different checks in "
+            f"repeated runs: {[r.checks for r in runs]}"
+        )
+    cpu = float(np.median([r.time.cpu_ms for r in runs]))
+    wall = float(np.median([r.time.wall_ms for r in runs]))
+    return dataclasses.replace(first, verified=all(r.verified for r in runs), time=Timed(cpu, wall))
 
 
 def _common(episodes: Sequence[EpisodeTime], kind: str) -> tuple[list[str], set[int]]:

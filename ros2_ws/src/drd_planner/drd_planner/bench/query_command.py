@@ -10,6 +10,7 @@ import numpy as np
 
 from drd_planner.bench.check_cost import cost_key, parse_check_costs
 from drd_planner.bench.cost_bench import (
+    CostRun,
     check_cost_policies,
     cost_markdown,
     run_cost_episodes,
@@ -47,6 +48,7 @@ class QueryBenchOptions:
             comma-separated text (:func:`~drd_planner.bench.check_cost.parse_check_costs`; None: no timing).
         max_checks: per-episode check cap (None: none; at least 1).
         seed: the seed of the queries, the episodes and the prior's validation and library.
+        repeat: with ``check_cost_ms``, runs of each timed episode, their median times kept (at least 1).
         json: write the results JSON here (None: not written).
         markdown: write the markdown report here (None: not written).
         leaf: how the built prior's eta, kappa and region rule are chosen.
@@ -60,6 +62,7 @@ class QueryBenchOptions:
     check_cost_ms: str | None = None
     max_checks: int | None = None
     seed: int = 0
+    repeat: int = 1
     json: str | None = None
     markdown: str | None = None
     leaf: LeafChoice = field(default_factory=LeafChoice)
@@ -98,6 +101,8 @@ def run_query_bench(options: QueryBenchOptions) -> int:
         raise DrdError(f"--queries must be at least 1, got {options.queries}")
     if options.max_checks is not None and options.max_checks < 1:
         raise DrdError(f"--max-checks must be at least 1, got {options.max_checks}")
+    if options.repeat < 1:
+        raise DrdError(f"--repeat must be at least 1, got {options.repeat}")
     costs = parse_check_costs(options.check_cost_ms) if options.check_cost_ms is not None else ()
     policies = options.policies or DEFAULT_QUERY_POLICIES
     if costs:
@@ -119,7 +124,8 @@ def run_query_bench(options: QueryBenchOptions) -> int:
     doc["memory_bytes"] = planner.memory_bytes()
     report = query_markdown(doc)
     if costs:
-        report += time_at_check_costs(problem, prior, queries, doc, costs, policies=policies, seed=options.seed)
+        run = CostRun(policies=policies, seed=options.seed, repeat=options.repeat)
+        report += time_at_check_costs(problem, prior, queries, doc, costs, run)
     print(report, end="")
     print(f"eta, kappa and region rule: {note}")
     write_bench_files(doc, report, json_path=options.json, markdown_path=options.markdown)
@@ -143,9 +149,7 @@ def time_at_check_costs(
     queries: list[tuple[int, int]],
     doc: dict[str, Any],
     costs: tuple[float, ...],
-    *,
-    policies: tuple[str, ...],
-    seed: int,
+    run: CostRun,
 ) -> str:
     """``--check-cost-ms``: time the queries again at each cost (a fresh planner), into ``doc``; the report.
 
@@ -162,7 +166,7 @@ def time_at_check_costs(
     def oracle_of(world: int) -> TableOracle:
         return TableOracle(worlds.X[int(test[world])])
 
-    episodes = run_cost_episodes(Planner(prior), timed_queries, oracle_of, costs, policies=policies, seed=seed)
+    episodes = run_cost_episodes(Planner(prior), timed_queries, oracle_of, costs, run)
     summary = summarize_costs(episodes, costs)
     for name, block in summary.items():
         entry = doc["policies"].setdefault(name, {})

@@ -59,6 +59,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.check_cost_ms is not None and args.queries is None:
         raise DrdError("--check-cost-ms times random queries: give --queries N too")
+    if args.repeat != 1 and args.check_cost_ms is None:
+        raise DrdError("--repeat repeats the episodes timed at check costs: give --check-cost-ms too")
     if args.queries is not None:
         return _bench_queries(args)
     return run_bench(
@@ -89,6 +91,7 @@ def _bench_queries(args: argparse.Namespace) -> int:
             check_cost_ms=args.check_cost_ms,
             max_checks=args.max_checks,
             seed=args.seed,
+            repeat=args.repeat,
             json=args.json,
             markdown=args.markdown,
             leaf=leaf_choice(args),
@@ -162,6 +165,14 @@ def add_bench_parser(sub: Any) -> argparse.ArgumentParser:
         "(per kind: the stored query and new ones; off-graph queries need live worlds: "
         "scripts/experiments/bench_check_cost.py; median and mean CPU and wall ms per C in the JSON's "
         "policies.NAME.time_ms.C)",
+    )
+    p.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        metavar="R",
+        help="with --check-cost-ms: run each timed episode R times and keep its median CPU and wall time "
+        "(the same checks each time; less clock noise in the medians)",
     )
     add_tree_options(p)
     p.set_defaults(func=cmd_bench)
