@@ -16,10 +16,10 @@ rounds begun after 64 checks most of them needed 67-83.
 Which joins come next is decided by the prior, not by length alone: when the connector can sketch its motions
 in bulk (:class:`SketchedJoins`: a few points along each, vectorised), candidate joins are imputed from the
 training worlds and the ranking is reordered by the lazy search's own weight, -log theta + lambda * length
-(:class:`~drd_planner.planner.join_ranking.PriorRanking`: imputed in the connector's order only as far as a round
-needs, the order the same as imputing all). On ``heli_lines`` a start low in a valley (every join among the 600 shortest
-blocked) and a goal whose short joins lead into a blocked part of the lattice needed 1071 and 2100 checks
-(7-13 s) with joins offered by length in rounds of 16, 32, 64, ...; ordered by the prior, 44 and 33.
+(:class:`~drd_planner.planner.join_ranking.PriorRanking`: imputed in the connector's order only as far as a
+round needs, in the same order as imputing them all). On ``heli_lines`` a start low in a valley (every join among
+the 600 shortest blocked) and a goal whose short joins lead into a blocked part of the lattice needed 1071 and
+2100 checks (7-13 s) with joins offered by length in rounds of 16, 32, 64, ...; ordered by the prior, 44 and 33.
 
 Only joins that can still lead somewhere are offered: a start is joined only to vertices from which the goal
 can still be reached over edges not known blocked, a goal only from vertices the start can still reach (one
