@@ -12,7 +12,7 @@ from drd_planner.planner import load_prior
 from drd_planner.planner.connect import POINTS_PER_EDGE, imputed_columns
 from drd_planner.planner.dubins_connector import DubinsConnector
 from drd_planner.planner.join_growth import SketchedJoins, more_joins_of, still_open
-from drd_planner.planner.join_ranking import prior_ranking
+from drd_planner.planner.join_ranking import PriorRanking
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 from drd_planner.planner.result import PlanStage, PlanStatus
@@ -146,7 +146,7 @@ def test_the_ranking_follows_the_lazy_weight_of_each_sketched_join(prior: WorldP
         START, prior.graph, ranking, outgoing=True, fractions=np.linspace(0, 1, POINTS_PER_EDGE)
     )
     index = planner._models.sample_index()
-    ordered = prior_ranking(ranking, lengths, points, index, prior)
+    ordered = PriorRanking.of_prior(ranking, lengths, points, index, prior).first(ranking.size)
     assert sorted(ordered.tolist()) == sorted(ranking.tolist())
     assert not np.array_equal(ordered, ranking)
     theta = np.average(imputed_columns(index, prior.worlds, list(points)), axis=0, weights=prior.world_weights)

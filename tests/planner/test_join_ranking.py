@@ -10,12 +10,21 @@ import pytest
 from drd_planner.planner import load_prior
 from drd_planner.planner.connect import POINTS_PER_EDGE
 from drd_planner.planner.dubins_connector import DubinsConnector
-from drd_planner.planner.join_ranking import FIRST_IMPUTED, PriorRanking, prior_ranking, prior_surprise
+from drd_planner.planner.join_ranking import FIRST_IMPUTED, PriorRanking, length_terms, prior_surprise
 from drd_planner.planner.planner import Planner
 from drd_planner.planner.prior import WorldPrior
 
 PRIOR = Path(__file__).resolve().parents[2] / "trees" / "heli_wires.npz"
 START = np.array([212.0, 33.0, 60.0, 2.9])
+
+
+def _whole(
+    ranking: np.ndarray, lengths: np.ndarray, points: np.ndarray, planner: Planner, columns: object
+) -> np.ndarray:
+    """Every motion imputed at once, sorted by weight (ties: the connector's order)."""
+    prior = planner.prior
+    weight = prior_surprise(points, planner._models.sample_index(), prior, columns) + length_terms(lengths, prior)
+    return ranking[np.argsort(weight, kind="stable")]
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +55,7 @@ def test_the_first_vertices_asked_for_are_those_of_the_whole_ranking(sketched: t
     prior, planner, ranking, lengths, points = sketched
     index = planner._models.sample_index()
     packed = planner._models.columns if columns else None
-    whole = prior_ranking(ranking, lengths, points, index, prior, packed)
+    whole = _whole(ranking, lengths, points, planner, packed)
     lazy = PriorRanking.of_prior(ranking, lengths, points, index, prior, packed)
     head = lazy.first(64)
     assert head.size >= 64

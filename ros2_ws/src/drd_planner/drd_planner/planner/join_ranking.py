@@ -11,7 +11,7 @@ offers 64.
 :class:`PriorRanking` imputes in the connector's order (shortest first), as far as the round asks. A motion's
 weight is at least its length term, so once the motions imputed so far include one whose weight is at most the
 least length term of every motion not yet imputed, the motions up to it are final: the same order, ties kept in
-the connector's order, as :func:`prior_ranking` over all of them. On ``heli_lines`` growth rounds that found a path
+the connector's order, as a stable sort of every motion's weight. On ``heli_lines`` growth rounds that found a path
 after 64 to 128 new joins the ranking cost a few hundred motions' imputation instead of every lattice vertex's.
 """
 
@@ -27,7 +27,7 @@ from drd_planner.planner.connect import EdgeSampleIndex, imputed_columns, impute
 from drd_planner.planner.graph_fallback import LENGTH_WEIGHT
 from drd_planner.planner.prior import WorldPrior
 
-__all__ = ["FIRST_IMPUTED", "PriorRanking", "length_terms", "prior_ranking", "prior_surprise"]
+__all__ = ["FIRST_IMPUTED", "PriorRanking", "length_terms", "prior_surprise"]
 
 #: Motions imputed in the first step of a :class:`PriorRanking` at least (count); each later step doubles.
 FIRST_IMPUTED = 256
@@ -59,34 +59,10 @@ def prior_surprise(
     return np.asarray(-np.log(np.clip(theta, 1e-3, 1.0)), dtype=np.float64)
 
 
-def prior_ranking(
-    ranking: IntArray,
-    lengths: FloatArray,
-    points: FloatArray,
-    index: EdgeSampleIndex,
-    prior: WorldPrior,
-    columns: WorldColumns | None = None,
-) -> IntArray:
-    """(M,) the ranked vertices reordered by the lazy search's weight of their joining motion, all imputed at once.
-
-    Ties keep the connector's order; a prior without training worlds keeps the connector's order.
-
-    Args:
-        ranking: (M,) vertex ids in the connector's order.
-        lengths: (M,) the motions' lengths (the graph's unit).
-        points: (M, P, D') positions along each motion.
-        index: points along the prior's graph edges.
-        prior: its training worlds, weights and graph lengths.
-        columns: the same worlds as packed columns, when at hand.
-    """
-    if ranking.size == 0 or prior.worlds is None:  # no training worlds: the connector's order
-        return ranking
-    weight = prior_surprise(points, index, prior, columns) + length_terms(lengths, prior)
-    return np.asarray(ranking[np.argsort(weight, kind="stable")], dtype=np.int64)
-
-
 class PriorRanking:
-    """:func:`prior_ranking`'s order, its motions imputed only as far as :meth:`first` is asked (module docstring).
+    """Vertices by their joining motion's weight (ties: the connector's order), imputed only as far as asked.
+
+    See the module docstring; :meth:`first` gives the order's head.
 
     Args:
         ranking: (M,) vertex ids in the connector's order.
@@ -115,7 +91,11 @@ class PriorRanking:
         prior: WorldPrior,
         columns: WorldColumns | None = None,
     ) -> PriorRanking:
-        """The ranking of motions of ``lengths`` (M,) sketched at ``points`` (M, P, D') (:func:`prior_ranking`'s)."""
+        """The ranking of motions of ``lengths`` (M,) sketched at ``points`` (M, P, D') under ``prior``.
+
+        A prior without training worlds keeps the connector's order (:meth:`as_given`); ``columns``: its worlds
+        packed (read faster than the worlds' rows), when at hand.
+        """
         if prior.worlds is None:  # the connector's order: nothing to impute
             return cls.as_given(ranking)
         return cls(ranking, length_terms(lengths, prior), lambda at: prior_surprise(points[at], index, prior, columns))

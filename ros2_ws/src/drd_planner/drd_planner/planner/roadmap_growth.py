@@ -102,7 +102,7 @@ class GrowthSettings:
             motion reaches and that can still lead to the other end, within the time and check budgets).
         join_batch: joins offered per off-graph endpoint in a join-growth round (count): as many as it
             already has, at least this many, in the order of their weight under the prior (a vectorised sketch
-            of each motion, :func:`~drd_planner.planner.join_ranking.prior_ranking`); None: every join left at
+            of each motion, :class:`~drd_planner.planner.join_ranking.PriorRanking`); None: every join left at
             once (a flyable motion to each lattice vertex is built and imputed: seconds on ``heli_lines``).
         graph_checks_first: checks the graph stage makes before a growth that may begin early (more joins of
             an off-graph start or goal, :attr:`GraphGrowth.starts_early`) begins, when the graph stage has
