@@ -11,6 +11,7 @@ budget ends. :class:`GraphStage` runs these for one plan and says why no path wa
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 from drd_planner.core.episode import CheckRecord, EdgeOracle, append_episode
 from drd_planner.core.status import PlanCause
@@ -34,12 +35,33 @@ from drd_planner.planner.result import (
 from drd_planner.planner.roadmap_growth import GraphGrowth, GrowthSettings, RoadmapGrowth, lazy_search
 from drd_planner.planner.state_sampler import sampler_of
 
-__all__ = ["GraphStage", "unwrapped_oracle"]
+__all__ = ["GraphStage", "PlanSoFar", "unwrapped_oracle"]
 
 
 def unwrapped_oracle(oracle: EdgeOracle) -> EdgeOracle:
     """The oracle a connected query's :class:`MotionDispatch` wraps (the oracle itself otherwise)."""
     return oracle.oracle if isinstance(oracle, MotionDispatch) else oracle
+
+
+@dataclass(frozen=True)
+class PlanSoFar:
+    """A plan as the graph stage takes it over.
+
+    Attributes:
+        model: the query's model (its graph is searched).
+        oracle: the plan's oracle.
+        known: every outcome of the plan so far (edge id -> free); the stages extend it.
+        checks: the plan's check log; the stages extend it.
+        limits: the plan's seed and budgets.
+        times: when the query's model was ready and when the plan began (``time.perf_counter()``).
+    """
+
+    model: QueryModel
+    oracle: EdgeOracle
+    known: dict[int, bool]
+    checks: list[CheckRecord]
+    limits: PlanLimits
+    times: tuple[float, float]
 
 
 class GraphStage:
@@ -62,35 +84,28 @@ class GraphStage:
         self.prior, self.growth = prior, growth
         self._connector, self._models = connector, models
 
-    def run(
-        self,
-        model: QueryModel,
-        oracle: EdgeOracle,
-        known: dict[int, bool],
-        checks: list[CheckRecord],
-        limits: PlanLimits,
-        times: tuple[float, float],
-    ) -> PlanResult:
+    def run(self, plan: PlanSoFar) -> PlanResult:
         """The graph stage after the library, then roadmap growth: its result, or why no path was proven."""
-        t_model, t_begin = times
-        raw, report = unwrapped_oracle(oracle), None
+        model, checks, limits = plan.model, plan.checks, plan.limits
+        t_model, t_begin = plan.times
+        raw, report = unwrapped_oracle(plan.oracle), None
         kind = self.growth_kind(model) if isinstance(raw, MotionOracle) else None
         first = None if kind is None or not kind.starts_early or self.growth is None else self.growth.graph_checks_first
-        stage = self._lazy_stage(model, oracle, known, checks, limits, times, first)
+        stage = self._lazy_stage(plan, first)
         if isinstance(stage, PlanResult):
             return stage
         growth = None if kind is None else self.growth_of(model, kind)
         if growth is not None and isinstance(raw, MotionOracle):
             grown = growth.run(
-                raw, known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
+                raw, plan.known, checks, seed=limits.seed, max_checks=limits.max_checks, deadline=limits.deadline
             )
             report = grown.report
             if grown.status is PlanStatus.FOUND and grown.path_edges is not None:
-                return found_result(model, grown.path_edges, checks, PlanStage.GROW, times, report)
+                return found_result(model, grown.path_edges, checks, PlanStage.GROW, plan.times, report)
             if grown.cause is not None and grown.cause.is_budget:
                 return exhausted_result(model, grown.cause, checks, t_model, t_begin, report)
         if stage:  # growth began before the graph stage's proof: finish it (every outcome reused)
-            finished = self._lazy_stage(model, oracle, known, checks, limits, times, None)
+            finished = self._lazy_stage(plan, None)
             if isinstance(finished, PlanResult):
                 return finished
         query = model.query if report is None else report.query
@@ -99,32 +114,19 @@ class GraphStage:
         result = unproven_result(model, PlanStatus.NO_PATH, reason, checks, t_model, t_begin, report)
         return dataclasses.replace(result, cause=blocked_end(query, checks))
 
-    def _lazy_stage(
-        self,
-        model: QueryModel,
-        oracle: EdgeOracle,
-        known: dict[int, bool],
-        checks: list[CheckRecord],
-        limits: PlanLimits,
-        times: tuple[float, float],
-        first: int | None,
-    ) -> PlanResult | bool:
-        """The lazy search over the query's whole graph, reusing and extending ``known`` and ``checks``.
+    def _lazy_stage(self, plan: PlanSoFar, first: int | None) -> PlanResult | bool:
+        """The lazy search over the query's whole graph, reusing and extending the plan's outcomes and checks.
 
         Args:
-            model: the query's model (its graph is searched).
-            oracle: the plan's oracle.
-            known: every outcome of the plan so far (edge id -> free), extended.
-            checks: the plan's check log, extended.
-            limits: the plan's seed and budgets.
-            times: when the query's model was ready and when the plan began (``time.perf_counter()``).
+            plan: the plan so far (its ``known`` and ``checks`` are extended).
             first: checks at most before the stage stops for growth to begin (None: until it ends).
 
         Returns:
             The plan's result when it found a path or one of the plan's budgets ended; True when it stopped
             after ``first`` checks without either; False when it proved that the graph has no free path.
         """
-        t_model, t_begin = times
+        model, known, checks, limits = plan.model, plan.known, plan.checks, plan.limits
+        t_model, t_begin = plan.times
         budget = None if limits.max_checks is None else limits.max_checks - len(checks)
         if budget is not None and budget <= 0:
             return exhausted_result(model, PlanCause.CHECK_BUDGET, checks, t_model, t_begin)
@@ -132,11 +134,11 @@ class GraphStage:
         edges = model.query.graph.num_edges  # outcomes of a growth's new edges (ids from E on) are not this graph's
         usable = known if all(e < edges for e in known) else {e: f for e, f in known.items() if e < edges}
         episode = lazy_search(
-            self.prior, model.query, oracle, usable, budget=stage_budget, deadline=limits.deadline, stage="graph"
+            self.prior, model.query, plan.oracle, usable, budget=stage_budget, deadline=limits.deadline, stage="graph"
         )
         append_episode(checks, known, episode)
         if episode.success and episode.path_edges is not None:
-            return found_result(model, episode.path_edges, checks, PlanStage.GRAPH, times)
+            return found_result(model, episode.path_edges, checks, PlanStage.GRAPH, plan.times)
         if episode.ran_out is PlanCause.CHECK_BUDGET and stage_budget != budget:
             return True
         if episode.ran_out is not None:

@@ -53,7 +53,7 @@ from drd_planner.planner.anytime import ImproveBudget, PlanLimits, as_improve_bu
 from drd_planner.planner.blas_threads import one_blas_thread
 from drd_planner.planner.connect import MotionOracle, QueryConnector, connector_for
 from drd_planner.planner.endpoints import Endpoint, EndpointResolver, QueryError
-from drd_planner.planner.graph_stage import GraphStage, unwrapped_oracle
+from drd_planner.planner.graph_stage import GraphStage, PlanSoFar, unwrapped_oracle
 from drd_planner.planner.lead import before_library, check_cost, lead_checks
 from drd_planner.planner.prior import LeafSetting, WorldPrior
 from drd_planner.planner.probe import DEFAULT_PROBE_PROBABILITY, PROBE_POLICIES, check_probe_probability
@@ -374,7 +374,7 @@ class Planner:
         if ahead.ran_out is not None:
             return exhausted_result(model, ahead.ran_out, checks, t_model, t_begin)
         if ahead.no_path:  # the lead proved it: no library can find a path either
-            return self._graph_stage().run(model, oracle, known, checks, limits, times)
+            return self._graph_stage().run(PlanSoFar(model, oracle, known, checks, limits, times))
         if model.library_pending:  # after the probe and lead (or another policy): the library now, timed as such
             model = self._models.with_library(model)
             t_model, times = t_model + model.build_s, (t_model + model.build_s, t_begin)
@@ -385,7 +385,7 @@ class Planner:
                 return found_result(model, episode.path_edges, checks, library_stage(checks), times)
             if episode.ran_out is not None:  # a policy that gave up goes on to the graph, as a blocked library
                 return exhausted_result(model, episode.ran_out, checks, t_model, t_begin)
-        return self._graph_stage().run(model, oracle, known, checks, limits, times)
+        return self._graph_stage().run(PlanSoFar(model, oracle, known, checks, limits, times))
 
     def _library_episode(
         self, model: QueryModel, oracle: EdgeOracle, policy: str, limits: PlanLimits, known: dict[int, bool], used: int
