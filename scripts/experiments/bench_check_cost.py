@@ -42,7 +42,14 @@ from typing import Any
 import numpy as np
 
 from drd_planner.bench.check_cost import Timed, cost_key, parse_check_costs
-from drd_planner.bench.cost_bench import CostRun, cost_markdown, median_episode, run_cost_episodes, summarize_costs
+from drd_planner.bench.cost_bench import (
+    CostRun,
+    cost_markdown,
+    episode_records,
+    median_episode,
+    run_cost_episodes,
+    summarize_costs,
+)
 from drd_planner.bench.cost_episodes import LEAD_POLICY, CostQuery, EpisodeTime
 from drd_planner.bench.held_out import WORLD_MODELS, held_out_worlds, new_queries, off_graph_queries
 from drd_planner.bench.ompl_peer import LiveWorlds, ompl_available, run_ompl_lazyprm_live
@@ -118,13 +125,15 @@ def run_prior(name: str, args: argparse.Namespace, costs: tuple[float, ...], omp
         "summary": summary,
         "markdown": cost_markdown(summary, costs, title=title, notes=notes),
         "queries": kinds,
+        "episodes": episode_records(episodes),
         "worlds": [r.to_json() for r in recipes],
         "seconds": time.perf_counter() - t0,
     }
 
 
 def ratio_lines(results: dict[str, Any], costs: tuple[float, ...], policy: str = "direct_bisect") -> list[str]:
-    """The 'done when' check: ``policy`` / lazysp median CPU per prior, kind and C."""
+    """The 'done when' check: ``policy`` / lazysp median CPU per prior, kind and C; in brackets the median of the
+    per-query ratios (each query against itself)."""
     lines = [
         "| prior | kind | " + " | ".join(f"C = {cost_key(c)}" for c in costs) + " |",
         "|" + "---|" * (len(costs) + 2),
@@ -136,8 +145,10 @@ def ratio_lines(results: dict[str, Any], costs: tuple[float, ...], policy: str =
             for c in costs:
                 a = s[policy]["time_ms"][cost_key(c)]["kinds"].get(kind)
                 b = s["lazysp"]["time_ms"][cost_key(c)]["kinds"].get(kind)
+                paired = s[policy]["paired_to_lazysp"].get(cost_key(c), {}).get(kind)
                 ok = a and b and a["median"] is not None and b["median"]
-                cells.append(f"{a['median'] / b['median']:.2f}" if ok else "-")
+                cell = f"{a['median'] / b['median']:.2f}" if ok else "-"
+                cells.append(cell + (f" ({paired['median']:.2f})" if paired else ""))
             lines.append(f"| {name} | {kind} | " + " | ".join(cells) + " |")
     return lines
 
@@ -170,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     results = {name: run_prior(name, args, costs, ompl) for name in names}
     text = "\n".join(r["markdown"] for r in results.values())
     for policy in ("direct_bisect", LEAD_POLICY):
-        text += f"\n## {policy} / lazysp, median CPU ms to a verified plan\n\n"
+        text += f"\n## {policy} / lazysp, median CPU ms to a verified plan (per query, the median ratio)\n\n"
         text += "\n".join(ratio_lines(results, costs, policy)) + "\n"
     text += "\n"
     print(text)

@@ -9,7 +9,7 @@ import pytest
 from conftest import gccd_folder
 
 from drd_planner.bench.check_cost import Timed
-from drd_planner.bench.cost_bench import cost_markdown, median_episode, summarize_costs
+from drd_planner.bench.cost_bench import cost_markdown, episode_records, median_episode, summarize_costs
 from drd_planner.bench.cost_episodes import EpisodeTime
 from drd_planner.cli.main import main
 from drd_planner.exceptions import DrdError
@@ -46,6 +46,9 @@ def test_time_keys_and_the_cost_paid(tmp_path: Path, capsys: pytest.CaptureFixtu
         assert entry["time_ms"]["2"]["median"] >= 2.0 * checks
         assert entry["time_ms"]["2"]["median"] > entry["time_ms"]["0"]["median"]
     assert "direct_bisect_lead / lazysp" in report
+    episodes = doc["check_cost"]["episodes"]
+    assert len(episodes) == 4 * 2 * 4  # queries x costs x policies, one record each
+    assert {e["policy"] for e in episodes} == {"direct_bisect", "direct_bisect_lead", "lazysp", "check_all"}
     lead = doc["policies"]["direct_bisect_lead"]
     assert set(lead["time_ms"]) == {"0", "2"}
     assert "checks" not in lead  # no check-count episodes of its own: its checks are timed ones
@@ -124,3 +127,25 @@ def test_medians_compare_the_queries_every_policy_verified() -> None:
     assert summary["b"]["verified"] == {"new": 1}
     assert summary["a"]["queries"] == {"new": 2}
     assert "| new | 0 | 1 | 1.00 | 2.00 |" in cost_markdown(summary, (0.0,), title="t")
+
+
+def test_the_paired_ratio_compares_each_query_with_itself() -> None:
+    def ep(policy: str, query: int, ms: float, ok: bool = True) -> EpisodeTime:
+        return EpisodeTime(policy, query, "new", 0.2, ok, 3, Timed(ms, ms))
+
+    # Two sizes of query: the medians of the times fall between them, the per-query ratios do not.
+    lazysp = [ep("lazysp", q, ms) for q, ms in enumerate([2.0, 2.0, 20.0, 20.0])]
+    ours = [ep("direct_bisect", q, ms) for q, ms in enumerate([1.8, 1.8, 18.0, 30.0])]
+    summary = summarize_costs([*lazysp, *ours, ep("direct_bisect", 4, 1.0), ep("lazysp", 4, 9.0, ok=False)], (0.2,))
+    paired = summary["direct_bisect"]["paired_to_lazysp"]["0.2"]["new"]
+    assert paired["n"] == 4  # query 4 is not compared: LazySP did not verify it
+    assert paired["median"] == pytest.approx(0.9)
+    assert summary["lazysp"]["paired_to_lazysp"]["0.2"]["new"]["median"] == 1.0
+    table = cost_markdown(summary, (0.2,), title="t")
+    assert "| new | 0.2 | 0.90 (4) |" in table
+    assert summarize_costs(ours, (0.2,))["direct_bisect"]["paired_to_lazysp"] == {}  # no LazySP, no ratio
+    records = episode_records(ours[:1])
+    assert records == [
+        {"policy": "direct_bisect", "query": 0, "kind": "new", "cost_ms": 0.2, "verified": True, "checks": 3,
+         "cpu_ms": 1.8, "wall_ms": 1.8}
+    ]  # fmt: skip

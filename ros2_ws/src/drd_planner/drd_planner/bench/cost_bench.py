@@ -43,7 +43,9 @@ __all__ = [
     "CostRun",
     "check_cost_policies",
     "cost_markdown",
+    "episode_records",
     "median_episode",
+    "paired_ratios",
     "run_cost_episodes",
     "summarize_costs",
 ]
@@ -182,14 +184,18 @@ def summarize_costs(episodes: Sequence[EpisodeTime], costs: Sequence[float]) -> 
     Returns:
         ``{policy: {"time_ms": {C: {"n", "median", "mean", "wall_median", "wall_mean", "kinds": {kind: {the
         same}}}}, "checks": {kind: median checks}, "checks_at": {C: {kind: median checks}}, "verified":
-        {kind: count}, "queries": {kind: count}}}``; ``checks``, ``verified`` and ``queries`` at the first C
-        (a planner told the check cost, :data:`LEAD_POLICY`, may check differently at each C: ``checks_at``).
+        {kind: count}, "queries": {kind: count}, "paired_to_lazysp": {C: {kind: {"median", "n"}}}}}``;
+        ``checks``, ``verified`` and ``queries`` at the first C (a planner told the check cost,
+        :data:`LEAD_POLICY`, may check differently at each C: ``checks_at``); ``paired_to_lazysp`` (when
+        ``lazysp`` ran): the median over the compared queries of the policy's CPU time over LazySP's on the
+        same query (:func:`paired_ratios`).
     """
     common = {kind: _common(episodes, kind) for kind in QUERY_KINDS}
     out: dict[str, Any] = {}
     for name in dict.fromkeys(e.policy for e in episodes):
         mine = [e for e in episodes if e.policy == name]
         block: dict[str, Any] = {"time_ms": {}, "checks": {}, "checks_at": {}, "verified": {}, "queries": {}}
+        block["paired_to_lazysp"] = paired_ratios(episodes, name, costs, {k: c[1] for k, c in common.items()})
         for cost in costs:
             at = [e for e in mine if e.cost_ms == cost]
             shared = [e for e in at if e.query in common[e.kind][1]]
@@ -214,6 +220,51 @@ def summarize_costs(episodes: Sequence[EpisodeTime], costs: Sequence[float]) -> 
                 block["queries"][kind] = len(of_kind)
         out[name] = block
     return out
+
+
+def paired_ratios(
+    episodes: Sequence[EpisodeTime], policy: str, costs: Sequence[float], compared: dict[str, set[int]]
+) -> dict[str, dict[str, dict[str, Any]]]:
+    """``{C: {kind: {"median", "n"}}}``: per query, ``policy``'s CPU time over ``lazysp``'s; their median.
+
+    A ratio of medians compares two distributions, which with a few queries of two sizes (a short plan and a long
+    one) can jump between them; the per-query ratio compares each query with itself. Over the ``compared``
+    queries of each kind (those every policy verified); empty when ``lazysp`` did not run.
+    """
+    times = {(e.policy, e.query, e.cost_ms): e.time.cpu_ms for e in episodes}
+    kinds = {e.query: e.kind for e in episodes}
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    if not any(e.policy == "lazysp" for e in episodes):
+        return out
+    for cost in costs:
+        row: dict[str, dict[str, Any]] = {}
+        for kind in QUERY_KINDS:
+            ratios = [
+                times[(policy, q, cost)] / times[("lazysp", q, cost)]
+                for q in sorted(compared.get(kind, set()))
+                if kinds[q] == kind and (policy, q, cost) in times and times.get(("lazysp", q, cost), 0.0) > 0
+            ]
+            if ratios:
+                row[kind] = {"median": float(np.median(ratios)), "n": len(ratios)}
+        out[cost_key(cost)] = row
+    return out
+
+
+def episode_records(episodes: Sequence[EpisodeTime]) -> list[dict[str, Any]]:
+    """Every timed episode as a JSON-ready record (policy, query, kind, cost_ms, verified, checks, cpu_ms, wall_ms)."""
+    return [
+        {
+            "policy": e.policy,
+            "query": e.query,
+            "kind": e.kind,
+            "cost_ms": e.cost_ms,
+            "verified": e.verified,
+            "checks": e.checks,
+            "cpu_ms": e.time.cpu_ms,
+            "wall_ms": e.time.wall_ms,
+        }
+        for e in episodes
+    ]
 
 
 def _ms(value: float | None) -> str:
@@ -245,6 +296,16 @@ def cost_markdown(summary: dict[str, Any], costs: Sequence[float], *, title: str
                 ok = a and b and a["median"] is not None and b["median"]
                 row.append(f"{a['median'] / b['median']:.2f}" if ok else "-")  # type: ignore[index]
             lines.append("| " + " | ".join(row) + " |")
+    if ratios:
+        lines += ["", "Per query, the policy's CPU time over LazySP's on the same query: the median (n):", ""]
+        lines += ["| kind | C ms/check | " + " | ".join(f"{n} / lazysp" for n in ratios) + " |"]
+        lines += ["|" + "---|" * (len(ratios) + 2)]
+        for kind in QUERY_KINDS:
+            for cost in costs:
+                paired = [summary[n]["paired_to_lazysp"].get(cost_key(cost), {}).get(kind) for n in ratios]
+                if any(p is not None for p in paired):
+                    cells = ["-" if p is None else f"{p['median']:.2f} ({p['n']})" for p in paired]
+                    lines.append(f"| {kind} | {cost_key(cost)} | " + " | ".join(cells) + " |")
     lines += ["", "Median checks (verified / queries):", ""]
     lines += ["| kind | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 1)]
     for kind in QUERY_KINDS:

@@ -13,6 +13,7 @@ from drd_planner.bench.cost_bench import (
     CostRun,
     check_cost_policies,
     cost_markdown,
+    episode_records,
     run_cost_episodes,
     summarize_costs,
 )
@@ -179,5 +180,6 @@ def time_at_check_costs(
         "clock": "CPU of this process (time.process_time), wall beside; ms",
         "compared": "per kind, the queries every policy verified at every cost",
         "off_graph": OFF_GRAPH_NOTE,
+        "episodes": episode_records(episodes),
     }
     return cost_markdown(summary, costs, title=f"{problem.name}: time to a verified plan", notes=(OFF_GRAPH_NOTE,))
