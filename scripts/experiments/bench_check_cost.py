@@ -22,7 +22,7 @@ graph (``drd_planner.bench.cost_episodes``), and OMPL's LazyPRM on the prior's g
 checker and the same per-check cost in its worker (vertex queries only: its roadmap cannot join an off-graph
 state). Query i runs against world i mod W. Times are CPU ms of the process that plans (the OMPL worker's
 own for LazyPRM); medians over the queries of a kind that every method verified at every C. With ``--repeat R``
-every episode (OMPL's too) runs R times and keeps its median time.
+every episode (OMPL's too) runs R times and keeps the run of median CPU time.
 
 Usage: python scripts/experiments/bench_check_cost.py [--priors heli_wires,heli_terrain,heli_lines,arm_table_clutter]
     [--costs 0,0.2,1,5] [--worlds 4] [--new 8] [--off-graph 8] [--seed 0] [--world-seed 0] [--no-ompl]
@@ -165,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--world-seed", type=int, default=0, help="first world seed (held out: see above)")
     parser.add_argument("--no-ompl", action="store_true", help="skip ompl_lazyprm")
     parser.add_argument(
-        "--repeat", type=int, default=1, help="runs of each episode (OMPL's too), their median times kept"
+        "--repeat", type=int, default=1, help="runs of each episode (OMPL's too), the run of median CPU time kept"
     )
     parser.add_argument("--json", type=Path, default=None)
     parser.add_argument("--markdown", type=Path, default=None)

@@ -79,7 +79,7 @@ def test_malformed_costs_and_missing_queries_are_one_clear_error(
     assert "--repeat must be at least 1, got 0" in capsys.readouterr().err
 
 
-def test_repeated_episodes_keep_their_median_times_and_the_same_checks(
+def test_repeated_episodes_keep_one_record_each_and_the_same_checks(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     folder = gccd_folder("dataset_2d_1")
@@ -94,23 +94,16 @@ def test_repeated_episodes_keep_their_median_times_and_the_same_checks(
         assert b[name]["time_ms"]["1"]["median"] > b[name]["time_ms"]["0"]["median"]
 
 
-def test_an_episodes_runs_give_their_median_times_and_must_agree_on_the_checks() -> None:
+def test_an_episodes_runs_give_the_run_of_median_time() -> None:
     def run(ms: float, ok: bool = True, checks: int = 3) -> EpisodeTime:
         return EpisodeTime("lazysp", 2, "new", 0.2, ok, checks, Timed(ms, 10 * ms))
 
-    one = median_episode([run(5.0), run(1.0), run(2.0)])
+    one = median_episode([run(5.0, checks=7), run(1.0), run(2.0, checks=4)])
     assert one.time == Timed(2.0, 20.0)
-    assert (one.policy, one.query, one.kind, one.cost_ms, one.checks, one.verified) == (
-        "lazysp",
-        2,
-        "new",
-        0.2,
-        3,
-        True,
-    )
+    assert one.checks == 4  # the median run's own checks (a time budget may cut a run short)
+    assert (one.policy, one.query, one.kind, one.cost_ms, one.verified) == ("lazysp", 2, "new", 0.2, True)
+    assert median_episode([run(3.0), run(1.0)]).time.cpu_ms == 1.0  # even count: the lower middle run
     assert not median_episode([run(1.0), run(1.0, ok=False)]).verified
-    with pytest.raises(DrdError, match=r"lazysp on query 2 at 0.2 ms/check made different checks .*\[3, 4\]"):
-        median_episode([run(1.0), run(1.0, checks=4)])
     with pytest.raises(DrdError, match="at least one run"):
         median_episode([])
 

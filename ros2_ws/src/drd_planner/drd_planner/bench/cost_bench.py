@@ -2,13 +2,12 @@
 
 Each query runs once per check cost C and policy (:mod:`~drd_planner.bench.cost_episodes`), each episode
 with a fresh oracle (a live checker may cache its answers); with ``repeat`` R > 1 each episode runs R times in
-a row and keeps the median of its CPU times (and of its wall times): the same checks each time (the same
-seed), so only the clock's noise differs, and a policy's median over the queries then moves less between runs
-of the benchmark where two policies are within a few per cent of each other. The summary keeps, per policy and
-C, the median
-and mean CPU time (and the wall time beside) over the queries of each kind that **every** policy timed on
-that kind verified at every C (so the medians compare the same queries), and over all such queries of all
-kinds; the verified counts say how many each policy verified on its own.
+a row and keeps the run of median CPU time: the same checks each time (the same seed), so only the clock's
+noise differs, and a policy's median over the queries then moves less between runs of the benchmark where two
+policies are within a few per cent of each other. The summary keeps, per policy and C, the median and mean CPU
+time (and the wall time beside) over the queries of each kind that **every** policy timed on that kind
+verified at every C (so the medians compare the same queries), and over all such queries of all kinds; the
+verified counts say how many each policy verified on its own.
 """
 
 from __future__ import annotations
@@ -20,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from drd_planner.bench.check_cost import Timed, cost_key, time_summary
+from drd_planner.bench.check_cost import cost_key, time_summary
 from drd_planner.bench.cost_episodes import (
     LEAD_POLICY,
     QUERY_KINDS,
@@ -77,7 +76,7 @@ class CostRun:
     Attributes:
         policies: the policies timed (:data:`COST_POLICIES`).
         seed: query i's library policies use seed ``seed + i`` (the same checks at every cost).
-        repeat: runs of each episode, their median times kept (:func:`median_episode`; at least 1).
+        repeat: runs of each episode, the run of median CPU time kept (:func:`median_episode`; at least 1).
         progress: show a progress bar (None: when stderr is a terminal).
     """
 
@@ -138,6 +137,7 @@ class _Episodes:
     seed: int
 
     def run(self, name: str, query: CostQuery, index: int, cost: float) -> EpisodeTime:
+        """Policy ``name`` on query number ``index`` at ``cost`` ms per check."""
         oracle = self.oracle_of(query.world)
         if name == "check_all":
             if query.world not in self.rows:
@@ -149,22 +149,17 @@ class _Episodes:
 
 
 def median_episode(runs: Sequence[EpisodeTime]) -> EpisodeTime:
-    """One episode of several runs of it: the median CPU and the median wall time (ms) of the runs.
+    """One episode of several runs of it: the run of median CPU time (the lower middle one of an even count).
 
-    Verified only when every run was; DrdError when the runs differ in their checks (the same episode, the
-    same seed: a difference is a determinism bug, not noise to average away).
+    Its checks and times are that run's; verified only when every run was. The runs of one episode make the
+    same checks (the same seed) unless a time budget cut one short (a growth's ``seconds``), so the median run
+    is one that really happened rather than a mix of runs.
     """
     if not runs:
         raise DrdError("an episode needs at least one run")
-    first = runs[0]
-    if any(r.checks != first.checks for r in runs):
-        raise DrdError(
-            f"{first.policy} on query {first.query} at {first.cost_ms:g} ms/check made different checks in "
-            f"repeated runs: {[r.checks for r in runs]}"
-        )
-    cpu = float(np.median([r.time.cpu_ms for r in runs]))
-    wall = float(np.median([r.time.wall_ms for r in runs]))
-    return dataclasses.replace(first, verified=all(r.verified for r in runs), time=Timed(cpu, wall))
+    ordered = sorted(runs, key=lambda r: r.time.cpu_ms)
+    middle = ordered[(len(ordered) - 1) // 2]
+    return dataclasses.replace(middle, verified=all(r.verified for r in runs))
 
 
 def _common(episodes: Sequence[EpisodeTime], kind: str) -> tuple[list[str], set[int]]:

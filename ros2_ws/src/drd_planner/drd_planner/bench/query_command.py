@@ -49,7 +49,7 @@ class QueryBenchOptions:
             comma-separated text (:func:`~drd_planner.bench.check_cost.parse_check_costs`; None: no timing).
         max_checks: per-episode check cap (None: none; at least 1).
         seed: the seed of the queries, the episodes and the prior's validation and library.
-        repeat: with ``check_cost_ms``, runs of each timed episode, their median times kept (at least 1).
+        repeat: with ``check_cost_ms``, runs of each timed episode, the run of median CPU time kept (at least 1).
         json: write the results JSON here (None: not written).
         markdown: write the markdown report here (None: not written).
         leaf: how the built prior's eta, kappa and region rule are chosen.

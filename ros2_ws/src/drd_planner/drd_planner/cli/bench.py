@@ -171,7 +171,7 @@ def add_bench_parser(sub: Any) -> argparse.ArgumentParser:
         type=int,
         default=1,
         metavar="R",
-        help="with --check-cost-ms: run each timed episode R times and keep its median CPU and wall time "
+        help="with --check-cost-ms: run each timed episode R times and keep the run of median CPU time "
         "(the same checks each time; less clock noise in the medians)",
     )
     add_tree_options(p)
