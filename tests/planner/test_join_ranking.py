@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from drd_planner.exceptions import ProblemError
 from drd_planner.planner import load_prior
 from drd_planner.planner.connect import POINTS_PER_EDGE
 from drd_planner.planner.dubins_connector import DubinsConnector
@@ -87,7 +88,7 @@ def test_a_ranking_stops_imputing_once_no_motion_left_can_weigh_less() -> None:
     assert ranking[3] not in head[:5]  # a likely-blocked join moved down
     assert lazy.first(600).tolist() == expected.tolist()
     assert sum(asked) == 600
-    with pytest.raises(ValueError, match="a weight floor per ranked vertex"):
+    with pytest.raises(ProblemError, match="a weight floor per ranked vertex"):
         PriorRanking(ranking, floor[:5], rest)
 
 
