@@ -171,6 +171,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--markdown", type=Path, default=None)
     args = parser.parse_args(argv)
     costs = parse_check_costs(args.costs)
+    if args.repeat < 1:
+        parser.error(f"--repeat must be at least 1, got {args.repeat}")
     names = [n.strip() for n in args.priors.split(",") if n.strip()]
     unknown = [n for n in names if n not in WORLD_MODELS]
     if unknown:
