@@ -150,8 +150,7 @@ class JoinGrowth(GraphGrowth):
             outgoing = vertex == query.start
             array = np.asarray(state, dtype=np.float64)
             given = connector.ranked(array, prior.graph, outgoing=outgoing)
-            ranking = PriorRanking.as_given(given)
-            if isinstance(connector, SketchedJoins):
+            if isinstance(connector, SketchedJoins) and prior.worlds is not None:
                 lengths, points = connector.sketches(
                     array,
                     prior.graph,
@@ -160,6 +159,8 @@ class JoinGrowth(GraphGrowth):
                     fractions=np.linspace(0, 1, POINTS_PER_EDGE),
                 )
                 ranking = PriorRanking.of_prior(given, lengths, points, index, prior, columns)
+            else:  # nothing to weigh the joins by: the connector's order
+                ranking = PriorRanking.as_given(given)
             self.ends[vertex] = (array, outgoing, ranking)
             edges = query.graph.edges
             mine = edges[:, 0] == vertex if outgoing else edges[:, 1] == vertex
